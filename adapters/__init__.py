@@ -1,0 +1,53 @@
+"""Log adapters: one per format family, chosen by content, all producing `Signals`."""
+
+from pathlib import Path
+from typing import Protocol
+
+from adapters.errors import LogError
+from adapters.rosbag import RosbagAdapter
+from adapters.signals import FieldSource, LogSources, SegmentMarker, Signals
+
+__all__ = [
+    "FieldSource",
+    "LogError",
+    "LogSources",
+    "SegmentMarker",
+    "Signals",
+    "detect_format",
+    "read_log",
+]
+
+
+class Adapter(Protocol):
+    formats: tuple[str, ...]
+
+    def sniff(self, path: Path) -> str | None: ...
+
+    def read(self, path: Path, sources: LogSources) -> Signals: ...
+
+
+ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(),)
+
+
+def _find_adapter(path: Path) -> tuple[Adapter, str]:
+    if not path.exists():
+        raise LogError(path, "no such file or directory")
+    if path.is_file() and path.stat().st_size == 0:
+        raise LogError(path, "empty file")
+    for adapter in ADAPTERS:
+        fmt = adapter.sniff(path)
+        if fmt is not None:
+            return adapter, fmt
+    kinds = ", ".join(fmt for adapter in ADAPTERS for fmt in adapter.formats)
+    raise LogError(path, f"not a log this tool reads (known formats: {kinds})")
+
+
+def detect_format(path: Path) -> str:
+    """Return the format name of the log at ``path`` from its content."""
+    return _find_adapter(path)[1]
+
+
+def read_log(path: Path, sources: LogSources) -> Signals:
+    """Read the signals named in ``sources`` from the log at ``path``."""
+    adapter, _ = _find_adapter(path)
+    return adapter.read(path, sources)

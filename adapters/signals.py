@@ -1,0 +1,53 @@
+"""The uniform signal frame every adapter produces.
+
+Contract: each signal is a float64 ``pandas.Series`` whose index is the receive time in
+integer nanoseconds (int64, the log's own clock), values in the profile's SI units, in the
+order the log stored them (not yet sorted or de-duplicated: resampling does that, and
+reports what it found). ``start_ns`` is the time of the log's first message on any topic;
+report times are seconds from it.
+"""
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+
+@dataclass(frozen=True)
+class FieldSource:
+    """Where one signal lives in a log: a topic (or message name) and a field path."""
+
+    topic: str
+    field: str
+    scale: float = 1.0
+    offset: float = 0.0
+
+
+@dataclass(frozen=True)
+class LogSources:
+    """What an adapter must extract: one source per signal, plus the segment-marker topic."""
+
+    signals: dict[str, FieldSource]
+    segment_topic: str | None = None
+
+
+@dataclass(frozen=True)
+class SegmentMarker:
+    """A label logged at the start of a diagnosis segment (``ZA``, ``ZB``, ``ZC``, ``MISSION``)."""
+
+    time_ns: int
+    label: str
+
+
+@dataclass
+class Signals:
+    """Everything diagnosis needs from one log, on each signal's own time base."""
+
+    path: Path
+    format: str
+    start_ns: int
+    end_ns: int
+    series: dict[str, pd.Series]
+    markers: list[SegmentMarker] = field(default_factory=list)
+    topics: dict[str, str] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)

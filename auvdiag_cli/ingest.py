@@ -1,0 +1,25 @@
+"""From a log path to signals on the model grid, through the right adapter."""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from adapters import LogError, Signals, read_log
+from auvdiag_cli.profile import Profile
+from auvdiag_cli.resample import AlignedFrame, resample
+
+
+@dataclass
+class IngestedLog:
+    signals: Signals
+    frame: AlignedFrame
+
+
+def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
+    """Read ``path`` with the profile's mapping and resample it to the profile's Δt."""
+    signals = read_log(path, profile.ros_sources)
+    try:
+        frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
+                         max_gap_s)
+    except ValueError as error:
+        raise LogError(path, str(error)) from None
+    return IngestedLog(signals, frame)

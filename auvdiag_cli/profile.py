@@ -1,0 +1,241 @@
+"""Vehicle profiles: TOML files validated once into a typed `Profile`."""
+
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from adapters.signals import FieldSource, LogSources
+from auvdiag_cli.errors import ProfileError
+
+MISSION_MODE = "mission"
+
+
+@dataclass(frozen=True)
+class Command:
+    name: str
+    component: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Sensor:
+    name: str
+    component: str
+    unit: str
+    full_scale: float
+    description: str
+
+
+@dataclass(frozen=True)
+class PatternRow:
+    case: int
+    b: dict[str, int]
+    components: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class DiagnosisSequence:
+    """A DMS: a fixed command history as steps of (duration_s, one command per actuator)."""
+
+    name: str
+    description: str
+    steps: tuple[tuple[float, tuple[float, ...]], ...]
+
+    @property
+    def duration_s(self) -> float:
+        return sum(duration for duration, _ in self.steps)
+
+
+@dataclass(frozen=True)
+class Profile:
+    name: str
+    description: str
+    dt_s: float
+    commands: tuple[Command, ...]
+    sensors: tuple[Sensor, ...]
+    window_samples: int
+    decision_window_s: float
+    thresholds: dict[str, dict[str, float]]
+    pattern: tuple[PatternRow, ...]
+    dms: dict[str, DiagnosisSequence]
+    ros_sources: LogSources
+    source_path: str
+
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.commands)
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.sensors)
+
+    @property
+    def full_scales(self) -> dict[str, float]:
+        return {s.name: s.full_scale for s in self.sensors}
+
+    def sensor(self, name: str) -> Sensor:
+        return next(s for s in self.sensors if s.name == name)
+
+    def thresholds_for(self, mode: str) -> dict[str, float]:
+        """Thresholds of a DMS name or of the mission mode; unknown modes use the mission's."""
+        return self.thresholds.get(mode, self.thresholds[MISSION_MODE])
+
+
+class _Reader:
+    """Typed access to a TOML table that names the full key in every error."""
+
+    def __init__(self, table: dict[str, Any], where: str) -> None:
+        self.table = table
+        self.where = where
+
+    def key(self, name: str) -> str:
+        return f"{self.where}.{name}" if self.where else name
+
+    def get(self, name: str, kind: type | tuple[type, ...], default: Any = ...) -> Any:
+        if name not in self.table:
+            if default is ...:
+                raise ProfileError(f"missing key '{self.key(name)}'")
+            return default
+        value = self.table[name]
+        if kind is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+            raise ProfileError(f"key '{self.key(name)}' must be {_kind_name(kind)}, got {value!r}")
+        return value
+
+    def sub(self, name: str) -> "_Reader":
+        return _Reader(self.get(name, dict), self.key(name))
+
+    def items(self, name: str) -> list["_Reader"]:
+        rows = self.get(name, list)
+        return [_row(row, f"{self.key(name)}[{i}]") for i, row in enumerate(rows)]
+
+
+def _row(row: Any, where: str) -> _Reader:
+    if not isinstance(row, dict):
+        raise ProfileError(f"key '{where}' must be a table")
+    return _Reader(row, where)
+
+
+def _kind_name(kind: type | tuple[type, ...]) -> str:
+    kinds = kind if isinstance(kind, tuple) else (kind,)
+    return " or ".join({"str": "a string", "float": "a number", "int": "an integer",
+                        "dict": "a table", "list": "an array"}.get(k.__name__, k.__name__)
+                       for k in kinds)
+
+
+def _positive(reader: _Reader, name: str) -> float:
+    value: float = reader.get(name, float)
+    if value <= 0:
+        raise ProfileError(f"key '{reader.key(name)}' must be positive, got {value}")
+    return value
+
+
+def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
+    """Validate a parsed TOML document into a `Profile`."""
+    top = _Reader(data, "")
+    vehicle = top.sub("vehicle")
+    commands = tuple(
+        Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
+        for r in top.items("commands")
+    )
+    sensors = tuple(
+        Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
+               _positive(r, "full_scale"), r.get("description", str, ""))
+        for r in top.items("sensors")
+    )
+    if not commands or not sensors:
+        raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
+    sensor_names = [s.name for s in sensors]
+    signal_names = [c.name for c in commands] + sensor_names
+    if len(set(signal_names)) != len(signal_names):
+        raise ProfileError("signal names in 'commands' and 'sensors' must be unique")
+
+    matching = top.sub("matching")
+    window = matching.get("window_samples", int)
+    if window < 1:
+        raise ProfileError("key 'matching.window_samples' must be at least 1")
+
+    threshold_table = top.sub("thresholds")
+    thresholds: dict[str, dict[str, float]] = {}
+    for mode in threshold_table.table:
+        row = threshold_table.sub(mode)
+        thresholds[mode] = {name: _positive(row, name) for name in sensor_names}
+    if MISSION_MODE not in thresholds:
+        raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
+
+    pattern = tuple(_pattern_row(r, sensor_names) for r in top.items("pattern"))
+    seen = {tuple(row.b[n] for n in sensor_names) for row in pattern}
+    if len(seen) != len(pattern):
+        raise ProfileError("key 'pattern' has two rows with the same b vector")
+
+    dms_table = top.sub("dms") if "dms" in data else _Reader({}, "dms")
+    dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
+
+    ros = top.sub("sources").sub("ros")
+    ros_signals = ros.sub("signals")
+    sources = {}
+    for name in signal_names:
+        entry = ros_signals.sub(name)
+        sources[name] = FieldSource(entry.get("topic", str), entry.get("field", str),
+                                    entry.get("scale", float, 1.0),
+                                    entry.get("offset", float, 0.0))
+    return Profile(
+        name=vehicle.get("name", str),
+        description=vehicle.get("description", str, ""),
+        dt_s=_positive(vehicle, "dt_s"),
+        commands=commands,
+        sensors=sensors,
+        window_samples=window,
+        decision_window_s=matching.get("decision_window_s", float, 0.0),
+        thresholds=thresholds,
+        pattern=pattern,
+        dms=dms,
+        ros_sources=LogSources(sources, ros.get("segment_topic", str, None)),
+        source_path=source_path,
+    )
+
+
+def _pattern_row(reader: _Reader, sensor_names: list[str]) -> PatternRow:
+    b_reader = reader.sub("b")
+    b = {}
+    for name in sensor_names:
+        bit = b_reader.get(name, int)
+        if bit not in (0, 1):
+            raise ProfileError(f"key '{b_reader.key(name)}' must be 0 or 1")
+        b[name] = bit
+    components = reader.get("components", list)
+    return PatternRow(reader.get("case", int), b, tuple(str(c) for c in components))
+
+
+def _dms(reader: _Reader, name: str, n_commands: int) -> DiagnosisSequence:
+    steps = []
+    for i, step in enumerate(reader.get("steps", list)):
+        if not isinstance(step, list) or len(step) != n_commands + 1:
+            raise ProfileError(
+                f"key '{reader.key('steps')}[{i}]' must be [duration_s, {n_commands} commands]")
+        duration, *levels = (float(v) for v in step)
+        steps.append((duration, tuple(levels)))
+    return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
+
+
+def load_profile(path: Path | None = None) -> Profile:
+    """Load a profile file, or the built-in Twin-Burger profile when ``path`` is None."""
+    if path is None:
+        resource = resources.files("auvdiag_cli") / "profiles" / "twin_burger.toml"
+        text, where = resource.read_text(encoding="utf-8"), "builtin:twin_burger"
+    else:
+        try:
+            text, where = path.read_text(encoding="utf-8"), str(path)
+        except OSError as error:
+            raise ProfileError(f"{path}: cannot read profile: {error.strerror}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ProfileError(f"{where}: not valid TOML: {error}") from None
+    try:
+        return parse_profile(data, where)
+    except ProfileError as error:
+        raise ProfileError(f"{where}: {error}") from None

@@ -1,0 +1,129 @@
+"""Put every signal on the model's Δt grid.
+
+Method (documented for users in the README):
+- the grid starts at the first instant every signal has been heard and ends at the last
+  instant all of them are still heard, in steps of Δt;
+- commands are held (zero-order hold): the value at grid time t is the last command
+  received at or before t, since an actuator keeps its last command;
+- sensors are averaged over the bin (t − Δt, t]: a faster sensor (the 50 Hz IMU) is low-pass
+  filtered to the model rate; an empty bin takes the linear interpolation of its neighbours;
+- before that, each series is sorted by time, exact duplicate timestamps keep the last value,
+  and non-finite values are dropped (and counted);
+- a silence longer than ``max_gap_s`` on any signal is a gap: grid points inside it are NaN
+  (never interpolated across) and the gap is reported.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from adapters.signals import Signals
+
+NS_PER_S = 1_000_000_000
+
+
+@dataclass(frozen=True)
+class Gap:
+    signal: str
+    start_s: float
+    end_s: float
+
+
+@dataclass
+class AlignedFrame:
+    """Signals on a common grid; ``time_s`` counts from the log's first message."""
+
+    time_s: np.ndarray
+    commands: np.ndarray        # (steps, n_commands)
+    sensors: np.ndarray         # (steps, n_sensors), NaN inside gaps
+    command_names: tuple[str, ...]
+    sensor_names: tuple[str, ...]
+    dt_s: float
+    gaps: list[Gap] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def sensor(self, name: str) -> np.ndarray:
+        return self.sensors[:, self.sensor_names.index(name)]
+
+
+def _clean(series: pd.Series, name: str, notes: list[str]) -> pd.Series:
+    finite = np.isfinite(series.to_numpy())
+    if not finite.all():
+        notes.append(f"{name}: dropped {int((~finite).sum())} non-finite value(s)")
+        series = series[finite]
+    if not series.index.is_monotonic_increasing:
+        notes.append(f"{name}: messages out of time order, sorted")
+        series = series.sort_index(kind="stable")
+    duplicated = series.index.duplicated(keep="last")
+    if duplicated.any():
+        notes.append(f"{name}: {int(duplicated.sum())} duplicate timestamp(s), kept the last")
+        series = series[~duplicated]
+    return series
+
+
+def _gaps(times_ns: np.ndarray, max_gap_ns: int) -> list[tuple[int, int]]:
+    steps = np.diff(times_ns)
+    return [(int(times_ns[i]), int(times_ns[i + 1])) for i in np.flatnonzero(steps > max_gap_ns)]
+
+
+def _held(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray) -> np.ndarray:
+    index = np.searchsorted(times_ns, grid_ns, side="right") - 1
+    return values[np.clip(index, 0, None)]
+
+
+def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_ns: int
+              ) -> np.ndarray:
+    right = np.searchsorted(times_ns, grid_ns, side="right")
+    left = np.searchsorted(times_ns, grid_ns - dt_ns, side="right")
+    sums = np.concatenate(([0.0], np.cumsum(values)))
+    counts = right - left
+    with np.errstate(invalid="ignore", divide="ignore"):
+        means = (sums[right] - sums[left]) / counts
+    empty = counts == 0
+    if empty.any():
+        means[empty] = np.interp(grid_ns[empty], times_ns, values)
+    return means
+
+
+def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tuple[str, ...],
+             dt_s: float, max_gap_s: float = 1.0) -> AlignedFrame:
+    """Align ``signals`` on a Δt grid as described in the module docstring."""
+    notes: list[str] = []
+    cleaned = {name: _clean(signals.series[name], name, notes)
+               for name in command_names + sensor_names}
+    empty = [name for name, s in cleaned.items() if s.empty]
+    if empty:
+        raise ValueError(f"no usable samples for {', '.join(empty)}")
+    dt_ns = round(dt_s * NS_PER_S)
+    first_ns = max(int(s.index[0]) for s in cleaned.values())
+    last_ns = min(int(s.index[-1]) for s in cleaned.values())
+    if last_ns - first_ns < 2 * dt_ns:
+        raise ValueError("the signals overlap for less than two model steps")
+    grid_ns = np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
+    max_gap_ns = round(max_gap_s * NS_PER_S)
+    gaps: list[Gap] = []
+    columns: dict[str, np.ndarray] = {}
+    for name, series in cleaned.items():
+        times_ns = series.index.to_numpy(dtype=np.int64)
+        values = series.to_numpy(dtype=np.float64)
+        if name in command_names:
+            columns[name] = _held(times_ns, values, grid_ns)
+        else:
+            columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
+        for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
+            inside = (grid_ns > start_ns) & (grid_ns < end_ns)
+            if name not in command_names:
+                columns[name][inside] = np.nan
+            gaps.append(Gap(name, (start_ns - signals.start_ns) / NS_PER_S,
+                            (end_ns - signals.start_ns) / NS_PER_S))
+    return AlignedFrame(
+        time_s=(grid_ns - signals.start_ns) / NS_PER_S,
+        commands=np.column_stack([columns[n] for n in command_names]),
+        sensors=np.column_stack([columns[n] for n in sensor_names]),
+        command_names=command_names,
+        sensor_names=sensor_names,
+        dt_s=dt_s,
+        gaps=gaps,
+        notes=notes,
+    )

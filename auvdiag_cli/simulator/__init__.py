@@ -1,0 +1,1 @@
+"""A physically plausible twin-thruster AUV (surge + yaw) that writes real logs with known truth."""

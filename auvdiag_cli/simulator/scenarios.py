@@ -1,0 +1,91 @@
+"""Named dive scenarios: a programme of phases (DMS runs, missions) and an optional fault."""
+
+from dataclasses import dataclass, field, replace
+
+from auvdiag_cli.simulator.faults import Fault
+
+
+@dataclass(frozen=True)
+class MissionSpec:
+    """Closed-loop following of a rectangle, starting at the origin heading north."""
+
+    length_m: float = 4.0
+    width_m: float = 2.0
+    clockwise: bool = True
+    cruise_speed_mps: float = 0.125
+    max_duration_s: float = 400.0
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One segment of a dive: a DMS by name (``ZA``, ``ZB``, ``ZC``) or a mission."""
+
+    name: str
+    mission: MissionSpec | None = None
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    description: str
+    phases: tuple[Phase, ...]
+    fault: Fault | None = None
+    # Once a fault is active, stop this long after onset if the mission has not ended.
+    run_after_fault_s: float = 60.0
+    extra: dict[str, str] = field(default_factory=dict)
+
+
+def _mission(**spec: float | bool) -> tuple[Phase, ...]:
+    return (Phase("MISSION", MissionSpec(**spec)),)  # type: ignore[arg-type]
+
+
+PAPER_MISSION = _mission()
+DMS_ALL = (Phase("ZA"), Phase("ZB"), Phase("ZC"))
+
+_SCENARIOS = [
+    Scenario("paper-normal", "4 m x 2 m clockwise rectangle, no fault (the paper's mission)",
+             PAPER_MISSION),
+    Scenario("paper-flow-sensor-covered",
+             "the paper's experiment: 4 m x 2 m clockwise rectangle, flow sensor covered at "
+             "115 s just after a right turn", PAPER_MISSION, Fault("flow_sensor", "covered", 115.0)),
+    Scenario("mission-ccw", "4 m x 2 m counter-clockwise rectangle, no fault",
+             _mission(clockwise=False)),
+    Scenario("mission-large-cw", "5 m x 2.5 m clockwise rectangle, no fault",
+             _mission(length_m=5.0, width_m=2.5)),
+    Scenario("mission-large-ccw", "5 m x 2.5 m counter-clockwise rectangle, no fault",
+             _mission(length_m=5.0, width_m=2.5, clockwise=False)),
+    Scenario("mission-fast-cw", "5 m x 2.5 m clockwise rectangle at 0.25 m/s, no fault",
+             _mission(length_m=5.0, width_m=2.5, cruise_speed_mps=0.25)),
+    Scenario("mission-fast-ccw", "4 m x 2 m counter-clockwise rectangle at 0.2 m/s, no fault",
+             _mission(clockwise=False, cruise_speed_mps=0.2)),
+    Scenario("dms-za", "Diagnosis Motion Sequence ZA (both thrusters), no fault", (Phase("ZA"),)),
+    Scenario("dms-zb", "Diagnosis Motion Sequence ZB (Thruster 0 only), no fault", (Phase("ZB"),)),
+    Scenario("dms-zc", "Diagnosis Motion Sequence ZC (Thruster 1 only), no fault", (Phase("ZC"),)),
+    Scenario("routine-and-mission", "ZA, ZB, ZC then the paper's mission, no fault",
+             DMS_ALL + PAPER_MISSION),
+    Scenario("mission-thruster-0-dead", "paper mission, Thruster 0 dead at 60 s",
+             PAPER_MISSION, Fault("thruster_0", "dead", 60.0)),
+    Scenario("mission-thruster-1-dead", "paper mission, Thruster 1 dead at 60 s",
+             PAPER_MISSION, Fault("thruster_1", "dead", 60.0)),
+    Scenario("mission-yaw-rate-sensor-dead", "paper mission, yaw-rate sensor dead at 60 s",
+             PAPER_MISSION, Fault("yaw_rate_sensor", "dead", 60.0)),
+    Scenario("mission-thruster-0-weak", "paper mission, Thruster 0 at 50 % power from 60 s",
+             PAPER_MISSION, Fault("thruster_0", "weak", 60.0, 0.5)),
+    Scenario("mission-thruster-1-weak", "paper mission, Thruster 1 at 50 % power from 60 s",
+             PAPER_MISSION, Fault("thruster_1", "weak", 60.0, 0.5)),
+]
+
+SCENARIOS: dict[str, Scenario] = {s.name: s for s in _SCENARIOS}
+
+
+def get_scenario(name: str, fault_at_s: float | None = None) -> Scenario:
+    """Look a scenario up by name; ``fault_at_s`` moves its fault onset."""
+    try:
+        scenario = SCENARIOS[name]
+    except KeyError:
+        raise KeyError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})") from None
+    if fault_at_s is not None:
+        if scenario.fault is None:
+            raise ValueError(f"scenario {name!r} has no fault to move")
+        scenario = replace(scenario, fault=replace(scenario.fault, onset_s=fault_at_s))
+    return scenario

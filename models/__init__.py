@@ -1,0 +1,1 @@
+"""The learned dynamics model of the healthy vehicle: torch module, training, model files."""
