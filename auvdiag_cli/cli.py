@@ -1,0 +1,196 @@
+"""The `auvdiag` command line: thin typer commands over the engine's functions."""
+
+import json
+import os
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, NoReturn
+
+import typer
+
+from auvdiag_cli import __version__
+
+EXIT_NORMAL, EXIT_FAULT, EXIT_UNUSABLE = 0, 1, 2
+LOG_FORMATS = ("bag", "db3", "ros2-mcap")
+
+app = typer.Typer(
+    name="auvdiag",
+    help="Diagnose autonomous underwater vehicles offline from their logs: replay the logged "
+         "thruster commands through a learned model of the healthy vehicle, compare with the "
+         "sensors, and say whether something broke, when, and which component "
+         "(Takai & Ura, 1999).",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode="markdown",
+)
+
+ModelOption = Annotated[Path | None, typer.Option(
+    "--model", help="Model directory (default: the built-in Twin-Burger model).",
+    file_okay=False)]
+ProfileOption = Annotated[Path | None, typer.Option(
+    "--profile", help="Vehicle profile TOML (default: the built-in Twin-Burger profile).",
+    dir_okay=False)]
+
+
+def _fail(message: str) -> NoReturn:
+    typer.echo(f"auvdiag: error: {message}", err=True)
+    raise typer.Exit(EXIT_UNUSABLE)
+
+
+@contextmanager
+def _user_errors(subject: Path | str) -> Iterator[None]:
+    """Turn every failure into one line on stderr and exit status 2 (never a traceback)."""
+    from auvdiag_cli.errors import INPUT_ERRORS
+    from models.store import ModelFileError
+
+    try:
+        yield
+    except typer.Exit:
+        raise
+    except (*INPUT_ERRORS, ModelFileError) as error:
+        _fail(str(error))
+    except KeyboardInterrupt:
+        _fail("interrupted")
+    except Exception as error:
+        if os.environ.get("AUVDIAG_DEBUG"):
+            raise
+        _fail(f"{subject}: unexpected {type(error).__name__}: {error} "
+              "(set AUVDIAG_DEBUG=1 for the traceback)")
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"auvdiag {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def main_options(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="Print the version and exit.")] = False,
+) -> None:
+    """Offline model-based fault diagnosis for AUVs."""
+
+
+@app.command()
+def diagnose(
+    log: Annotated[Path, typer.Argument(help="Log: ROS 1 .bag, ROS 2 bag directory (or its "
+                                             ".db3/.mcap file).")],
+    model: ModelOption = None,
+    profile: ProfileOption = None,
+    json_path: Annotated[str | None, typer.Option(
+        "--json", help="Write the JSON report to PATH, or to standard output with '-'.",
+        metavar="PATH|-")] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
+) -> None:
+    """Diagnose one log. Exit status: 0 no fault, 1 fault found, 2 log not analysable."""
+    from adapters import detect_format
+    from auvdiag_cli.diagnosis import diagnose as run_diagnosis
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_json import diagnosis_to_dict, write_json
+    from auvdiag_cli.report_text import summary_lines
+    from models.store import load_model
+
+    with _user_errors(log):
+        detect_format(log)  # a bad path is reported before the model is even loaded
+        result = run_diagnosis(log, load_profile(profile), load_model(model))
+        document = diagnosis_to_dict(result)
+        if json_path == "-":
+            typer.echo(json.dumps(document, indent=2))
+        elif json_path is not None:
+            write_json(document, Path(json_path))
+        if not quiet:
+            for line in summary_lines(result):
+                typer.echo(line, err=json_path == "-")
+    raise typer.Exit(EXIT_FAULT if result.verdict == "fault" else EXIT_NORMAL)
+
+
+@app.command()
+def train(
+    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs to learn from.")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Model directory to write.",
+                                         file_okay=False)],
+    profile: ProfileOption = None,
+    holdout: Annotated[list[Path] | None, typer.Option(
+        "--holdout", help="Held-out normal log for the error figures (repeatable; default: "
+                          "every fifth log).")] = None,
+    hidden: Annotated[int, typer.Option(help="Size of the recurrent context.", min=4)] = 32,
+    seed: Annotated[int, typer.Option(help="Random seed of the training.")] = 0,
+    iterations_scale: Annotated[float, typer.Option(
+        help="Multiply every stage's iteration count (e.g. 0.1 for a quick model).",
+        min=0.001)] = 1.0,
+) -> None:
+    """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
+
+    Training runs in stages, short rollouts first and long free-running ones after; the
+    free-run error on held-out logs is printed and stored in the model's metadata."""
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.training_job import PAPER_MODEL_ERROR, train_from_logs
+
+    with _user_errors(output):
+        result = train_from_logs(logs, output, load_profile(profile), holdout or (), hidden,
+                                 seed, iterations_scale, progress=_progress)
+    typer.echo(f"model written to {result.output} ({result.training_logs} training logs, "
+               f"{result.heldout_logs} held out)")
+    typer.echo("free-run error on held-out normal logs (rms / mean abs; paper's figure):")
+    for name, rms in result.heldout_rms.items():
+        paper = PAPER_MODEL_ERROR.get(name)
+        typer.echo(f"  {name:<10} {rms:.4f} / {result.heldout_mean_abs[name]:.4f}"
+                   + (f"   (paper {paper})" if paper is not None else ""))
+
+
+def _progress(message: str) -> None:
+    typer.echo(message, err=True)
+
+
+@app.command()
+def simulate(
+    scenario: Annotated[str, typer.Argument(help="Scenario name (see 'auvdiag scenarios').")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Log path to write.")],
+    log_format: Annotated[str, typer.Option(
+        "--format", help=f"Log format: {', '.join(LOG_FORMATS)}.")] = "ros2-mcap",
+    seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
+    fault_at: Annotated[float | None, typer.Option(
+        help="Move the scenario's fault onset to this time (s).")] = None,
+) -> None:
+    """Simulate a Twin-Burger dive and write it as a log with its ground truth beside it.
+
+    The truth goes to NAME.truth.json (scenario, fault, onset) and NAME.truth.csv (true
+    surge, yaw rate, heading and position at 10 Hz)."""
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.logwriter import truth_paths, write_log
+    from auvdiag_cli.simulator.run import simulate as run_simulation
+    from auvdiag_cli.simulator.scenarios import get_scenario
+
+    if log_format not in LOG_FORMATS:
+        _fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
+    with _user_errors(output):
+        try:
+            chosen = get_scenario(scenario, fault_at)
+        except (KeyError, ValueError) as error:
+            _fail(str(error).strip("'\""))
+        if output.exists():
+            _fail(f"{output}: exists already, not overwriting")
+        dive = run_simulation(chosen, load_profile(None), seed)
+        write_log(dive, output, log_format)
+    typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
+               f"{truth_paths(output)[0].name}")
+
+
+@app.command()
+def scenarios() -> None:
+    """List the simulator's named scenarios."""
+    from auvdiag_cli.simulator.scenarios import SCENARIOS
+
+    width = max(len(name) for name in SCENARIOS)
+    for name, scenario in SCENARIOS.items():
+        typer.echo(f"{name:<{width}}  {scenario.description}")
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console-script entry point."""
+    command: Callable[..., object] = app
+    command(args=argv if argv is not None else sys.argv[1:], prog_name="auvdiag")

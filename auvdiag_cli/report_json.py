@@ -1,0 +1,68 @@
+"""The machine-readable report (SPEC §5): a plain dict, written as JSON."""
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+from auvdiag_cli import __version__
+from auvdiag_cli.diagnosis import PAPER_ASSUMPTIONS, Diagnosis
+
+SCHEMA_VERSION = 1
+
+
+def _finite(value: float) -> float | None:
+    return None if value is None or not math.isfinite(value) else value
+
+
+def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
+    substitution = diagnosis.substitution
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "tool": f"auvdiag {__version__}",
+        "log": str(diagnosis.log),
+        "format": diagnosis.format,
+        "vehicle": diagnosis.vehicle,
+        "verdict": diagnosis.verdict,
+        "component": diagnosis.component,
+        "candidates": diagnosis.candidates,
+        "case": diagnosis.case,
+        "b": diagnosis.b,
+        "detected_at_s": diagnosis.detected_at_s,
+        "onset_s": diagnosis.onset_s,
+        "duration_s": round(float(diagnosis.time_s[-1]), 3) if diagnosis.time_s.size else None,
+        "segments": [
+            {
+                "name": r.segment.name,
+                "start_s": round(r.segment.start_s, 3),
+                "end_s": round(r.segment.end_s, 3),
+                "mode": r.segment.mode,
+                "thresholds": r.segment.thresholds,
+                "max_g": {k: _finite(v) for k, v in r.max_g.items()},
+                "b": r.b,
+            }
+            for r in diagnosis.segments
+        ],
+        "substitution": None if substitution is None else {
+            "signal": substitution.signal,
+            "from_s": substitution.from_s,
+            "unit": substitution.unit,
+            "expected_error_rms": substitution.expected_error_rms,
+        },
+        "model": diagnosis.model,
+        "method": {
+            "g": "g_i(k) = 100/(K R_i) * sum_{j=k-K+1..k} |SS_i(j) - SM_i(j)| (mean of K samples)",
+            "window_samples": diagnosis.window_samples,
+            "decision_window_s": diagnosis.decision_window_s,
+            "assumptions": list(PAPER_ASSUMPTIONS),
+        },
+        "notes": diagnosis.notes,
+    }
+
+
+def write_json(document: dict[str, Any], target: Path) -> None:
+    """Write atomically: a reader never sees half a report."""
+    text = json.dumps(document, indent=2) + "\n"
+    temporary = target.with_name(f".{target.name}.tmp")
+    temporary.write_text(text, encoding="utf-8")
+    temporary.replace(target)

@@ -1,0 +1,42 @@
+"""The short human summary printed on the terminal."""
+
+from auvdiag_cli.diagnosis import Diagnosis
+
+
+def _components(names: list[str]) -> str:
+    return " or ".join(name.replace("_", " ") for name in names)
+
+
+def summary_lines(diagnosis: Diagnosis) -> list[str]:
+    d = diagnosis
+    duration = float(d.time_s[-1]) if d.time_s.size else 0.0
+    lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
+    if d.verdict == "normal":
+        lines.append("verdict: NORMAL: no fault detected")
+    else:
+        what = (d.component.replace("_", " ") if d.component
+                else _components(d.candidates) if d.candidates else "unidentified component")
+        lines.append(f"verdict: FAULT: {what}"
+                     + (f" (pattern case {d.case})" if d.case is not None else ""))
+        lines.append(f"  onset    ~{d.onset_s:.1f} s   detected {d.detected_at_s:.1f} s   "
+                     f"(delay {d.detected_at_s - d.onset_s:.1f} s)"
+                     if d.onset_s is not None and d.detected_at_s is not None else "")
+        lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in d.b.items()))
+        if d.component is None and len(d.candidates) > 1:
+            lines.append("  the pattern table cannot tell these apart; run the Diagnosis Motion "
+                         "Sequences that move one thruster at a time (ZB, ZC) to decide")
+        if d.substitution is not None:
+            s = d.substitution
+            error = (f", expected error {s.expected_error_rms:.4f} {s.unit} rms"
+                     if s.expected_error_rms is not None else "")
+            lines.append(f"  substituting control: model {s.signal} replaces the sensor from "
+                         f"{s.from_s:.1f} s{error}")
+    for result in d.segments:
+        seg = result.segment
+        peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"
+                          for name in result.max_g)
+        lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "
+                     f"max g / threshold: {peaks}")
+    lines += [f"  note: {note}" for note in d.notes]
+    lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
+    return [line for line in lines if line]

@@ -1,0 +1,49 @@
+"""Shared fixtures: real logs written by the simulator through the real writers."""
+
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from auvdiag_cli.profile import Profile, load_profile
+from auvdiag_cli.simulator.logwriter import write_log
+from auvdiag_cli.simulator.run import SimulatedDive, simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+
+MakeLog = Callable[..., Path]
+
+
+@pytest.fixture(scope="session")
+def profile() -> Profile:
+    return load_profile()
+
+
+@pytest.fixture(scope="session")
+def dive_cache(profile: Profile) -> Callable[[str, int], SimulatedDive]:
+    cache: dict[tuple[str, int], SimulatedDive] = {}
+
+    def get(scenario: str, seed: int) -> SimulatedDive:
+        if (scenario, seed) not in cache:
+            cache[scenario, seed] = simulate(get_scenario(scenario), profile, seed)
+        return cache[scenario, seed]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def log_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("logs")
+
+
+@pytest.fixture(scope="session")
+def make_log(log_dir: Path, dive_cache: Callable[[str, int], SimulatedDive]) -> MakeLog:
+    """Write (once per session) the dive of ``scenario`` with ``seed`` in ``fmt``."""
+
+    def make(scenario: str, seed: int = 11, fmt: str = "ros2-mcap") -> Path:
+        suffix = ".bag" if fmt == "bag" else ""
+        path = log_dir / f"{scenario}-s{seed}-{fmt}{suffix}"
+        if not path.exists():
+            write_log(dive_cache(scenario, seed), path, fmt)
+        return path
+
+    return make

@@ -1,0 +1,76 @@
+"""Logs written by the real writers read back exactly, in every ROS format."""
+
+import numpy as np
+import pytest
+
+from adapters import LogError, detect_format, read_log
+from adapters.fieldpath import field_getter, parse_field_path
+
+FORMATS = ["bag", "db3", "ros2-mcap"]
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_round_trip_values_and_markers(make_log, dive_cache, profile, fmt):
+    dive = dive_cache("routine-and-mission", 11)
+    log = make_log("routine-and-mission", 11, fmt)
+    assert detect_format(log) == fmt
+    signals = read_log(log, profile.ros_sources)
+    assert signals.format == fmt
+    commands = np.asarray(dive.commands.values)
+    np.testing.assert_allclose(signals.series["thruster_0"].to_numpy(), commands[:, 0])
+    np.testing.assert_allclose(signals.series["thruster_1"].to_numpy(), commands[:, 1])
+    np.testing.assert_allclose(signals.series["flow"].to_numpy(),
+                               np.asarray(dive.flow.values)[:, 0])
+    np.testing.assert_allclose(signals.series["yaw_rate"].to_numpy(),
+                               np.asarray(dive.imu.values)[:, 0])
+    expected_ns = dive.start_ns + np.round(np.asarray(dive.imu.times_s) * 1e9).astype(np.int64)
+    np.testing.assert_array_equal(signals.series["yaw_rate"].index.to_numpy(), expected_ns)
+    assert [m.label for m in signals.markers] == ["ZA", "ZB", "ZC", "MISSION"]
+    first_ns = min([int(s.index[0]) for s in signals.series.values()]
+                   + [m.time_ns for m in signals.markers])
+    assert signals.start_ns == first_ns
+
+
+def test_ros2_bag_storage_file_is_read_like_its_directory(make_log, profile):
+    directory = make_log("paper-normal", 11, "ros2-mcap")
+    storage = next(directory.glob("*.mcap"))
+    assert detect_format(storage) == "ros2-mcap"
+    a = read_log(directory, profile.ros_sources).series["flow"]
+    b = read_log(storage, profile.ros_sources).series["flow"]
+    assert a.equals(b)
+
+
+def test_field_paths():
+    assert parse_field_path("twist.linear.x") == ("twist", "linear", "x")
+    assert parse_field_path("data[1]") == ("data", 1)
+    assert parse_field_path("a.b[2].c") == ("a", "b", 2, "c")
+    assert field_getter("data[1]")({"data": [5.0, 7.0]}) == 7.0
+    with pytest.raises(ValueError, match="cannot parse"):
+        parse_field_path("data[x]")
+    with pytest.raises(ValueError, match="empty step"):
+        parse_field_path("twist..x")
+
+
+def test_unresolvable_field_names_the_file(make_log, profile):
+    from dataclasses import replace
+
+    from adapters import FieldSource
+
+    sources = replace(profile.ros_sources, signals={
+        **profile.ros_sources.signals,
+        "flow": FieldSource("/flow/velocity", "twist.linear.w")})
+    log = make_log("paper-normal", 11)
+    with pytest.raises(LogError, match="field does not resolve") as error:
+        read_log(log, sources)
+    assert str(log) in str(error.value)
+
+
+def test_unindexed_ros1_bag_is_a_log_error(make_log, tmp_path, profile):
+    source = make_log("paper-normal", 11, "bag").read_bytes()
+    # A killed recorder leaves index_pos = 0 in the bag header record.
+    position = source.index(b"index_pos=") + len(b"index_pos=")
+    damaged = tmp_path / "unindexed.bag"
+    damaged.write_bytes(source[:position] + b"\x00" * 8 + source[position + 8:])
+    with pytest.raises(LogError) as error:
+        read_log(damaged, profile.ros_sources)
+    assert str(damaged) in str(error.value)

@@ -1,0 +1,112 @@
+"""The dynamics model really trains, saves without pickle, and loads back identically."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.ingest import ingest
+from models.dynamics import replay
+from models.store import ModelFileError, load_model
+
+PAPER_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
+
+
+@pytest.fixture(scope="module")
+def quick_model(make_log, tmp_path_factory):
+    """A model trained by `auvdiag train` on real logs, with shortened stages."""
+    logs = [make_log(name, 11) for name in ("dms-za", "dms-zb", "dms-zc", "paper-normal",
+                                             "mission-large-ccw")]
+    output = tmp_path_factory.mktemp("model") / "quick"
+    result = CliRunner().invoke(app, [
+        "train", *map(str, logs), "--holdout", str(make_log("mission-ccw", 12)),
+        "--output", str(output), "--iterations-scale", "0.3", "--hidden", "16"])
+    assert result.exit_code == 0, result.output
+    return output, result
+
+
+def test_train_writes_readable_metadata_and_error_figures(quick_model, profile):
+    output, result = quick_model
+    meta = json.loads((output / "model.json").read_text())
+    assert meta["format"] == "auvdiag-model" and meta["format_version"] == 1
+    assert meta["dt_s"] == 0.1
+    assert meta["signals"]["commands"] == ["thruster_0", "thruster_1"]
+    assert [s["name"] for s in meta["signals"]["sensors"]] == ["flow", "yaw_rate"]
+    assert meta["thresholds"]["mission"] == {"flow": 15.0, "yaw_rate": 10.0}
+    assert meta["full_scale"] == {"flow": 0.5, "yaw_rate": 0.5}
+    assert len(meta["training"]["logs"]) == 5
+    assert len(meta["training"]["data_sha256"]) == 64
+    assert meta["heldout_error"]["logs"] == ["mission-ccw-s12-ros2-mcap"]
+    assert [s["horizon_steps"] for s in meta["training"]["stages"]] == [10, 50, 200, 600]
+    for name in ("flow", "yaw_rate"):
+        assert 0.0 < meta["heldout_error"]["rms"][name] < 2 * PAPER_ERROR[name]
+        assert f"{meta['heldout_error']['rms'][name]:.4f}" in result.stdout
+
+
+def test_trained_model_beats_a_model_that_predicts_no_change(quick_model, make_log, profile):
+    model = load_model(quick_model[0])
+    frame = ingest(make_log("mission-large-cw", 12), profile).frame
+    predicted = replay(model.network, model.normaliser, frame.commands, frame.sensors[0])
+    learned = np.sqrt(np.nanmean((frame.sensors - predicted) ** 2, axis=0))
+    constant = np.sqrt(np.nanmean((frame.sensors - frame.sensors[0]) ** 2, axis=0))
+    assert np.all(learned < 0.3 * constant)
+
+
+def test_replay_is_free_running(quick_model, make_log, profile):
+    """After the initial state no sensor value enters: zeroing the sensors from the second
+    sample on leaves SM unchanged (the paper's RC_1 feedback) while g grows."""
+    from auvdiag_cli.matching import match
+
+    model = load_model(quick_model[0])
+    frame = ingest(make_log("paper-normal", 12), profile).frame
+    healthy = match(model, frame, profile.full_scales, profile.window_samples)
+    frame.sensors[1:] = 0.0
+    broken = match(model, frame, profile.full_scales, profile.window_samples)
+    np.testing.assert_array_equal(healthy.modelled, broken.modelled)
+    assert np.nanmax(broken.g_percent) > 2 * np.nanmax(healthy.g_percent)
+
+
+def test_model_loads_identically(quick_model):
+    output, _ = quick_model
+    a, b = load_model(output), load_model(output)
+    for (name, x), (_, y) in zip(a.network.state_dict().items(),
+                                 b.network.state_dict().items(), strict=True):
+        assert torch.equal(x, y), name
+
+
+def test_weights_that_need_code_to_load_are_refused(quick_model, tmp_path):
+    output, _ = quick_model
+    target = tmp_path / "evil"
+    target.mkdir()
+    (target / "model.json").write_text((output / "model.json").read_text())
+    torch.save({"payload": np.dtype}, target / "weights.pt")   # unpickling needs a callable
+    with pytest.raises(ModelFileError, match="does not load"):
+        load_model(target)
+
+
+def test_unknown_model_version_is_refused(quick_model, tmp_path):
+    output, _ = quick_model
+    target = tmp_path / "future"
+    target.mkdir()
+    meta = json.loads((output / "model.json").read_text())
+    meta["format_version"] = 99
+    (target / "model.json").write_text(json.dumps(meta))
+    (target / "weights.pt").write_bytes((output / "weights.pt").read_bytes())
+    with pytest.raises(ModelFileError, match="version 99 is not supported"):
+        load_model(target)
+
+
+def test_shipped_model_matches_the_papers_model_error():
+    meta = load_model().metadata
+    for name, paper in PAPER_ERROR.items():
+        assert meta["heldout_error"]["rms"][name] <= paper
+    assert meta["heldout_error"]["paper_rms"] == PAPER_ERROR
+
+
+def test_train_needs_two_logs(make_log, tmp_path):
+    result = CliRunner().invoke(app, ["train", str(make_log("dms-za", 11)), "--output",
+                                      str(tmp_path / "m")])
+    assert result.exit_code == 2 and "at least two logs" in result.stderr

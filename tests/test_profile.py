@@ -1,0 +1,49 @@
+"""Profiles validate once, and a bad one names the offending key."""
+
+import pytest
+
+from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.profile import load_profile
+
+
+def test_builtin_profile_has_the_papers_figures(profile):
+    assert profile.command_names == ("thruster_0", "thruster_1")
+    assert profile.sensor_names == ("flow", "yaw_rate")
+    assert profile.thresholds["mission"] == {"flow": 15.0, "yaw_rate": 10.0}
+    for dms in ("ZA", "ZB", "ZC"):
+        assert profile.thresholds[dms] == {"flow": 8.0, "yaw_rate": 7.0}
+    table = {row.case: (row.b["flow"], row.b["yaw_rate"], row.components)
+             for row in profile.pattern}
+    assert table == {0: (0, 0, ()), 1: (1, 1, ("thruster_0", "thruster_1")),
+                     2: (1, 0, ("flow_sensor",)), 3: (0, 1, ("yaw_rate_sensor",))}
+
+
+BUILTIN = load_profile().source_path
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (("full_scale = 0.5", 'full_scale = "big"'), "sensors[0].full_scale' must be a number"),
+    (("full_scale = 0.5", "full_scale = -1.0"), "sensors[0].full_scale' must be positive"),
+    (("[thresholds.mission]\nflow = 15.0\n", "[thresholds.mission]\n"),
+     "missing key 'thresholds.mission.flow'"),
+    (("dt_s = 0.1 ", "dt_x = 0.1 "), "missing key 'vehicle.dt_s'"),
+    (("b = { flow = 1, yaw_rate = 0 }", "b = { flow = 2, yaw_rate = 0 }"),
+     "pattern[2].b.flow' must be 0 or 1"),
+    (('field = "data[0]"', "fieldx = 1"), "sources.ros.signals.thruster_0.field"),
+    (("[5, 0.6, 0.3]", "[5, 0.6]"), "dms.ZA.steps[0]"),
+    (("[vehicle]", "[vehicle"), "not valid TOML"),
+])
+def test_invalid_profile_names_the_key(tmp_path, edit, message):
+    from importlib import resources
+
+    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    assert edit[0] in text
+    path = tmp_path / "p.toml"
+    path.write_text(text.replace(edit[0], edit[1], 1))
+    with pytest.raises(ProfileError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        load_profile(path)
+
+
+def test_missing_profile_file(tmp_path):
+    with pytest.raises(ProfileError, match="cannot read profile"):
+        load_profile(tmp_path / "absent.toml")

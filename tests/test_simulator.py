@@ -1,0 +1,98 @@
+"""The simulated vehicle obeys the conventions and physics the diagnosis relies on."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.simulator.faults import Fault
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.vehicle import TwinThrusterVehicle, VehicleParams
+
+
+def settle(commands, seconds=20.0, gains=(1.0, 1.0)):
+    vehicle = TwinThrusterVehicle(VehicleParams())
+    vehicle.thruster_gain = list(gains)
+    for _ in range(int(seconds / 0.01)):
+        vehicle.step(commands, 0.01)
+    return vehicle.state
+
+
+def test_thruster_0_alone_turns_to_starboard():
+    assert settle((0.6, 0.0)).yaw_rate_rps > 0.05
+    assert settle((0.0, 0.6)).yaw_rate_rps < -0.05
+
+
+def test_forward_speed_is_plausible_and_reverse_is_weaker():
+    full = settle((1.0, 1.0)).surge_mps
+    assert 0.4 < full < 0.6
+    assert -settle((-1.0, -1.0)).surge_mps < full
+
+
+def test_dead_thruster_produces_no_thrust():
+    assert settle((0.6, 0.6), gains=(0.0, 1.0)).thrust_n[0] == 0.0
+
+
+def test_fault_changes_readings_only_after_onset():
+    fault = Fault("flow_sensor", "covered", 10.0)
+    assert fault.sensor_reading("flow_sensor", 0.3, 9.99) == 0.3
+    assert fault.sensor_reading("flow_sensor", 0.3, 10.0) == 0.0
+    assert fault.sensor_reading("yaw_rate_sensor", 0.3, 20.0) == 0.3
+    with pytest.raises(ValueError, match="unknown fault"):
+        Fault("flow_sensor", "exploded", 1.0)
+
+
+def test_dms_zb_moves_only_thruster_0(dive_cache):
+    commands = np.asarray(dive_cache("dms-zb", 11).commands.values)
+    assert np.abs(commands[:, 0]).max() > 0.5
+    assert np.abs(commands[:, 1]).max() == 0.0
+
+
+def test_flow_sensor_fault_changes_what_the_controller_does(dive_cache):
+    normal, faulty = dive_cache("paper-normal", 11), dive_cache("paper-flow-sensor-covered", 11)
+    after = np.asarray(faulty.flow.times_s) > 115.1
+    assert np.all(np.asarray(faulty.flow.values)[after] == 0.0)
+    # The speed loop, told the vehicle is still, pushes harder than on the healthy run.
+    steps = slice(1170, 1200)
+    assert (np.asarray(faulty.commands.values)[steps].sum()
+            > np.asarray(normal.commands.values)[steps].sum() + 1.0)
+
+
+def test_paper_mission_ends_a_right_turn_just_before_the_fault(dive_cache):
+    truth = dive_cache("paper-normal", 11).truth.set_index("t_s")
+    # Heading is about 270 degrees (third right turn done) and the vehicle is nearly still.
+    assert abs(truth.loc[115.0, "heading_rad"] - 1.5 * np.pi) < 0.2
+    assert truth.loc[115.0, "surge_mps"] < 0.05
+    assert truth.loc[110.0, "yaw_rate_rps"] > 0.1
+
+
+def test_unknown_scenario_lists_the_known_ones():
+    with pytest.raises(KeyError, match="paper-flow-sensor-covered"):
+        get_scenario("nonsense")
+
+
+def test_simulate_command_writes_log_and_truth(tmp_path):
+    runner = CliRunner()
+    out = tmp_path / "dive.bag"
+    result = runner.invoke(app, ["simulate", "mission-thruster-1-dead", "--format", "bag",
+                                 "--output", str(out), "--seed", "3", "--fault-at", "40"])
+    assert result.exit_code == 0, result.output
+    assert out.read_bytes().startswith(b"#ROSBAG V2.0")
+    truth = json.loads((tmp_path / "dive.truth.json").read_text())
+    assert truth["fault"]["component"] == "thruster_1"
+    assert truth["fault"]["onset_s"] == pytest.approx(40.0, abs=0.01)
+    series = pd.read_csv(tmp_path / "dive.truth.csv")
+    assert {"t_s", "surge_mps", "yaw_rate_rps", "x_m", "y_m"} <= set(series.columns)
+    again = runner.invoke(app, ["simulate", "paper-normal", "--output", str(out)])
+    assert again.exit_code == 2 and "exists already" in again.stderr
+    bad = runner.invoke(app, ["simulate", "paper-normal", "--output", str(tmp_path / "x"),
+                              "--format", "zip"])
+    assert bad.exit_code == 2 and "unknown --format" in bad.stderr
+
+
+def test_scenarios_command_lists_the_paper_scenario():
+    result = CliRunner().invoke(app, ["scenarios"])
+    assert result.exit_code == 0 and "paper-flow-sensor-covered" in result.stdout
