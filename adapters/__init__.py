@@ -19,7 +19,10 @@ __all__ = [
 
 
 class Adapter(Protocol):
-    formats: tuple[str, ...]
+    """One format family: recognises its files by content and reads the needed signals."""
+
+    @property
+    def formats(self) -> tuple[str, ...]: ...
 
     def sniff(self, path: Path) -> str | None: ...
 

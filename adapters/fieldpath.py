@@ -34,9 +34,7 @@ def field_getter(path: str) -> Callable[[Any], Any]:
     def get(message: Any) -> Any:
         value = message
         for step in steps:
-            if isinstance(step, int):
-                value = value[step]
-            elif isinstance(value, dict):
+            if isinstance(step, int) or isinstance(value, dict):
                 value = value[step]
             else:
                 value = getattr(value, step)

@@ -46,11 +46,12 @@ def _user_errors(subject: Path | str) -> Iterator[None]:
     from auvdiag_cli.errors import INPUT_ERRORS
     from models.store import ModelFileError
 
+    expected: tuple[type[Exception], ...] = (*INPUT_ERRORS, ModelFileError)
     try:
         yield
     except typer.Exit:
         raise
-    except (*INPUT_ERRORS, ModelFileError) as error:
+    except expected as error:
         _fail(str(error))
     except KeyboardInterrupt:
         _fail("interrupted")

@@ -29,7 +29,7 @@ def detect(b: np.ndarray, residual_fraction: np.ndarray, thresholds: np.ndarray,
     if alarms.size == 0:
         return None
     alarm = int(alarms[0])
-    decided = b[alarm:alarm + decision_steps + 1].any(axis=0)
+    decided = np.asarray(b[alarm:alarm + decision_steps + 1].any(axis=0))
     onsets = [
         _onset(residual_fraction[:, i], thresholds[alarm, i] / 100.0, alarm, lookback_steps)
         for i in np.flatnonzero(decided)

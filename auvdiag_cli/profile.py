@@ -101,7 +101,7 @@ class _Reader:
         value = self.table[name]
         if kind is float and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
-        if not isinstance(value, kind) or isinstance(value, bool) and kind is not bool:
+        if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
             raise ProfileError(f"key '{self.key(name)}' must be {_kind_name(kind)}, got {value!r}")
         return value
 

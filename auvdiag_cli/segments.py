@@ -22,14 +22,16 @@ class Segment:
 def segments_from_markers(markers: list[SegmentMarker], start_ns: int, end_s: float,
                           profile: Profile) -> list[Segment]:
     """Cut the log at its markers; time before the first marker, or a log without markers,
-    is treated as mission."""
+    is treated as mission. A marker less than one model step after the previous cut
+    relabels that segment (no segment is shorter than a step), and a repeated label
+    continues the segment it repeats."""
     cuts: list[tuple[float, str]] = [(0.0, "MISSION")]
     for marker in sorted(markers, key=lambda m: m.time_ns):
         time_s = (marker.time_ns - start_ns) / 1e9
         label = marker.label.strip().upper()
-        if time_s <= cuts[-1][0] + 1e-3:
+        if time_s < cuts[-1][0] + profile.dt_s:
             cuts[-1] = (cuts[-1][0], label)
-        else:
+        elif label != cuts[-1][1]:
             cuts.append((time_s, label))
     segments = []
     for (start, label), (end, _) in zip(cuts, [*cuts[1:], (end_s, "")], strict=True):

@@ -70,6 +70,7 @@ def save_model(directory: Path, network: RecurrentDynamics, normaliser: Normalis
 
 def load_model(directory: Path | None = None) -> LoadedModel:
     """Load a model directory (the shipped Twin-Burger model when ``directory`` is None)."""
+    label = "builtin:twin_burger" if directory is None else str(directory)
     directory = default_model_dir() if directory is None else directory
     meta_path, weights_path = directory / METADATA_FILE, directory / WEIGHTS_FILE
     if not meta_path.is_file() or not weights_path.is_file():
@@ -95,4 +96,4 @@ def load_model(directory: Path | None = None) -> LoadedModel:
     except Exception as error:  # torch raises many types (pickle refusals, zip, shape)
         raise ModelFileError(f"{directory}: model does not load: {error}") from None
     network.eval()
-    return LoadedModel(network, normaliser, metadata, str(directory))
+    return LoadedModel(network, normaliser, metadata, label)

@@ -50,3 +50,21 @@ def test_detection_collects_b_over_the_decision_window_and_finds_the_onset():
     assert abs(found.onset_index - 200) <= 10
     assert detect(np.zeros((10, 2), np.int8), residual[:10], thresholds[:10],
                   ("flow", "yaw_rate"), 5, 5) is None
+
+
+def test_segments_from_markers(profile):
+    from adapters import SegmentMarker
+    from auvdiag_cli.segments import segments_from_markers
+
+    start = 1_000_000_000
+    markers = [SegmentMarker(start + 2_000_000, "ZA"), SegmentMarker(start + 30 * 10**9, "zb"),
+               SegmentMarker(start + 40 * 10**9, "ZB"), SegmentMarker(start + 60 * 10**9,
+                                                                         "MISSION")]
+    segments = segments_from_markers(markers, start, 100.0, profile)
+    assert [(s.name, s.mode, s.start_s, s.end_s) for s in segments] == [
+        ("ZA", "routine", 0.0, 30.0), ("ZB", "routine", 30.0, 60.0),
+        ("MISSION", "mission", 60.0, 100.0)]
+    assert segments[0].thresholds == {"flow": 8.0, "yaw_rate": 7.0}
+    assert [s.name for s in segments_from_markers([], start, 100.0, profile)] == ["MISSION"]
+    late = segments_from_markers([SegmentMarker(start + 5 * 10**9, "ZC")], start, 50.0, profile)
+    assert [(s.name, s.start_s) for s in late] == [("MISSION", 0.0), ("ZC", 5.0)]

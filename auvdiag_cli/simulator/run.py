@@ -162,7 +162,8 @@ class _Dive:
         spec = phase.mission
         assert spec is not None
         waypoints = rectangle_waypoints(spec.length_m, spec.width_m, spec.clockwise)
-        controller = PathFollower(waypoints, ControllerGains(cruise_speed_mps=spec.cruise_speed_mps))
+        gains = ControllerGains(cruise_speed_mps=spec.cruise_speed_mps)
+        controller = PathFollower(waypoints, gains)
         # The controller's navigation starts where the vehicle is, in its own frame.
         controller.heading = 0.0
         start = self.time_s

@@ -47,7 +47,8 @@ _SCENARIOS = [
              PAPER_MISSION),
     Scenario("paper-flow-sensor-covered",
              "the paper's experiment: 4 m x 2 m clockwise rectangle, flow sensor covered at "
-             "115 s just after a right turn", PAPER_MISSION, Fault("flow_sensor", "covered", 115.0)),
+             "115 s just after a right turn", PAPER_MISSION,
+             Fault("flow_sensor", "covered", 115.0)),
     Scenario("mission-ccw", "4 m x 2 m counter-clockwise rectangle, no fault",
              _mission(clockwise=False)),
     Scenario("mission-large-cw", "5 m x 2.5 m clockwise rectangle, no fault",

@@ -1,0 +1,38 @@
+"""The bundled sample logs still give the reports recorded beside them, and their truth."""
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+SAMPLES = Path(__file__).parents[1] / "sample_logs"
+EXPECTED = sorted(SAMPLES.glob("*.expected.json"))
+
+
+def test_there_are_samples_of_every_kind():
+    verdicts = {json.loads(p.read_text())["component"] for p in EXPECTED}
+    assert {None, "flow_sensor", "yaw_rate_sensor"} <= verdicts
+
+
+@pytest.mark.parametrize("expected_path", EXPECTED, ids=lambda p: p.name.split(".")[0])
+def test_sample_log_report_matches_expected_and_truth(expected_path):
+    expected = json.loads(expected_path.read_text())
+    truth = json.loads(expected_path.with_name(
+        expected_path.name.replace(".expected.json", ".truth.json")).read_text())
+    log = SAMPLES.parent / expected["log"]
+    result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
+    report = json.loads(result.stdout)
+    assert result.exit_code == (1 if expected["verdict"] == "fault" else 0)
+    for key in ("verdict", "component", "candidates", "case", "b", "format"):
+        assert report[key] == expected[key], key
+    for key in ("onset_s", "detected_at_s"):
+        assert (report[key] is None) == (expected[key] is None)
+        if expected[key] is not None:
+            assert report[key] == pytest.approx(expected[key], abs=0.5)
+    assert report["verdict"] == truth["expected"]["verdict"]
+    if truth["fault"] is not None:
+        assert truth["fault"]["component"] in report["candidates"]
+        assert abs(report["onset_s"] - truth["fault"]["onset_s"]) < 2.0
