@@ -3,15 +3,20 @@
 from pathlib import Path
 from typing import Protocol
 
+from collections.abc import Mapping
+
 from adapters.errors import LogError
+from adapters.mavlink import DataflashAdapter, TlogAdapter
+from adapters.mcap import McapAdapter
 from adapters.rosbag import RosbagAdapter
-from adapters.signals import FieldSource, LogSources, SegmentMarker, Signals
+from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSource, Signals
 
 __all__ = [
     "FieldSource",
     "LogError",
     "LogSources",
     "SegmentMarker",
+    "SegmentSource",
     "Signals",
     "detect_format",
     "read_log",
@@ -22,6 +27,10 @@ class Adapter(Protocol):
     """One format family: recognises its files by content and reads the needed signals."""
 
     @property
+    def family(self) -> str:
+        """Which profile mapping it reads: ``ros``, ``mavlink`` or ``dataflash``."""
+
+    @property
     def formats(self) -> tuple[str, ...]: ...
 
     def sniff(self, path: Path) -> str | None: ...
@@ -29,7 +38,9 @@ class Adapter(Protocol):
     def read(self, path: Path, sources: LogSources) -> Signals: ...
 
 
-ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(),)
+# Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
+ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(), McapAdapter(), TlogAdapter(),
+                                 DataflashAdapter())
 
 
 def _find_adapter(path: Path) -> tuple[Adapter, str]:
@@ -50,7 +61,11 @@ def detect_format(path: Path) -> str:
     return _find_adapter(path)[1]
 
 
-def read_log(path: Path, sources: LogSources) -> Signals:
-    """Read the signals named in ``sources`` from the log at ``path``."""
-    adapter, _ = _find_adapter(path)
-    return adapter.read(path, sources)
+def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:
+    """Read the log at ``path`` with the mapping of its family (``sources[family]``)."""
+    adapter, fmt = _find_adapter(path)
+    mapping = sources.get(adapter.family)
+    if mapping is None:
+        raise LogError(path, f"the profile has no [sources.{adapter.family}] mapping for "
+                             f"{fmt} logs")
+    return adapter.read(path, mapping)

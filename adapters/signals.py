@@ -15,20 +15,38 @@ import pandas as pd
 
 @dataclass(frozen=True)
 class FieldSource:
-    """Where one signal lives in a log: a topic (or message name) and a field path."""
+    """Where one signal lives in a log: a topic (ROS, MCAP) or message name (MAVLink,
+    DataFlash), a field path, a linear map to SI units (value · scale + offset), and
+    optionally fields a message must match to count (e.g. NAMED_VALUE_FLOAT ``name``)."""
 
     topic: str
     field: str
     scale: float = 1.0
     offset: float = 0.0
+    where: tuple[tuple[str, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class SegmentSource:
+    """Where segment markers live: a text field whose value, after ``prefix``, is the label."""
+
+    topic: str
+    field: str = "data"
+    prefix: str = ""
 
 
 @dataclass(frozen=True)
 class LogSources:
-    """What an adapter must extract: one source per signal, plus the segment-marker topic."""
+    """What an adapter must extract: one source per signal, plus the segment markers."""
 
     signals: dict[str, FieldSource]
-    segment_topic: str | None = None
+    segment: SegmentSource | None = None
+
+    @property
+    def topics(self) -> set[str]:
+        """Every topic or message name the adapter has to read."""
+        names = {src.topic for src in self.signals.values()}
+        return names | ({self.segment.topic} if self.segment else set())
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,6 @@ import typer
 from auvdiag_cli import __version__
 
 EXIT_NORMAL, EXIT_FAULT, EXIT_UNUSABLE = 0, 1, 2
-LOG_FORMATS = ("bag", "db3", "ros2-mcap")
 
 app = typer.Typer(
     name="auvdiag",
@@ -152,7 +151,9 @@ def simulate(
     scenario: Annotated[str, typer.Argument(help="Scenario name (see 'auvdiag scenarios').")],
     output: Annotated[Path, typer.Option("--output", "-o", help="Log path to write.")],
     log_format: Annotated[str, typer.Option(
-        "--format", help=f"Log format: {', '.join(LOG_FORMATS)}.")] = "ros2-mcap",
+        "--format", help="Log format: bag (ROS 1), db3 (ROS 2, sqlite3), ros2-mcap (ROS 2, "
+                         "mcap storage), mcap (standalone), tlog (MAVLink), bin (DataFlash)."
+    )] = "ros2-mcap",
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
     fault_at: Annotated[float | None, typer.Option(
         help="Move the scenario's fault onset to this time (s).")] = None,
@@ -162,7 +163,7 @@ def simulate(
     The truth goes to NAME.truth.json (scenario, fault, onset) and NAME.truth.csv (true
     surge, yaw rate, heading and position at 10 Hz)."""
     from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.simulator.logwriter import truth_paths, write_log
+    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths, write_log
     from auvdiag_cli.simulator.run import simulate as run_simulation
     from auvdiag_cli.simulator.scenarios import get_scenario
 

@@ -16,7 +16,7 @@ class IngestedLog:
 
 def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
     """Read ``path`` with the profile's mapping and resample it to the profile's Δt."""
-    signals = read_log(path, profile.ros_sources)
+    signals = read_log(path, profile.sources)
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
                          max_gap_s)

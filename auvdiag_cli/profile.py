@@ -6,7 +6,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from adapters.signals import FieldSource, LogSources
+from adapters.signals import FieldSource, LogSources, SegmentSource
 from auvdiag_cli.errors import ProfileError
 
 MISSION_MODE = "mission"
@@ -60,8 +60,11 @@ class Profile:
     thresholds: dict[str, dict[str, float]]
     pattern: tuple[PatternRow, ...]
     dms: dict[str, DiagnosisSequence]
-    ros_sources: LogSources
+    sources: dict[str, LogSources]   # per log family: ros, mavlink, dataflash
     source_path: str
+
+    def sources_for(self, family: str) -> LogSources | None:
+        return self.sources.get(family)
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -174,14 +177,9 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     dms_table = top.sub("dms") if "dms" in data else _Reader({}, "dms")
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
 
-    ros = top.sub("sources").sub("ros")
-    ros_signals = ros.sub("signals")
-    sources = {}
-    for name in signal_names:
-        entry = ros_signals.sub(name)
-        sources[name] = FieldSource(entry.get("topic", str), entry.get("field", str),
-                                    entry.get("scale", float, 1.0),
-                                    entry.get("offset", float, 0.0))
+    sources_table = top.sub("sources")
+    sources = {family: _log_sources(sources_table.sub(family), signal_names)
+               for family in sources_table.table}
     return Profile(
         name=vehicle.get("name", str),
         description=vehicle.get("description", str, ""),
@@ -193,9 +191,33 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         thresholds=thresholds,
         pattern=pattern,
         dms=dms,
-        ros_sources=LogSources(sources, ros.get("segment_topic", str, None)),
+        sources=sources,
         source_path=source_path,
     )
+
+
+def _topic(reader: _Reader) -> str:
+    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key."""
+    if "topic" not in reader.table and "message" in reader.table:
+        return str(reader.get("message", str))
+    return str(reader.get("topic", str))
+
+
+def _log_sources(reader: _Reader, signal_names: list[str]) -> LogSources:
+    signals_table = reader.sub("signals")
+    signals = {}
+    for name in signal_names:
+        entry = signals_table.sub(name)
+        where = entry.sub("where").table if "where" in entry.table else {}
+        signals[name] = FieldSource(
+            _topic(entry), entry.get("field", str), entry.get("scale", float, 1.0),
+            entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()))
+    segment = None
+    if "segment" in reader.table:
+        entry = reader.sub("segment")
+        segment = SegmentSource(_topic(entry), entry.get("field", str),
+                                entry.get("prefix", str, ""))
+    return LogSources(signals, segment)
 
 
 def _pattern_row(reader: _Reader, sensor_names: list[str]) -> PatternRow:

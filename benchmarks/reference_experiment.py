@@ -16,7 +16,7 @@ from pathlib import Path
 
 from auvdiag_cli.diagnosis import diagnose
 from auvdiag_cli.profile import load_profile
-from auvdiag_cli.simulator.logwriter import truth_paths, write_log
+from auvdiag_cli.simulator.writers import truth_paths, write_log
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from models.store import load_model

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from auvdiag_cli.profile import Profile, load_profile
-from auvdiag_cli.simulator.logwriter import write_log
+from auvdiag_cli.simulator.writers import write_log
 from auvdiag_cli.simulator.run import SimulatedDive, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 

@@ -14,7 +14,7 @@ def test_round_trip_values_and_markers(make_log, dive_cache, profile, fmt):
     dive = dive_cache("routine-and-mission", 11)
     log = make_log("routine-and-mission", 11, fmt)
     assert detect_format(log) == fmt
-    signals = read_log(log, profile.ros_sources)
+    signals = read_log(log, profile.sources)
     assert signals.format == fmt
     commands = np.asarray(dive.commands.values)
     np.testing.assert_allclose(signals.series["thruster_0"].to_numpy(), commands[:, 0])
@@ -35,8 +35,8 @@ def test_ros2_bag_storage_file_is_read_like_its_directory(make_log, profile):
     directory = make_log("paper-normal", 11, "ros2-mcap")
     storage = next(directory.glob("*.mcap"))
     assert detect_format(storage) == "ros2-mcap"
-    a = read_log(directory, profile.ros_sources).series["flow"]
-    b = read_log(storage, profile.ros_sources).series["flow"]
+    a = read_log(directory, profile.sources).series["flow"]
+    b = read_log(storage, profile.sources).series["flow"]
     assert a.equals(b)
 
 
@@ -56,12 +56,12 @@ def test_unresolvable_field_names_the_file(make_log, profile):
 
     from adapters import FieldSource
 
-    sources = replace(profile.ros_sources, signals={
-        **profile.ros_sources.signals,
+    sources = replace(profile.sources["ros"], signals={
+        **profile.sources["ros"].signals,
         "flow": FieldSource("/flow/velocity", "twist.linear.w")})
     log = make_log("paper-normal", 11)
-    with pytest.raises(LogError, match="field does not resolve") as error:
-        read_log(log, sources)
+    with pytest.raises(LogError, match="does not resolve") as error:
+        read_log(log, {"ros": sources})
     assert str(log) in str(error.value)
 
 
@@ -72,5 +72,5 @@ def test_unindexed_ros1_bag_is_a_log_error(make_log, tmp_path, profile):
     damaged = tmp_path / "unindexed.bag"
     damaged.write_bytes(source[:position] + b"\x00" * 8 + source[position + 8:])
     with pytest.raises(LogError) as error:
-        read_log(damaged, profile.ros_sources)
+        read_log(damaged, profile.sources)
     assert str(damaged) in str(error.value)

@@ -1,0 +1,92 @@
+"""Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from adapters.errors import LogError
+from adapters.fieldpath import field_getter
+from adapters.signals import LogSources, SegmentMarker, Signals
+
+
+class _Extractor:
+    def __init__(self, name: str, source: Any) -> None:
+        self.name = name
+        self.get: Callable[[Any], Any] = field_getter(source.field)
+        self.scale, self.offset = source.scale, source.offset
+        self.where = [(field_getter(key), value) for key, value in source.where]
+
+    def matches(self, message: Any) -> bool:
+        return all(_text(get(message)) == value for get, value in self.where)
+
+
+def _text(value: Any) -> str:
+    if isinstance(value, bytes):
+        value = value.split(b"\0", 1)[0].decode("utf-8", "replace")
+    return str(value).rstrip("\0").strip()
+
+
+class SignalCollector:
+    """Accumulates the profile's signals and markers from messages as an adapter reads them.
+
+    Adapters call `add(topic, time_ns, message)` for every message of a wanted topic and
+    `finish(...)` at the end; field resolution, scaling, filters and marker parsing live here.
+    """
+
+    def __init__(self, path: Path, sources: LogSources) -> None:
+        self.path, self.sources = path, sources
+        self.by_topic: dict[str, list[_Extractor]] = {}
+        for name, source in sources.signals.items():
+            self.by_topic.setdefault(source.topic, []).append(_Extractor(name, source))
+        self.times: dict[str, list[int]] = {name: [] for name in sources.signals}
+        self.values: dict[str, list[float]] = {name: [] for name in sources.signals}
+        self.markers: list[SegmentMarker] = []
+        self.segment_get = field_getter(sources.segment.field) if sources.segment else None
+        self.count = 0
+        self.notes: list[str] = []
+
+    @property
+    def topics(self) -> set[str]:
+        return self.sources.topics
+
+    def add(self, topic: str, time_ns: int, message: Any) -> None:
+        self.count += 1
+        segment = self.sources.segment
+        if segment is not None and topic == segment.topic and self.segment_get is not None:
+            text = _text(self.segment_get(message))
+            if text.startswith(segment.prefix):
+                self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
+        for extractor in self.by_topic.get(topic, ()):
+            if extractor.where and not extractor.matches(message):
+                continue
+            try:
+                value = float(extractor.get(message))
+            except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
+                raise LogError(self.path, f"field {extractor.name!r} does not resolve on "
+                                          f"{topic}: {error!r}") from None
+            self.times[extractor.name].append(time_ns)
+            self.values[extractor.name].append(value * extractor.scale + extractor.offset)
+
+    def missing_topics(self, available: set[str]) -> list[str]:
+        """Signal topics the log does not have at all."""
+        return sorted({s.topic for s in self.sources.signals.values()} - available)
+
+    def finish(self, fmt: str, start_ns: int | None, end_ns: int | None,
+               topics: dict[str, str]) -> Signals:
+        empty = sorted(name for name, times in self.times.items() if not times)
+        if empty:
+            where = ", ".join(f"{n} ({self.sources.signals[n].topic})" for n in empty)
+            raise LogError(self.path, f"no messages for signal(s) {where}")
+        series = {name: pd.Series(np.asarray(self.values[name], dtype=np.float64),
+                                  index=np.asarray(self.times[name], dtype=np.int64), name=name)
+                  for name in self.times}
+        first = min([int(s.index.min()) for s in series.values()]
+                    + [m.time_ns for m in self.markers])
+        last = max(int(s.index.max()) for s in series.values())
+        return Signals(path=self.path, format=fmt,
+                       start_ns=first if start_ns is None else min(start_ns, first),
+                       end_ns=last if end_ns is None else max(end_ns, last),
+                       series=series, markers=self.markers, topics=topics, notes=self.notes)

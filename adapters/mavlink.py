@@ -1,0 +1,103 @@
+"""MAVLink telemetry logs (.tlog) and ArduPilot DataFlash logs (.bin) through pymavlink.
+
+Only the message types the profile names are decoded (pymavlink's type filter). A tlog's
+times are the ground station's receive times; a DataFlash log's are the autopilot's TimeUS
+(µs since boot)."""
+
+import contextlib
+import io
+import struct
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from adapters.collect import SignalCollector
+from adapters.errors import LogError
+from adapters.signals import LogSources, Signals
+
+MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
+PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
+DATAFLASH_HEADER = b"\xa3\x95\x80"       # record header + FMT type
+
+
+def _read_messages(path: Path, reader: Any, collector: SignalCollector,
+                   time_ns: Callable[[Any], int]) -> None:
+    """Feed the wanted messages to the collector; keep what precedes any damage."""
+    wanted = sorted(collector.topics)
+    try:
+        while (message := reader.recv_match(type=wanted, blocking=False)) is not None:
+            collector.add(message.get_type(), time_ns(message), message)
+    except LogError:
+        raise
+    except Exception as error:  # pymavlink raises assorted types on damaged records
+        if collector.count == 0:
+            raise LogError(path, f"damaged log: {error}") from None
+        collector.notes.append(f"log damaged after {collector.count} messages ({error}); "
+                               "analysed the part before the damage")
+
+
+@contextlib.contextmanager
+def _quiet() -> Any:
+    """pymavlink prints 'bad header' and progress to stdout/stderr; a library must not."""
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        yield
+
+
+class TlogAdapter:
+    family = "mavlink"
+    formats = ("tlog",)
+
+    def sniff(self, path: Path) -> str | None:
+        if not path.is_file():
+            return None
+        with path.open("rb") as stream:
+            head = stream.read(9)
+        if len(head) < 9 or head[8] not in MAVLINK_MAGICS:
+            return None
+        (time_us,) = struct.unpack(">Q", head[:8])
+        return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
+
+    def read(self, path: Path, sources: LogSources) -> Signals:
+        from pymavlink import mavutil
+
+        collector = SignalCollector(path, sources)
+        with path.open("rb") as stream:
+            (first_us,) = struct.unpack(">Q", stream.read(8))
+        with _quiet():
+            try:
+                reader = mavutil.mavmmaplog(str(path))
+            except Exception as error:  # pymavlink's index build fails in assorted ways
+                raise LogError(path, f"cannot open tlog: {error}") from None
+            try:
+                # The low bits of the record time carry a link id; whole µs are enough here.
+                _read_messages(path, reader, collector,
+                               lambda m: round(m._timestamp * 1e6) * 1000)
+                topics = {str(reader.id_to_name[i]): "MAVLink" for i in reader.counts
+                          if i in reader.id_to_name}
+            finally:
+                reader.close()
+        return collector.finish("tlog", first_us * 1000, None, topics)
+
+
+class DataflashAdapter:
+    family = "dataflash"
+    formats = ("bin",)
+
+    def sniff(self, path: Path) -> str | None:
+        if not path.is_file():
+            return None
+        with path.open("rb") as stream:
+            return "bin" if stream.read(3) == DATAFLASH_HEADER else None
+
+    def read(self, path: Path, sources: LogSources) -> Signals:
+        from pymavlink import DFReader
+
+        collector = SignalCollector(path, sources)
+        with _quiet():
+            try:
+                reader = DFReader.DFReader_binary(str(path), zero_time_base=True)
+            except Exception as error:  # the indexer fails in assorted ways on damage
+                raise LogError(path, f"cannot open DataFlash log: {error}") from None
+            _read_messages(path, reader, collector, lambda m: int(m.TimeUS) * 1000)
+        topics = {fmt.name: f"DataFlash {fmt.format}" for fmt in reader.formats.values()}
+        return collector.finish("bin", None, None, topics)

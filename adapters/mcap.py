@@ -1,0 +1,104 @@
+"""Standalone MCAP files through the `mcap` library, with ros2 (CDR), ros1 and JSON
+message encodings. Only the profile's channels are decoded; the summary (when present) lists
+channels and the log's time span without scanning, and a damaged file is read up to the
+damage."""
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, BinaryIO
+
+from adapters.collect import SignalCollector
+from adapters.errors import LogError
+from adapters.signals import LogSources, Signals
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def _decoder_factories() -> list[Any]:
+    from mcap.decoder import DecoderFactory
+    from mcap_ros1.decoder import DecoderFactory as Ros1DecoderFactory
+    from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
+
+    class JsonDecoderFactory(DecoderFactory):
+        def decoder_for(self, message_encoding: str, schema: Any
+                        ) -> Callable[[bytes], Any] | None:
+            return json.loads if message_encoding == "json" else None
+
+    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory()]
+
+
+def salvage_mcap(path: Path, collector: SignalCollector, fmt: str, reason: str) -> Signals:
+    """Read an MCAP front to back without its index, up to the first damaged record."""
+    from mcap.reader import NonSeekingReader
+
+    topics: dict[str, str] = {}
+    try:
+        with path.open("rb") as stream:
+            reader = NonSeekingReader(stream, decoder_factories=_decoder_factories())
+            # log_time_order=False: sorting would buffer everything and yield nothing on damage.
+            for schema, channel, message, decoded in reader.iter_decoded_messages(
+                    topics=sorted(collector.topics), log_time_order=False):
+                topics[channel.topic] = schema.name if schema else ""
+                collector.add(channel.topic, message.log_time, decoded)
+    except LogError:
+        raise
+    except Exception as error:  # truncation surfaces as EndOfFile, struct.error, zstd errors
+        if collector.count == 0:
+            raise LogError(path, f"damaged MCAP, nothing readable ({reason}; {error})") from None
+        collector.notes.append(
+            f"log damaged ({reason}); read {collector.count} messages up to the damage and "
+            "analysed that part")
+    else:
+        collector.notes.append(f"index unusable ({reason}); read the file sequentially")
+    missing = collector.missing_topics(set(topics))
+    if missing:
+        raise LogError(path, f"missing topic(s) {', '.join(missing)} in the readable part")
+    return collector.finish(fmt, None, None, topics)
+
+
+class McapAdapter:
+    """A standalone .mcap file (any profile: ros2, ros1 or JSON-encoded channels)."""
+
+    family = "ros"
+    formats = ("mcap",)
+
+    def sniff(self, path: Path) -> str | None:
+        if not path.is_file():
+            return None
+        with path.open("rb") as stream:
+            return "mcap" if stream.read(len(MCAP_MAGIC)) == MCAP_MAGIC else None
+
+    def read(self, path: Path, sources: LogSources) -> Signals:
+        from mcap.reader import SeekingReader
+
+        collector = SignalCollector(path, sources)
+        with path.open("rb") as stream:
+            try:
+                reader = SeekingReader(stream, decoder_factories=_decoder_factories())
+                summary = reader.get_summary()
+            except Exception as error:  # no valid footer/summary: a truncated recording
+                return salvage_mcap(path, collector, "mcap", str(error))
+            if summary is None:
+                return salvage_mcap(path, collector, "mcap", "the file has no summary")
+            return self._read_indexed(reader, summary, stream, collector)
+
+    def _read_indexed(self, reader: Any, summary: Any, stream: BinaryIO,
+                      collector: SignalCollector) -> Signals:
+        topics = {c.topic: summary.schemas[c.schema_id].name if c.schema_id else ""
+                  for c in summary.channels.values()}
+        missing = collector.missing_topics(set(topics))
+        if missing:
+            raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
+        try:
+            for _, channel, message, decoded in reader.iter_decoded_messages(
+                    topics=sorted(collector.topics & set(topics))):
+                collector.add(channel.topic, message.log_time, decoded)
+        except LogError:
+            raise
+        except Exception as error:  # a damaged chunk: keep what came before it
+            fresh = SignalCollector(collector.path, collector.sources)
+            return salvage_mcap(collector.path, fresh, "mcap", str(error))
+        stats = summary.statistics
+        return collector.finish("mcap", stats.message_start_time if stats else None,
+                                stats.message_end_time if stats else None, topics)

@@ -1,0 +1,62 @@
+"""Write a simulated dive as a real log in any supported format, with its truth beside it."""
+
+import json
+from pathlib import Path
+
+from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
+from auvdiag_cli.simulator.writers.dataflash import write_dataflash
+from auvdiag_cli.simulator.writers.mavlink import write_tlog
+from auvdiag_cli.simulator.writers.ros import write_mcap, write_rosbag
+
+LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin")
+
+
+def truth_paths(log_path: Path) -> tuple[Path, Path]:
+    """Where the ground truth of a log lives: ``NAME.truth.json`` and ``NAME.truth.csv``."""
+    stem = log_path.name.split(".")[0]
+    return (log_path.with_name(stem + ".truth.json"), log_path.with_name(stem + ".truth.csv"))
+
+
+def write_log(dive: SimulatedDive, path: Path, fmt: str) -> None:
+    """Write ``dive`` to ``path`` in format ``fmt`` and its truth beside it."""
+    if fmt not in LOG_FORMATS:
+        raise ValueError(f"unknown log format {fmt!r} (writable: {', '.join(LOG_FORMATS)})")
+    if path.exists():
+        raise FileExistsError(f"{path}: exists already, not overwriting")
+    if fmt in ("bag", "db3", "ros2-mcap"):
+        write_rosbag(dive, path, fmt)
+    elif fmt == "mcap":
+        write_mcap(dive, path)
+    elif fmt == "tlog":
+        write_tlog(dive, path)
+    else:
+        write_dataflash(dive, path)
+    _write_truth(dive, path, fmt)
+
+
+def _write_truth(dive: SimulatedDive, path: Path, fmt: str) -> None:
+    json_path, csv_path = truth_paths(path)
+    fault = dive.scenario.fault
+    # Report times count from the log's first message, which carries receive jitter.
+    first_s = min(min(dive.commands.times_s), min(dive.flow.times_s), min(dive.imu.times_s),
+                  *(t for t, _ in dive.markers))
+    fault_info = fault_summary(fault)
+    if fault_info is not None:
+        fault_info["onset_s"] = round(float(fault_info["onset_s"]) - first_s, 6)  # type: ignore[arg-type]
+    truth = {
+        "log": path.name,
+        "format": fmt,
+        "scenario": dive.scenario.name,
+        "description": dive.scenario.description,
+        "seed": dive.seed,
+        "duration_s": round(dive.duration_s, 3),
+        "fault": fault_info,
+        "expected": {
+            "verdict": "normal" if fault is None else "fault",
+            "component": None if fault is None else fault.component,
+        },
+        "phases": [{"name": name, "start_s": round(t, 3)} for name, t in dive.phase_starts_s],
+        "truth_series": csv_path.name,
+    }
+    json_path.write_text(json.dumps(truth, indent=2) + "\n", encoding="utf-8")
+    dive.truth.round(6).to_csv(csv_path, index=False)
