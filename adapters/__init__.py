@@ -1,9 +1,8 @@
 """Log adapters: one per format family, chosen by content, all producing `Signals`."""
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Protocol
-
-from collections.abc import Mapping
 
 from adapters.errors import LogError
 from adapters.mavlink import DataflashAdapter, TlogAdapter

@@ -1,6 +1,9 @@
 """ROS 1 bags and ROS 2 bags (sqlite3 or mcap storage, directory or storage file) through
 rosbags' AnyReader; message definitions come from the bag itself."""
 
+import contextlib
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +23,19 @@ def _head(path: Path, size: int) -> bytes:
 
 def _storage_files(directory: Path) -> list[Path]:
     return sorted(p for p in directory.iterdir() if p.suffix in (".mcap", ".db3"))
+
+
+@contextlib.contextmanager
+def _named_for_rosbags(path: Path, fmt: str) -> Iterator[Path]:
+    """rosbags tells ROS 1 from ROS 2 by the ``.bag`` suffix; a ROS 1 bag under another name
+    (recognised here by content) is read through a temporary link with that suffix."""
+    if fmt != "bag" or path.suffix == ".bag":
+        yield path
+        return
+    with tempfile.TemporaryDirectory(prefix="auvdiag-") as folder:
+        link = Path(folder) / "log.bag"
+        link.symlink_to(path.resolve())
+        yield link
 
 
 class RosbagAdapter:
@@ -52,18 +68,19 @@ class RosbagAdapter:
         if fmt is None:
             raise LogError(path, "not a ROS bag")
         collector = SignalCollector(path, sources)
-        try:
-            reader = AnyReader([path])
-            reader.open()
-        except Exception as error:  # rosbags raises several unrelated types on damaged files
-            if fmt == "ros2-mcap":
-                # The storage is plain MCAP: read what is readable, say what was lost.
-                return salvage_mcap(self._mcap_file(path), collector, fmt, str(error))
-            raise LogError(path, f"cannot open {fmt} log: {error}") from None
-        try:
-            return self._extract(reader, collector, fmt)
-        finally:
-            reader.close()
+        with _named_for_rosbags(path, fmt) as readable:
+            try:
+                reader = AnyReader([readable])
+                reader.open()
+            except Exception as error:  # rosbags raises several unrelated types on damage
+                if fmt == "ros2-mcap":
+                    # The storage is plain MCAP: read what is readable, say what was lost.
+                    return salvage_mcap(self._mcap_file(path), collector, fmt, str(error))
+                raise LogError(path, f"cannot open {fmt} log: {error}") from None
+            try:
+                return self._extract(reader, collector, fmt)
+            finally:
+                reader.close()
 
     @staticmethod
     def _mcap_file(path: Path) -> Path:

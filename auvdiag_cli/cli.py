@@ -163,9 +163,9 @@ def simulate(
     The truth goes to NAME.truth.json (scenario, fault, onset) and NAME.truth.csv (true
     surge, yaw rate, heading and position at 10 Hz)."""
     from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths, write_log
     from auvdiag_cli.simulator.run import simulate as run_simulation
     from auvdiag_cli.simulator.scenarios import get_scenario
+    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths, write_log
 
     if log_format not in LOG_FORMATS:
         _fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")

@@ -6,9 +6,9 @@ from pathlib import Path
 import pytest
 
 from auvdiag_cli.profile import Profile, load_profile
-from auvdiag_cli.simulator.writers import write_log
 from auvdiag_cli.simulator.run import SimulatedDive, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
 
 MakeLog = Callable[..., Path]
 

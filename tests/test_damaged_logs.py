@@ -1,0 +1,149 @@
+"""Damaged, partial and odd logs: either the readable part is analysed and the report says
+what was lost, or one line names the file and the problem (exit 2). Never a traceback."""
+
+import json
+import shutil
+
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]
+DAMAGE_WORDS = ("cut short", "damaged", "index unusable")
+runner = CliRunner()
+
+
+def storage_file(log, fmt):
+    if fmt in ("db3", "ros2-mcap"):
+        return next(p for p in log.iterdir() if p.suffix in (".db3", ".mcap"))
+    return log
+
+
+def copy_log(log, fmt, target):
+    if log.is_dir():
+        shutil.copytree(log, target)
+    else:
+        shutil.copy(log, target)
+    return target, storage_file(target, fmt)
+
+
+def outcome(log):
+    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
+    assert "Traceback" not in result.output
+    if result.exit_code == 2:
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and str(log) in lines[0], result.stderr
+        return 2, None
+    assert result.exit_code in (0, 1), result.output
+    return result.exit_code, json.loads(result.stdout)
+
+
+@pytest.mark.parametrize("fraction", [0.05, 0.5, 0.97])
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_truncated_logs(make_log, tmp_path, fmt, fraction):
+    log, storage = copy_log(make_log("paper-flow-sensor-covered", 31, fmt), fmt,
+                            tmp_path / f"cut.{fmt}")
+    data = storage.read_bytes()
+    storage.write_bytes(data[: int(len(data) * fraction)])
+    code, report = outcome(log)
+    if code != 2:
+        assert any(word in note for note in report["notes"] for word in DAMAGE_WORDS)
+        assert report["duration_s"] < 175.0
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "tlog", "bin", "bag"])
+def test_zero_length_files(tmp_path, fmt):
+    empty = tmp_path / f"empty.{fmt}"
+    empty.touch()
+    assert outcome(empty) == (2, None)
+
+
+def test_mostly_intact_mcap_is_still_diagnosed(make_log, tmp_path):
+    log, storage = copy_log(make_log("paper-flow-sensor-covered", 31, "mcap"), "mcap",
+                            tmp_path / "late_cut.mcap")
+    data = storage.read_bytes()
+    storage.write_bytes(data[: len(data) - 5000])
+    code, report = outcome(log)
+    assert code == 1 and report["component"] == "flow_sensor"
+    assert any("damaged" in note for note in report["notes"])
+
+
+def test_mcap_without_summary_is_read_sequentially(tmp_path, dive_cache):
+    from mcap.reader import make_reader
+    from mcap.writer import IndexType, Writer
+
+    from auvdiag_cli.simulator.writers.ros import TOPICS, RosMessages
+
+    messages = RosMessages(ros1=False)
+    path = tmp_path / "nosummary.mcap"
+    with path.open("wb") as stream:
+        writer = Writer(stream, use_chunking=False, use_summary_offsets=False,
+                        use_statistics=False, index_types=IndexType.NONE,
+                        repeat_channels=False, repeat_schemas=False)
+        writer.start(profile="ros2", library="test")
+        channels = {}
+        for topic, msgtype in TOPICS.values():
+            text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
+            channels[topic] = writer.register_channel(
+                topic, "cdr", writer.register_schema(msgtype, "ros2msg", text.encode()))
+        for time_ns, topic, data in messages.serialised(dive_cache("paper-normal", 31)):
+            writer.add_message(channels[topic], log_time=time_ns, data=data,
+                               publish_time=time_ns)
+        writer.finish()
+    with path.open("rb") as stream:
+        assert make_reader(stream).get_summary() is None
+    code, report = outcome(path)
+    assert code == 0 and report["verdict"] == "normal"
+    assert any("no summary" in note for note in report["notes"])
+
+
+def test_unindexed_ros1_bag_is_one_line(make_log, tmp_path):
+    source = make_log("paper-normal", 31, "bag").read_bytes()
+    position = source.index(b"index_pos=") + len(b"index_pos=")
+    damaged = tmp_path / "recording.bag"
+    damaged.write_bytes(source[:position] + b"\x00" * 8 + source[position + 8:])
+    assert outcome(damaged) == (2, None)
+
+
+def test_unknown_message_types_on_unrelated_topics_are_ignored(tmp_path, dive_cache):
+    """A bag with a custom message type (definition only in the bag) on another topic."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import get_types_from_msg
+
+    from auvdiag_cli.simulator.writers.ros import TOPICS, RosMessages
+
+    messages = RosMessages(ros1=False)
+    store = messages.store
+    store.register(get_types_from_msg("uint8[] pixels\nstring encoding", "acme_msgs/msg/Frame"))
+    path = tmp_path / "with_camera"
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connections = {topic: writer.add_connection(topic, msgtype, typestore=store)
+                       for topic, msgtype in TOPICS.values()}
+        camera = writer.add_connection("/camera/frame", "acme_msgs/msg/Frame", typestore=store)
+        frame = store.types["acme_msgs/msg/Frame"](
+            pixels=__import__("numpy").zeros(1000, dtype="uint8"), encoding="mono8")
+        frame_bytes = bytes(store.serialize_cdr(frame, "acme_msgs/msg/Frame"))
+        for index, (time_ns, topic, data) in enumerate(
+                messages.serialised(dive_cache("paper-normal", 31))):
+            writer.write(connections[topic], time_ns, data)
+            if index % 50 == 0:
+                writer.write(camera, time_ns, frame_bytes)
+    code, report = outcome(path)
+    assert code == 0 and report["verdict"] == "normal"
+
+
+@pytest.mark.parametrize(("fmt", "missing"), [("tlog", "ATTITUDE"), ("bin", "IMU"),
+                                              ("mcap", "/imu/data"), ("db3", "/imu/data")])
+def test_log_missing_one_needed_source_is_one_line(make_log, tmp_path, fmt, missing):
+    from importlib import resources
+
+    original = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    renamed = {"ATTITUDE": "ATTITUDE_QUATERNION", "IMU": "IMU2", "/imu/data": "/imu/other"}
+    profile_path = tmp_path / "p.toml"
+    profile_path.write_text(original.replace(f'"{missing}"', f'"{renamed[missing]}"'))
+    log = make_log("paper-normal", 31, fmt)
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(profile_path)])
+    assert result.exit_code == 2
+    line = result.stderr.strip()
+    assert "\n" not in line and str(log) in line and renamed[missing] in line
