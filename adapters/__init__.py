@@ -5,6 +5,7 @@ from pathlib import Path
 from typing import Protocol
 
 from adapters.errors import LogError
+from adapters.inventory import LogInventory, TopicInfo
 from adapters.mavlink import DataflashAdapter, TlogAdapter
 from adapters.mcap import McapAdapter
 from adapters.rosbag import RosbagAdapter
@@ -13,11 +14,14 @@ from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSour
 __all__ = [
     "FieldSource",
     "LogError",
+    "LogInventory",
     "LogSources",
     "SegmentMarker",
     "SegmentSource",
     "Signals",
+    "TopicInfo",
     "detect_format",
+    "inventory",
     "read_log",
 ]
 
@@ -35,6 +39,8 @@ class Adapter(Protocol):
     def sniff(self, path: Path) -> str | None: ...
 
     def read(self, path: Path, sources: LogSources) -> Signals: ...
+
+    def inventory(self, path: Path) -> LogInventory: ...
 
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
@@ -68,3 +74,9 @@ def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:
         raise LogError(path, f"the profile has no [sources.{adapter.family}] mapping for "
                              f"{fmt} logs")
     return adapter.read(path, mapping)
+
+
+def inventory(path: Path) -> tuple[LogInventory, str]:
+    """What the log at ``path`` holds, and the profile family that maps its signals."""
+    adapter, _ = _find_adapter(path)
+    return adapter.inventory(path), adapter.family

@@ -6,7 +6,6 @@ times are the ground station's receive times; a DataFlash log's are the autopilo
 
 import contextlib
 import io
-import mmap
 import struct
 from collections.abc import Callable
 from pathlib import Path
@@ -14,60 +13,13 @@ from typing import Any
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
+from adapters.inventory import LogInventory, TopicInfo
+from adapters.mavlink_scan import RecordScan, scan_file
 from adapters.signals import LogSources, Signals
 
 MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
 PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
 DATAFLASH_HEADER = b"\xa3\x95\x80"       # record header + FMT type
-
-
-def _truncation_note(size: int, position: int, what: str) -> str:
-    return (f"{what} at byte {position} of {size}: the recording was cut short or damaged "
-            "there; the analysis covers the records before it")
-
-
-def tlog_framing_problem(data: bytes | mmap.mmap) -> str | None:
-    """Walk the tlog's records (8-byte time + MAVLink frame); describe the first that is
-    incomplete or not a frame. pymavlink stops or resyncs there silently."""
-    size, position = len(data), 0
-    while position < size:
-        if position + 10 > size:
-            return _truncation_note(size, position, "the file ends inside a record")
-        magic, length = data[position + 8], data[position + 9]
-        if magic == 0xFE:
-            frame = 6 + length + 2
-        elif magic == 0xFD:
-            frame = 10 + length + 2 + (13 if data[position + 10] & 1 else 0)
-        else:
-            return _truncation_note(size, position, "bytes that are not a MAVLink frame")
-        if position + 8 + frame > size:
-            return _truncation_note(size, position, "the file ends inside a record")
-        position += 8 + frame
-    return None
-
-
-def dataflash_framing_problem(data: bytes | mmap.mmap) -> str | None:
-    """Walk the DataFlash records using the lengths its FMT records declare."""
-    size, position, lengths = len(data), 0, {0x80: 89}
-    while position < size:
-        if position + 3 > size:
-            return _truncation_note(size, position, "the file ends inside a record")
-        if data[position] != 0xA3 or data[position + 1] != 0x95:
-            return _truncation_note(size, position, "bytes that are not a DataFlash record")
-        length = lengths.get(data[position + 2])
-        if length is None:
-            return _truncation_note(size, position, "a record of an undeclared type")
-        if position + length > size:
-            return _truncation_note(size, position, "the file ends inside a record")
-        if data[position + 2] == 0x80:
-            lengths[data[position + 3]] = data[position + 4]
-        position += length
-    return None
-
-
-def _framing_note(path: Path, check: Callable[[mmap.mmap], str | None]) -> str | None:
-    with path.open("rb") as stream, mmap.mmap(stream.fileno(), 0, access=mmap.ACCESS_READ) as m:
-        return check(m)
 
 
 def _read_messages(path: Path, reader: Any, collector: SignalCollector,
@@ -126,10 +78,13 @@ class TlogAdapter:
                           if i in reader.id_to_name}
             finally:
                 reader.close()
-        note = _framing_note(path, tlog_framing_problem)
-        if note:
-            collector.notes.append(note)
+        scan = scan_file(path, "tlog", _message_names())
+        if scan.problem:
+            collector.notes.append(scan.problem)
         return collector.finish("tlog", first_us * 1000, None, topics)
+
+    def inventory(self, path: Path) -> LogInventory:
+        return _inventory("tlog", scan_file(path, "tlog", _message_names()), "MAVLink")
 
 
 class DataflashAdapter:
@@ -152,8 +107,25 @@ class DataflashAdapter:
             except Exception as error:  # the indexer fails in assorted ways on damage
                 raise LogError(path, f"cannot open DataFlash log: {error}") from None
             _read_messages(path, reader, collector, lambda m: int(m.TimeUS) * 1000)
-        note = _framing_note(path, dataflash_framing_problem)
-        if note:
-            collector.notes.append(note)
+        scan = scan_file(path, "bin")
+        if scan.problem:
+            collector.notes.append(scan.problem)
         topics = {fmt.name: f"DataFlash {fmt.format}" for fmt in reader.formats.values()}
         return collector.finish("bin", None, None, topics)
+
+    def inventory(self, path: Path) -> LogInventory:
+        return _inventory("bin", scan_file(path, "bin"), "DataFlash")
+
+
+def _message_names() -> dict[int, str]:
+    from pymavlink.dialects.v20 import ardupilotmega
+
+    return {msgid: cls.msgname for msgid, cls in ardupilotmega.mavlink_map.items()}
+
+
+def _inventory(fmt: str, scan: RecordScan, kind: str) -> LogInventory:
+    return LogInventory(
+        fmt, None if scan.first_us is None else scan.first_us * 1000,
+        None if scan.last_us is None else scan.last_us * 1000,
+        [TopicInfo(name, kind, count) for name, count in sorted(scan.counts.items())],
+        [scan.problem] if scan.problem else [])

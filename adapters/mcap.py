@@ -10,6 +10,7 @@ from typing import Any, BinaryIO
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
+from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -45,7 +46,8 @@ def salvage_mcap(path: Path, collector: SignalCollector, fmt: str, reason: str) 
         raise
     except Exception as error:  # truncation surfaces as EndOfFile, struct.error, zstd errors
         if collector.count == 0:
-            raise LogError(path, f"damaged MCAP, nothing readable ({reason}; {error})") from None
+            raise LogError(path, "damaged MCAP, nothing readable "
+                                 f"({reason}; {str(error) or type(error).__name__})") from None
         collector.notes.append(
             f"log damaged ({reason}); read {collector.count} messages up to the damage and "
             "analysed that part")
@@ -85,7 +87,7 @@ class McapAdapter:
 
     def _read_indexed(self, reader: Any, summary: Any, stream: BinaryIO,
                       collector: SignalCollector) -> Signals:
-        topics = {c.topic: summary.schemas[c.schema_id].name if c.schema_id else ""
+        topics = {c.topic: _schema_name(summary.schemas, c.schema_id)
                   for c in summary.channels.values()}
         missing = collector.missing_topics(set(topics))
         if missing:
@@ -102,3 +104,41 @@ class McapAdapter:
         stats = summary.statistics
         return collector.finish("mcap", stats.message_start_time if stats else None,
                                 stats.message_end_time if stats else None, topics)
+
+    def inventory(self, path: Path) -> LogInventory:
+        """From the summary when there is one, else by a raw scan (nothing decoded)."""
+        from mcap.reader import NonSeekingReader, SeekingReader
+
+        with path.open("rb") as stream:
+            try:
+                summary = SeekingReader(stream).get_summary()
+            except Exception:  # no usable footer: fall through to the scan
+                summary = None
+            if summary is not None and summary.statistics is not None:
+                stats = summary.statistics
+                topics = [TopicInfo(c.topic, _schema_name(summary.schemas, c.schema_id),
+                                    stats.channel_message_counts.get(c.id, 0))
+                          for c in summary.channels.values()]
+                return LogInventory("mcap", stats.message_start_time, stats.message_end_time,
+                                    sorted(topics, key=lambda t: t.name))
+            stream.seek(0)
+            counts: dict[tuple[str, str], int] = {}
+            first = last = None
+            notes: list[str] = []
+            try:
+                for schema, channel, message in NonSeekingReader(stream).iter_messages(
+                        log_time_order=False):
+                    key = (channel.topic, schema.name if schema else "")
+                    counts[key] = counts.get(key, 0) + 1
+                    first = message.log_time if first is None else min(first, message.log_time)
+                    last = message.log_time if last is None else max(last, message.log_time)
+            except Exception as error:  # truncated: report what was readable
+                notes.append(f"damaged after {sum(counts.values())} messages: "
+                             f"{str(error) or type(error).__name__}")
+            topics = [TopicInfo(t, n, c) for (t, n), c in sorted(counts.items())]
+            return LogInventory("mcap", first, last, topics, notes)
+
+
+def _schema_name(schemas: dict[int, Any], schema_id: int) -> str:
+    schema = schemas.get(schema_id)
+    return schema.name if schema is not None else ""

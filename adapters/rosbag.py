@@ -9,7 +9,8 @@ from typing import Any
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
-from adapters.mcap import MCAP_MAGIC, salvage_mcap
+from adapters.inventory import LogInventory, TopicInfo
+from adapters.mcap import MCAP_MAGIC, McapAdapter, salvage_mcap
 from adapters.signals import LogSources, Signals
 
 ROS1_MAGIC = b"#ROSBAG V2.0"
@@ -81,6 +82,31 @@ class RosbagAdapter:
                 return self._extract(reader, collector, fmt)
             finally:
                 reader.close()
+
+    def inventory(self, path: Path) -> LogInventory:
+        from rosbags.highlevel import AnyReader
+
+        fmt = self.sniff(path)
+        if fmt is None:
+            raise LogError(path, "not a ROS bag")
+        with _named_for_rosbags(path, fmt) as readable:
+            try:
+                reader = AnyReader([readable])
+                reader.open()
+            except Exception as error:  # damaged: the storage may still be plain MCAP
+                if fmt == "ros2-mcap":
+                    inventory = McapAdapter().inventory(self._mcap_file(path))
+                    inventory.format = fmt
+                    return inventory
+                raise LogError(path, f"cannot open {fmt} log: {error}") from None
+            counts: dict[tuple[str, str], int] = {}
+            for c in reader.connections:
+                counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
+            span = (int(reader.start_time), int(reader.end_time))
+            reader.close()
+        topics = [TopicInfo(topic, msgtype, count)
+                  for (topic, msgtype), count in sorted(counts.items())]
+        return LogInventory(fmt, *span, topics)
 
     @staticmethod
     def _mcap_file(path: Path) -> Path:

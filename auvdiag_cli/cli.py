@@ -183,6 +183,28 @@ def simulate(
 
 
 @app.command()
+def inspect(
+    log: Annotated[Path, typer.Argument(help="Log of any supported format.")],
+    profile: ProfileOption = None,
+) -> None:
+    """Show what a log holds and which of the profile's signals resolve in it.
+
+    Lists the format, time span, topics or message types with their types, counts and rates,
+    and for each profile signal whether it resolved (or why not, with the closest topics).
+    Exit status 0 when every signal resolves, 2 otherwise."""
+    from auvdiag_cli.inspection import inspect_log
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_text import inspection_lines
+
+    with _user_errors(log):
+        result = inspect_log(log, load_profile(profile))
+    for line in inspection_lines(result):
+        typer.echo(line)
+    if not all(s.resolved for s in result.signals):
+        raise typer.Exit(EXIT_UNUSABLE)
+
+
+@app.command()
 def scenarios() -> None:
     """List the simulator's named scenarios."""
     from auvdiag_cli.simulator.scenarios import SCENARIOS

@@ -1,6 +1,9 @@
 """The short human summary printed on the terminal."""
 
+from datetime import UTC, datetime
+
 from auvdiag_cli.diagnosis import Diagnosis
+from auvdiag_cli.inspection import Inspection
 
 
 def _components(names: list[str]) -> str:
@@ -40,3 +43,37 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines += [f"  note: {note}" for note in d.notes]
     lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
     return [line for line in lines if line]
+
+
+def _utc(time_ns: int | None) -> str:
+    if time_ns is None:
+        return "?"
+    if time_ns < 10**17:  # a clock since boot, not since the epoch
+        return f"{time_ns / 1e9:.3f} s since boot"
+    return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec="milliseconds")
+
+
+def inspection_lines(inspection: Inspection) -> list[str]:
+    inv = inspection.inventory
+    duration = inv.duration_s
+    lines = [f"{inspection.path}", f"  format    {inv.format} (profile mapping: "
+             f"[sources.{inspection.family}])",
+             f"  span      {_utc(inv.start_ns)} … {_utc(inv.end_ns)}"
+             + (f"  ({duration:.1f} s)" if duration is not None else "")]
+    lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'rate':>9}")
+    for topic in inv.topics:
+        rate = f"{topic.count / duration:.1f} Hz" if duration else ""
+        lines.append(f"  {topic.name:<32} {topic.type:<34} {topic.count:>8} {rate:>9}")
+    lines.append("  profile signals:")
+    for s in inspection.signals:
+        where = f"{s.topic} {s.field}"
+        if s.resolved:
+            rate = f", {s.rate_hz:.1f} Hz" if s.rate_hz else ""
+            lines.append(f"    ok       {s.name:<12} {where}  ({s.count} samples{rate})")
+        else:
+            hint = f"; closest: {', '.join(s.candidates)}" if s.candidates else ""
+            lines.append(f"    MISSING  {s.name:<12} {where}  ({s.problem}{hint})")
+    if inspection.markers:
+        lines.append(f"  segment markers: {' '.join(inspection.markers)}")
+    lines += [f"  note: {note}" for note in inv.notes]
+    return lines
