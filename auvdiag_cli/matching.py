@@ -42,12 +42,17 @@ def residual_index(measured: np.ndarray, modelled: np.ndarray, full_scale: np.nd
 
 def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
           window: int) -> Matching:
-    """Replay the log's commands from its first measured state; compute g."""
+    """Replay the log's commands from its first measured state (and again after every
+    stretch where the commands are unknown); compute g."""
     measured = frame.sensors
-    finite_rows = np.flatnonzero(np.isfinite(measured).all(axis=1))
-    start = int(finite_rows[0]) if finite_rows.size else 0
     modelled = np.full_like(measured, np.nan)
-    modelled[start:] = replay(model.network, model.normaliser, frame.commands[start:],
-                              measured[start])
+    bounds = [0, *frame.restarts, len(measured)]
+    for begin, end in zip(bounds[:-1], bounds[1:], strict=True):
+        finite_rows = np.flatnonzero(np.isfinite(measured[begin:end]).all(axis=1))
+        if finite_rows.size == 0:
+            continue
+        start = begin + int(finite_rows[0])
+        modelled[start:end] = replay(model.network, model.normaliser,
+                                     frame.commands[start:end], measured[start])
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
     return Matching(measured, modelled, residual_index(measured, modelled, scales, window))

@@ -10,7 +10,12 @@ Method (documented for users in the README):
 - before that, each series is sorted by time, exact duplicate timestamps keep the last value,
   and non-finite values are dropped (and counted);
 - a silence longer than ``max_gap_s`` on any signal is a gap: grid points inside it are NaN
-  (never interpolated across) and the gap is reported.
+  (never interpolated across) and the gap is reported. A gap in a *command* means the
+  actuators' history is unknown there: all sensors are NaN inside it and the model replay
+  restarts from the measured state after it (``restarts``);
+- a clock that jumps back by more than ``max_gap_s`` in the order the log stored the
+  samples (a clock reset) is re-timed: the samples after the jump are shifted to follow on
+  one median period after the last sample before it, and the jump is reported.
 """
 
 from dataclasses import dataclass, field
@@ -42,16 +47,35 @@ class AlignedFrame:
     dt_s: float
     gaps: list[Gap] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    restarts: list[int] = field(default_factory=list)   # grid indices where replay restarts
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
 
 
-def _clean(series: pd.Series, name: str, notes: list[str]) -> pd.Series:
+def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
+            ) -> pd.Series:
+    times = series.index.to_numpy(dtype=np.int64).copy()
+    steps = np.diff(times)
+    jumps = np.flatnonzero(steps < -max_gap_ns)
+    if jumps.size == 0:
+        return series
+    period = int(np.median(steps[steps > 0])) if (steps > 0).any() else 0
+    for i in jumps:
+        back = int(times[i] - times[i + 1])
+        times[i + 1:] += back + period
+        notes.append(f"{name}: clock jumps back by {back / NS_PER_S:.1f} s at "
+                     f"{(times[i] - start_ns) / NS_PER_S:.1f} s; later samples re-timed")
+    return pd.Series(series.to_numpy(), index=times, name=series.name)
+
+
+def _clean(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
+           ) -> pd.Series:
     finite = np.isfinite(series.to_numpy())
     if not finite.all():
         notes.append(f"{name}: dropped {int((~finite).sum())} non-finite value(s)")
         series = series[finite]
+    series = _unjump(series, name, max_gap_ns, start_ns, notes)
     if not series.index.is_monotonic_increasing:
         notes.append(f"{name}: messages out of time order, sorted")
         series = series.sort_index(kind="stable")
@@ -90,7 +114,8 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
              dt_s: float, max_gap_s: float = 1.0) -> AlignedFrame:
     """Align ``signals`` on a Δt grid as described in the module docstring."""
     notes: list[str] = []
-    cleaned = {name: _clean(signals.series[name], name, notes)
+    max_gap_ns = round(max_gap_s * NS_PER_S)
+    cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
                for name in command_names + sensor_names}
     empty = [name for name, s in cleaned.items() if s.empty]
     if empty:
@@ -101,9 +126,10 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     if last_ns - first_ns < 2 * dt_ns:
         raise ValueError("the signals overlap for less than two model steps")
     grid_ns = np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
-    max_gap_ns = round(max_gap_s * NS_PER_S)
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}
+    blind = np.zeros(len(grid_ns), dtype=bool)     # inside a command gap
+    restarts: set[int] = set()
     for name, series in cleaned.items():
         times_ns = series.index.to_numpy(dtype=np.int64)
         values = series.to_numpy(dtype=np.float64)
@@ -113,17 +139,23 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
             columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
         for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
             inside = (grid_ns > start_ns) & (grid_ns < end_ns)
-            if name not in command_names:
+            if name in command_names:
+                blind |= inside
+                restarts.add(int(np.searchsorted(grid_ns, end_ns)))
+            else:
                 columns[name][inside] = np.nan
             gaps.append(Gap(name, (start_ns - signals.start_ns) / NS_PER_S,
                             (end_ns - signals.start_ns) / NS_PER_S))
+    sensors = np.column_stack([columns[n] for n in sensor_names])
+    sensors[blind] = np.nan
     return AlignedFrame(
         time_s=(grid_ns - signals.start_ns) / NS_PER_S,
         commands=np.column_stack([columns[n] for n in command_names]),
-        sensors=np.column_stack([columns[n] for n in sensor_names]),
+        sensors=sensors,
         command_names=command_names,
         sensor_names=sensor_names,
         dt_s=dt_s,
         gaps=gaps,
         notes=notes,
+        restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
     )

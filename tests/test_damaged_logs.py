@@ -147,3 +147,26 @@ def test_log_missing_one_needed_source_is_one_line(make_log, tmp_path, fmt, miss
     assert result.exit_code == 2
     line = result.stderr.strip()
     assert "\n" not in line and str(log) in line and renamed[missing] in line
+
+
+def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_cache):
+    """All topics silent for 5 minutes (a paused recorder or a clock jump forward)."""
+    import copy
+
+    from auvdiag_cli.simulator.writers import write_log
+
+    dive = copy.deepcopy(dive_cache("paper-normal", 31))
+    for stream in (dive.commands, dive.flow, dive.imu):
+        stream.times_s = [t + 300.0 if t > 60.0 else t for t in stream.times_s]
+    path = tmp_path / "paused.mcap"
+    write_log(dive, path, "mcap")
+    code, report = outcome(path)
+    assert code == 0 and report["verdict"] == "normal"
+    import re
+
+    gaps = [re.search(r"gap in (\w+) from ([\d.]+) s to ([\d.]+) s", note)
+            for note in report["notes"]]
+    spans = {m.group(1): (float(m.group(2)), float(m.group(3))) for m in gaps if m}
+    assert set(spans) == {"thruster_0", "thruster_1", "flow", "yaw_rate"}
+    for start, end in spans.values():
+        assert 59.8 <= start <= 60.1 and 359.9 <= end <= 360.2

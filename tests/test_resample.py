@@ -63,3 +63,23 @@ def test_signals_that_never_overlap_are_refused():
     with pytest.raises(ValueError, match="overlap"):
         resample(signals(c=([0.0, 0.1], [0.0, 0.0]), s=([5.0, 6.0], [1.0, 1.0])),
                  ("c",), ("s",), 0.1)
+
+
+def test_command_gap_blinds_sensors_and_restarts_the_replay():
+    dense = [i * 0.1 for i in range(81)]
+    commands = [i * 0.1 for i in range(20)] + [6.0 + i * 0.1 for i in range(21)]
+    frame = resample(signals(c=(commands, [0.5] * 41), s=(dense, [1.0] * 81)),
+                     ("c",), ("s",), 0.1, max_gap_s=1.0)
+    inside = (frame.time_s > 1.95) & (frame.time_s < 5.95)
+    assert np.isnan(frame.sensors[inside, 0]).all()
+    assert frame.restarts == [60]
+    assert [g.signal for g in frame.gaps] == ["c"]
+
+
+def test_clock_jumping_back_is_retimed_and_reported():
+    times = [10.0 + i * 0.1 for i in range(30)] + [1.0 + i * 0.1 for i in range(30)]
+    values = list(range(60))
+    frame = resample(signals(c=(times, [0.0] * 60), s=(times, values)), ("c",), ("s",), 0.1)
+    assert frame.time_s[-1] == pytest.approx(15.9, abs=0.11)
+    np.testing.assert_allclose(np.diff(frame.sensors[:, 0]), 1.0)
+    assert any("clock jumps back by 11.9 s" in note for note in frame.notes)
