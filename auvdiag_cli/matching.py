@@ -6,6 +6,7 @@ divides by K; we average exactly K so that g is an unbiased mean). Samples missi
 reported gap are left out of the mean; g is NaN until half a window of samples exists.
 """
 
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,7 +48,7 @@ def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
     measured = frame.sensors
     modelled = np.full_like(measured, np.nan)
     bounds = [0, *frame.restarts, len(measured)]
-    for begin, end in zip(bounds[:-1], bounds[1:], strict=True):
+    for begin, end in itertools.pairwise(bounds):
         finite_rows = np.flatnonzero(np.isfinite(measured[begin:end]).all(axis=1))
         if finite_rows.size == 0:
             continue
