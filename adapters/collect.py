@@ -1,5 +1,6 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
+from array import array
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -41,8 +42,9 @@ class SignalCollector:
         self.by_topic: dict[str, list[_Extractor]] = {}
         for name, source in sources.signals.items():
             self.by_topic.setdefault(source.topic, []).append(_Extractor(name, source))
-        self.times: dict[str, list[int]] = {name: [] for name in sources.signals}
-        self.values: dict[str, list[float]] = {name: [] for name in sources.signals}
+        # Typed arrays: 8 bytes a sample, not a Python object, so long dives stay small.
+        self.times: dict[str, array[int]] = {name: array("q") for name in sources.signals}
+        self.values: dict[str, array[float]] = {name: array("d") for name in sources.signals}
         self.markers: list[SegmentMarker] = []
         self.segment_get = field_getter(sources.segment.field) if sources.segment else None
         self.count = 0
@@ -80,8 +82,9 @@ class SignalCollector:
         if empty:
             where = ", ".join(f"{n} ({self.sources.signals[n].topic})" for n in empty)
             raise LogError(self.path, f"no messages for signal(s) {where}")
-        series = {name: pd.Series(np.asarray(self.values[name], dtype=np.float64),
-                                  index=np.asarray(self.times[name], dtype=np.int64), name=name)
+        series = {name: pd.Series(np.frombuffer(self.values[name], dtype=np.float64),
+                                  index=np.frombuffer(self.times[name], dtype=np.int64),
+                                  name=name)
                   for name in self.times}
         first = min([int(s.index.min()) for s in series.values()]
                     + [m.time_ns for m in self.markers])

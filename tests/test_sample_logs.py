@@ -12,9 +12,12 @@ SAMPLES = Path(__file__).parents[1] / "sample_logs"
 EXPECTED = sorted(SAMPLES.glob("*.expected.json"))
 
 
-def test_there_are_samples_of_every_kind():
-    verdicts = {json.loads(p.read_text())["component"] for p in EXPECTED}
-    assert {None, "flow_sensor", "yaw_rate_sensor"} <= verdicts
+def test_there_is_a_normal_and_a_faulty_sample_in_every_format():
+    reports = [json.loads(p.read_text()) for p in EXPECTED]
+    kinds = {(r["format"], r["verdict"]) for r in reports}
+    for fmt in ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"):
+        assert {(fmt, "normal"), (fmt, "fault")} <= kinds, fmt
+    assert {"flow_sensor", "yaw_rate_sensor"} <= {r["component"] for r in reports}
 
 
 @pytest.mark.parametrize("expected_path", EXPECTED, ids=lambda p: p.name.split(".")[0])

@@ -1,12 +1,13 @@
 """Write a simulated dive as a real log in any supported format, with its truth beside it."""
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
-from auvdiag_cli.simulator.writers.ros import write_mcap, write_rosbag
+from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
 
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin")
 
@@ -17,16 +18,18 @@ def truth_paths(log_path: Path) -> tuple[Path, Path]:
     return (log_path.with_name(stem + ".truth.json"), log_path.with_name(stem + ".truth.csv"))
 
 
-def write_log(dive: SimulatedDive, path: Path, fmt: str) -> None:
-    """Write ``dive`` to ``path`` in format ``fmt`` and its truth beside it."""
+def write_log(dive: SimulatedDive, path: Path, fmt: str, extra: Sequence[ExtraTopic] = ()
+              ) -> None:
+    """Write ``dive`` to ``path`` in format ``fmt`` and its truth beside it; ``extra`` adds
+    unrelated topics to the ROS formats (MAVLink logs have no place for them)."""
     if fmt not in LOG_FORMATS:
         raise ValueError(f"unknown log format {fmt!r} (writable: {', '.join(LOG_FORMATS)})")
     if path.exists():
         raise FileExistsError(f"{path}: exists already, not overwriting")
     if fmt in ("bag", "db3", "ros2-mcap"):
-        write_rosbag(dive, path, fmt)
+        write_rosbag(dive, path, fmt, extra)
     elif fmt == "mcap":
-        write_mcap(dive, path)
+        write_mcap(dive, path, extra)
     elif fmt == "tlog":
         write_tlog(dive, path)
     else:

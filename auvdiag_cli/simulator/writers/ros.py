@@ -1,7 +1,9 @@
 """ROS logs in the default Twin-Burger conventions (SPEC §4): ROS 1 bag, ROS 2 bag (sqlite3,
 mcap) through rosbags, and standalone MCAP (ros2 CDR) through the mcap library."""
 
-from collections.abc import Iterator
+import heapq
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +19,17 @@ TOPICS = {
     MARKER: ("/diagnosis/sequence", "std_msgs/msg/String"),
 }
 COVARIANCE = np.zeros(9, dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class ExtraTopic:
+    """Unrelated traffic to record beside the dive (a camera, say): ``build(types, i)`` makes
+    the i-th message from the type store's classes; it is received at ``times_ns[i]``."""
+
+    topic: str
+    msgtype: str
+    times_ns: Sequence[int]
+    build: Callable[[Any, int], Any]
 
 
 class RosMessages:
@@ -62,23 +75,39 @@ class RosMessages:
                 linear_acceleration_covariance=COVARIANCE)
         return t["std_msgs/msg/String"](data=label)
 
-    def serialised(self, dive: SimulatedDive) -> Iterator[tuple[int, str, bytes]]:
+    def serialised(self, dive: SimulatedDive, extra: Sequence[ExtraTopic] = ()
+                   ) -> Iterator[tuple[int, str, bytes]]:
         """(receive time ns, topic, serialised bytes) in time order."""
         serialize = self.store.serialize_ros1 if self.ros1 else self.store.serialize_cdr
-        for record in dive_records(dive):
-            topic, msgtype = TOPICS[record.kind]
-            message = self.build(record.kind, record.time_ns, record.values, record.label)
-            yield record.time_ns, topic, bytes(serialize(message, msgtype))
+
+        def dive_messages() -> Iterator[tuple[int, str, bytes]]:
+            for record in dive_records(dive):
+                topic, msgtype = TOPICS[record.kind]
+                message = self.build(record.kind, record.time_ns, record.values, record.label)
+                yield record.time_ns, topic, bytes(serialize(message, msgtype))
+
+        def extra_messages(topic: ExtraTopic) -> Iterator[tuple[int, str, bytes]]:
+            for index, time_ns in enumerate(topic.times_ns):
+                message = topic.build(self.types, index)
+                yield time_ns, topic.topic, bytes(serialize(message, topic.msgtype))
+
+        yield from heapq.merge(dive_messages(), *map(extra_messages, extra),
+                               key=lambda item: item[0])
 
 
-def write_rosbag(dive: SimulatedDive, path: Path, fmt: str) -> None:
+def _all_topics(extra: Sequence[ExtraTopic]) -> list[tuple[str, str]]:
+    return [*TOPICS.values(), *((e.topic, e.msgtype) for e in extra)]
+
+
+def write_rosbag(dive: SimulatedDive, path: Path, fmt: str,
+                 extra: Sequence[ExtraTopic] = ()) -> None:
     """ROS 1 bag (``bag``, lz4 chunks) or ROS 2 bag (``db3``; ``ros2-mcap`` with zstd chunks)."""
     messages = RosMessages(ros1=fmt == "bag")
     writer = _open_rosbag_writer(path, fmt)
     with writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=messages.store)
-                       for topic, msgtype in TOPICS.values()}
-        for time_ns, topic, data in messages.serialised(dive):
+                       for topic, msgtype in _all_topics(extra)}
+        for time_ns, topic, data in messages.serialised(dive, extra):
             writer.write(connections[topic], time_ns, data)
 
 
@@ -100,7 +129,7 @@ def _open_rosbag_writer(path: Path, fmt: str) -> Any:
     return writer2
 
 
-def write_mcap(dive: SimulatedDive, path: Path) -> None:
+def write_mcap(dive: SimulatedDive, path: Path, extra: Sequence[ExtraTopic] = ()) -> None:
     """Standalone MCAP, profile ros2: ros2msg schemas and CDR messages, zstd chunks."""
     from mcap.writer import CompressionType, Writer
 
@@ -109,11 +138,11 @@ def write_mcap(dive: SimulatedDive, path: Path) -> None:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="auvdiag simulate")
         channels = {}
-        for topic, msgtype in TOPICS.values():
+        for topic, msgtype in _all_topics(extra):
             text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
             schema = writer.register_schema(msgtype, "ros2msg", text.encode())
             channels[topic] = writer.register_channel(topic, "cdr", schema)
-        for sequence, (time_ns, topic, data) in enumerate(messages.serialised(dive)):
+        for sequence, (time_ns, topic, data) in enumerate(messages.serialised(dive, extra)):
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns, sequence=sequence)
         writer.finish()
