@@ -11,6 +11,7 @@ from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, salvage_mcap
+from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
 
 ROS1_MAGIC = b"#ROSBAG V2.0"
@@ -39,6 +40,17 @@ def _named_for_rosbags(path: Path, fmt: str) -> Iterator[Path]:
         yield link
 
 
+def _open_reader(path: Path) -> Any:
+    """An open AnyReader. Bags that carry no message definitions (ROS 2 Humble and older
+    .db3) are decoded with the Humble type store."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+    reader.open()
+    return reader
+
+
 class RosbagAdapter:
     """Reads the profile's ROS topics, decoding only those connections."""
 
@@ -63,20 +75,19 @@ class RosbagAdapter:
         return None
 
     def read(self, path: Path, sources: LogSources) -> Signals:
-        from rosbags.highlevel import AnyReader
-
         fmt = self.sniff(path)
         if fmt is None:
             raise LogError(path, "not a ROS bag")
         collector = SignalCollector(path, sources)
         with _named_for_rosbags(path, fmt) as readable:
             try:
-                reader = AnyReader([readable])
-                reader.open()
+                reader = _open_reader(readable)
             except Exception as error:  # rosbags raises several unrelated types on damage
                 if fmt == "ros2-mcap":
                     # The storage is plain MCAP: read what is readable, say what was lost.
                     return salvage_mcap(self._mcap_file(path), collector, fmt, str(error))
+                if fmt == "bag":
+                    return self._salvage_bag1(path, collector, str(error))
                 raise LogError(path, f"cannot open {fmt} log: {error}") from None
             try:
                 return self._extract(reader, collector, fmt)
@@ -84,15 +95,12 @@ class RosbagAdapter:
                 reader.close()
 
     def inventory(self, path: Path) -> LogInventory:
-        from rosbags.highlevel import AnyReader
-
         fmt = self.sniff(path)
         if fmt is None:
             raise LogError(path, "not a ROS bag")
         with _named_for_rosbags(path, fmt) as readable:
             try:
-                reader = AnyReader([readable])
-                reader.open()
+                reader = _open_reader(readable)
             except Exception as error:  # damaged: the storage may still be plain MCAP
                 if fmt == "ros2-mcap":
                     inventory = McapAdapter().inventory(self._mcap_file(path))
@@ -107,6 +115,20 @@ class RosbagAdapter:
         topics = [TopicInfo(topic, msgtype, count)
                   for (topic, msgtype), count in sorted(counts.items())]
         return LogInventory(fmt, *span, topics)
+
+    @staticmethod
+    def _salvage_bag1(path: Path, collector: SignalCollector, reason: str) -> Signals:
+        topics, stopped = salvage_bag1(path, collector)
+        if collector.count == 0:
+            raise LogError(path, f"cannot open bag log ({reason}) and no message is "
+                                 f"readable without its index ({stopped})")
+        missing = collector.missing_topics(set(topics))
+        if missing:
+            raise LogError(path, f"missing topic(s) {', '.join(missing)} in the readable part")
+        collector.notes.append(
+            f"bag index unusable ({reason}); read {collector.count} messages record by record"
+            + (f" up to the damage ({stopped})" if stopped else ""))
+        return collector.finish("bag", None, None, topics)
 
     @staticmethod
     def _mcap_file(path: Path) -> Path:

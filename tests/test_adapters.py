@@ -65,12 +65,23 @@ def test_unresolvable_field_names_the_file(make_log, profile):
     assert str(log) in str(error.value)
 
 
-def test_unindexed_ros1_bag_is_a_log_error(make_log, tmp_path, profile):
-    source = make_log("paper-normal", 11, "bag").read_bytes()
+def test_unindexed_ros1_bag_gives_the_same_signals(make_log, tmp_path, profile):
+    log = make_log("paper-normal", 11, "bag")
+    source = log.read_bytes()
     # A killed recorder leaves index_pos = 0 in the bag header record.
     position = source.index(b"index_pos=") + len(b"index_pos=")
     damaged = tmp_path / "unindexed.bag"
     damaged.write_bytes(source[:position] + b"\x00" * 8 + source[position + 8:])
-    with pytest.raises(LogError) as error:
-        read_log(damaged, profile.sources)
-    assert str(damaged) in str(error.value)
+    salvaged, intact = read_log(damaged, profile.sources), read_log(log, profile.sources)
+    for name, series in intact.series.items():
+        assert salvaged.series[name].equals(series), name
+    assert [m.label for m in salvaged.markers] == ["MISSION"]
+    assert "record by record" in salvaged.notes[0]
+
+
+def test_file_that_only_looks_like_a_bag(tmp_path, profile):
+    fake = tmp_path / "fake.bag"
+    fake.write_bytes(b"#ROSBAG V2.0\n" + b"\xff" * 100)
+    with pytest.raises(LogError, match="no message is readable") as error:
+        read_log(fake, profile.sources)
+    assert str(fake) in str(error.value)

@@ -98,12 +98,19 @@ def test_mcap_without_summary_is_read_sequentially(tmp_path, dive_cache):
     assert any("no summary" in note for note in report["notes"])
 
 
-def test_unindexed_ros1_bag_is_one_line(make_log, tmp_path):
-    source = make_log("paper-normal", 31, "bag").read_bytes()
+def test_unindexed_ros1_bag_is_read_record_by_record(make_log, tmp_path):
+    """What a killed recorder leaves: index_pos = 0 and no index records."""
+    log = make_log("paper-flow-sensor-covered", 31, "bag")
+    source = log.read_bytes()
     position = source.index(b"index_pos=") + len(b"index_pos=")
-    damaged = tmp_path / "recording.bag"
+    damaged = tmp_path / "recording.bag.active"
     damaged.write_bytes(source[:position] + b"\x00" * 8 + source[position + 8:])
-    assert outcome(damaged) == (2, None)
+    code, report = outcome(damaged)
+    _, intact = outcome(log)
+    assert code == 1 and report["component"] == "flow_sensor"
+    assert report["onset_s"] == intact["onset_s"]
+    assert report["detected_at_s"] == intact["detected_at_s"]
+    assert any("read 12251 messages record by record" in note for note in report["notes"])
 
 
 def test_unknown_message_types_on_unrelated_topics_are_ignored(tmp_path, dive_cache):
