@@ -150,10 +150,20 @@ def test_log_without_needed_topic_is_exit_2(tmp_path, profile):
     assert "missing topic" in line and "/flow/velocity" in line and str(path) in line
 
 
-def test_truncated_log_is_exit_2(make_log, tmp_path):
+def test_truncated_log_is_analysed_up_to_the_cut(make_log, tmp_path):
     source = make_log("paper-normal", 11, "bag")
     cut = tmp_path / "cut.bag"
     cut.write_bytes(source.read_bytes()[: source.stat().st_size // 2])
+    code, report = run_json(cut)
+    assert code == 0
+    assert report["duration_s"] < 80.0
+    assert any("up to the damage" in note for note in report["notes"])
+
+
+def test_truncated_to_nothing_useful_is_exit_2(make_log, tmp_path):
+    source = make_log("paper-normal", 11, "bag")
+    cut = tmp_path / "cut.bag"
+    cut.write_bytes(source.read_bytes()[:5000])
     result = runner.invoke(app, ["diagnose", str(cut)])
     assert result.exit_code == 2
     assert str(cut) in one_line_error(result)
