@@ -85,8 +85,15 @@ def diagnose(
         "--json", help="Write the JSON report to PATH, or to standard output with '-'.",
         metavar="PATH|-")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
+    companions: Annotated[list[Path] | None, typer.Option(
+        "--with", help="Another log of the same vehicle and day whose Diagnosis Motion "
+                       "Sequences may decide between candidates (repeatable).")] = None,
 ) -> None:
-    """Diagnose one log. Exit status: 0 no fault, 1 fault found, 2 log not analysable."""
+    """Diagnose one log. Exit status: 0 no fault, 1 fault found, 2 log not analysable.
+
+    Segments come from the log's markers, or are recognised from the commands; each
+    Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
+    leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from adapters import detect_format
     from auvdiag_cli.diagnosis import diagnose as run_diagnosis
     from auvdiag_cli.profile import load_profile
@@ -96,7 +103,7 @@ def diagnose(
 
     with _user_errors(log):
         detect_format(log)  # a bad path is reported before the model is even loaded
-        result = run_diagnosis(log, load_profile(profile), load_model(model))
+        result = run_diagnosis(log, load_profile(profile), load_model(model), companions or ())
         document = diagnosis_to_dict(result)
         if json_path == "-":
             typer.echo(json.dumps(document, indent=2))
@@ -157,6 +164,9 @@ def simulate(
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
     fault_at: Annotated[float | None, typer.Option(
         help="Move the scenario's fault onset to this time (s).")] = None,
+    start: Annotated[str, typer.Option(
+        help="When the log's clock starts (ISO 8601, UTC if no zone).")
+    ] = "2026-11-22T10:00:00Z",
 ) -> None:
     """Simulate a Twin-Burger dive and write it as a log with its ground truth beside it.
 
@@ -176,7 +186,7 @@ def simulate(
             _fail(str(error).strip("'\""))
         if output.exists():
             _fail(f"{output}: exists already, not overwriting")
-        dive = run_simulation(chosen, load_profile(None), seed)
+        dive = run_simulation(chosen, load_profile(None), seed, _unix_ns(start))
         write_log(dive, output, log_format)
     typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
                f"{truth_paths(output)[0].name}")
@@ -202,6 +212,18 @@ def inspect(
         typer.echo(line)
     if not all(s.resolved for s in result.signals):
         raise typer.Exit(EXIT_UNUSABLE)
+
+
+def _unix_ns(text: str) -> int:
+    from datetime import UTC, datetime
+
+    try:
+        moment = datetime.fromisoformat(text)
+    except ValueError:
+        _fail(f"--start {text!r} is not an ISO 8601 time (e.g. 2026-11-22T10:00:00Z)")
+    if moment.tzinfo is None:
+        moment = moment.replace(tzinfo=UTC)
+    return round(moment.timestamp() * 1e9)
 
 
 @app.command()

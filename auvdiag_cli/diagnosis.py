@@ -1,20 +1,30 @@
 """The diagnosis engine: one log in, one `Diagnosis` out. Rendering never recomputes."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.detection import binary_vector, detect, look_up
 from auvdiag_cli.errors import ModelError
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.matching import Matching, match
 from auvdiag_cli.profile import Profile
-from auvdiag_cli.segments import Segment, segments_from_markers, threshold_matrix
+from auvdiag_cli.segments import (
+    ROUTINE_MODE,
+    Segment,
+    segments_from_commands,
+    segments_from_markers,
+    threshold_matrix,
+)
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
+EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
 PAPER_ASSUMPTIONS = (
     "The environment is steady: a change in how the vehicle moves comes only from its hardware.",
     "At most one sensor or actuator is defective at a time.",
@@ -28,6 +38,8 @@ class SegmentResult:
     segment: Segment
     max_g: dict[str, float]
     b: dict[str, int]
+    case: int | None
+    components: tuple[str, ...]
 
 
 @dataclass
@@ -53,12 +65,15 @@ class Diagnosis:
     detected_at_s: float | None
     onset_s: float | None
     segments: list[SegmentResult]
+    segment_source: str               # "markers" or "commands"
     substitution: Substitution | None
     model: dict[str, Any]
     window_samples: int
     decision_window_s: float
     sensor_units: dict[str, str]
     notes: list[str] = field(default_factory=list)
+    active: ActiveDiagnosis | None = None
+    start_ns: int = 0
     # Time histories for reports.
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
@@ -82,19 +97,66 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
                          f"{profile.dt_s} s")
 
 
-def diagnose(path: Path, profile: Profile, model: LoadedModel) -> Diagnosis:
-    """Diagnose the log at ``path`` (raises LogError / ModelError when it cannot)."""
+def diagnose(path: Path, profile: Profile, model: LoadedModel,
+             companions: Sequence[Path] = ()) -> Diagnosis:
+    """Diagnose the log at ``path`` (raises LogError / ModelError when it cannot).
+
+    ``companions`` are other logs of the same vehicle and day whose Diagnosis Motion
+    Sequences may decide between candidates (active diagnosis)."""
     check_model_fits(model, profile, path)
-    return diagnose_ingested(ingest(path, profile), profile, model)
+    main = ingest(path, profile)
+    runs: list[tuple[DmsRun, int]] = []
+    notes: list[str] = []
+    for companion in companions:
+        other = ingest(companion, profile)
+        problem = _companion_problem(main, other)
+        if problem is not None:
+            notes.append(f"companion log {companion} ignored: {problem}")
+            continue
+        result = diagnose_ingested(other, profile, model)
+        runs += [(run, result.start_ns) for run in dms_runs(result)]
+        notes.append(f"companion log {companion}: {len(dms_runs(result))} DMS run(s)")
+    diagnosis = diagnose_ingested(main, profile, model, runs)
+    diagnosis.notes += notes
+    return diagnosis
 
 
-def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel) -> Diagnosis:
+def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
+    """Why another log cannot speak for this vehicle's state, or None."""
+    a, b = main.signals, other.signals
+    if a.start_ns < b.end_ns and b.start_ns < a.end_ns:
+        return "it overlaps this log in time (one vehicle cannot fly two dives at once)"
+    if min(a.start_ns, b.start_ns) > EPOCH_CLOCK_NS:
+        day_a = datetime.fromtimestamp(a.start_ns / 1e9, UTC).date()
+        day_b = datetime.fromtimestamp(b.start_ns / 1e9, UTC).date()
+        if day_a != day_b:
+            return f"recorded on {day_b}, this log on {day_a}"
+    return None
+
+
+def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:
+    """The log's DMS segments with their outcome, in absolute time."""
+    return [DmsRun(str(diagnosis.log), r.segment.name,
+                   diagnosis.start_ns + round(r.segment.start_s * 1e9),
+                   diagnosis.start_ns + round(r.segment.end_s * 1e9), r.b)
+            for r in diagnosis.segments if r.segment.mode == ROUTINE_MODE]
+
+
+def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
+                      companion_runs: Sequence[tuple[DmsRun, int]] = ()) -> Diagnosis:
     frame, signals = log.frame, log.signals
     full_scale = model.metadata.get("full_scale", profile.full_scales)
     window = int(model.metadata.get("window_samples", profile.window_samples))
-    matching = match(model, frame, full_scale, window)
-    segments = segments_from_markers(signals.markers, signals.start_ns, float(frame.time_s[-1]),
-                                     _with_model_thresholds(profile, model))
+    judged = _with_model_thresholds(profile, model)
+    if signals.markers:
+        segments = segments_from_markers(signals.markers, signals.start_ns,
+                                         float(frame.time_s[-1]), judged)
+    else:
+        segments = segments_from_commands(frame.commands, frame.time_s, judged)
+    # Every DMS is a test of its own: the replay starts afresh from the measured state.
+    dms_starts = [int(np.searchsorted(frame.time_s, s.start_s)) for s in segments
+                  if s.mode == ROUTINE_MODE]
+    matching = match(model, frame, full_scale, window, dms_starts)
     thresholds = threshold_matrix(segments, frame.time_s, frame.sensor_names)
     b_series = binary_vector(matching.g_percent, thresholds)
     scales = np.asarray([full_scale[n] for n in frame.sensor_names])
@@ -110,17 +172,35 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel) ->
         component=None, candidates=[], case=_normal_case(profile),
         b={name: 0 for name in frame.sensor_names}, detected_at_s=None, onset_s=None,
         segments=_segment_results(segments, frame.time_s, matching, b_series,
-                                  frame.sensor_names),
+                                  frame.sensor_names, profile),
+        segment_source="markers" if signals.markers else "commands",
         substitution=None, model=model.identity, window_samples=window,
         decision_window_s=profile.decision_window_s,
         sensor_units={s.name: s.unit for s in profile.sensors}, notes=notes,
         time_s=frame.time_s, commands=frame.commands, command_names=frame.command_names,
         sensor_names=frame.sensor_names, matching=matching, thresholds=thresholds,
-        b_series=b_series)
+        b_series=b_series, start_ns=signals.start_ns)
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
+        if len(diagnosis.candidates) > 1:
+            own = [(run, signals.start_ns) for run in dms_runs(diagnosis)]
+            _apply_active_diagnosis(diagnosis, [*own, *companion_runs], profile, model)
     return diagnosis
+
+
+def _apply_active_diagnosis(diagnosis: Diagnosis, runs: list[tuple[DmsRun, int]],
+                            profile: Profile, model: LoadedModel) -> None:
+    assert diagnosis.onset_s is not None
+    onset_ns = diagnosis.start_ns + round(diagnosis.onset_s * 1e9)
+    active = decide(diagnosis.candidates, onset_ns, runs, profile)
+    diagnosis.active = active
+    if active.conflict:
+        diagnosis.notes.append("the DMS runs contradict each other (more than one fault?); "
+                               "all candidates kept")
+    diagnosis.candidates = active.candidates
+    if len(active.candidates) == 1:
+        _name_component(diagnosis, active.candidates[0], profile, model)
 
 
 def _with_model_thresholds(profile: Profile, model: LoadedModel) -> Profile:
@@ -151,16 +231,23 @@ def _apply_detection(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, on
     diagnosis.case = row.case
     diagnosis.candidates = list(row.components)
     if len(row.components) == 1:
-        diagnosis.component = row.components[0]
-        sensor = next((s for s in profile.sensors if s.component == diagnosis.component), None)
-        if sensor is not None:
-            errors = model.metadata.get("heldout_error", {}).get("rms", {})
-            diagnosis.substitution = Substitution(sensor.name, diagnosis.onset_s,
-                                                  errors.get(sensor.name), sensor.unit)
+        _name_component(diagnosis, row.components[0], profile, model)
+
+
+def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,
+                    model: LoadedModel) -> None:
+    """The verdict names one component; a failed sensor gets Substituting Control."""
+    diagnosis.component = component
+    sensor = next((s for s in profile.sensors if s.component == component), None)
+    if sensor is not None and diagnosis.onset_s is not None:
+        errors = model.metadata.get("heldout_error", {}).get("rms", {})
+        diagnosis.substitution = Substitution(sensor.name, diagnosis.onset_s,
+                                              errors.get(sensor.name), sensor.unit)
 
 
 def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matching,
-                     b_series: np.ndarray, sensor_names: tuple[str, ...]) -> list[SegmentResult]:
+                     b_series: np.ndarray, sensor_names: tuple[str, ...], profile: Profile
+                     ) -> list[SegmentResult]:
     results = []
     for segment in segments:
         inside = (time_s >= segment.start_s) & (time_s <= segment.end_s)
@@ -169,5 +256,7 @@ def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matc
                         if g.size and np.isfinite(g[:, i]).any() else float("nan"))
                  for i, name in enumerate(sensor_names)}
         b = {name: int(b_series[inside, i].any()) for i, name in enumerate(sensor_names)}
-        results.append(SegmentResult(segment, max_g, b))
+        row = look_up(profile.pattern, b)
+        results.append(SegmentResult(segment, max_g, b, None if row is None else row.case,
+                                     () if row is None else row.components))
     return results

@@ -4,9 +4,14 @@ Window convention: g_i(k) = 100 / (K · R_i) · Σ_{j=k−K+1..k} |SS_i(j) − S
 mean of the last K absolute differences in percent of R_i (the paper sums K+1 terms and
 divides by K; we average exactly K so that g is an unbiased mean). Samples missing inside a
 reported gap are left out of the mean; g is NaN until half a window of samples exists.
+
+The replay runs free from the first measured state; it restarts from the measured state at
+each *restart* (after a stretch of unknown commands, and at the start of every Diagnosis
+Motion Sequence, which is a test of its own), and g's window never reaches across one.
 """
 
 import itertools
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -42,18 +47,20 @@ def residual_index(measured: np.ndarray, modelled: np.ndarray, full_scale: np.nd
 
 
 def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
-          window: int) -> Matching:
-    """Replay the log's commands from its first measured state (and again after every
-    stretch where the commands are unknown); compute g."""
+          window: int, restarts: Sequence[int] = ()) -> Matching:
+    """Replay the log's commands and compute g, restarting at ``frame.restarts`` and
+    ``restarts`` (grid indices)."""
     measured = frame.sensors
     modelled = np.full_like(measured, np.nan)
-    bounds = [0, *frame.restarts, len(measured)]
-    for begin, end in itertools.pairwise(bounds):
+    g = np.full_like(measured, np.nan)
+    scales = np.asarray([full_scale[name] for name in frame.sensor_names])
+    cuts = sorted({0, len(measured), *frame.restarts, *restarts})
+    for begin, end in itertools.pairwise(cuts):
         finite_rows = np.flatnonzero(np.isfinite(measured[begin:end]).all(axis=1))
         if finite_rows.size == 0:
             continue
         start = begin + int(finite_rows[0])
         modelled[start:end] = replay(model.network, model.normaliser,
                                      frame.commands[start:end], measured[start])
-    scales = np.asarray([full_scale[name] for name in frame.sensor_names])
-    return Matching(measured, modelled, residual_index(measured, modelled, scales, window))
+        g[begin:end] = residual_index(measured[begin:end], modelled[begin:end], scales, window)
+    return Matching(measured, modelled, g)

@@ -40,9 +40,13 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
                 "thresholds": r.segment.thresholds,
                 "max_g": {k: _finite(v) for k, v in r.max_g.items()},
                 "b": r.b,
+                "case": r.case,
+                "components": list(r.components),
             }
             for r in diagnosis.segments
         ],
+        "segment_source": diagnosis.segment_source,
+        "active_diagnosis": _active(diagnosis),
         "substitution": None if substitution is None else {
             "signal": substitution.signal,
             "from_s": substitution.from_s,
@@ -57,6 +61,20 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "assumptions": list(PAPER_ASSUMPTIONS),
         },
         "notes": diagnosis.notes,
+    }
+
+
+def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    active = diagnosis.active
+    if active is None:
+        return None
+    return {
+        "candidates_before": active.candidates_before,
+        "candidates_after": active.candidates,
+        "evidence": [{"log": e.log, "segment": e.segment, "start_s": e.start_s, "b": e.b,
+                      "tested": list(e.tested), "faulty": e.faulty} for e in active.evidence],
+        "recommended_dms": active.recommended_dms,
+        "conflict": active.conflict,
     }
 
 

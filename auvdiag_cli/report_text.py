@@ -25,9 +25,17 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                      f"(delay {d.detected_at_s - d.onset_s:.1f} s)"
                      if d.onset_s is not None and d.detected_at_s is not None else "")
         lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in d.b.items()))
-        if d.component is None and len(d.candidates) > 1:
-            lines.append("  the pattern table cannot tell these apart; run the Diagnosis Motion "
-                         "Sequences that move one thruster at a time (ZB, ZC) to decide")
+        if d.active is not None:
+            for e in d.active.evidence:
+                verdict = "fault among" if e.faulty else "clears"
+                lines.append(f"  active diagnosis: {e.segment} at {e.start_s:.1f} s "
+                             f"({e.log}) moved {', '.join(e.tested)}: b = "
+                             + ", ".join(str(v) for v in e.b.values())
+                             + f" -> {verdict} {', '.join(e.tested)}")
+            if d.active.recommended_dms:
+                lines.append("  cannot tell these apart from this log: run "
+                             + " or ".join(d.active.recommended_dms)
+                             + " on the next dive (or give such a log with --with) to decide")
         if d.substitution is not None:
             s = d.substitution
             error = (f", expected error {s.expected_error_rms:.4f} {s.unit} rms"
@@ -38,8 +46,9 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"
                           for name in result.max_g)
+        case = f"  case {result.case}" if result.case else ""
         lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "
-                     f"max g / threshold: {peaks}")
+                     f"max g / threshold: {peaks}{case}")
     lines += [f"  note: {note}" for note in d.notes]
     lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
     return [line for line in lines if line]

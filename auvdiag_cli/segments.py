@@ -1,11 +1,13 @@
-"""Diagnosis segments of a log: DMS runs and mission, from the logged segment markers."""
+"""Diagnosis segments of a log: DMS runs and mission, from the logged segment markers or,
+when a log has none, from the command history itself (each DMS is a fixed command history,
+so it is found by matching the profile's template)."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
 from adapters.signals import SegmentMarker
-from auvdiag_cli.profile import MISSION_MODE, Profile
+from auvdiag_cli.profile import MISSION_MODE, DiagnosisSequence, Profile
 
 ROUTINE_MODE = "routine"
 
@@ -49,3 +51,59 @@ def threshold_matrix(segments: list[Segment], time_s: np.ndarray,
         inside = (time_s >= segment.start_s) & (time_s <= segment.end_s)
         thresholds[inside] = [segment.thresholds[name] for name in sensor_names]
     return thresholds
+
+
+# A DMS matches where the commands follow its template within this much (normalised command;
+# PWM logs quantise to 0.0025) on all but this fraction of samples (step edges may shift by
+# a sample of receive jitter).
+TEMPLATE_TOLERANCE = 0.02
+TEMPLATE_MISMATCH = 0.05
+
+
+def dms_template(dms: DiagnosisSequence, dt_s: float) -> np.ndarray:
+    """The DMS command history on the model grid, shape (steps, n_commands)."""
+    rows = [levels for duration, levels in dms.steps for _ in range(round(duration / dt_s))]
+    return np.asarray(rows, dtype=np.float64)
+
+
+def find_dms(commands: np.ndarray, profile: Profile) -> list[tuple[str, int, int]]:
+    """(name, first index, end index) of every DMS run in the command history."""
+    found: list[tuple[str, int, int]] = []
+    for name, dms in profile.dms.items():
+        template = dms_template(dms, profile.dt_s)
+        length = len(template)
+        at_first = np.all(np.abs(commands - template[0]) <= TEMPLATE_TOLERANCE, axis=1)
+        starts = np.flatnonzero(at_first & ~np.concatenate(([False], at_first[:-1])))
+        for start in starts:
+            window = commands[start:start + length]
+            if len(window) < length:
+                continue
+            off = np.any(np.abs(window - template) > TEMPLATE_TOLERANCE, axis=1)
+            if off.mean() <= TEMPLATE_MISMATCH:
+                found.append((name, int(start), int(start + length)))
+    found.sort(key=lambda item: item[1])
+    kept: list[tuple[str, int, int]] = []
+    for item in found:
+        if not kept or item[1] >= kept[-1][2]:
+            kept.append(item)
+    return kept
+
+
+def segments_from_commands(commands: np.ndarray, time_s: np.ndarray, profile: Profile
+                           ) -> list[Segment]:
+    """DMS runs recognised in the commands; everything between them is mission."""
+    segments: list[Segment] = []
+    cursor = 0.0
+    end_s = float(time_s[-1])
+    for name, first, end in find_dms(commands, profile):
+        start_s, stop_s = float(time_s[first]), float(time_s[min(end, len(time_s) - 1)])
+        if start_s - cursor >= profile.dt_s:
+            segments.append(Segment("MISSION", MISSION_MODE, cursor, start_s,
+                                    profile.thresholds_for("MISSION")))
+        segments.append(Segment(name, ROUTINE_MODE, start_s, stop_s,
+                                profile.thresholds_for(name)))
+        cursor = stop_s
+    if end_s - cursor >= profile.dt_s or not segments:
+        segments.append(Segment("MISSION", MISSION_MODE, cursor, end_s,
+                                profile.thresholds_for("MISSION")))
+    return segments

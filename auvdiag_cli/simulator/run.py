@@ -182,8 +182,10 @@ class _Dive:
         return self.out
 
 
-def simulate(scenario: Scenario, profile: Profile, seed: int = 0) -> SimulatedDive:
-    """Fly ``scenario`` once; ``seed`` fixes every noise draw."""
+def simulate(scenario: Scenario, profile: Profile, seed: int = 0,
+             start_ns: int = LOG_EPOCH_NS) -> SimulatedDive:
+    """Fly ``scenario`` once; ``seed`` fixes every noise draw; the log's clock starts at
+    ``start_ns`` (Unix time)."""
     missing = [p.name for p in scenario.phases if p.mission is None and p.name not in profile.dms]
     if missing:
         raise KeyError(f"profile {profile.name!r} defines no DMS {', '.join(missing)}")
@@ -192,7 +194,9 @@ def simulate(scenario: Scenario, profile: Profile, seed: int = 0) -> SimulatedDi
         dive.run_phase(phase)
         if dive.fault_over():
             break
-    return dive.finish()
+    result = dive.finish()
+    result.start_ns = start_ns
+    return result
 
 
 def fault_summary(fault: Fault | None) -> dict[str, object] | None:
