@@ -149,6 +149,52 @@ def train(
                    + (f"   (paper {paper})" if paper is not None else ""))
 
 
+@app.command()
+def calibrate(
+    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs.")],
+    model: Annotated[Path, typer.Option("--model", help="Model directory to calibrate.",
+                                        file_okay=False, exists=True)],
+    faulty: Annotated[list[Path] | None, typer.Option(
+        "--faulty", help="A log with a known fault, to check detection (repeatable).")
+    ] = None,
+    margin: Annotated[float, typer.Option(help="Threshold = margin x largest normal g.")
+                      ] = 1.5,
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="Write a calibrated copy here instead of updating --model.",
+        file_okay=False)] = None,
+    profile: ProfileOption = None,
+) -> None:
+    """Set the model's thresholds from the g it reaches on normal logs.
+
+    Per diagnosis mode (mission, ZA, ZB, ZC) and signal: threshold = margin x the largest g
+    on the normal logs (zero false alarms there by construction; the implied rate is stated
+    as a 95 % upper bound). Modes with under 30 s of data keep the profile's thresholds.
+    With --faulty, those logs are diagnosed with the new thresholds to show the margin."""
+    from auvdiag_cli.calibration import calibrate as run_calibration
+    from auvdiag_cli.calibration import write_metadata
+    from auvdiag_cli.profile import load_profile
+    from models.store import load_model
+
+    with _user_errors(model):
+        loaded = load_model(model)
+        result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin)
+        write_metadata(loaded, output or model)
+    typer.echo(f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
+               f"{result.margin:g}; false alarms on those logs: 0 (rate < "
+               f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)")
+    for mode in result.modes:
+        peaks = ", ".join(f"{k} {v:.1f} -> {mode.thresholds[k]:g} %" for k, v in
+                          mode.max_g.items())
+        kept = "  (too little data: profile default kept)" if mode.kept_default else ""
+        typer.echo(f"  {mode.mode:<8} {mode.samples:>7} samples  max g -> threshold: "
+                   f"{peaks}{kept}")
+    for check in result.faulty:
+        named = check.component or " or ".join(check.candidates) or "-"
+        typer.echo(f"  faulty {check.log}: {check.verdict} {named}, peak g "
+                   f"{check.peak_ratio:.1f} x threshold")
+    typer.echo(f"thresholds written to {(output or model) / 'model.json'}")
+
+
 def _progress(message: str) -> None:
     typer.echo(message, err=True)
 

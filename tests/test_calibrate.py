@@ -1,0 +1,66 @@
+"""`auvdiag calibrate`: thresholds from normal logs, written into the model's metadata."""
+
+import json
+import shutil
+
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from models.store import default_model_dir
+
+runner = CliRunner()
+
+
+def test_calibrated_thresholds_hold_on_held_out_logs_and_still_detect(make_log, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model)
+    weights = (model / "weights.pt").read_bytes()
+    normal = [make_log(name, seed) for name, seed in (
+        ("paper-normal", 61), ("paper-normal", 62), ("mission-ccw", 61),
+        ("mission-large-cw", 61), ("routine-and-mission", 61), ("routine-and-mission", 62))]
+    faulty = make_log("paper-flow-sensor-covered", 61)
+    result = runner.invoke(app, ["calibrate", *map(str, normal), "--model", str(model),
+                                 "--faulty", str(faulty)])
+    assert result.exit_code == 0, result.output
+    assert "false alarms on those logs: 0" in result.stdout
+    assert f"faulty {faulty}: fault flow_sensor" in result.stdout
+    meta = json.loads((model / "model.json").read_text())
+    assert (model / "weights.pt").read_bytes() == weights
+    calibration = meta["calibration"]
+    assert calibration["margin"] == 1.5 and len(calibration["normal_logs"]) == 6
+    mission = next(m for m in calibration["modes"] if m["mode"] == "mission")
+    for signal in ("flow", "yaw_rate"):
+        assert meta["thresholds"]["mission"][signal] == round(1.5 * mission["max_g"][signal], 2)
+    assert {m["mode"] for m in calibration["modes"]} == {"mission", "ZA", "ZB", "ZC"}
+
+    def diagnose(log):
+        out = runner.invoke(app, ["diagnose", str(log), "--model", str(model), "--json", "-",
+                                  "-q"])
+        return out.exit_code, json.loads(out.stdout)
+
+    for log in (make_log("paper-normal", 63), make_log("mission-large-ccw", 63),
+                make_log("routine-and-mission", 63)):
+        code, report = diagnose(log)
+        assert (code, report["verdict"]) == (0, "normal"), log
+        assert report["segments"][-1]["thresholds"] == meta["thresholds"]["mission"]
+    code, report = diagnose(make_log("paper-flow-sensor-covered", 63))
+    assert report["component"] == "flow_sensor"
+    code, report = diagnose(make_log("mission-thruster-1-dead", 63))
+    assert report["case"] == 1
+    code, report = diagnose(make_log("mission-yaw-rate-sensor-dead", 63))
+    assert report["component"] == "yaw_rate_sensor"
+
+
+def test_calibrate_to_a_copy_leaves_the_model_alone(make_log, tmp_path):
+    model, copy = tmp_path / "model", tmp_path / "copy"
+    shutil.copytree(default_model_dir(), model)
+    before = (model / "model.json").read_text()
+    result = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
+                                 str(model), "--output", str(copy), "--margin", "2"])
+    assert result.exit_code == 0, result.output
+    assert (model / "model.json").read_text() == before
+    assert json.loads((copy / "model.json").read_text())["calibration"]["margin"] == 2.0
+    assert (copy / "weights.pt").read_bytes() == (model / "weights.pt").read_bytes()
+    bad = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
+                              str(model), "--margin", "0.5"])
+    assert bad.exit_code == 2 and "margin below 1" in bad.stderr
