@@ -25,17 +25,27 @@ def detect(b: np.ndarray, residual_fraction: np.ndarray, thresholds: np.ndarray,
            ) -> Detection | None:
     """Find the first alarm; decide b over ``decision_steps`` after it; estimate the onset
     within ``lookback_steps`` before the alarm."""
-    alarms = np.flatnonzero(b.any(axis=1))
-    if alarms.size == 0:
+    alarm = first_alarm(b)
+    if alarm is None:
         return None
-    alarm = int(alarms[0])
-    decided = np.asarray(b[alarm:alarm + decision_steps + 1].any(axis=0))
+    decided = decided_b(b, alarm, decision_steps)
     onsets = [
         _onset(residual_fraction[:, i], thresholds[alarm, i] / 100.0, alarm, lookback_steps)
         for i in np.flatnonzero(decided)
     ]
     return Detection(alarm, {name: int(decided[i]) for i, name in enumerate(sensor_names)},
                      min(onsets))
+
+
+def first_alarm(b: np.ndarray) -> int | None:
+    alarms = np.flatnonzero(b.any(axis=1))
+    return int(alarms[0]) if alarms.size else None
+
+
+def decided_b(b: np.ndarray, alarm: int, decision_steps: int) -> np.ndarray:
+    """b as read into the pattern table: every b_i that is 1 within the decision window
+    after the first alarm (one residual may cross a little before another)."""
+    return np.asarray(b[alarm:alarm + decision_steps + 1].any(axis=0))
 
 
 def _onset(residual: np.ndarray, threshold: float, alarm: int, lookback_steps: int) -> int:

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
-from auvdiag_cli.detection import binary_vector, detect, look_up
+from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.errors import ModelError
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.matching import Matching, match
@@ -21,6 +21,7 @@ from auvdiag_cli.segments import (
     segments_from_markers,
     threshold_matrix,
 )
+from auvdiag_cli.substitution import Substitution, substitute
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
@@ -40,16 +41,6 @@ class SegmentResult:
     b: dict[str, int]
     case: int | None
     components: tuple[str, ...]
-
-
-@dataclass
-class Substitution:
-    """Substituting Control for a failed sensor: SM_i replaces SS_i from ``from_s`` on."""
-
-    signal: str
-    from_s: float
-    expected_error_rms: float | None   # the model's free-run error on held-out normal logs
-    unit: str
 
 
 @dataclass
@@ -161,8 +152,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     b_series = binary_vector(matching.g_percent, thresholds)
     scales = np.asarray([full_scale[n] for n in frame.sensor_names])
     residual = np.abs(matching.measured - matching.modelled) / scales
-    detection = detect(b_series, residual, thresholds, frame.sensor_names,
-                       round(profile.decision_window_s / profile.dt_s),
+    decision = round(profile.decision_window_s / profile.dt_s)
+    detection = detect(b_series, residual, thresholds, frame.sensor_names, decision,
                        round(ONSET_LOOKBACK_S / profile.dt_s))
     notes = list(signals.notes) + frame.notes
     notes += [f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s "
@@ -172,7 +163,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         component=None, candidates=[], case=_normal_case(profile),
         b={name: 0 for name in frame.sensor_names}, detected_at_s=None, onset_s=None,
         segments=_segment_results(segments, frame.time_s, matching, b_series,
-                                  frame.sensor_names, profile),
+                                  frame.sensor_names, profile, decision),
         segment_source="markers" if signals.markers else "commands",
         substitution=None, model=model.identity, window_samples=window,
         decision_window_s=profile.decision_window_s,
@@ -239,15 +230,18 @@ def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,
     """The verdict names one component; a failed sensor gets Substituting Control."""
     diagnosis.component = component
     sensor = next((s for s in profile.sensors if s.component == component), None)
-    if sensor is not None and diagnosis.onset_s is not None:
+    matching = diagnosis.matching
+    if sensor is not None and diagnosis.onset_s is not None and matching is not None:
         errors = model.metadata.get("heldout_error", {}).get("rms", {})
-        diagnosis.substitution = Substitution(sensor.name, diagnosis.onset_s,
-                                              errors.get(sensor.name), sensor.unit)
+        diagnosis.substitution = substitute(
+            diagnosis.log, sensor, diagnosis.sensor_names, diagnosis.time_s, matching.measured,
+            matching.modelled, diagnosis.onset_s, profile.navigation, errors.get(sensor.name))
 
 
 def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matching,
-                     b_series: np.ndarray, sensor_names: tuple[str, ...], profile: Profile
-                     ) -> list[SegmentResult]:
+                     b_series: np.ndarray, sensor_names: tuple[str, ...], profile: Profile,
+                     decision_steps: int) -> list[SegmentResult]:
+    """Each segment's peak g, and its b read as the whole log's is: at its first alarm."""
     results = []
     for segment in segments:
         inside = (time_s >= segment.start_s) & (time_s <= segment.end_s)
@@ -255,7 +249,11 @@ def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matc
         max_g = {name: (round(float(np.nanmax(g[:, i])), 3)
                         if g.size and np.isfinite(g[:, i]).any() else float("nan"))
                  for i, name in enumerate(sensor_names)}
-        b = {name: int(b_series[inside, i].any()) for i, name in enumerate(sensor_names)}
+        rows = b_series[inside]
+        alarm = first_alarm(rows)
+        bits = np.zeros(len(sensor_names), bool) if alarm is None else decided_b(
+            rows, alarm, decision_steps)
+        b = {name: int(bits[i]) for i, name in enumerate(sensor_names)}
         row = look_up(profile.pattern, b)
         results.append(SegmentResult(segment, max_g, b, None if row is None else row.case,
                                      () if row is None else row.components))

@@ -26,6 +26,15 @@ class Sensor:
     unit: str
     full_scale: float
     description: str
+    truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
+
+
+@dataclass(frozen=True)
+class Navigation:
+    """Which signals dead-reckon the track: a forward speed and a yaw rate."""
+
+    speed: str
+    yaw_rate: str
 
 
 @dataclass(frozen=True)
@@ -62,6 +71,7 @@ class Profile:
     dms: dict[str, DiagnosisSequence]
     sources: dict[str, LogSources]   # per log family: ros, mavlink, dataflash
     source_path: str
+    navigation: Navigation | None = None
 
     def sources_for(self, family: str) -> LogSources | None:
         return self.sources.get(family)
@@ -146,7 +156,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     )
     sensors = tuple(
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
-               _positive(r, "full_scale"), r.get("description", str, ""))
+               _positive(r, "full_scale"), r.get("description", str, ""),
+               r.get("truth_column", str, None))
         for r in top.items("sensors")
     )
     if not commands or not sensors:
@@ -180,6 +191,13 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     sources_table = top.sub("sources")
     sources = {family: _log_sources(sources_table.sub(family), signal_names)
                for family in sources_table.table}
+    navigation = None
+    if "navigation" in data:
+        nav = top.sub("navigation")
+        navigation = Navigation(nav.get("speed", str), nav.get("yaw_rate", str))
+        for key, name in (("speed", navigation.speed), ("yaw_rate", navigation.yaw_rate)):
+            if name not in sensor_names:
+                raise ProfileError(f"key 'navigation.{key}' names no sensor: {name!r}")
     return Profile(
         name=vehicle.get("name", str),
         description=vehicle.get("description", str, ""),
@@ -192,6 +210,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         pattern=pattern,
         dms=dms,
         sources=sources,
+        navigation=navigation,
         source_path=source_path,
     )
 

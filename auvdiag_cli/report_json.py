@@ -52,6 +52,14 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "from_s": substitution.from_s,
             "unit": substitution.unit,
             "expected_error_rms": substitution.expected_error_rms,
+            "truth_error_rms": _rounded(substitution.truth_error_rms),
+            "failed_sensor_error_rms": _rounded(substitution.failed_error_rms),
+            "track_end_m": {name: [round(v, 3) for v in track.end]
+                            for name, track in substitution.tracks.items()},
+            "track_end_error_m": {
+                name: round(track.distance_to(substitution.tracks["truth"]), 3)
+                for name, track in substitution.tracks.items()
+                if name != "truth" and "truth" in substitution.tracks},
         },
         "model": diagnosis.model,
         "method": {
@@ -62,6 +70,10 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         },
         "notes": diagnosis.notes,
     }
+
+
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(value, 5)
 
 
 def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:

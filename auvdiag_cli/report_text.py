@@ -42,6 +42,15 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                      if s.expected_error_rms is not None else "")
             lines.append(f"  substituting control: model {s.signal} replaces the sensor from "
                          f"{s.from_s:.1f} s{error}")
+            if s.truth_error_rms is not None and s.failed_error_rms is not None:
+                lines.append(f"    against the truth: substituted {s.truth_error_rms:.4f} "
+                             f"{s.unit} rms, failed sensor {s.failed_error_rms:.4f} {s.unit}")
+            if "truth" in s.tracks:
+                lines.append("    dead-reckoned track ends "
+                             f"{s.tracks['substituted'].distance_to(s.tracks['truth']):.2f} m "
+                             "from the true end with the substitute, "
+                             f"{s.tracks['failed'].distance_to(s.tracks['truth']):.2f} m with "
+                             "the failed sensor")
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"

@@ -18,7 +18,8 @@ from auvdiag_cli.diagnosis import diagnose
 from auvdiag_cli.profile import load_profile
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import truth_paths, write_log
+from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.truth import truth_paths
 from models.store import load_model
 
 SCENARIOS = ["paper-flow-sensor-covered", "paper-normal", "mission-ccw", "mission-large-cw",

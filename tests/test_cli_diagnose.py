@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.simulator.writers import truth_paths
+from auvdiag_cli.truth import truth_paths
 
 runner = CliRunner()
 
@@ -173,7 +173,7 @@ def test_wrong_model_for_profile_is_exit_2(make_log, tmp_path):
     profile_text = (Path(__file__).parents[1] / "auvdiag_cli/profiles/twin_burger.toml").read_text()
     other = tmp_path / "renamed.toml"
     other.write_text(profile_text.replace('name = "yaw_rate"', 'name = "heave"').replace(
-        "yaw_rate = ", "heave = "))
+        "yaw_rate = ", "heave = ").replace('heave = "yaw_rate"', 'yaw_rate = "heave"'))
     result = runner.invoke(app, ["diagnose", str(make_log("paper-normal", 11)),
                                  "--profile", str(other)])
     assert result.exit_code == 2

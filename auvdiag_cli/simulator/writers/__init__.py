@@ -8,14 +8,11 @@ from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
 from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
+from auvdiag_cli.truth import truth_paths
+
+__all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
 
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin")
-
-
-def truth_paths(log_path: Path) -> tuple[Path, Path]:
-    """Where the ground truth of a log lives: ``NAME.truth.json`` and ``NAME.truth.csv``."""
-    stem = log_path.name.split(".")[0]
-    return (log_path.with_name(stem + ".truth.json"), log_path.with_name(stem + ".truth.csv"))
 
 
 def write_log(dive: SimulatedDive, path: Path, fmt: str, extra: Sequence[ExtraTopic] = ()

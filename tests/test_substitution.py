@@ -1,0 +1,50 @@
+"""Substituting Control: the model's signal in place of the failed sensor, judged against the
+simulator's ground truth."""
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.substitution import dead_reckon
+
+
+def test_dead_reckoning_straight_and_turning():
+    t = np.arange(0, 10.01, 0.1)
+    straight = dead_reckon(t, np.full_like(t, 0.5), np.zeros_like(t))
+    assert straight.end == pytest.approx((5.0, 0.0), abs=0.06)
+    # A full circle at 0.2π rad/s for 10 s ends where it began, turning to starboard (+y).
+    circle = dead_reckon(t, np.full_like(t, 0.5), np.full_like(t, 0.2 * np.pi))
+    assert np.hypot(*circle.end) < 0.1
+    assert circle.y_m[25] > 0
+
+
+@pytest.mark.parametrize(("scenario", "signal"), [("paper-flow-sensor-covered", "flow"),
+                                                  ("mission-yaw-rate-sensor-dead", "yaw_rate")])
+def test_substitution_beats_the_failed_sensor(make_log, scenario, signal):
+    result = CliRunner().invoke(app, ["diagnose", str(make_log(scenario, 71, "bag")),
+                                      "--json", "-", "-q"])
+    report = json.loads(result.stdout)
+    substitution = report["substitution"]
+    assert substitution["signal"] == signal
+    assert substitution["from_s"] == report["onset_s"]
+    assert substitution["truth_error_rms"] < 0.5 * substitution["failed_sensor_error_rms"]
+    assert set(substitution["track_end_m"]) == {"substituted", "failed", "truth"}
+    if signal == "flow":
+        ends = substitution["track_end_error_m"]
+        assert ends["substituted"] < 0.2 * ends["failed"]
+
+
+def test_no_truth_no_truth_figures(make_log, tmp_path):
+    import shutil
+
+    log = tmp_path / "alone.bag"
+    shutil.copy(make_log("paper-flow-sensor-covered", 71, "bag"), log)
+    report = json.loads(CliRunner().invoke(app, ["diagnose", str(log), "--json", "-",
+                                                 "-q"]).stdout)
+    substitution = report["substitution"]
+    assert substitution["truth_error_rms"] is None
+    assert set(substitution["track_end_m"]) == {"substituted", "failed"}
+    assert substitution["track_end_error_m"] == {}
