@@ -85,6 +85,10 @@ def diagnose(
         "--json", help="Write the JSON report to PATH, or to standard output with '-'.",
         metavar="PATH|-")] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
+    mission: Annotated[Path | None, typer.Option(
+        "--mission", help="Mission plan JSON for the closed-loop Substituting Control replay "
+                          "(default: NAME.mission.json beside the log).", dir_okay=False)
+    ] = None,
     companions: Annotated[list[Path] | None, typer.Option(
         "--with", help="Another log of the same vehicle and day whose Diagnosis Motion "
                        "Sequences may decide between candidates (repeatable).")] = None,
@@ -103,7 +107,8 @@ def diagnose(
 
     with _user_errors(log):
         detect_format(log)  # a bad path is reported before the model is even loaded
-        result = run_diagnosis(log, load_profile(profile), load_model(model), companions or ())
+        result = run_diagnosis(log, load_profile(profile), load_model(model), companions or (),
+                               mission)
         document = diagnosis_to_dict(result)
         if json_path == "-":
             typer.echo(json.dumps(document, indent=2))

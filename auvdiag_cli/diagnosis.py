@@ -9,8 +9,9 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
+from auvdiag_cli.closed_loop import replay_closed_loop
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
-from auvdiag_cli.errors import ModelError
+from auvdiag_cli.errors import ModelError, UsageError
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.matching import Matching, match
 from auvdiag_cli.profile import Profile
@@ -22,6 +23,7 @@ from auvdiag_cli.segments import (
     threshold_matrix,
 )
 from auvdiag_cli.substitution import Substitution, substitute
+from auvdiag_cli.truth import mission_path, read_missions
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
@@ -65,6 +67,7 @@ class Diagnosis:
     notes: list[str] = field(default_factory=list)
     active: ActiveDiagnosis | None = None
     start_ns: int = 0
+    mission_legs: list[dict[str, Any]] = field(default_factory=list)
     # Time histories for reports.
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
@@ -89,12 +92,15 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
-             companions: Sequence[Path] = ()) -> Diagnosis:
+             companions: Sequence[Path] = (), mission: Path | None = None) -> Diagnosis:
     """Diagnose the log at ``path`` (raises LogError / ModelError when it cannot).
 
     ``companions`` are other logs of the same vehicle and day whose Diagnosis Motion
-    Sequences may decide between candidates (active diagnosis)."""
+    Sequences may decide between candidates (active diagnosis). ``mission`` is the mission
+    plan (default: NAME.mission.json beside the log, when there is one), used to replay
+    Substituting Control in closed loop."""
     check_model_fits(model, profile, path)
+    legs = _mission_legs(mission or mission_path(path), explicit=mission is not None)
     main = ingest(path, profile)
     runs: list[tuple[DmsRun, int]] = []
     notes: list[str] = []
@@ -107,9 +113,20 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
         result = diagnose_ingested(other, profile, model)
         runs += [(run, result.start_ns) for run in dms_runs(result)]
         notes.append(f"companion log {companion}: {len(dms_runs(result))} DMS run(s)")
-    diagnosis = diagnose_ingested(main, profile, model, runs)
+    diagnosis = diagnose_ingested(main, profile, model, runs, legs)
     diagnosis.notes += notes
     return diagnosis
+
+
+def _mission_legs(path: Path, explicit: bool) -> list[dict[str, Any]]:
+    if not path.is_file():
+        if explicit:
+            raise UsageError(f"{path}: no such mission plan")
+        return []
+    try:
+        return read_missions(path)
+    except (OSError, ValueError) as error:
+        raise UsageError(f"{path}: unreadable mission plan: {error}") from None
 
 
 def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
@@ -134,7 +151,8 @@ def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:
 
 
 def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
-                      companion_runs: Sequence[tuple[DmsRun, int]] = ()) -> Diagnosis:
+                      companion_runs: Sequence[tuple[DmsRun, int]] = (),
+                      mission_legs: Sequence[dict[str, Any]] = ()) -> Diagnosis:
     frame, signals = log.frame, log.signals
     full_scale = model.metadata.get("full_scale", profile.full_scales)
     window = int(model.metadata.get("window_samples", profile.window_samples))
@@ -170,7 +188,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         sensor_units={s.name: s.unit for s in profile.sensors}, notes=notes,
         time_s=frame.time_s, commands=frame.commands, command_names=frame.command_names,
         sensor_names=frame.sensor_names, matching=matching, thresholds=thresholds,
-        b_series=b_series, start_ns=signals.start_ns)
+        b_series=b_series, start_ns=signals.start_ns, mission_legs=list(mission_legs))
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
@@ -236,6 +254,11 @@ def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,
         diagnosis.substitution = substitute(
             diagnosis.log, sensor, diagnosis.sensor_names, diagnosis.time_s, matching.measured,
             matching.modelled, diagnosis.onset_s, profile.navigation, errors.get(sensor.name))
+        if profile.controller is not None and diagnosis.mission_legs:
+            diagnosis.substitution.closed_loop = replay_closed_loop(
+                model, profile.controller, diagnosis.sensor_names, diagnosis.command_names,
+                diagnosis.time_s, diagnosis.commands, matching.measured, diagnosis.onset_s,
+                diagnosis.mission_legs, profile.dt_s)
 
 
 def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matching,

@@ -38,6 +38,22 @@ class Navigation:
 
 
 @dataclass(frozen=True)
+class ControllerSpec:
+    """The vehicle's own mission controller, for closed-loop replays: its kind (the only one
+    implemented is "turn-then-go", see auvdiag_cli.controller), the sensors it is fed, the
+    commands it sets (port, starboard) and gains that differ from the defaults."""
+
+    kind: str
+    speed: str
+    yaw_rate: str
+    commands: tuple[str, str]
+    gains: dict[str, float]
+
+
+CONTROLLER_KINDS = ("turn-then-go",)
+
+
+@dataclass(frozen=True)
 class PatternRow:
     case: int
     b: dict[str, int]
@@ -72,6 +88,7 @@ class Profile:
     sources: dict[str, LogSources]   # per log family: ros, mavlink, dataflash
     source_path: str
     navigation: Navigation | None = None
+    controller: ControllerSpec | None = None
 
     def sources_for(self, family: str) -> LogSources | None:
         return self.sources.get(family)
@@ -198,6 +215,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         for key, name in (("speed", navigation.speed), ("yaw_rate", navigation.yaw_rate)):
             if name not in sensor_names:
                 raise ProfileError(f"key 'navigation.{key}' names no sensor: {name!r}")
+    controller = _controller(top.sub("controller"), sensor_names,
+                             [c.name for c in commands]) if "controller" in data else None
     return Profile(
         name=vehicle.get("name", str),
         description=vehicle.get("description", str, ""),
@@ -211,8 +230,37 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         dms=dms,
         sources=sources,
         navigation=navigation,
+        controller=controller,
         source_path=source_path,
     )
+
+
+def _controller(reader: _Reader, sensor_names: list[str], command_names: list[str]
+                ) -> ControllerSpec:
+    from dataclasses import fields
+
+    from auvdiag_cli.controller import ControllerGains
+
+    kind = reader.get("kind", str)
+    if kind not in CONTROLLER_KINDS:
+        raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
+    for key in ("speed", "yaw_rate"):
+        if reader.get(key, str) not in sensor_names:
+            raise ProfileError(f"key '{reader.key(key)}' names no sensor")
+    commands = reader.get("commands", list)
+    if len(commands) != 2 or any(c not in command_names for c in commands):
+        raise ProfileError(f"key '{reader.key('commands')}' must name the port and "
+                           "starboard commands")
+    gains_reader = reader.sub("gains") if "gains" in reader.table else _Reader({}, "gains")
+    known = {f.name for f in fields(ControllerGains)}
+    gains = {}
+    for name in gains_reader.table:
+        if name not in known:
+            raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
+                               f"{kind} (known: {', '.join(sorted(known))})")
+        gains[name] = gains_reader.get(name, float)
+    return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str),
+                          (str(commands[0]), str(commands[1])), gains)
 
 
 def _topic(reader: _Reader) -> str:

@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Any
 
 from auvdiag_cli import __version__
+from auvdiag_cli.closed_loop import ClosedLoopReplay
 from auvdiag_cli.diagnosis import PAPER_ASSUMPTIONS, Diagnosis
 
 SCHEMA_VERSION = 1
@@ -60,6 +61,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
                 name: round(track.distance_to(substitution.tracks["truth"]), 3)
                 for name, track in substitution.tracks.items()
                 if name != "truth" and "truth" in substitution.tracks},
+            "closed_loop": _closed_loop(substitution.closed_loop),
         },
         "model": diagnosis.model,
         "method": {
@@ -70,6 +72,15 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         },
         "notes": diagnosis.notes,
     }
+
+
+def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:
+    if replay is None:
+        return None
+    return {"from_s": replay.start_s, "reached_last_waypoint": replay.reached,
+            "finished_s": replay.finished_s, "miss_m": replay.miss_m,
+            "last_waypoint_m": list(replay.last_waypoint),
+            "end_m": [round(float(replay.x_m[-1]), 3), round(float(replay.y_m[-1]), 3)]}
 
 
 def _rounded(value: float | None) -> float | None:

@@ -51,6 +51,13 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                              "from the true end with the substitute, "
                              f"{s.tracks['failed'].distance_to(s.tracks['truth']):.2f} m with "
                              "the failed sensor")
+            loop = s.closed_loop
+            if loop is not None:
+                outcome = (f"reaches its last waypoint at {loop.finished_s:.1f} s"
+                           if loop.reached else "does not reach its last waypoint")
+                lines.append(f"    closed-loop replay (controller fed the model from "
+                             f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
+                             f"{loop.miss_m:.2f} m from it")
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"

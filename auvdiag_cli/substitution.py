@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from auvdiag_cli.closed_loop import ClosedLoopReplay
 from auvdiag_cli.profile import Navigation, Sensor
 from auvdiag_cli.truth import truth_series
 
@@ -39,6 +40,7 @@ class Substitution:
     truth_error_rms: float | None = None      # SM_i − truth after the onset
     failed_error_rms: float | None = None     # SS_i − truth after the onset
     tracks: dict[str, Track] = field(default_factory=dict)   # substituted, failed, truth
+    closed_loop: ClosedLoopReplay | None = None
 
 
 def dead_reckon(time_s: np.ndarray, speed: np.ndarray, yaw_rate: np.ndarray) -> Track:

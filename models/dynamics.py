@@ -73,3 +73,34 @@ def replay(model: RecurrentDynamics, normaliser: Normaliser, commands: np.ndarra
         predicted = model(normaliser.commands(commands)[None],
                           normaliser.states(initial_state)[None])
     return normaliser.to_units(predicted[0])
+
+
+class Stepper:
+    """The model one step at a time, for closed-loop use: a controller reads its state and
+    chooses the next command. ``warm_up`` replays a command history first, exactly as
+    `replay` does, so the context matches the free run up to that point."""
+
+    def __init__(self, model: RecurrentDynamics, normaliser: Normaliser) -> None:
+        self.model, self.normaliser = model, normaliser
+        self.hidden = torch.zeros(1, model.hidden)
+        self.state = torch.zeros(1, model.n_states)
+
+    def warm_up(self, commands: np.ndarray, initial_state: np.ndarray) -> np.ndarray:
+        """Run over ``commands`` from ``initial_state``; return the state after the last."""
+        self.state = self.normaliser.states(initial_state)[None]
+        for command in commands:
+            self.step(command)
+        return self.current
+
+    @property
+    def current(self) -> np.ndarray:
+        return self.normaliser.to_units(self.state[0])
+
+    def step(self, command: np.ndarray) -> np.ndarray:
+        with torch.inference_mode():
+            features = torch.cat((self.normaliser.commands(np.asarray(command))[None],
+                                  self.state), dim=1)
+            self.hidden = self.model.cell(features, self.hidden)
+            delta = self.model.head(torch.cat((self.hidden, features), dim=1))
+            self.state = self.state + self.model.delta_ratio * delta
+        return self.current

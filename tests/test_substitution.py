@@ -35,6 +35,12 @@ def test_substitution_beats_the_failed_sensor(make_log, scenario, signal):
     if signal == "flow":
         ends = substitution["track_end_error_m"]
         assert ends["substituted"] < 0.2 * ends["failed"]
+        # The paper's model error, and the paper's outcome: the path is finished.
+        assert substitution["truth_error_rms"] <= 0.0175
+    loop = substitution["closed_loop"]
+    assert loop["from_s"] == pytest.approx(report["onset_s"], abs=0.1)
+    assert loop["reached_last_waypoint"] and loop["finished_s"] > loop["from_s"]
+    assert loop["miss_m"] < 0.5 and loop["last_waypoint_m"] == [0.0, 0.0]
 
 
 def test_no_truth_no_truth_figures(make_log, tmp_path):
@@ -48,3 +54,24 @@ def test_no_truth_no_truth_figures(make_log, tmp_path):
     assert substitution["truth_error_rms"] is None
     assert set(substitution["track_end_m"]) == {"substituted", "failed"}
     assert substitution["track_end_error_m"] == {}
+    assert substitution["closed_loop"] is None
+
+
+def test_mission_plan_given_explicitly(make_log, tmp_path):
+    import shutil
+
+    from auvdiag_cli.truth import mission_path
+
+    source = make_log("paper-flow-sensor-covered", 71, "bag")
+    log = tmp_path / "alone.bag"
+    shutil.copy(source, log)
+    runner = CliRunner()
+    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "-q", "--mission",
+                                 str(mission_path(source))])
+    assert json.loads(result.stdout)["substitution"]["closed_loop"]["reached_last_waypoint"]
+    missing = runner.invoke(app, ["diagnose", str(log), "--mission", str(tmp_path / "x.json")])
+    assert missing.exit_code == 2 and "no such mission plan" in missing.stderr
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"missions": [{"waypoints": []}]}')
+    bad = runner.invoke(app, ["diagnose", str(log), "--mission", str(broken)])
+    assert bad.exit_code == 2 and "unreadable mission plan" in bad.stderr

@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from auvdiag_cli.controller import ControllerGains, PathFollower, rectangle_waypoints
 from auvdiag_cli.profile import Profile
-from auvdiag_cli.simulator.controller import ControllerGains, PathFollower, rectangle_waypoints
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import Phase, Scenario
 from auvdiag_cli.simulator.vehicle import TwinThrusterVehicle, VehicleParams
@@ -47,6 +47,8 @@ class SimulatedDive:
     phase_starts_s: list[tuple[str, float]]
     truth: pd.DataFrame
     start_ns: int = LOG_EPOCH_NS
+    # The mission plans as the vehicle had them: start time, waypoints, cruise speed.
+    missions: list[dict[str, object]] = field(default_factory=list)
 
     @property
     def duration_s(self) -> float:
@@ -164,6 +166,8 @@ class _Dive:
         waypoints = rectangle_waypoints(spec.length_m, spec.width_m, spec.clockwise)
         gains = ControllerGains(cruise_speed_mps=spec.cruise_speed_mps)
         controller = PathFollower(waypoints, gains)
+        self.out.missions.append({"start_s": round(self.time_s, 6), "waypoints": waypoints,
+                                  "cruise_speed_mps": spec.cruise_speed_mps})
         # The controller's navigation starts where the vehicle is, in its own frame.
         controller.heading = 0.0
         start = self.time_s

@@ -8,7 +8,7 @@ from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
 from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
-from auvdiag_cli.truth import truth_paths
+from auvdiag_cli.truth import mission_path, truth_paths
 
 __all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
 
@@ -60,3 +60,8 @@ def _write_truth(dive: SimulatedDive, path: Path, fmt: str) -> None:
     }
     json_path.write_text(json.dumps(truth, indent=2) + "\n", encoding="utf-8")
     dive.truth.round(6).to_csv(csv_path, index=False)
+    if dive.missions:
+        plans = [{**leg, "start_s": round(float(leg["start_s"]) - first_s, 6)}  # type: ignore[arg-type]
+                 for leg in dive.missions]
+        mission_path(path).write_text(json.dumps({"missions": plans}, indent=2) + "\n",
+                                      encoding="utf-8")
