@@ -277,6 +277,49 @@ def _unix_ns(text: str) -> int:
     return round(moment.timestamp() * 1e9)
 
 
+@app.command("derive-table")
+def derive_table(
+    model: ModelOption = None,
+    profile: ProfileOption = None,
+    json_path: Annotated[Path | None, typer.Option(
+        "--json", help="Also write the signatures and the table as JSON.", dir_okay=False)
+    ] = None,
+) -> None:
+    """Derive the pattern table by simulating every single-component fault on the model.
+
+    Each thruster producing nothing and each sensor reading zero is simulated with the
+    dynamics model as the vehicle, on every DMS and on a mission flown by the profile's
+    controller; the b signatures are printed, and the table they imply is compared with
+    the profile's. Exit status 0 when they agree, 1 when they differ."""
+    from auvdiag_cli.derivation import derive_table as run_derivation
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_json import write_json
+    from models.store import load_model
+
+    with _user_errors(model or "builtin model"):
+        loaded_profile = load_profile(profile)
+        result = run_derivation(load_model(model), loaded_profile)
+    names = loaded_profile.sensor_names
+    modes = list(result.signatures[0].b)
+    typer.echo("b signatures (" + ", ".join(names) + ") of each single fault:")
+    typer.echo(f"  {'component':<18}" + "".join(f"{mode:>10}" for mode in modes))
+    for signature in result.signatures:
+        cells = ["".join(str(signature.b[mode][n]) for n in names) for mode in modes]
+        typer.echo(f"  {signature.component:<18}" + "".join(f"{c:>10}" for c in cells))
+    typer.echo("pattern table derived from the mission signatures:")
+    for row in result.rows:
+        bits = ", ".join(f"{n}={row.b[n]}" for n in names)
+        typer.echo(f"  case {row.case}: {bits}  ->  "
+                   + (" or ".join(row.components) or "nothing"))
+    typer.echo("matches the profile's table" if result.matches_profile
+               else "DIFFERS from the profile's table")
+    if json_path is not None:
+        write_json({"signatures": [s.__dict__ for s in result.signatures],
+                    "table": [r.__dict__ for r in result.rows],
+                    "matches_profile": result.matches_profile}, json_path)
+    raise typer.Exit(EXIT_NORMAL if result.matches_profile else EXIT_FAULT)
+
+
 @app.command()
 def scenarios() -> None:
     """List the simulator's named scenarios."""

@@ -189,7 +189,8 @@ def test_console_script_runs_in_a_fresh_process(make_log):
 
 
 def test_every_command_has_help():
-    for command in ("diagnose", "train", "simulate", "scenarios"):
+    for command in ("diagnose", "inspect", "train", "calibrate", "simulate", "derive-table",
+                    "scenarios"):
         result = runner.invoke(app, [command, "--help"])
         assert result.exit_code == 0
         assert len(result.stdout.split()) > 10

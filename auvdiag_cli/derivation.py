@@ -1,0 +1,132 @@
+"""Derive the pattern table from the model: simulate each single-component fault (a sensor
+reading zero, a thruster producing nothing) with the dynamics model as the vehicle, on each
+DMS and on a mission flown by the profile's controller, and read the b signatures the
+diagnosis would see. The signatures on the mission give the table; those on the DMSs show
+which sequence separates which candidates (what active diagnosis relies on)."""
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from auvdiag_cli.controller import ControllerGains, PathFollower
+from auvdiag_cli.detection import binary_vector, decided_b, first_alarm
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.matching import residual_index
+from auvdiag_cli.profile import MISSION_MODE, PatternRow, Profile
+from auvdiag_cli.segments import dms_template
+from models.dynamics import Stepper, replay
+from models.store import LoadedModel
+
+FAULT_AT_S = 20.0          # into the mission: after the first leg has begun
+MISSION_S = 90.0
+PAPER_RECTANGLE = [(4.0, 0.0), (4.0, 2.0), (0.0, 2.0), (0.0, 0.0)]
+
+
+@dataclass(frozen=True)
+class Signature:
+    component: str
+    b: dict[str, dict[str, int]]      # mode (ZA, …, mission) -> signal -> bit
+
+
+@dataclass(frozen=True)
+class DerivedTable:
+    signatures: list[Signature]
+    rows: list[PatternRow]            # grouped by the mission signature
+    matches_profile: bool
+
+
+def _bits(measured: np.ndarray, modelled: np.ndarray, profile: Profile, mode: str,
+          model: LoadedModel) -> dict[str, int]:
+    full_scale = model.metadata.get("full_scale", profile.full_scales)
+    scales = np.asarray([full_scale[n] for n in profile.sensor_names])
+    window = int(model.metadata.get("window_samples", profile.window_samples))
+    g = residual_index(measured, modelled, scales, window)
+    limits = np.tile([profile.thresholds_for(mode)[n] for n in profile.sensor_names],
+                     (len(g), 1))
+    b = binary_vector(g, limits)
+    alarm = first_alarm(b)
+    bits = np.zeros(len(profile.sensor_names), bool) if alarm is None else decided_b(
+        b, alarm, round(profile.decision_window_s / profile.dt_s))
+    return {name: int(bits[i]) for i, name in enumerate(profile.sensor_names)}
+
+
+def _faults(profile: Profile) -> list[tuple[str, int | None, int | None]]:
+    """(component, actuator index, sensor index) of every single-component fault."""
+    faults: list[tuple[str, int | None, int | None]] = [
+        (c.component, i, None) for i, c in enumerate(profile.commands)]
+    return faults + [(s.component, None, j) for j, s in enumerate(profile.sensors)]
+
+
+def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | None,
+            sensor: int | None) -> dict[str, int]:
+    commands = dms_template(profile.dms[name], profile.dt_s)
+    start = np.zeros(len(profile.sensor_names))
+    modelled = replay(model.network, model.normaliser, commands, start)
+    executed = commands.copy()
+    if actuator is not None:
+        executed[:, actuator] = 0.0
+    measured = replay(model.network, model.normaliser, executed, start)
+    if sensor is not None:
+        measured[:, sensor] = 0.0
+    return _bits(measured, modelled, profile, name, model)
+
+
+def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[float, float]],
+                actuator: int | None, sensor: int | None) -> dict[str, int]:
+    spec = profile.controller
+    assert spec is not None
+    controller = PathFollower(waypoints, ControllerGains(**spec.gains))
+    plant = Stepper(model.network, model.normaliser)
+    plant.warm_up(np.empty((0, len(profile.command_names))),
+                  np.zeros(len(profile.sensor_names)))
+    speed, rate = (profile.sensor_names.index(n) for n in (spec.speed, spec.yaw_rate))
+    port, starboard = (profile.command_names.index(n) for n in spec.commands)
+    fault_step = round(FAULT_AT_S / profile.dt_s)
+    readings, commands = [], []
+    for step in range(round(MISSION_S / profile.dt_s)):
+        reading = plant.current.copy()
+        if sensor is not None and step >= fault_step:
+            reading[sensor] = 0.0
+        readings.append(reading)
+        pair = controller.step(float(reading[speed]), float(reading[rate]), profile.dt_s)
+        command = np.zeros(len(profile.command_names))
+        command[port], command[starboard] = pair
+        commands.append(command)
+        executed = command.copy()
+        if actuator is not None and step >= fault_step:
+            executed[actuator] = 0.0
+        plant.step(executed)
+    modelled = replay(model.network, model.normaliser, np.asarray(commands), readings[0])
+    return _bits(np.asarray(readings), modelled, profile, MISSION_MODE, model)
+
+
+def derive_table(model: LoadedModel, profile: Profile,
+                 waypoints: list[tuple[float, float]] | None = None,
+                 progress: Callable[[str], None] = lambda _: None) -> DerivedTable:
+    if profile.controller is None:
+        raise UsageError(f"profile {profile.name!r} describes no [controller]: the mission "
+                         "signatures need one")
+    signatures = []
+    for component, actuator, sensor in _faults(profile):
+        progress(f"simulating {component} failed")
+        bits = {name: _on_dms(model, profile, name, actuator, sensor) for name in profile.dms}
+        bits[MISSION_MODE] = _on_mission(model, profile, waypoints or PAPER_RECTANGLE,
+                                         actuator, sensor)
+        signatures.append(Signature(component, bits))
+    groups: dict[tuple[int, ...], list[str]] = {}
+    for signature in signatures:
+        key = tuple(signature.b[MISSION_MODE][n] for n in profile.sensor_names)
+        groups.setdefault(key, []).append(signature.component)
+    groups.setdefault(tuple(0 for _ in profile.sensor_names), [])
+    rows = []
+    for key, components in sorted(groups.items(), key=lambda item: (sum(item[0]) > 0,
+                                                                    -sum(item[0]), item[0])):
+        existing = next((r for r in profile.pattern
+                         if tuple(r.b[n] for n in profile.sensor_names) == key), None)
+        case = existing.case if existing is not None else -1
+        rows.append(PatternRow(case, dict(zip(profile.sensor_names, key, strict=True)),
+                               tuple(components)))
+    wanted = {(tuple(r.b.values()), tuple(sorted(r.components))) for r in profile.pattern}
+    derived = {(tuple(r.b.values()), tuple(sorted(r.components))) for r in rows}
+    return DerivedTable(signatures, sorted(rows, key=lambda r: r.case), wanted == derived)
