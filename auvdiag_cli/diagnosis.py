@@ -10,6 +10,7 @@ import numpy as np
 
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.closed_loop import replay_closed_loop
+from auvdiag_cli.degradation import WeakenedThruster, explain_by_weak_thruster
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.errors import ModelError, UsageError
 from auvdiag_cli.ingest import IngestedLog, ingest
@@ -68,6 +69,7 @@ class Diagnosis:
     active: ActiveDiagnosis | None = None
     start_ns: int = 0
     mission_legs: list[dict[str, Any]] = field(default_factory=list)
+    degradation: WeakenedThruster | None = None
     # Time histories for reports.
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
@@ -195,7 +197,24 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         if len(diagnosis.candidates) > 1:
             own = [(run, signals.start_ns) for run in dms_runs(diagnosis)]
             _apply_active_diagnosis(diagnosis, [*own, *companion_runs], profile, model)
+        elif diagnosis.substitution is not None:
+            weak = explain_by_weak_thruster(model, profile, frame, thresholds,
+                                            detection.onset_index, dms_starts)
+            if weak is not None:
+                _apply_weakened_thruster(diagnosis, weak)
     return diagnosis
+
+
+def _apply_weakened_thruster(diagnosis: Diagnosis, weak: WeakenedThruster) -> None:
+    table_says = diagnosis.component
+    diagnosis.component, diagnosis.candidates = weak.component, [weak.component]
+    diagnosis.substitution = None
+    diagnosis.degradation = weak
+    diagnosis.notes.append(
+        f"the pattern table reads b as {table_says}, but the log is explained by "
+        f"{weak.component} giving {weak.thrust_fraction:.0%} of its thrust from the onset "
+        f"(g then stays at {weak.peak_g_ratio:.0%} of its threshold at most): a partial "
+        "failure, which the paper's table (assumption 3) does not describe")
 
 
 def _apply_active_diagnosis(diagnosis: Diagnosis, runs: list[tuple[DmsRun, int]],

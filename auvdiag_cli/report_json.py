@@ -47,6 +47,10 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             for r in diagnosis.segments
         ],
         "segment_source": diagnosis.segment_source,
+        "degradation": None if diagnosis.degradation is None else {
+            "component": diagnosis.degradation.component, "kind": "weakened",
+            "thrust_fraction": diagnosis.degradation.thrust_fraction,
+            "peak_g_over_threshold": diagnosis.degradation.peak_g_ratio},
         "active_diagnosis": _active(diagnosis),
         "substitution": None if substitution is None else {
             "signal": substitution.signal,

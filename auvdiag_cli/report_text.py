@@ -19,6 +19,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     else:
         what = (d.component.replace("_", " ") if d.component
                 else _components(d.candidates) if d.candidates else "unidentified component")
+        if d.degradation is not None:
+            what += f" weakened to about {d.degradation.thrust_fraction:.0%} thrust"
         lines.append(f"verdict: FAULT: {what}"
                      + (f" (pattern case {d.case})" if d.case is not None else ""))
         lines.append(f"  onset    ~{d.onset_s:.1f} s   detected {d.detected_at_s:.1f} s   "
