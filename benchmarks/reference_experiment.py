@@ -25,7 +25,8 @@ from models.store import load_model
 SCENARIOS = ["paper-flow-sensor-covered", "paper-normal", "mission-ccw", "mission-large-cw",
              "mission-fast-ccw", "routine-and-mission", "mission-thruster-0-dead",
              "mission-thruster-1-dead", "mission-yaw-rate-sensor-dead", "routine-thruster-0-dead",
-             "routine-thruster-1-dead", "za-thruster-0-dead"]
+             "routine-thruster-1-dead", "za-thruster-0-dead", "mission-thruster-0-weak",
+             "mission-thruster-1-weak"]
 
 
 def main() -> None:
