@@ -90,9 +90,6 @@ class Profile:
     navigation: Navigation | None = None
     controller: ControllerSpec | None = None
 
-    def sources_for(self, family: str) -> LogSources | None:
-        return self.sources.get(family)
-
     @property
     def command_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.commands)

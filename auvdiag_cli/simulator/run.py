@@ -1,7 +1,6 @@
 """Run a scenario: physics at 100 Hz, controller and commands at 10 Hz, flow sensor at
 10 Hz, IMU at 50 Hz, each with its own phase, noise, quantisation and receive jitter."""
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -209,6 +208,3 @@ def fault_summary(fault: Fault | None) -> dict[str, object] | None:
     return {"component": fault.component, "kind": fault.kind, "onset_s": fault.onset_s,
             "severity": fault.severity if fault.kind in ("weak", "bias", "drift") else None}
 
-
-def heading_deg(heading_rad: float) -> float:
-    return math.degrees(heading_rad) % 360.0
