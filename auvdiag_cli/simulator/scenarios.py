@@ -76,6 +76,11 @@ _SCENARIOS = [
              PAPER_MISSION, Fault("yaw_rate_sensor", "dead", 60.0)),
     Scenario("mission-thruster-0-weak", "paper mission, Thruster 0 at 50 % power from 60 s",
              PAPER_MISSION, Fault("thruster_0", "weak", 60.0, 0.5)),
+    Scenario("mission-flow-sensor-bias", "paper mission, flow sensor reads 0.1 m/s high from 60 s",
+             PAPER_MISSION, Fault("flow_sensor", "bias", 60.0, 0.1)),
+    Scenario("mission-yaw-rate-sensor-drift", "paper mission, yaw-rate sensor drifts by "
+             "0.005 rad/s per second from 60 s", PAPER_MISSION,
+             Fault("yaw_rate_sensor", "drift", 60.0, 0.005)),
     Scenario("routine-thruster-0-dead", "Thruster 0 dead at 10 s, during ZA; then ZB, ZC and "
              "the mission", DMS_ALL + PAPER_MISSION, Fault("thruster_0", "dead", 10.0),
              run_after_fault_s=150.0),
