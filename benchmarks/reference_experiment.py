@@ -26,7 +26,7 @@ SCENARIOS = ["paper-flow-sensor-covered", "paper-normal", "mission-ccw", "missio
              "mission-fast-ccw", "routine-and-mission", "mission-thruster-0-dead",
              "mission-thruster-1-dead", "mission-yaw-rate-sensor-dead", "routine-thruster-0-dead",
              "routine-thruster-1-dead", "za-thruster-0-dead", "mission-thruster-0-weak",
-             "mission-thruster-1-weak"]
+             "mission-thruster-1-weak", "mission-flow-sensor-bias", "mission-yaw-rate-sensor-drift"]
 
 
 def main() -> None:

@@ -147,10 +147,19 @@ class _Dive:
     def run_phase(self, phase: Phase) -> None:
         self.out.markers.append((self.time_s + self.jitter(), phase.name))
         self.out.phase_starts_s.append((phase.name, self.time_s))
-        if phase.mission is None:
+        if phase.excitation is not None:
+            self._run_excitation(phase.excitation.duration_s)
+        elif phase.mission is None:
             self._run_dms(phase.name)
         else:
             self._run_mission(phase)
+
+    def _run_excitation(self, duration_s: float) -> None:
+        end = self.time_s + duration_s
+        while self.time_s < end and not self.fault_over():
+            levels = tuple(float(v) for v in self.rng.uniform(-1.0, 1.0, 2))
+            for _ in range(round(float(self.rng.uniform(1.0, 4.0)) / PHYSICS_DT_S)):
+                self.advance(None, levels)
 
     def _run_dms(self, name: str) -> None:
         for duration_s, levels in self.profile.dms[name].steps:
@@ -189,7 +198,8 @@ def simulate(scenario: Scenario, profile: Profile, seed: int = 0,
              start_ns: int = LOG_EPOCH_NS) -> SimulatedDive:
     """Fly ``scenario`` once; ``seed`` fixes every noise draw; the log's clock starts at
     ``start_ns`` (Unix time)."""
-    missing = [p.name for p in scenario.phases if p.mission is None and p.name not in profile.dms]
+    missing = [p.name for p in scenario.phases
+               if p.mission is None and p.excitation is None and p.name not in profile.dms]
     if missing:
         raise KeyError(f"profile {profile.name!r} defines no DMS {', '.join(missing)}")
     dive = _Dive(scenario, profile, seed)

@@ -17,11 +17,22 @@ class MissionSpec:
 
 
 @dataclass(frozen=True)
+class ExcitationSpec:
+    """Open-loop system-identification run: both commands jump to random levels in
+    [-1, 1], each held 1-4 s, so training sees the whole command range (full reverse,
+    one thruster against the other) that missions and DMSs rarely reach."""
+
+    duration_s: float = 120.0
+
+
+@dataclass(frozen=True)
 class Phase:
-    """One segment of a dive: a DMS by name (``ZA``, ``ZB``, ``ZC``) or a mission."""
+    """One segment of a dive: a DMS by name (``ZA``, ``ZB``, ``ZC``), a mission, or an
+    excitation run (logged as ``MISSION``: it is no diagnosis sequence)."""
 
     name: str
     mission: MissionSpec | None = None
+    excitation: ExcitationSpec | None = None
 
 
 @dataclass(frozen=True)
@@ -63,6 +74,8 @@ _SCENARIOS = [
              _mission(length_m=5.0, width_m=2.5, cruise_speed_mps=0.45)),
     Scenario("mission-sprint-ccw", "5 m x 2.5 m counter-clockwise rectangle at 0.45 m/s",
              _mission(length_m=5.0, width_m=2.5, clockwise=False, cruise_speed_mps=0.45)),
+    Scenario("excitation", "open-loop random command steps over the whole range, no fault",
+             (Phase("MISSION", excitation=ExcitationSpec()),)),
     Scenario("dms-za", "Diagnosis Motion Sequence ZA (both thrusters), no fault", (Phase("ZA"),)),
     Scenario("dms-zb", "Diagnosis Motion Sequence ZB (Thruster 0 only), no fault", (Phase("ZB"),)),
     Scenario("dms-zc", "Diagnosis Motion Sequence ZC (Thruster 1 only), no fault", (Phase("ZC"),)),
