@@ -1,4 +1,4 @@
-"""The paper's reference experiment and the issue's fault cases, over several seeds.
+"""The paper's reference experiment and the fault cases around it, over several seeds.
 
 Simulates each scenario, writes it as a real ROS 2 (mcap) bag, diagnoses it with the shipped
 model and prints a Markdown table: verdict, component, case, onset error and detection delay.

@@ -29,3 +29,22 @@ def test_dead_sensors_are_not_explained_away(make_log, scenario, component):
     report = json.loads(CliRunner().invoke(
         app, ["diagnose", str(make_log(scenario, 81, "bag")), "--json", "-", "-q"]).stdout)
     assert report["component"] == component and report["degradation"] is None
+
+
+def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
+    from importlib import resources
+
+    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    row = ('[[pattern]]\ncase = 3\nb = { flow = 0, yaw_rate = 1 }\n'
+           'components = ["yaw_rate_sensor"]\n')
+    assert row in text
+    partial = tmp_path / "partial.toml"
+    partial.write_text(text.replace(row, ""))
+    result = CliRunner().invoke(app, ["diagnose", str(make_log("mission-yaw-rate-sensor-dead",
+                                                                81, "bag")),
+                                      "--profile", str(partial), "--json", "-", "-q"])
+    report = json.loads(result.stdout)
+    assert result.exit_code == 1 and report["verdict"] == "fault"
+    assert report["case"] is None and report["component"] is None
+    assert report["b"] == {"flow": 0, "yaw_rate": 1}
+    assert any("fits no row of the pattern table" in note for note in report["notes"])
