@@ -74,14 +74,10 @@ class TlogAdapter:
                 # The low bits of the record time carry a link id; whole µs are enough here.
                 _read_messages(path, reader, collector,
                                lambda m: round(m._timestamp * 1e6) * 1000)
-                topics = {str(reader.id_to_name[i]): "MAVLink" for i in reader.counts
-                          if i in reader.id_to_name}
             finally:
                 reader.close()
-        scan = scan_file(path, "tlog", _message_names())
-        if scan.problem:
-            collector.notes.append(scan.problem)
-        return collector.finish("tlog", first_us * 1000, None, topics)
+        return _finish(collector, "tlog", first_us * 1000,
+                       scan_file(path, "tlog", _message_names()), "MAVLink")
 
     def inventory(self, path: Path) -> LogInventory:
         return _inventory("tlog", scan_file(path, "tlog", _message_names()), "MAVLink")
@@ -107,14 +103,18 @@ class DataflashAdapter:
             except Exception as error:  # the indexer fails in assorted ways on damage
                 raise LogError(path, f"cannot open DataFlash log: {error}") from None
             _read_messages(path, reader, collector, lambda m: int(m.TimeUS) * 1000)
-        scan = scan_file(path, "bin")
-        if scan.problem:
-            collector.notes.append(scan.problem)
-        topics = {fmt.name: f"DataFlash {fmt.format}" for fmt in reader.formats.values()}
-        return collector.finish("bin", None, None, topics)
+        return _finish(collector, "bin", None, scan_file(path, "bin"), "DataFlash")
 
     def inventory(self, path: Path) -> LogInventory:
         return _inventory("bin", scan_file(path, "bin"), "DataFlash")
+
+
+def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: RecordScan,
+            kind: str) -> Signals:
+    """The record walk names the message types and says where the file breaks, if it does."""
+    if scan.problem:
+        collector.notes.append(scan.problem)
+    return collector.finish(fmt, start_ns, None, {name: kind for name in scan.counts})
 
 
 def _message_names() -> dict[int, str]:
