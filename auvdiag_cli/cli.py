@@ -27,10 +27,11 @@ app = typer.Typer(
 )
 
 ModelOption = Annotated[Path | None, typer.Option(
-    "--model", help="Model directory (default: the built-in Twin-Burger model).",
+    "--model", help="Model directory (default: the model shipped for the profile's vehicle).",
     file_okay=False)]
 ProfileOption = Annotated[Path | None, typer.Option(
-    "--profile", help="Vehicle profile TOML (default: the built-in Twin-Burger profile).",
+    "--profile", help="Vehicle profile TOML, or a built-in one by name: twin_burger (the "
+                      "default), three_thruster, bluerov2.",
     dir_okay=False)]
 
 
@@ -107,7 +108,8 @@ def diagnose(
 
     with _user_errors(log):
         detect_format(log)  # a bad path is reported before the model is even loaded
-        result = run_diagnosis(log, load_profile(profile), load_model(model), companions or (),
+        vehicle = load_profile(profile)
+        result = run_diagnosis(log, vehicle, load_model(model, vehicle.name), companions or (),
                                mission)
         document = diagnosis_to_dict(result)
         if json_path == "-":
@@ -218,11 +220,14 @@ def simulate(
     start: Annotated[str, typer.Option(
         help="When the log's clock starts (ISO 8601, UTC if no zone).")
     ] = "2026-11-22T10:00:00Z",
+    profile: ProfileOption = None,
 ) -> None:
-    """Simulate a Twin-Burger dive and write it as a log with its ground truth beside it.
+    """Simulate a dive of the profile's vehicle and write it as a log with its ground truth.
 
-    The truth goes to NAME.truth.json (scenario, fault, onset) and NAME.truth.csv (true
-    surge, yaw rate, heading and position at 10 Hz)."""
+    The vehicle is flown with the physics of the profile's [simulation] table and logged the
+    way its [sources] tables describe. The truth goes to NAME.truth.json (scenario, fault,
+    onset) and NAME.truth.csv (true velocities, heading, position and depth at 10 Hz); a
+    mission's plan to NAME.mission.json."""
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.run import simulate as run_simulation
     from auvdiag_cli.simulator.scenarios import get_scenario
@@ -231,14 +236,15 @@ def simulate(
     if log_format not in LOG_FORMATS:
         _fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
     with _user_errors(output):
+        vehicle = load_profile(profile)
         try:
-            chosen = get_scenario(scenario, fault_at)
+            chosen = get_scenario(scenario, vehicle, fault_at)
+            if output.exists():
+                _fail(f"{output}: exists already, not overwriting")
+            dive = run_simulation(chosen, vehicle, seed, _unix_ns(start))
+            write_log(dive, vehicle, output, log_format)
         except (KeyError, ValueError) as error:
             _fail(str(error).strip("'\""))
-        if output.exists():
-            _fail(f"{output}: exists already, not overwriting")
-        dive = run_simulation(chosen, load_profile(None), seed, _unix_ns(start))
-        write_log(dive, output, log_format)
     typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
                f"{truth_paths(output)[0].name}")
 
@@ -298,7 +304,7 @@ def derive_table(
 
     with _user_errors(model or "builtin model"):
         loaded_profile = load_profile(profile)
-        result = run_derivation(load_model(model), loaded_profile)
+        result = run_derivation(load_model(model, loaded_profile.name), loaded_profile)
     names = loaded_profile.sensor_names
     modes = list(result.signatures[0].b)
     typer.echo("b signatures (" + ", ".join(names) + ") of each single fault:")
@@ -321,12 +327,15 @@ def derive_table(
 
 
 @app.command()
-def scenarios() -> None:
-    """List the simulator's named scenarios."""
-    from auvdiag_cli.simulator.scenarios import SCENARIOS
+def scenarios(profile: ProfileOption = None) -> None:
+    """List the simulator's named scenarios for the profile's vehicle."""
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.scenarios import scenarios_for
 
-    width = max(len(name) for name in SCENARIOS)
-    for name, scenario in SCENARIOS.items():
+    with _user_errors(profile or "builtin profile"):
+        known = scenarios_for(load_profile(profile))
+    width = max(len(name) for name in known)
+    for name, scenario in known.items():
         typer.echo(f"{name:<{width}}  {scenario.description}")
 
 

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.controller import ControllerGains, PathFollower
+from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
 from auvdiag_cli.profile import ControllerSpec
 from models.dynamics import Stepper
 from models.store import LoadedModel
@@ -47,23 +47,20 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     gains = ControllerGains(**{**spec.gains, **(
         {"cruise_speed_mps": float(leg["cruise_speed_mps"])} if "cruise_speed_mps" in leg
         else {})})
-    controller = PathFollower(waypoints, gains)
+    controller = PathFollower(waypoints, gains, [float(d) for d in leg.get("depths_m", [])])
+    vehicle = VehicleController(spec, sensor_names, command_names, controller)
     first = int(np.searchsorted(time_s, float(leg["start_s"])))
     onset = int(np.searchsorted(time_s, onset_s))
-    speed, rate = sensor_names.index(spec.speed), sensor_names.index(spec.yaw_rate)
     # Before the onset the sensors were sound: they bring the controller to its state then.
-    for row in measured[first:onset]:
-        controller.step(float(np.nan_to_num(row[speed])), float(np.nan_to_num(row[rate])), dt_s)
+    for row in np.nan_to_num(measured[first:onset]):
+        vehicle.step(row, dt_s)
     stepper = Stepper(model.network, model.normaliser)
     state = stepper.warm_up(commands[first:onset], np.nan_to_num(measured[first]))
-    port, starboard = (command_names.index(name) for name in spec.commands)
     path, issued = [(controller.x, controller.y)], []
     settle = round(SETTLE_AFTER_LAST_WAYPOINT_S / dt_s)
     finished_step = None
     for step in range(round(MAX_REPLAY_S / dt_s)):
-        pair = controller.step(float(state[speed]), float(state[rate]), dt_s)
-        command = np.zeros(len(command_names))
-        command[port], command[starboard] = pair
+        command = vehicle.step(state, dt_s)
         issued.append(command)
         state = stepper.step(command)
         path.append((controller.x, controller.y))

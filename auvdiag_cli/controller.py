@@ -1,10 +1,21 @@
 """The vehicle's own mission controller: dead-reckoning navigation from its sensors, a
-turn-then-go waypoint guidance, and PI loops on speed (flow sensor) and yaw rate (yaw-rate
-sensor). Because the loops are closed on the sensors, a sensor fault changes the commands,
-as it did on the real vehicle."""
+turn-then-go waypoint guidance, PI loops on speed (flow sensor) and yaw rate (yaw-rate
+sensor), and for vehicles that keep depth a depth loop on the integrated heave rate. Because
+the loops are closed on the sensors, a sensor fault changes the commands, as it did on the
+real vehicle. The loops output efforts (surge, yaw, heave) that the profile's mix turns into
+actuator commands."""
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from auvdiag_cli.profile import ControllerSpec
+
+EFFORTS = ("surge", "yaw", "heave")
 
 
 @dataclass(frozen=True)
@@ -24,6 +35,11 @@ class ControllerGains:
     # Nominal inverse steady-state maps used as feed-forward (from the design model).
     speed_feedforward: float = 1.2       # common command per sqrt(m/s)
     yaw_feedforward: float = 1.0         # differential command per sqrt(rad/s)
+    depth_gain: float = 0.5              # heave-rate reference per m of depth error
+    heave_rate_limit_mps: float = 0.15
+    heave_kp: float = 2.0
+    heave_ki: float = 1.0
+    heave_feedforward: float = 1.0       # heave command per sqrt(m/s)
 
 
 def wrap_angle(angle: float) -> float:
@@ -39,26 +55,31 @@ def _clip(value: float, limit: float) -> float:
 
 
 class PathFollower:
-    """Steps at the control rate; returns (thruster_0, thruster_1) commands."""
+    """Steps at the control rate; returns the efforts {surge, yaw, heave}. ``depths_m`` gives
+    the depth to hold on the way to each waypoint (none: the heave effort stays zero)."""
 
-    def __init__(self, waypoints: list[tuple[float, float]], gains: ControllerGains) -> None:
+    def __init__(self, waypoints: list[tuple[float, float]], gains: ControllerGains,
+                 depths_m: Sequence[float] = ()) -> None:
         self.waypoints = waypoints
+        self.depths_m = list(depths_m)
         self.gains = gains
         self.target = 0
         self.turning = True
-        self.x = self.y = self.heading = 0.0
+        self.x = self.y = self.heading = self.depth = 0.0
         self.speed_ref = 0.0
-        self.speed_integral = self.yaw_integral = 0.0
+        self.speed_integral = self.yaw_integral = self.heave_integral = 0.0
 
     @property
     def finished(self) -> bool:
         return self.target >= len(self.waypoints)
 
-    def step(self, flow_mps: float, yaw_rate_rps: float, dt_s: float) -> tuple[float, float]:
+    def step(self, flow_mps: float, yaw_rate_rps: float, dt_s: float, heave_mps: float = 0.0
+             ) -> dict[str, float]:
         g = self.gains
         self.heading += yaw_rate_rps * dt_s
         self.x += flow_mps * math.cos(self.heading) * dt_s
         self.y += flow_mps * math.sin(self.heading) * dt_s
+        self.depth += heave_mps * dt_s
         rate_ref, speed_target = 0.0, 0.0
         if not self.finished:
             wx, wy = self.waypoints[self.target]
@@ -85,7 +106,48 @@ class PathFollower:
                   + g.speed_ki * self.speed_integral)
         differential = (g.yaw_feedforward * _signed_sqrt(rate_ref) + g.yaw_kp * rate_error
                         + g.yaw_ki * self.yaw_integral)
-        return _clip(common + differential, 1.0), _clip(common - differential, 1.0)
+        return {"surge": common, "yaw": differential, "heave": self._heave_effort(heave_mps,
+                                                                                   dt_s)}
+
+    def _heave_effort(self, heave_mps: float, dt_s: float) -> float:
+        if not self.depths_m:
+            return 0.0
+        g = self.gains
+        target = self.depths_m[min(self.target, len(self.depths_m) - 1)]
+        heave_ref = _clip(g.depth_gain * (target - self.depth), g.heave_rate_limit_mps)
+        heave_error = heave_ref - heave_mps
+        self.heave_integral = _clip(self.heave_integral + heave_error * dt_s, g.integral_limit)
+        return (g.heave_feedforward * _signed_sqrt(heave_ref) + g.heave_kp * heave_error
+                + g.heave_ki * self.heave_integral)
+
+
+def mix_commands(mix: Mapping[str, Mapping[str, float]], command_names: Sequence[str],
+                 efforts: Mapping[str, float]) -> np.ndarray:
+    """Actuator commands (clipped to ±1) from the efforts through the profile's mix; commands
+    the mix does not name stay at zero."""
+    commands = np.zeros(len(command_names))
+    for index, name in enumerate(command_names):
+        factors = mix.get(name, {})
+        commands[index] = _clip(sum(f * efforts[e] for e, f in factors.items()), 1.0)
+    return commands
+
+
+class VehicleController:
+    """The profile's controller on a vehicle: sensor readings in (profile order), actuator
+    commands out (profile order)."""
+
+    def __init__(self, spec: "ControllerSpec", sensor_names: Sequence[str],
+                 command_names: Sequence[str], follower: PathFollower) -> None:
+        self.spec, self.follower, self.command_names = spec, follower, command_names
+        self.speed = sensor_names.index(spec.speed)
+        self.yaw_rate = sensor_names.index(spec.yaw_rate)
+        self.heave = None if spec.heave is None else sensor_names.index(spec.heave)
+
+    def step(self, readings: Sequence[float] | np.ndarray, dt_s: float) -> np.ndarray:
+        heave = 0.0 if self.heave is None else float(readings[self.heave])
+        efforts = self.follower.step(float(readings[self.speed]), float(readings[self.yaw_rate]),
+                                     dt_s, heave)
+        return mix_commands(self.spec.mix, self.command_names, efforts)
 
 
 def rectangle_waypoints(length_m: float, width_m: float, clockwise: bool

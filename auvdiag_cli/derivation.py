@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.controller import ControllerGains, PathFollower
+from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
 from auvdiag_cli.detection import binary_vector, decided_b, first_alarm
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.matching import residual_index
@@ -76,12 +76,14 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
                 actuator: int | None, sensor: int | None) -> dict[str, int]:
     spec = profile.controller
     assert spec is not None
-    controller = PathFollower(waypoints, ControllerGains(**spec.gains))
+    depths = profile.simulation.mission_depths_m if profile.simulation else ()
+    controller = PathFollower(waypoints, ControllerGains(**spec.gains),
+                              [depths[i % len(depths)] for i in range(len(waypoints))]
+                              if depths else [])
     plant = Stepper(model.network, model.normaliser)
     plant.warm_up(np.empty((0, len(profile.command_names))),
                   np.zeros(len(profile.sensor_names)))
-    speed, rate = (profile.sensor_names.index(n) for n in (spec.speed, spec.yaw_rate))
-    port, starboard = (profile.command_names.index(n) for n in spec.commands)
+    vehicle = VehicleController(spec, profile.sensor_names, profile.command_names, controller)
     fault_step = round(FAULT_AT_S / profile.dt_s)
     readings, commands = [], []
     for step in range(round(MISSION_S / profile.dt_s)):
@@ -89,9 +91,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
         if sensor is not None and step >= fault_step:
             reading[sensor] = 0.0
         readings.append(reading)
-        pair = controller.step(float(reading[speed]), float(reading[rate]), profile.dt_s)
-        command = np.zeros(len(profile.command_names))
-        command[port], command[starboard] = pair
+        command = vehicle.step(reading, profile.dt_s)
         commands.append(command)
         executed = command.copy()
         if actuator is not None and step >= fault_step:

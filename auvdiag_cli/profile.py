@@ -8,6 +8,8 @@ from typing import Any
 
 from adapters.signals import FieldSource, LogSources, SegmentSource
 from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.simulation_spec import SimulationSpec, parse_simulation
+from auvdiag_cli.toml_reader import TableReader, positive
 
 MISSION_MODE = "mission"
 
@@ -40,14 +42,16 @@ class Navigation:
 @dataclass(frozen=True)
 class ControllerSpec:
     """The vehicle's own mission controller, for closed-loop replays: its kind (the only one
-    implemented is "turn-then-go", see auvdiag_cli.controller), the sensors it is fed, the
-    commands it sets (port, starboard) and gains that differ from the defaults."""
+    implemented is "turn-then-go", see auvdiag_cli.controller), the sensors it is fed (a
+    heave-rate sensor when it also keeps depth), how its surge/yaw/heave efforts are mixed
+    onto the commands, and gains that differ from the defaults."""
 
     kind: str
     speed: str
     yaw_rate: str
-    commands: tuple[str, str]
+    mix: dict[str, dict[str, float]]     # command -> effort (surge, yaw, heave) -> factor
     gains: dict[str, float]
+    heave: str | None = None
 
 
 CONTROLLER_KINDS = ("turn-then-go",)
@@ -89,6 +93,7 @@ class Profile:
     source_path: str
     navigation: Navigation | None = None
     controller: ControllerSpec | None = None
+    simulation: SimulationSpec | None = None
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -110,59 +115,9 @@ class Profile:
         return self.thresholds.get(mode, self.thresholds[MISSION_MODE])
 
 
-class _Reader:
-    """Typed access to a TOML table that names the full key in every error."""
-
-    def __init__(self, table: dict[str, Any], where: str) -> None:
-        self.table = table
-        self.where = where
-
-    def key(self, name: str) -> str:
-        return f"{self.where}.{name}" if self.where else name
-
-    def get(self, name: str, kind: type | tuple[type, ...], default: Any = ...) -> Any:
-        if name not in self.table:
-            if default is ...:
-                raise ProfileError(f"missing key '{self.key(name)}'")
-            return default
-        value = self.table[name]
-        if kind is float and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
-            raise ProfileError(f"key '{self.key(name)}' must be {_kind_name(kind)}, got {value!r}")
-        return value
-
-    def sub(self, name: str) -> "_Reader":
-        return _Reader(self.get(name, dict), self.key(name))
-
-    def items(self, name: str) -> list["_Reader"]:
-        rows = self.get(name, list)
-        return [_row(row, f"{self.key(name)}[{i}]") for i, row in enumerate(rows)]
-
-
-def _row(row: Any, where: str) -> _Reader:
-    if not isinstance(row, dict):
-        raise ProfileError(f"key '{where}' must be a table")
-    return _Reader(row, where)
-
-
-def _kind_name(kind: type | tuple[type, ...]) -> str:
-    kinds = kind if isinstance(kind, tuple) else (kind,)
-    return " or ".join({"str": "a string", "float": "a number", "int": "an integer",
-                        "dict": "a table", "list": "an array"}.get(k.__name__, k.__name__)
-                       for k in kinds)
-
-
-def _positive(reader: _Reader, name: str) -> float:
-    value: float = reader.get(name, float)
-    if value <= 0:
-        raise ProfileError(f"key '{reader.key(name)}' must be positive, got {value}")
-    return value
-
-
 def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     """Validate a parsed TOML document into a `Profile`."""
-    top = _Reader(data, "")
+    top = TableReader(data, "")
     vehicle = top.sub("vehicle")
     commands = tuple(
         Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
@@ -170,7 +125,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     )
     sensors = tuple(
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
-               _positive(r, "full_scale"), r.get("description", str, ""),
+               positive(r, "full_scale"), r.get("description", str, ""),
                r.get("truth_column", str, None))
         for r in top.items("sensors")
     )
@@ -190,7 +145,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     thresholds: dict[str, dict[str, float]] = {}
     for mode in threshold_table.table:
         row = threshold_table.sub(mode)
-        thresholds[mode] = {name: _positive(row, name) for name in sensor_names}
+        thresholds[mode] = {name: positive(row, name) for name in sensor_names}
     if MISSION_MODE not in thresholds:
         raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
 
@@ -199,7 +154,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     if len(seen) != len(pattern):
         raise ProfileError("key 'pattern' has two rows with the same b vector")
 
-    dms_table = top.sub("dms") if "dms" in data else _Reader({}, "dms")
+    dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
 
     sources_table = top.sub("sources")
@@ -217,7 +172,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     return Profile(
         name=vehicle.get("name", str),
         description=vehicle.get("description", str, ""),
-        dt_s=_positive(vehicle, "dt_s"),
+        dt_s=positive(vehicle, "dt_s"),
         commands=commands,
         sensors=sensors,
         window_samples=window,
@@ -228,27 +183,35 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         sources=sources,
         navigation=navigation,
         controller=controller,
+        simulation=parse_simulation(top.sub("simulation"), [c.name for c in commands],
+                                    sensor_names) if "simulation" in data else None,
         source_path=source_path,
     )
 
 
-def _controller(reader: _Reader, sensor_names: list[str], command_names: list[str]
+def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
                 ) -> ControllerSpec:
     from dataclasses import fields
 
-    from auvdiag_cli.controller import ControllerGains
+    from auvdiag_cli.controller import EFFORTS, ControllerGains
 
     kind = reader.get("kind", str)
     if kind not in CONTROLLER_KINDS:
         raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
-    for key in ("speed", "yaw_rate"):
-        if reader.get(key, str) not in sensor_names:
+    for key in ("speed", "yaw_rate", "heave"):
+        if key in reader.table and reader.get(key, str) not in sensor_names:
             raise ProfileError(f"key '{reader.key(key)}' names no sensor")
-    commands = reader.get("commands", list)
-    if len(commands) != 2 or any(c not in command_names for c in commands):
-        raise ProfileError(f"key '{reader.key('commands')}' must name the port and "
-                           "starboard commands")
-    gains_reader = reader.sub("gains") if "gains" in reader.table else _Reader({}, "gains")
+    mix_table = reader.sub("mix")
+    mix = {}
+    for command in mix_table.table:
+        if command not in command_names:
+            raise ProfileError(f"key '{mix_table.key(command)}' names no command")
+        row = mix_table.sub(command)
+        for effort in row.table:
+            if effort not in EFFORTS:
+                raise ProfileError(f"key '{row.key(effort)}' must be one of {EFFORTS}")
+        mix[command] = {effort: row.get(effort, float) for effort in row.table}
+    gains_reader = reader.sub("gains") if "gains" in reader.table else TableReader({}, "gains")
     known = {f.name for f in fields(ControllerGains)}
     gains = {}
     for name in gains_reader.table:
@@ -256,18 +219,18 @@ def _controller(reader: _Reader, sensor_names: list[str], command_names: list[st
             raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
                                f"{kind} (known: {', '.join(sorted(known))})")
         gains[name] = gains_reader.get(name, float)
-    return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str),
-                          (str(commands[0]), str(commands[1])), gains)
+    return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str), mix,
+                          gains, reader.get("heave", str, None))
 
 
-def _topic(reader: _Reader) -> str:
+def _topic(reader: TableReader) -> str:
     """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key."""
     if "topic" not in reader.table and "message" in reader.table:
         return str(reader.get("message", str))
     return str(reader.get("topic", str))
 
 
-def _log_sources(reader: _Reader, signal_names: list[str]) -> LogSources:
+def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
     signals_table = reader.sub("signals")
     signals = {}
     for name in signal_names:
@@ -284,7 +247,7 @@ def _log_sources(reader: _Reader, signal_names: list[str]) -> LogSources:
     return LogSources(signals, segment)
 
 
-def _pattern_row(reader: _Reader, sensor_names: list[str]) -> PatternRow:
+def _pattern_row(reader: TableReader, sensor_names: list[str]) -> PatternRow:
     b_reader = reader.sub("b")
     b = {}
     for name in sensor_names:
@@ -296,7 +259,7 @@ def _pattern_row(reader: _Reader, sensor_names: list[str]) -> PatternRow:
     return PatternRow(reader.get("case", int), b, tuple(str(c) for c in components))
 
 
-def _dms(reader: _Reader, name: str, n_commands: int) -> DiagnosisSequence:
+def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
     steps = []
     for i, step in enumerate(reader.get("steps", list)):
         if not isinstance(step, list) or len(step) != n_commands + 1:
@@ -307,16 +270,22 @@ def _dms(reader: _Reader, name: str, n_commands: int) -> DiagnosisSequence:
     return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
 
 
+BUILTIN_PROFILES = ("twin_burger", "three_thruster", "bluerov2")
+
+
 def load_profile(path: Path | None = None) -> Profile:
-    """Load a profile file, or the built-in Twin-Burger profile when ``path`` is None."""
-    if path is None:
-        resource = resources.files("auvdiag_cli") / "profiles" / "twin_burger.toml"
-        text, where = resource.read_text(encoding="utf-8"), "builtin:twin_burger"
+    """Load a profile file, or a built-in profile by name (``twin_burger``, ``three_thruster``,
+    ``bluerov2``); None is the Twin-Burger of the paper."""
+    name = "twin_burger" if path is None else str(path)
+    if path is None or (name in BUILTIN_PROFILES and not path.exists()):
+        resource = resources.files("auvdiag_cli") / "profiles" / f"{name}.toml"
+        text, where = resource.read_text(encoding="utf-8"), f"builtin:{name}"
     else:
         try:
             text, where = path.read_text(encoding="utf-8"), str(path)
         except OSError as error:
-            raise ProfileError(f"{path}: cannot read profile: {error.strerror}") from None
+            raise ProfileError(f"{path}: cannot read profile: {error.strerror} (built-in "
+                               f"profiles: {', '.join(BUILTIN_PROFILES)})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -39,7 +39,8 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
     from auvdiag_cli.simulator.writers.ros import ExtraTopic
 
     hour = Scenario("one-hour", "16 x (ZA, ZB, ZC, mission)", (DMS_ALL + PAPER_MISSION) * 16)
-    dive = simulate(hour, load_profile(), seed=1)
+    profile = load_profile()
+    dive = simulate(hour, profile, seed=1)
     frames = round(image_gb * 1e9 / IMAGE_BYTES)
     period_ns = round(dive.duration_s * 1e9 / frames)
     rng = np.random.default_rng(0)
@@ -63,7 +64,7 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
         path = workdir / {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
                           "bin": "dive.bin"}.get(fmt, f"dive_{fmt}")
         started = time.perf_counter()
-        write_log(dive, path, fmt, [camera] if fmt not in ("tlog", "bin") else [])
+        write_log(dive, profile, path, fmt, [camera] if fmt not in ("tlog", "bin") else [])
         size = sum(p.stat().st_size for p in path.rglob("*")) if path.is_dir() else \
             path.stat().st_size
         print(f"wrote {fmt:<9} {size / 1e9:6.2f} GB in {time.perf_counter() - started:5.1f} s",

@@ -40,7 +40,8 @@ def main() -> None:
             delays, onset_errors, outcomes, max_g = [], [], [], []
             for seed in range(1000, 1000 + args.seeds):
                 path = Path(work) / f"{name}-{seed}"
-                write_log(simulate(get_scenario(name), profile, seed), path, "ros2-mcap")
+                write_log(simulate(get_scenario(name, profile), profile, seed), profile, path,
+                          "ros2-mcap")
                 truth = json.loads(truth_paths(path)[0].read_text())
                 result = diagnose(path, profile, model)
                 outcomes.append((result.verdict, result.component or "/".join(result.candidates),

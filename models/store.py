@@ -44,8 +44,9 @@ class LoadedModel:
         return tuple(s["name"] for s in self.metadata["signals"]["sensors"])
 
 
-def default_model_dir() -> Path:
-    return Path(str(resources.files("models") / "twin_burger"))
+def default_model_dir(vehicle: str = "twin-burger") -> Path:
+    """Where the shipped model of a vehicle (the profile's ``vehicle.name``) lives."""
+    return Path(str(resources.files("models") / vehicle.replace("-", "_")))
 
 
 def save_model(directory: Path, network: RecurrentDynamics, normaliser: Normaliser,
@@ -68,10 +69,15 @@ def save_model(directory: Path, network: RecurrentDynamics, normaliser: Normalis
     (directory / METADATA_FILE).write_text(json.dumps(full, indent=2) + "\n", encoding="utf-8")
 
 
-def load_model(directory: Path | None = None) -> LoadedModel:
-    """Load a model directory (the shipped Twin-Burger model when ``directory`` is None)."""
-    label = "builtin:twin_burger" if directory is None else str(directory)
-    directory = default_model_dir() if directory is None else directory
+def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> LoadedModel:
+    """Load a model directory, or when ``directory`` is None the model shipped for
+    ``vehicle`` (a profile's ``vehicle.name``)."""
+    label = f"builtin:{vehicle.replace('-', '_')}" if directory is None else str(directory)
+    if directory is None:
+        directory = default_model_dir(vehicle)
+        if not (directory / METADATA_FILE).is_file():
+            raise ModelFileError(f"no model is shipped for vehicle {vehicle!r}: train one "
+                                 "with 'auvdiag train' and pass it with --model")
     meta_path, weights_path = directory / METADATA_FILE, directory / WEIGHTS_FILE
     if not meta_path.is_file() or not weights_path.is_file():
         raise ModelFileError(f"{directory}: not a model directory "

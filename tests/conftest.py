@@ -24,7 +24,7 @@ def dive_cache(profile: Profile) -> Callable[[str, int], SimulatedDive]:
 
     def get(scenario: str, seed: int) -> SimulatedDive:
         if (scenario, seed) not in cache:
-            cache[scenario, seed] = simulate(get_scenario(scenario), profile, seed)
+            cache[scenario, seed] = simulate(get_scenario(scenario, profile), profile, seed)
         return cache[scenario, seed]
 
     return get
@@ -36,14 +36,15 @@ def log_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def make_log(log_dir: Path, dive_cache: Callable[[str, int], SimulatedDive]) -> MakeLog:
+def make_log(log_dir: Path, dive_cache: Callable[[str, int], SimulatedDive],
+             profile: Profile) -> MakeLog:
     """Write (once per session) the dive of ``scenario`` with ``seed`` in ``fmt``."""
 
     def make(scenario: str, seed: int = 11, fmt: str = "ros2-mcap") -> Path:
         suffix = ".bag" if fmt == "bag" else ""
         path = log_dir / f"{scenario}-s{seed}-{fmt}{suffix}"
         if not path.exists():
-            write_log(dive_cache(scenario, seed), path, fmt)
+            write_log(dive_cache(scenario, seed), profile, path, fmt)
         return path
 
     return make

@@ -67,11 +67,11 @@ def test_a_log_overlapping_in_time_or_from_another_day_is_ignored(tmp_path, make
     assert "overlaps this log in time" in notes and "recorded on 2026-11-23" in notes
 
 
-def test_dms_segments_are_recognised_from_the_commands(tmp_path, dive_cache):
+def test_dms_segments_are_recognised_from_the_commands(tmp_path, dive_cache, profile):
     dive = copy.deepcopy(dive_cache("routine-and-mission", 51))
     dive.markers = []
     path = tmp_path / "unmarked.mcap"
-    write_log(dive, path, "mcap")
+    write_log(dive, profile, path, "mcap")
     report = report_of(path)
     assert report["segment_source"] == "commands"
     names = [(s["name"], s["mode"]) for s in report["segments"]]

@@ -20,10 +20,11 @@ def test_round_trip_values_and_markers(make_log, dive_cache, profile, fmt):
     np.testing.assert_allclose(signals.series["thruster_0"].to_numpy(), commands[:, 0])
     np.testing.assert_allclose(signals.series["thruster_1"].to_numpy(), commands[:, 1])
     np.testing.assert_allclose(signals.series["flow"].to_numpy(),
-                               np.asarray(dive.flow.values)[:, 0])
+                               np.asarray(dive.sensors["flow"].values)[:, 0])
     np.testing.assert_allclose(signals.series["yaw_rate"].to_numpy(),
-                               np.asarray(dive.imu.values)[:, 0])
-    expected_ns = dive.start_ns + np.round(np.asarray(dive.imu.times_s) * 1e9).astype(np.int64)
+                               np.asarray(dive.sensors["yaw_rate"].values)[:, 0])
+    gyro_times = np.asarray(dive.sensors["yaw_rate"].times_s)
+    expected_ns = dive.start_ns + np.round(gyro_times * 1e9).astype(np.int64)
     np.testing.assert_array_equal(signals.series["yaw_rate"].index.to_numpy(), expected_ns)
     assert [m.label for m in signals.markers] == ["ZA", "ZB", "ZC", "MISSION"]
     first_ns = min([int(s.index[0]) for s in signals.series.values()]

@@ -69,13 +69,13 @@ def test_mostly_intact_mcap_is_still_diagnosed(make_log, tmp_path):
     assert any("damaged" in note for note in report["notes"])
 
 
-def test_mcap_without_summary_is_read_sequentially(tmp_path, dive_cache):
+def test_mcap_without_summary_is_read_sequentially(tmp_path, dive_cache, profile):
     from mcap.reader import make_reader
     from mcap.writer import IndexType, Writer
 
-    from auvdiag_cli.simulator.writers.ros import TOPICS, RosMessages
+    from auvdiag_cli.simulator.writers.ros import RosMessages, ros_topics
 
-    messages = RosMessages(ros1=False)
+    messages = RosMessages(False, ros_topics(profile))
     path = tmp_path / "nosummary.mcap"
     with path.open("wb") as stream:
         writer = Writer(stream, use_chunking=False, use_summary_offsets=False,
@@ -83,11 +83,11 @@ def test_mcap_without_summary_is_read_sequentially(tmp_path, dive_cache):
                         repeat_channels=False, repeat_schemas=False)
         writer.start(profile="ros2", library="test")
         channels = {}
-        for topic, msgtype in TOPICS.values():
+        for topic, msgtype in messages.topics.items():
             text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
             channels[topic] = writer.register_channel(
                 topic, "cdr", writer.register_schema(msgtype, "ros2msg", text.encode()))
-        for time_ns, topic, data in messages.serialised(dive_cache("paper-normal", 31)):
+        for time_ns, topic, data in messages.serialised(dive_cache("paper-normal", 31), profile):
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns)
         writer.finish()
@@ -113,26 +113,26 @@ def test_unindexed_ros1_bag_is_read_record_by_record(make_log, tmp_path):
     assert any("read 12251 messages record by record" in note for note in report["notes"])
 
 
-def test_unknown_message_types_on_unrelated_topics_are_ignored(tmp_path, dive_cache):
+def test_unknown_message_types_on_unrelated_topics_are_ignored(tmp_path, dive_cache, profile):
     """A bag with a custom message type (definition only in the bag) on another topic."""
     from rosbags.rosbag2 import StoragePlugin, Writer
     from rosbags.typesys import get_types_from_msg
 
-    from auvdiag_cli.simulator.writers.ros import TOPICS, RosMessages
+    from auvdiag_cli.simulator.writers.ros import RosMessages, ros_topics
 
-    messages = RosMessages(ros1=False)
+    messages = RosMessages(False, ros_topics(profile))
     store = messages.store
     store.register(get_types_from_msg("uint8[] pixels\nstring encoding", "acme_msgs/msg/Frame"))
     path = tmp_path / "with_camera"
     with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=store)
-                       for topic, msgtype in TOPICS.values()}
+                       for topic, msgtype in messages.topics.items()}
         camera = writer.add_connection("/camera/frame", "acme_msgs/msg/Frame", typestore=store)
         frame = store.types["acme_msgs/msg/Frame"](
             pixels=__import__("numpy").zeros(1000, dtype="uint8"), encoding="mono8")
         frame_bytes = bytes(store.serialize_cdr(frame, "acme_msgs/msg/Frame"))
         for index, (time_ns, topic, data) in enumerate(
-                messages.serialised(dive_cache("paper-normal", 31))):
+                messages.serialised(dive_cache("paper-normal", 31), profile)):
             writer.write(connections[topic], time_ns, data)
             if index % 50 == 0:
                 writer.write(camera, time_ns, frame_bytes)
@@ -156,17 +156,17 @@ def test_log_missing_one_needed_source_is_one_line(make_log, tmp_path, fmt, miss
     assert "\n" not in line and str(log) in line and renamed[missing] in line
 
 
-def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_cache):
+def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_cache, profile):
     """All topics silent for 5 minutes (a paused recorder or a clock jump forward)."""
     import copy
 
     from auvdiag_cli.simulator.writers import write_log
 
     dive = copy.deepcopy(dive_cache("paper-normal", 31))
-    for stream in (dive.commands, dive.flow, dive.imu):
+    for stream in (dive.commands, *dive.sensors.values()):
         stream.times_s = [t + 300.0 if t > 60.0 else t for t in stream.times_s]
     path = tmp_path / "paused.mcap"
-    write_log(dive, path, "mcap")
+    write_log(dive, profile, path, "mcap")
     code, report = outcome(path)
     assert code == 0 and report["verdict"] == "normal"
     import re

@@ -61,10 +61,11 @@ def test_standalone_mcap_with_json_and_ros1_encodings(tmp_path, profile, dive_ca
         schema = writer.register_schema("Reading", "jsonschema", b"{}")
         channels = {topic: writer.register_channel(topic, "json", schema) for topic in
                     ("/thrusters/command", "/flow/velocity", "/imu/data")}
+        flow, gyro = dive.sensors["flow"], dive.sensors["yaw_rate"]
         for topic, stream_, encode in (
                 ("/thrusters/command", dive.commands, lambda v: {"data": list(v)}),
-                ("/flow/velocity", dive.flow, lambda v: {"twist": {"linear": {"x": v[0]}}}),
-                ("/imu/data", dive.imu, lambda v: {"angular_velocity": {"z": v[0]}})):
+                ("/flow/velocity", flow, lambda v: {"twist": {"linear": {"x": v[0]}}}),
+                ("/imu/data", gyro, lambda v: {"angular_velocity": {"z": v[0]}})):
             for t, v in zip(stream_.times_s, stream_.values, strict=True):
                 time_ns = dive.start_ns + round(t * 1e9)
                 writer.add_message(channels[topic], log_time=time_ns, publish_time=time_ns,
@@ -73,7 +74,7 @@ def test_standalone_mcap_with_json_and_ros1_encodings(tmp_path, profile, dive_ca
     signals = read_log(path, profile.sources)
     assert signals.format == "mcap"
     np.testing.assert_allclose(signals.series["flow"].to_numpy(),
-                               np.asarray(dive.flow.values)[:, 0])
+                               np.asarray(dive.sensors["flow"].values)[:, 0])
 
 
 def test_ros1_encoded_mcap(tmp_path, profile):
@@ -114,19 +115,19 @@ def test_ros1_encoded_mcap(tmp_path, profile):
 
 def test_dataflash_log_without_the_flow_record_names_it(tmp_path, make_log, profile):
     source = make_log("paper-normal", 21, "bin").read_bytes()
-    # Drop every FLOW record (type 36, 3 + 12 bytes) by rewriting the file record by record.
-    from auvdiag_cli.simulator.writers.dataflash import FLOW_MSG
-
+    # Drop every FLOW record by rewriting the file record by record (FMT records give each
+    # type's name and length).
     kept, position = bytearray(), 0
-    lengths = {}
+    lengths, names = {}, {}
     while position < len(source):
         type_id = source[position + 2]
         if type_id == 128:
             lengths[source[position + 3]] = source[position + 4]
+            names[source[position + 3]] = source[position + 5:position + 9].rstrip(b"\0")
             length = 89
         else:
             length = lengths[type_id]
-        if type_id != FLOW_MSG.type_id:
+        if names.get(type_id) != b"FLOW":
             kept += source[position:position + length]
         position += length
     damaged = tmp_path / "noflow.bin"

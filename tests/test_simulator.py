@@ -8,28 +8,31 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
+from auvdiag_cli.profile import load_profile
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.vehicle import TwinThrusterVehicle, VehicleParams
+from auvdiag_cli.simulator.vehicle import Vehicle
 
 
 def settle(commands, seconds=20.0, gains=(1.0, 1.0)):
-    vehicle = TwinThrusterVehicle(VehicleParams())
+    spec = load_profile().simulation
+    assert spec is not None
+    vehicle = Vehicle(spec)
     vehicle.thruster_gain = list(gains)
     for _ in range(int(seconds / 0.01)):
         vehicle.step(commands, 0.01)
-    return vehicle.state
+    return vehicle
 
 
 def test_thruster_0_alone_turns_to_starboard():
-    assert settle((0.6, 0.0)).yaw_rate_rps > 0.05
-    assert settle((0.0, 0.6)).yaw_rate_rps < -0.05
+    assert settle((0.6, 0.0)).velocity["yaw"] > 0.05
+    assert settle((0.0, 0.6)).velocity["yaw"] < -0.05
 
 
 def test_forward_speed_is_plausible_and_reverse_is_weaker():
-    full = settle((1.0, 1.0)).surge_mps
+    full = settle((1.0, 1.0)).velocity["surge"]
     assert 0.4 < full < 0.6
-    assert -settle((-1.0, -1.0)).surge_mps < full
+    assert -settle((-1.0, -1.0)).velocity["surge"] < full
 
 
 def test_dead_thruster_produces_no_thrust():
@@ -42,7 +45,9 @@ def test_fault_changes_readings_only_after_onset():
     assert fault.sensor_reading("flow_sensor", 0.3, 10.0) == 0.0
     assert fault.sensor_reading("yaw_rate_sensor", 0.3, 20.0) == 0.3
     with pytest.raises(ValueError, match="unknown fault"):
-        Fault("flow_sensor", "exploded", 1.0)
+        Fault("flow_sensor", "exploded", 1.0).check(load_profile())
+    with pytest.raises(ValueError, match="unknown fault"):
+        Fault("heave_sensor", "dead", 1.0).check(load_profile())
 
 
 def test_dms_zb_moves_only_thruster_0(dive_cache):
@@ -53,8 +58,9 @@ def test_dms_zb_moves_only_thruster_0(dive_cache):
 
 def test_flow_sensor_fault_changes_what_the_controller_does(dive_cache):
     normal, faulty = dive_cache("paper-normal", 11), dive_cache("paper-flow-sensor-covered", 11)
-    after = np.asarray(faulty.flow.times_s) > 115.1
-    assert np.all(np.asarray(faulty.flow.values)[after] == 0.0)
+    flow = faulty.sensors["flow"]
+    after = np.asarray(flow.times_s) > 115.1
+    assert np.all(np.asarray(flow.values)[after] == 0.0)
     # The speed loop, told the vehicle is still, pushes harder than on the healthy run.
     steps = slice(1170, 1200)
     assert (np.asarray(faulty.commands.values)[steps].sum()
@@ -71,7 +77,7 @@ def test_paper_mission_ends_a_right_turn_just_before_the_fault(dive_cache):
 
 def test_unknown_scenario_lists_the_known_ones():
     with pytest.raises(KeyError, match="paper-flow-sensor-covered"):
-        get_scenario("nonsense")
+        get_scenario("nonsense", load_profile())
 
 
 def test_simulate_command_writes_log_and_truth(tmp_path):

@@ -2,12 +2,10 @@
 
 from dataclasses import dataclass
 
-FAULT_KINDS = {
-    "flow_sensor": ("covered", "bias", "drift"),
-    "yaw_rate_sensor": ("dead", "bias", "drift"),
-    "thruster_0": ("dead", "weak"),
-    "thruster_1": ("dead", "weak"),
-}
+from auvdiag_cli.profile import Profile
+
+ACTUATOR_FAULTS = ("dead", "weak")
+SENSOR_FAULTS = ("dead", "covered", "bias", "drift")
 
 
 @dataclass(frozen=True)
@@ -23,14 +21,16 @@ class Fault:
     onset_s: float
     severity: float = 0.0
 
-    def __post_init__(self) -> None:
-        kinds = FAULT_KINDS.get(self.component)
-        if kinds is None or self.kind not in kinds:
-            valid = "; ".join(f"{c}: {', '.join(k)}" for c, k in FAULT_KINDS.items())
-            raise ValueError(f"unknown fault {self.component}:{self.kind} (valid: {valid})")
+    def check(self, profile: Profile) -> None:
+        """ValueError unless the profile's vehicle has this component and it can fail so."""
+        kinds = fault_kinds(profile)
+        if self.kind not in kinds.get(self.component, ()):
+            valid = "; ".join(f"{c}: {', '.join(k)}" for c, k in kinds.items())
+            raise ValueError(f"unknown fault {self.component}:{self.kind} for "
+                             f"{profile.name} (valid: {valid})")
 
-    def thruster_gain(self, index: int, time_s: float) -> float:
-        if self.component != f"thruster_{index}" or time_s < self.onset_s:
+    def thruster_gain(self, component: str, time_s: float) -> float:
+        if self.component != component or time_s < self.onset_s:
             return 1.0
         return 0.0 if self.kind == "dead" else self.severity
 
@@ -42,3 +42,9 @@ class Fault:
         if self.kind == "bias":
             return true_reading + self.severity
         return true_reading + self.severity * (time_s - self.onset_s)
+
+
+def fault_kinds(profile: Profile) -> dict[str, tuple[str, ...]]:
+    """Every component of the profile's vehicle and the ways it can fail."""
+    kinds = {c.component: ACTUATOR_FAULTS for c in profile.commands}
+    return kinds | {s.component: SENSOR_FAULTS for s in profile.sensors}

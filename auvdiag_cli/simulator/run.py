@@ -1,23 +1,26 @@
-"""Run a scenario: physics at 100 Hz, controller and commands at 10 Hz, flow sensor at
-10 Hz, IMU at 50 Hz, each with its own phase, noise, quantisation and receive jitter."""
+"""Run a scenario: physics at 100 Hz, controller and commands at 10 Hz, each sensor at the
+rate its profile's `[simulation]` table gives, with its own phase, noise, quantisation and
+receive jitter."""
 
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from auvdiag_cli.controller import ControllerGains, PathFollower, rectangle_waypoints
+from auvdiag_cli.controller import (
+    ControllerGains,
+    PathFollower,
+    VehicleController,
+    rectangle_waypoints,
+)
 from auvdiag_cli.profile import Profile
+from auvdiag_cli.simulation_spec import TRUTH_COLUMNS, SimulationSpec
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import Phase, Scenario
-from auvdiag_cli.simulator.vehicle import TwinThrusterVehicle, VehicleParams
+from auvdiag_cli.simulator.vehicle import Vehicle
 
 PHYSICS_DT_S = 0.01
 CONTROL_EVERY = 10      # physics ticks per command (10 Hz)
-FLOW_EVERY = 10         # 10 Hz
-IMU_EVERY = 2           # 50 Hz
-FLOW_NOISE_MPS, FLOW_QUANTUM_MPS = 0.004, 0.001
-GYRO_NOISE_RPS, GYRO_QUANTUM_RPS = 0.008, 0.0005
 RECEIVE_JITTER_S = 0.002
 SETTLE_AFTER_MISSION_S = 5.0
 LOG_EPOCH_NS = 1_795_341_600_000_000_000   # 2026-11-22T10:00:00Z
@@ -40,8 +43,7 @@ class SimulatedDive:
     scenario: Scenario
     seed: int
     commands: Stream
-    flow: Stream
-    imu: Stream
+    sensors: dict[str, Stream]          # by sensor name
     markers: list[tuple[float, str]]
     phase_starts_s: list[tuple[str, float]]
     truth: pd.DataFrame
@@ -73,25 +75,36 @@ def _quantise(value: float, quantum: float) -> float:
     return round(value / quantum) * quantum
 
 
+class _SensorChannel:
+    """One simulated sensor: when it samples, its noise, and its last reading."""
+
+    def __init__(self, name: str, component: str, every: int, noise: "_Noise", quantum: float,
+                 measures: str) -> None:
+        self.name, self.component, self.every = name, component, every
+        self.noise, self.quantum, self.measures = noise, quantum, measures
+        self.last = 0.0
+
+
 class _Dive:
     """Mutable state of one simulation run."""
 
-    def __init__(self, scenario: Scenario, profile: Profile, seed: int) -> None:
+    def __init__(self, scenario: Scenario, profile: Profile, spec: SimulationSpec,
+                 seed: int) -> None:
         rng = np.random.default_rng(seed)
-        self.scenario, self.profile, self.fault = scenario, profile, scenario.fault
-        self.vehicle = TwinThrusterVehicle(VehicleParams())
+        self.scenario, self.profile, self.spec, self.fault = scenario, profile, spec, scenario.fault
+        self.vehicle = Vehicle(spec)
         self.rng = rng
-        self.flow_noise = _Noise(rng, FLOW_NOISE_MPS)
-        self.gyro_noise = _Noise(rng, GYRO_NOISE_RPS)
-        self.force_noise = _Noise(rng, 0.25)
-        self.torque_noise = _Noise(rng, 0.03)
-        self.disturbance = [0.0, 0.0]
+        self.channels = [
+            _SensorChannel(physics.sensor, profile.sensor(physics.sensor).component,
+                           max(1, round(1.0 / (physics.rate_hz * PHYSICS_DT_S))),
+                           _Noise(rng, physics.noise), physics.quantum, physics.measures)
+            for physics in spec.sensors]
+        self.disturbance_noise = {dof: _Noise(rng, p.disturbance) for dof, p in spec.dofs.items()}
+        self.disturbance = dict.fromkeys(spec.dofs, 0.0)
         self.tick = 0
-        self.command = (0.0, 0.0)
-        self.last_flow = 0.0
-        self.last_gyro = 0.0
-        self.out = SimulatedDive(scenario, seed, Stream(), Stream(), Stream(), [], [],
-                                 pd.DataFrame())
+        self.command: tuple[float, ...] = (0.0,) * len(profile.commands)
+        streams = {channel.name: Stream() for channel in self.channels}
+        self.out = SimulatedDive(scenario, seed, Stream(), streams, [], [], pd.DataFrame())
         self.truth_rows: list[tuple[float, ...]] = []
 
     @property
@@ -110,38 +123,36 @@ class _Dive:
             return true_value
         return self.fault.sensor_reading(component, true_value, self.time_s)
 
-    def advance(self, controller: PathFollower | None, dms_levels: tuple[float, ...] | None
+    def advance(self, controller: VehicleController | None, dms_levels: tuple[float, ...] | None
                 ) -> None:
         """One physics tick, publishing whatever is due at this instant."""
         t = self.time_s
+        vehicle = self.vehicle
         if self.tick % CONTROL_EVERY == 0:
             if controller is not None:
-                self.command = controller.step(self.last_flow, self.last_gyro,
-                                               CONTROL_EVERY * PHYSICS_DT_S)
+                readings = [channel.last for channel in self.channels]
+                self.command = tuple(float(c) for c in controller.step(
+                    readings, CONTROL_EVERY * PHYSICS_DT_S))
             elif dms_levels is not None:
-                self.command = (dms_levels[0], dms_levels[1])
+                self.command = dms_levels
             self.out.commands.add(t + self.jitter(), *self.command)
-            s = self.vehicle.state
-            self.truth_rows.append((t, s.surge_mps, s.yaw_rate_rps, s.heading_rad, s.x_m,
-                                    s.y_m, s.thrust_n[0], s.thrust_n[1],
-                                    self.last_flow, self.last_gyro))
-        state = self.vehicle.state
-        if self.tick % FLOW_EVERY == FLOW_EVERY // 2:
-            reading = state.surge_mps + self.flow_noise.draw()
-            self.last_flow = _quantise(self.sensor("flow_sensor", reading), FLOW_QUANTUM_MPS)
-            self.out.flow.add(t + self.jitter(), self.last_flow)
-        if self.tick % IMU_EVERY == 1:
-            reading = state.yaw_rate_rps + self.gyro_noise.draw()
-            self.last_gyro = _quantise(self.sensor("yaw_rate_sensor", reading),
-                                       GYRO_QUANTUM_RPS)
-            self.out.imu.add(t + self.jitter(), self.last_gyro)
+            self.truth_rows.append((t, *vehicle.velocity.values(), vehicle.heading_rad,
+                                    vehicle.x_m, vehicle.y_m, vehicle.depth_m, *vehicle.thrust_n,
+                                    *(channel.last for channel in self.channels)))
+        for channel in self.channels:
+            if self.tick % channel.every == channel.every // 2:
+                reading = vehicle.velocity[channel.measures] + channel.noise.draw()
+                channel.last = _quantise(self.sensor(channel.component, reading),
+                                         channel.quantum)
+                self.out.sensors[channel.name].add(t + self.jitter(), channel.last)
         if self.fault is not None:
-            self.vehicle.thruster_gain = [self.fault.thruster_gain(i, t) for i in (0, 1)]
+            vehicle.thruster_gain = [self.fault.thruster_gain(c.component, t)
+                                     for c in self.profile.commands]
         # Slow, small Ornstein-Uhlenbeck disturbance: the tank is steady, not perfectly still.
         decay = PHYSICS_DT_S / 2.0
-        self.disturbance[0] += -decay * self.disturbance[0] + 0.1 * self.force_noise.draw()
-        self.disturbance[1] += -decay * self.disturbance[1] + 0.1 * self.torque_noise.draw()
-        self.vehicle.step(self.command, PHYSICS_DT_S, (self.disturbance[0], self.disturbance[1]))
+        for dof, noise in self.disturbance_noise.items():
+            self.disturbance[dof] += -decay * self.disturbance[dof] + 0.1 * noise.draw()
+        vehicle.step(self.command, PHYSICS_DT_S, self.disturbance)
         self.tick += 1
 
     def run_phase(self, phase: Phase) -> None:
@@ -157,7 +168,7 @@ class _Dive:
     def _run_excitation(self, duration_s: float) -> None:
         end = self.time_s + duration_s
         while self.time_s < end and not self.fault_over():
-            levels = tuple(float(v) for v in self.rng.uniform(-1.0, 1.0, 2))
+            levels = tuple(float(v) for v in self.rng.uniform(-1.0, 1.0, len(self.command)))
             for _ in range(round(float(self.rng.uniform(1.0, 4.0)) / PHYSICS_DT_S)):
                 self.advance(None, levels)
 
@@ -173,24 +184,36 @@ class _Dive:
         assert spec is not None
         waypoints = rectangle_waypoints(spec.length_m, spec.width_m, spec.clockwise)
         gains = ControllerGains(cruise_speed_mps=spec.cruise_speed_mps)
-        controller = PathFollower(waypoints, gains)
-        self.out.missions.append({"start_s": round(self.time_s, 6), "waypoints": waypoints,
-                                  "cruise_speed_mps": spec.cruise_speed_mps})
+        depths = self.spec.mission_depths_m
+        depths_m = [depths[i % len(depths)] for i in range(len(waypoints))] if depths else []
+        follower = PathFollower(waypoints, gains, depths_m)
+        profile = self.profile
+        if profile.controller is None:
+            raise ValueError(f"profile {profile.name!r} describes no [controller] to fly "
+                             "missions with")
+        controller = VehicleController(profile.controller, profile.sensor_names,
+                                       profile.command_names, follower)
+        plan: dict[str, object] = {"start_s": round(self.time_s, 6), "waypoints": waypoints,
+                                   "cruise_speed_mps": spec.cruise_speed_mps}
+        if depths_m:
+            plan["depths_m"] = depths_m
+        self.out.missions.append(plan)
         # The controller's navigation starts where the vehicle is, in its own frame.
-        controller.heading = 0.0
+        follower.heading = 0.0
         start = self.time_s
         settle_ticks = round(SETTLE_AFTER_MISSION_S / PHYSICS_DT_S)
         while settle_ticks > 0 and self.time_s - start < spec.max_duration_s:
             if self.fault_over():
                 return
             self.advance(controller, None)
-            if controller.finished:
+            if follower.finished:
                 settle_ticks -= 1
 
     def finish(self) -> SimulatedDive:
-        self.out.truth = pd.DataFrame(self.truth_rows, columns=[
-            "t_s", "surge_mps", "yaw_rate_rps", "heading_rad", "x_m", "y_m",
-            "thrust_0_n", "thrust_1_n", "flow_reading_mps", "yaw_rate_reading_rps"])
+        columns = ["t_s", *(TRUTH_COLUMNS[d] for d in self.spec.dofs), "heading_rad", "x_m",
+                   "y_m", "depth_m", *(f"thrust_{i}_n" for i in range(len(self.spec.thrusters))),
+                   *(f"{c.name}_reading" for c in self.channels)]
+        self.out.truth = pd.DataFrame(self.truth_rows, columns=columns)
         return self.out
 
 
@@ -198,11 +221,16 @@ def simulate(scenario: Scenario, profile: Profile, seed: int = 0,
              start_ns: int = LOG_EPOCH_NS) -> SimulatedDive:
     """Fly ``scenario`` once; ``seed`` fixes every noise draw; the log's clock starts at
     ``start_ns`` (Unix time)."""
+    if profile.simulation is None:
+        raise ValueError(f"profile {profile.name!r} has no [simulation] table: nothing "
+                         "describes how to fly it")
     missing = [p.name for p in scenario.phases
                if p.mission is None and p.excitation is None and p.name not in profile.dms]
     if missing:
         raise KeyError(f"profile {profile.name!r} defines no DMS {', '.join(missing)}")
-    dive = _Dive(scenario, profile, seed)
+    if scenario.fault is not None:
+        scenario.fault.check(profile)
+    dive = _Dive(scenario, profile, profile.simulation, seed)
     for phase in scenario.phases:
         dive.run_phase(phase)
         if dive.fault_over():

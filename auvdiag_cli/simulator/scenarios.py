@@ -2,7 +2,8 @@
 
 from dataclasses import dataclass, field, replace
 
-from auvdiag_cli.simulator.faults import Fault
+from auvdiag_cli.profile import Profile
+from auvdiag_cli.simulator.faults import Fault, fault_kinds
 
 
 @dataclass(frozen=True)
@@ -116,15 +117,57 @@ _SCENARIOS = [
              PAPER_MISSION, Fault("thruster_1", "weak", 60.0, 0.5)),
 ]
 
-SCENARIOS: dict[str, Scenario] = {s.name: s for s in _SCENARIOS}
+MISSION_FAULT_AT_S = 60.0
+WEAK_THRUST_FRACTION = 0.5
 
 
-def get_scenario(name: str, fault_at_s: float | None = None) -> Scenario:
+def _fits(scenario: Scenario, profile: Profile) -> bool:
+    dms_known = all(p.name in profile.dms for p in scenario.phases
+                    if p.mission is None and p.excitation is None)
+    if scenario.fault is None:
+        return dms_known
+    return dms_known and scenario.fault.kind in fault_kinds(profile).get(
+        scenario.fault.component, ())
+
+
+def _generated(profile: Profile) -> list[Scenario]:
+    """Scenarios any vehicle has: each DMS alone, all DMSs then the mission, and each
+    component failing during the mission in each way it can fail."""
+    every_dms = tuple(Phase(name) for name in profile.dms)
+    scenarios = [Scenario(f"dms-{name.lower()}", f"Diagnosis Motion Sequence {name}, no fault",
+                          (Phase(name),)) for name in profile.dms]
+    if every_dms:
+        scenarios.append(Scenario("all-dms-and-mission", f"{', '.join(profile.dms)} then the "
+                                  "paper's mission, no fault", every_dms + PAPER_MISSION))
+    for component, kinds in fault_kinds(profile).items():
+        for kind in kinds:
+            severity = WEAK_THRUST_FRACTION if kind == "weak" else 0.0
+            if kind in ("bias", "drift"):
+                continue     # their size depends on the sensor's range: named scenarios set it
+            what = f"at {severity:.0%} power" if kind == "weak" else kind
+            scenarios.append(Scenario(
+                f"mission-{component.replace('_', '-')}-{kind}",
+                f"paper mission, {component} {what} from {MISSION_FAULT_AT_S:.0f} s",
+                PAPER_MISSION, Fault(component, kind, MISSION_FAULT_AT_S, severity)))
+    return scenarios
+
+
+def scenarios_for(profile: Profile) -> dict[str, Scenario]:
+    """The named scenarios that fit the profile's vehicle (its DMSs and components)."""
+    named = {s.name: s for s in _SCENARIOS if _fits(s, profile)}
+    for scenario in _generated(profile):
+        named.setdefault(scenario.name, scenario)
+    return named
+
+
+def get_scenario(name: str, profile: Profile, fault_at_s: float | None = None) -> Scenario:
     """Look a scenario up by name; ``fault_at_s`` moves its fault onset."""
+    known = scenarios_for(profile)
     try:
-        scenario = SCENARIOS[name]
+        scenario = known[name]
     except KeyError:
-        raise KeyError(f"unknown scenario {name!r} (known: {', '.join(SCENARIOS)})") from None
+        raise KeyError(f"unknown scenario {name!r} for {profile.name} (known: "
+                       f"{', '.join(known)})") from None
     if fault_at_s is not None:
         if scenario.fault is None:
             raise ValueError(f"scenario {name!r} has no fault to move")

@@ -1,72 +1,47 @@
-"""Surge/yaw rigid-body dynamics of a twin-thruster AUV with thruster lag and faults."""
+"""Rigid-body dynamics of a thruster-driven vehicle in the degrees of freedom its profile's
+`[simulation]` table describes (surge, sway, heave, yaw), with thruster lag and faults."""
 
 import math
-from dataclasses import dataclass, field
+
+from auvdiag_cli.simulation_spec import SimulationSpec
 
 
-@dataclass(frozen=True)
-class VehicleParams:
-    """Twin-Burger-sized constants (SI units)."""
+class Vehicle:
+    """Integrates the vehicle with semi-implicit Euler; ``thruster_gain`` models actuator
+    faults. ``velocity[dof]`` is in the body frame; heading, x (north), y (east) and depth
+    (down) in the world frame."""
 
-    mass_kg: float = 60.0
-    added_mass_surge_kg: float = 20.0
-    inertia_yaw_kgm2: float = 10.0
-    added_inertia_yaw_kgm2: float = 5.0
-    thruster_max_n: float = 15.0          # forward thrust at command 1
-    reverse_thrust_ratio: float = 0.6     # propellers push less in reverse
-    thruster_lag_s: float = 0.2           # first-order lag of thrust
-    thruster_arm_m: float = 0.3           # lateral offset of each thruster from the centre line
-    surge_linear_drag: float = 20.0       # N per m/s
-    surge_quadratic_drag: float = 80.0    # N per (m/s)^2
-    surge_drag_from_yaw: float = 30.0     # N per (rad/s)^2: turning costs speed (coupling)
-    yaw_linear_drag: float = 5.0          # N m per rad/s
-    yaw_quadratic_drag: float = 10.0      # N m per (rad/s)^2
-    yaw_drag_from_surge: float = 8.0      # N m per (rad/s * m/s): faster means stiffer in yaw
+    def __init__(self, spec: SimulationSpec) -> None:
+        self.spec = spec
+        self.velocity = dict.fromkeys(spec.dofs, 0.0)
+        self.thrust_n = [0.0] * len(spec.thrusters)
+        self.thruster_gain = [1.0] * len(spec.thrusters)
+        self.heading_rad = self.x_m = self.y_m = self.depth_m = 0.0
 
-    def thrust_n(self, command: float) -> float:
-        """Steady thrust of one thruster: quadratic in the command, weaker in reverse."""
-        c = max(-1.0, min(1.0, command))
-        thrust = self.thruster_max_n * c * abs(c)
-        return thrust if c >= 0 else thrust * self.reverse_thrust_ratio
-
-
-@dataclass
-class VehicleState:
-    surge_mps: float = 0.0
-    yaw_rate_rps: float = 0.0
-    heading_rad: float = 0.0    # clockwise from the x (north) axis
-    x_m: float = 0.0            # north
-    y_m: float = 0.0            # east
-    thrust_n: list[float] = field(default_factory=lambda: [0.0, 0.0])
-
-
-class TwinThrusterVehicle:
-    """Integrates the vehicle with semi-implicit Euler; thruster_gain models actuator faults."""
-
-    def __init__(self, params: VehicleParams) -> None:
-        self.params = params
-        self.state = VehicleState()
-        self.thruster_gain = [1.0, 1.0]
-
-    def step(self, commands: tuple[float, float], dt_s: float,
-             disturbance: tuple[float, float] = (0.0, 0.0)) -> None:
-        p, s = self.params, self.state
-        for i, command in enumerate(commands):
-            target = p.thrust_n(command) * self.thruster_gain[i]
-            s.thrust_n[i] += (target - s.thrust_n[i]) * min(1.0, dt_s / p.thruster_lag_s)
-        u, r = s.surge_mps, s.yaw_rate_rps
-        force = (s.thrust_n[0] + s.thrust_n[1] - p.surge_linear_drag * u
-                 - p.surge_quadratic_drag * u * abs(u) - p.surge_drag_from_yaw * r * r * _sign(u)
-                 + disturbance[0])
-        # Thruster 0 (port) pushing alone turns the vehicle to starboard: positive yaw rate.
-        torque = (p.thruster_arm_m * (s.thrust_n[0] - s.thrust_n[1])
-                  - (p.yaw_linear_drag + p.yaw_drag_from_surge * abs(u)) * r
-                  - p.yaw_quadratic_drag * r * abs(r) + disturbance[1])
-        s.surge_mps = u + dt_s * force / (p.mass_kg + p.added_mass_surge_kg)
-        s.yaw_rate_rps = r + dt_s * torque / (p.inertia_yaw_kgm2 + p.added_inertia_yaw_kgm2)
-        s.heading_rad += dt_s * s.yaw_rate_rps
-        s.x_m += dt_s * s.surge_mps * math.cos(s.heading_rad)
-        s.y_m += dt_s * s.surge_mps * math.sin(s.heading_rad)
+    def step(self, commands: tuple[float, ...], dt_s: float,
+             disturbance: dict[str, float] | None = None) -> None:
+        for i, (thruster, command) in enumerate(zip(self.spec.thrusters, commands, strict=True)):
+            target = thruster.steady_thrust_n(command) * self.thruster_gain[i]
+            self.thrust_n[i] += (target - self.thrust_n[i]) * min(1.0, dt_s / thruster.lag_s)
+        v = self.velocity
+        accelerations = {}
+        for dof, p in self.spec.dofs.items():
+            own = v[dof]
+            force = sum(t.effect.get(dof, 0.0) * self.thrust_n[i]
+                        for i, t in enumerate(self.spec.thrusters))
+            force -= (p.linear_drag + sum(c * abs(v[o]) for o, c in p.cross_linear.items())) * own
+            force -= p.quadratic_drag * own * abs(own)
+            force -= sum(c * v[o] * v[o] for o, c in p.cross_quadratic.items()) * _sign(own)
+            force += p.constant_force + (disturbance or {}).get(dof, 0.0)
+            accelerations[dof] = force / p.inertia
+        for dof, acceleration in accelerations.items():
+            v[dof] += dt_s * acceleration
+        self.heading_rad += dt_s * v.get("yaw", 0.0)
+        surge, sway = v.get("surge", 0.0), v.get("sway", 0.0)
+        cos, sin = math.cos(self.heading_rad), math.sin(self.heading_rad)
+        self.x_m += dt_s * (surge * cos - sway * sin)
+        self.y_m += dt_s * (surge * sin + sway * cos)
+        self.depth_m += dt_s * v.get("heave", 0.0)
 
 
 def _sign(value: float) -> float:

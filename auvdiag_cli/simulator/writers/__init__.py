@@ -4,9 +4,11 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
+from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
+from auvdiag_cli.simulator.writers.records import first_message_s
 from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
 from auvdiag_cli.truth import mission_path, truth_paths
 
@@ -15,8 +17,8 @@ __all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin")
 
 
-def write_log(dive: SimulatedDive, path: Path, fmt: str, extra: Sequence[ExtraTopic] = ()
-              ) -> None:
+def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
+              extra: Sequence[ExtraTopic] = ()) -> None:
     """Write ``dive`` to ``path`` in format ``fmt`` and its truth beside it; ``extra`` adds
     unrelated topics to the ROS formats (MAVLink logs have no place for them)."""
     if fmt not in LOG_FORMATS:
@@ -24,13 +26,13 @@ def write_log(dive: SimulatedDive, path: Path, fmt: str, extra: Sequence[ExtraTo
     if path.exists():
         raise FileExistsError(f"{path}: exists already, not overwriting")
     if fmt in ("bag", "db3", "ros2-mcap"):
-        write_rosbag(dive, path, fmt, extra)
+        write_rosbag(dive, profile, path, fmt, extra)
     elif fmt == "mcap":
-        write_mcap(dive, path, extra)
+        write_mcap(dive, profile, path, extra)
     elif fmt == "tlog":
-        write_tlog(dive, path)
+        write_tlog(dive, profile, path)
     else:
-        write_dataflash(dive, path)
+        write_dataflash(dive, profile, path)
     _write_truth(dive, path, fmt)
 
 
@@ -38,8 +40,7 @@ def _write_truth(dive: SimulatedDive, path: Path, fmt: str) -> None:
     json_path, csv_path = truth_paths(path)
     fault = dive.scenario.fault
     # Report times count from the log's first message, which carries receive jitter.
-    first_s = min(min(dive.commands.times_s), min(dive.flow.times_s), min(dive.imu.times_s),
-                  *(t for t, _ in dive.markers))
+    first_s = first_message_s(dive)
     fault_info = fault_summary(fault)
     if fault_info is not None:
         fault_info["onset_s"] = round(float(fault_info["onset_s"]) - first_s, 6)  # type: ignore[arg-type]

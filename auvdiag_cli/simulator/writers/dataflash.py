@@ -5,9 +5,9 @@ FMT record (type 128) earlier in the file."""
 import struct
 from pathlib import Path
 
+from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.mavlink import command_to_pwm
-from auvdiag_cli.simulator.writers.records import COMMAND, FLOW, IMU, MARKER, dive_records
+from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
 
 HEADER = b"\xa3\x95"
 FMT_TYPE = 128
@@ -29,10 +29,37 @@ class _Message:
 
 
 FMT = _Message(FMT_TYPE, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
-RCOU = _Message(34, "RCOU", "Q" + "H" * 14, "TimeUS," + ",".join(f"C{i}" for i in range(1, 15)))
-IMU_MSG = _Message(35, "IMU", "QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ")
-FLOW_MSG = _Message(36, "FLOW", "Qf", "TimeUS,Vel")
-MSG = _Message(37, "MSG", "QZ", "TimeUS,Message")
+# ArduPilot's own layouts of the records a profile is likely to read; any other record is
+# written as TimeUS and the fields the profile reads (floats; `where` fields as text).
+KNOWN_LAYOUTS = {
+    "RCOU": ("Q" + "H" * 14, "TimeUS," + ",".join(f"C{i}" for i in range(1, 15))),
+    "IMU": ("QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
+    "MSG": ("QZ", "TimeUS,Message"),
+}
+FIRST_TYPE_ID = 34
+
+
+def _formats(profile: Profile) -> dict[str, _Message]:
+    """One record format per message name the profile reads, plus MSG for the banner."""
+    sources = family_sources(profile, "dataflash")
+    fields: dict[str, list[str]] = {"MSG": []}
+    where: dict[str, list[str]] = {}
+    for source in sources.signals.values():
+        fields.setdefault(source.topic, []).append(source.field)
+        where.setdefault(source.topic, [k for k, _ in source.where])
+    if sources.segment is not None:
+        fields.setdefault(sources.segment.topic, []).append(sources.segment.field)
+    formats = {}
+    for type_id, (name, used) in enumerate(fields.items(), FIRST_TYPE_ID):
+        if name in KNOWN_LAYOUTS:
+            fmt, columns = KNOWN_LAYOUTS[name]
+        else:
+            texts = where.get(name, [])
+            numbers = [f for f in dict.fromkeys(used) if f not in texts]
+            fmt = "Q" + "f" * len(numbers) + "N" * len(texts)
+            columns = ",".join(["TimeUS", *numbers, *texts])
+        formats[name] = _Message(type_id, name, fmt, columns)
+    return formats
 
 
 def _format_record(message: _Message) -> bytes:
@@ -40,21 +67,25 @@ def _format_record(message: _Message) -> bytes:
                     message.fmt.encode(), message.columns.encode())
 
 
-def write_dataflash(dive: SimulatedDive, path: Path) -> None:
+def _pack(message: _Message, record: Record, time_us: int) -> bytes:
+    values: dict[str, object] = dict(record.fields)
+    values |= {name: text.encode() for name, text in record.where}
+    if record.text is not None:
+        values[record.text[0]] = record.text[1].encode()
+    row: list[object] = [time_us]
+    for column, code in zip(message.columns.split(",")[1:], message.fmt[1:], strict=True):
+        value = values.get(column, b"" if code in "nNZ" else 0)
+        row.append(round(value) if code in "HB" else value)  # type: ignore[call-overload]
+    return message.pack(*row)
+
+
+def write_dataflash(dive: SimulatedDive, profile: Profile, path: Path) -> None:
     """TimeUS counts from boot, which is the dive's start."""
+    formats = _formats(profile)
     with path.open("wb") as stream:
-        for message in (FMT, RCOU, IMU_MSG, FLOW_MSG, MSG):
+        for message in (FMT, *formats.values()):
             stream.write(_format_record(message))
-        stream.write(MSG.pack(0, b"ArduSub V4.5.0 (auvdiag simulate)"))
-        for record in dive_records(dive):
+        stream.write(formats["MSG"].pack(0, b"ArduSub V4.5.0 (auvdiag simulate)"))
+        for record in dive_records(dive, profile, "dataflash"):
             time_us = (record.time_ns - dive.start_ns) // 1000
-            if record.kind == COMMAND:
-                pwm = [command_to_pwm(c) for c in record.values]
-                stream.write(RCOU.pack(time_us, pwm[0], pwm[1], *[1500] * 12))
-            elif record.kind == FLOW:
-                stream.write(FLOW_MSG.pack(time_us, record.values[0]))
-            elif record.kind == IMU:
-                stream.write(IMU_MSG.pack(time_us, 0, 0.0, 0.0, record.values[0], 0.0, 0.0,
-                                          -9.81))
-            elif record.kind == MARKER:
-                stream.write(MSG.pack(time_us, f"DMS {record.label}".encode()))
+            stream.write(_pack(formats[record.topic], record, time_us))

@@ -1,23 +1,49 @@
-"""MAVLink telemetry logs (.tlog) the way a ground station records an ArduSub vehicle:
-each record is the receive time (big-endian µs since the Unix epoch) and a MAVLink 2 frame."""
+"""MAVLink telemetry logs (.tlog) the way a ground station records an ArduSub vehicle, laid
+out by the profile's `[sources.mavlink]` table: each record is the receive time (big-endian
+µs since the Unix epoch) and a MAVLink 2 frame; a heartbeat every second."""
 
 import struct
 from pathlib import Path
+from typing import Any
 
+from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import COMMAND, FLOW, IMU, MARKER, dive_records
+from auvdiag_cli.simulator.writers.records import Record, dive_records
 
-PWM_NEUTRAL_US, PWM_PER_COMMAND_US = 1500, 400
 HEARTBEAT_PERIOD_NS = 1_000_000_000
 MAV_TYPE_SUBMARINE, MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_SEVERITY_INFO = 12, 3, 6
 
 
-def command_to_pwm(command: float) -> int:
-    """ArduSub output: 1500 µs neutral, ±400 µs at full command."""
-    return round(PWM_NEUTRAL_US + PWM_PER_COMMAND_US * max(-1.0, min(1.0, command)))
+def mavlink_message(dialect: Any, record: Record, boot_ns: int) -> Any:
+    """The record as a pymavlink message: every field zero except the boot-relative time
+    fields, the record's fields (integers rounded, as PWM is) and its ``where`` fields."""
+    cls = getattr(dialect, f"MAVLink_{record.topic.lower()}_message", None)
+    if cls is None:
+        raise ValueError(f"cannot write {record.topic}: not a MAVLink message")
+    lengths = dict(zip(cls.ordered_fieldnames, cls.array_lengths, strict=True))
+    types = dict(zip(cls.fieldnames, cls.fieldtypes, strict=True))
+
+    def zero(name: str) -> Any:
+        if types[name] == "char":
+            return b""
+        return [0] * lengths[name] if lengths[name] else 0
+
+    values = {name: zero(name) for name in cls.fieldnames}
+    since_boot_ns = record.time_ns - boot_ns
+    times = {"time_boot_ms": since_boot_ns // 1_000_000 & 0xFFFFFFFF,
+             "time_usec": since_boot_ns // 1000 & 0xFFFFFFFF}
+    values |= {name: t for name, t in times.items() if name in values}
+    for name, raw in record.fields:
+        values[name] = round(raw) if types[name].startswith(("int", "uint")) else raw
+    for name, text in record.where:
+        values[name] = text.encode()
+    if record.text is not None:
+        values[record.text[0]] = record.text[1].encode()
+        values["severity"] = MAV_SEVERITY_INFO
+    return cls(**values)
 
 
-def write_tlog(dive: SimulatedDive, path: Path) -> None:
+def write_tlog(dive: SimulatedDive, profile: Profile, path: Path) -> None:
     from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
     mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
@@ -25,26 +51,12 @@ def write_tlog(dive: SimulatedDive, path: Path) -> None:
     next_heartbeat = boot_ns
     with path.open("wb") as stream:
 
-        def emit(time_ns: int, message: object) -> None:
-            frame = message.pack(mav)  # type: ignore[attr-defined]
-            stream.write(struct.pack(">Q", time_ns // 1000) + frame)
+        def emit(time_ns: int, message: Any) -> None:
+            stream.write(struct.pack(">Q", time_ns // 1000) + message.pack(mav))
 
-        for record in dive_records(dive):
-            t_ns = record.time_ns
-            boot_ms = (t_ns - boot_ns) // 1_000_000
-            while next_heartbeat <= t_ns:
+        for record in dive_records(dive, profile, "mavlink"):
+            while next_heartbeat <= record.time_ns:
                 emit(next_heartbeat, mav.heartbeat_encode(
                     MAV_TYPE_SUBMARINE, MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0))
                 next_heartbeat += HEARTBEAT_PERIOD_NS
-            if record.kind == COMMAND:
-                pwm = [command_to_pwm(c) for c in record.values]
-                emit(t_ns, mav.servo_output_raw_encode(
-                    (t_ns - boot_ns) // 1000 & 0xFFFFFFFF, 0, pwm[0], pwm[1], *[1500] * 6))
-            elif record.kind == FLOW:
-                emit(t_ns, mav.named_value_float_encode(boot_ms, b"FLOW", record.values[0]))
-            elif record.kind == IMU:
-                emit(t_ns, mav.attitude_encode(boot_ms, 0.0, 0.0, 0.0, 0.0, 0.0,
-                                               record.values[0]))
-            elif record.kind == MARKER:
-                emit(t_ns, mav.statustext_encode(MAV_SEVERITY_INFO,
-                                                 f"DMS {record.label}".encode()))
+            emit(record.time_ns, mavlink_message(mavlink, record, boot_ns))

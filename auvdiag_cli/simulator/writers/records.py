@@ -1,27 +1,87 @@
-"""A simulated dive as one time-ordered stream of records, whatever the output format."""
+"""A simulated dive as one time-ordered stream of messages, laid out the way the profile says
+the vehicle logs them (its `[sources.FAMILY]` table read backwards), whatever the format."""
 
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from auvdiag_cli.simulator.run import SimulatedDive
-
-COMMAND, FLOW, IMU, MARKER = "command", "flow", "imu", "marker"
+from adapters.signals import FieldSource, LogSources
+from auvdiag_cli.profile import Profile
+from auvdiag_cli.simulator.run import SimulatedDive, Stream
 
 
 @dataclass(frozen=True)
 class Record:
-    time_ns: int                     # receive time, the log's clock
-    kind: str                        # COMMAND, FLOW, IMU or MARKER
-    values: tuple[float, ...]        # thruster commands, flow m/s, yaw rate rad/s
-    label: str = ""                  # marker text
+    """One message: its receive time (the log's clock), topic or message name, the raw value
+    of each field path it carries (the profile's scale and offset undone), the fields a
+    reader matches on (``where``), or for a segment marker its text."""
+
+    time_ns: int
+    topic: str
+    fields: tuple[tuple[str, float], ...] = ()
+    where: tuple[tuple[str, str], ...] = ()
+    text: tuple[str, str] | None = None        # (field, text) of a segment marker
 
 
-def dive_records(dive: SimulatedDive) -> Iterator[Record]:
+def raw_value(source: FieldSource, value: float) -> float:
+    return (value - source.offset) / source.scale
+
+
+def family_sources(profile: Profile, family: str) -> LogSources:
+    sources = profile.sources.get(family)
+    if sources is None:
+        raise ValueError(f"profile {profile.name!r} has no [sources.{family}] table: it does "
+                         f"not say how the vehicle logs {family} messages")
+    return sources
+
+
+def _groups(sources: LogSources, names: tuple[str, ...]
+            ) -> dict[tuple[str, tuple[tuple[str, str], ...]], list[str]]:
+    """Signals that travel in one message: same topic, same ``where``."""
+    groups: dict[tuple[str, tuple[tuple[str, str], ...]], list[str]] = {}
+    for name in names:
+        source = sources.signals[name]
+        groups.setdefault((source.topic, source.where), []).append(name)
+    return groups
+
+
+def _stream_records(start_ns: int, sources: LogSources, topic: str,
+                    where: tuple[tuple[str, str], ...], names: list[str],
+                    columns: list[list[float]], times_s: list[float]) -> list[Record]:
+    paths = [sources.signals[name].field for name in names]
+    return [Record(start_ns + round(t * 1e9), topic,
+                   tuple((path, raw_value(sources.signals[name], column[k]))
+                         for path, name, column in zip(paths, names, columns, strict=True)),
+                   where)
+            for k, t in enumerate(times_s)]
+
+
+def dive_records(dive: SimulatedDive, profile: Profile, family: str) -> Iterator[Record]:
     """Every message of the dive in receive-time order."""
-    records = [Record(dive.start_ns + round(t * 1e9), kind, v)
-               for kind, stream in ((COMMAND, dive.commands), (FLOW, dive.flow), (IMU, dive.imu))
-               for t, v in zip(stream.times_s, stream.values, strict=True)]
-    records += [Record(dive.start_ns + round(t * 1e9), MARKER, (), label)
-                for t, label in dive.markers]
+    sources = family_sources(profile, family)
+    records: list[Record] = []
+    command_columns = [list(c) for c in zip(*dive.commands.values, strict=True)]
+    for (topic, where), names in _groups(sources, profile.command_names).items():
+        columns = [command_columns[profile.command_names.index(n)] for n in names]
+        records += _stream_records(dive.start_ns, sources, topic, where, names, columns,
+                                   dive.commands.times_s)
+    for (topic, where), names in _groups(sources, profile.sensor_names).items():
+        streams: list[Stream] = [dive.sensors[n] for n in names]
+        if len({len(s.times_s) for s in streams}) > 1:
+            raise ValueError(f"sensors {', '.join(names)} share {topic} but the simulation "
+                             "samples them at different rates")
+        columns = [[v[0] for v in s.values] for s in streams]
+        records += _stream_records(dive.start_ns, sources, topic, where, names, columns,
+                                   streams[0].times_s)
+    segment = sources.segment
+    if segment is not None:
+        records += [Record(dive.start_ns + round(t * 1e9), segment.topic,
+                           text=(segment.field, segment.prefix + label))
+                    for t, label in dive.markers]
     records.sort(key=lambda record: record.time_ns)
     yield from records
+
+
+def first_message_s(dive: SimulatedDive) -> float:
+    """Seconds from the dive's clock start to its first message (receive jitter)."""
+    streams = [dive.commands, *dive.sensors.values()]
+    return min([min(s.times_s) for s in streams if s.times_s] + [t for t, _ in dive.markers])

@@ -1,7 +1,9 @@
-"""ROS logs in the default Twin-Burger conventions (SPEC §4): ROS 1 bag, ROS 2 bag (sqlite3,
-mcap) through rosbags, and standalone MCAP (ros2 CDR) through the mcap library."""
+"""ROS logs the way the profile's `[sources.ros]` table says the vehicle records them: ROS 1
+bag, ROS 2 bag (sqlite3, mcap) through rosbags, and standalone MCAP (ros2 CDR) through the
+mcap library. Each topic's message type follows from the field paths read on it."""
 
 import heapq
+import itertools
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -9,16 +11,44 @@ from typing import Any
 
 import numpy as np
 
+from adapters.fieldpath import parse_field_path
+from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import COMMAND, FLOW, IMU, MARKER, dive_records
+from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
 
-TOPICS = {
-    COMMAND: ("/thrusters/command", "std_msgs/msg/Float64MultiArray"),
-    FLOW: ("/flow/velocity", "geometry_msgs/msg/TwistStamped"),
-    IMU: ("/imu/data", "sensor_msgs/msg/Imu"),
-    MARKER: ("/diagnosis/sequence", "std_msgs/msg/String"),
+# The message type a topic carries, from the first step of the field paths read on it.
+TYPES_BY_FIELD = {
+    "twist": "geometry_msgs/msg/TwistStamped",
+    "angular_velocity": "sensor_msgs/msg/Imu",
+    "linear_acceleration": "sensor_msgs/msg/Imu",
+    "vector": "geometry_msgs/msg/Vector3Stamped",
+    "point": "geometry_msgs/msg/PointStamped",
 }
-COVARIANCE = np.zeros(9, dtype=np.float64)
+NUMPY_TYPES = {"float64": np.float64, "float32": np.float32, "int8": np.int8, "int16": np.int16,
+               "int32": np.int32, "int64": np.int64, "uint8": np.uint8, "uint16": np.uint16,
+               "uint32": np.uint32, "uint64": np.uint64, "byte": np.uint8, "char": np.uint8,
+               "bool": np.bool_}
+
+
+def ros_topics(profile: Profile) -> dict[str, str]:
+    """Topic -> message type of every topic the dive is written on."""
+    sources = family_sources(profile, "ros")
+    topics: dict[str, str] = {}
+    for source in sources.signals.values():
+        steps = parse_field_path(source.field)
+        if steps[0] == "data":
+            msgtype = ("std_msgs/msg/Float64MultiArray" if len(steps) > 1
+                       else "std_msgs/msg/Float64")
+        elif steps[0] in TYPES_BY_FIELD:
+            msgtype = TYPES_BY_FIELD[str(steps[0])]
+        else:
+            raise ValueError(f"cannot write {source.topic}: no known message type has the "
+                             f"field {source.field!r}")
+        if topics.setdefault(source.topic, msgtype) != msgtype:
+            raise ValueError(f"cannot write {source.topic}: its fields need two message types")
+    if sources.segment is not None:
+        topics[sources.segment.topic] = "std_msgs/msg/String"
+    return topics
 
 
 @dataclass(frozen=True)
@@ -35,56 +65,61 @@ class ExtraTopic:
 class RosMessages:
     """Builds and serialises the dive's messages with a rosbags type store."""
 
-    def __init__(self, ros1: bool) -> None:
+    def __init__(self, ros1: bool, topics: dict[str, str]) -> None:
         from rosbags.typesys import Stores, get_typestore
 
         self.ros1 = ros1
+        self.topics = topics
         self.store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
         self.types = self.store.types
         self.sequence = 0
 
-    def _header(self, time_ns: int, frame: str) -> Any:
-        stamp = self.types["builtin_interfaces/msg/Time"](sec=time_ns // 10**9,
-                                                          nanosec=time_ns % 10**9)
+    def zero(self, msgtype: str) -> Any:
+        """A message of ``msgtype`` with every field zero or empty."""
+        from rosbags.typesys.base import Nodetype
+
+        def value(node: int, desc: Any) -> Any:
+            if node == Nodetype.BASE:
+                kind = desc[0]
+                return "" if kind == "string" else np.zeros(1, NUMPY_TYPES[kind])[0].item()
+            if node == Nodetype.NAME:
+                return self.zero(desc)
+            sub_node, sub_desc = desc[0]
+            length = desc[1] if node == Nodetype.ARRAY else 0
+            if sub_node == Nodetype.BASE and sub_desc[0] in NUMPY_TYPES:
+                return np.zeros(length, NUMPY_TYPES[sub_desc[0]])
+            return [value(sub_node, sub_desc) for _ in range(length)]
+
+        _, fields = self.store.fielddefs[msgtype]
+        return self.types[msgtype](**{name: value(node, desc) for name, (node, desc) in fields})
+
+    def build(self, record: Record) -> Any:
+        message = self.zero(self.topics[record.topic])
+        if hasattr(message, "header"):
+            self._stamp(message.header, record.time_ns, record.topic.strip("/").split("/")[0])
+        if record.text is not None:
+            _assign(message, record.text[0], record.text[1])
+        for path, raw in record.fields:
+            _assign(message, path, raw)
+        return message
+
+    def _stamp(self, header: Any, time_ns: int, frame: str) -> None:
+        header.stamp = self.types["builtin_interfaces/msg/Time"](sec=time_ns // 10**9,
+                                                                 nanosec=time_ns % 10**9)
+        header.frame_id = frame
         if self.ros1:
             self.sequence += 1
-            return self.types["std_msgs/msg/Header"](seq=self.sequence, stamp=stamp,
-                                                     frame_id=frame)
-        return self.types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+            header.seq = self.sequence
 
-    def build(self, kind: str, time_ns: int, values: tuple[float, ...], label: str) -> Any:
-        t = self.types
-        vector3 = t["geometry_msgs/msg/Vector3"]
-        if kind == COMMAND:
-            layout = t["std_msgs/msg/MultiArrayLayout"](dim=[], data_offset=0)
-            return t["std_msgs/msg/Float64MultiArray"](
-                layout=layout, data=np.asarray(values, dtype=np.float64))
-        if kind == FLOW:
-            twist = t["geometry_msgs/msg/Twist"](linear=vector3(x=values[0], y=0.0, z=0.0),
-                                                 angular=vector3(x=0.0, y=0.0, z=0.0))
-            return t["geometry_msgs/msg/TwistStamped"](header=self._header(time_ns, "flow"),
-                                                       twist=twist)
-        if kind == IMU:
-            return t["sensor_msgs/msg/Imu"](
-                header=self._header(time_ns, "imu"),
-                orientation=t["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0),
-                orientation_covariance=COVARIANCE,
-                angular_velocity=vector3(x=0.0, y=0.0, z=values[0]),
-                angular_velocity_covariance=COVARIANCE,
-                linear_acceleration=vector3(x=0.0, y=0.0, z=0.0),
-                linear_acceleration_covariance=COVARIANCE)
-        return t["std_msgs/msg/String"](data=label)
-
-    def serialised(self, dive: SimulatedDive, extra: Sequence[ExtraTopic] = ()
-                   ) -> Iterator[tuple[int, str, bytes]]:
+    def serialised(self, dive: SimulatedDive, profile: Profile,
+                   extra: Sequence[ExtraTopic] = ()) -> Iterator[tuple[int, str, bytes]]:
         """(receive time ns, topic, serialised bytes) in time order."""
         serialize = self.store.serialize_ros1 if self.ros1 else self.store.serialize_cdr
 
         def dive_messages() -> Iterator[tuple[int, str, bytes]]:
-            for record in dive_records(dive):
-                topic, msgtype = TOPICS[record.kind]
-                message = self.build(record.kind, record.time_ns, record.values, record.label)
-                yield record.time_ns, topic, bytes(serialize(message, msgtype))
+            for record in dive_records(dive, profile, "ros"):
+                yield (record.time_ns, record.topic,
+                       bytes(serialize(self.build(record), self.topics[record.topic])))
 
         def extra_messages(topic: ExtraTopic) -> Iterator[tuple[int, str, bytes]]:
             for index, time_ns in enumerate(topic.times_ns):
@@ -95,19 +130,39 @@ class RosMessages:
                                key=lambda item: item[0])
 
 
-def _all_topics(extra: Sequence[ExtraTopic]) -> list[tuple[str, str]]:
-    return [*TOPICS.values(), *((e.topic, e.msgtype) for e in extra)]
+def _assign(message: Any, path: str, value: float | str) -> None:
+    """Set the field at ``path``, growing a sequence that is too short for its index."""
+    steps = parse_field_path(path)
+    parent = message
+    for step, following in itertools.pairwise(steps):
+        child = parent[step] if isinstance(step, int) else getattr(parent, step)
+        if isinstance(following, int) and isinstance(child, np.ndarray) \
+                and len(child) <= following:
+            grown = np.zeros(following + 1, child.dtype)
+            grown[:len(child)] = child
+            setattr(parent, str(step), grown)
+            child = grown
+        parent = child
+    last = steps[-1]
+    if isinstance(last, int):
+        parent[last] = value
+    else:
+        setattr(parent, last, value)
 
 
-def write_rosbag(dive: SimulatedDive, path: Path, fmt: str,
+def _all_topics(profile: Profile, extra: Sequence[ExtraTopic]) -> list[tuple[str, str]]:
+    return [*ros_topics(profile).items(), *((e.topic, e.msgtype) for e in extra)]
+
+
+def write_rosbag(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
                  extra: Sequence[ExtraTopic] = ()) -> None:
     """ROS 1 bag (``bag``, lz4 chunks) or ROS 2 bag (``db3``; ``ros2-mcap`` with zstd chunks)."""
-    messages = RosMessages(ros1=fmt == "bag")
+    messages = RosMessages(fmt == "bag", ros_topics(profile))
     writer = _open_rosbag_writer(path, fmt)
     with writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=messages.store)
-                       for topic, msgtype in _all_topics(extra)}
-        for time_ns, topic, data in messages.serialised(dive, extra):
+                       for topic, msgtype in _all_topics(profile, extra)}
+        for time_ns, topic, data in messages.serialised(dive, profile, extra):
             writer.write(connections[topic], time_ns, data)
 
 
@@ -129,20 +184,22 @@ def _open_rosbag_writer(path: Path, fmt: str) -> Any:
     return writer2
 
 
-def write_mcap(dive: SimulatedDive, path: Path, extra: Sequence[ExtraTopic] = ()) -> None:
+def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
+               extra: Sequence[ExtraTopic] = ()) -> None:
     """Standalone MCAP, profile ros2: ros2msg schemas and CDR messages, zstd chunks."""
     from mcap.writer import CompressionType, Writer
 
-    messages = RosMessages(ros1=False)
+    messages = RosMessages(False, ros_topics(profile))
     with path.open("wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="auvdiag simulate")
         channels = {}
-        for topic, msgtype in _all_topics(extra):
+        for topic, msgtype in _all_topics(profile, extra):
             text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
             schema = writer.register_schema(msgtype, "ros2msg", text.encode())
             channels[topic] = writer.register_channel(topic, "cdr", schema)
-        for sequence, (time_ns, topic, data) in enumerate(messages.serialised(dive, extra)):
+        ordered = messages.serialised(dive, profile, extra)
+        for sequence, (time_ns, topic, data) in enumerate(ordered):
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns, sequence=sequence)
         writer.finish()
