@@ -89,12 +89,12 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         finite = np.isfinite(g).all(axis=1)
         count = int(finite.sum())
         peaks = {name: float(np.nanmax(g[:, i])) for i, name in enumerate(profile.sensor_names)}
-        keep = count < MIN_SAMPLES_PER_MODE or mode not in profile.thresholds
+        keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
         if not keep:
             thresholds[mode] = {name: round(margin * peak, 2) for name, peak in peaks.items()}
         modes.append(ModeCalibration(mode, count, count * dt_h,
                                      {k: round(v, 3) for k, v in peaks.items()},
-                                     thresholds.get(mode, thresholds[MISSION_MODE]), keep))
+                                     thresholds.get(mode, profile.thresholds_for(mode)), keep))
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")

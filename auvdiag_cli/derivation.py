@@ -58,6 +58,13 @@ def _faults(profile: Profile) -> list[tuple[str, int | None, int | None]]:
     return faults + [(s.component, None, j) for j, s in enumerate(profile.sensors)]
 
 
+def dms_signature(model: LoadedModel, profile: Profile, dms_name: str, component: str
+                  ) -> dict[str, int]:
+    """The b the model predicts on a DMS when ``component`` has failed outright."""
+    fault = next(f for f in _faults(profile) if f[0] == component)
+    return _on_dms(model, profile, dms_name, fault[1], fault[2])
+
+
 def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | None,
             sensor: int | None) -> dict[str, int]:
     commands = dms_template(profile.dms[name], profile.dt_s)

@@ -8,9 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
+from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide, shows_fault_period
 from auvdiag_cli.closed_loop import replay_closed_loop
 from auvdiag_cli.degradation import WeakenedThruster, explain_by_weak_thruster
+from auvdiag_cli.derivation import dms_signature
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.errors import ModelError, UsageError
 from auvdiag_cli.ingest import IngestedLog, ingest
@@ -226,9 +227,38 @@ def _apply_active_diagnosis(diagnosis: Diagnosis, runs: list[tuple[DmsRun, int]]
     if active.conflict:
         diagnosis.notes.append("the DMS runs contradict each other (more than one fault?); "
                                "all candidates kept")
+    if len(active.candidates) > 1:
+        _narrow_by_predicted_signatures(diagnosis, active, onset_ns, runs, profile, model)
     diagnosis.candidates = active.candidates
     if len(active.candidates) == 1:
         _name_component(diagnosis, active.candidates[0], profile, model)
+
+
+def _narrow_by_predicted_signatures(diagnosis: Diagnosis, active: ActiveDiagnosis,
+                                    onset_ns: int, runs: list[tuple[DmsRun, int]],
+                                    profile: Profile, model: LoadedModel) -> None:
+    """Where moving or not moving a component cannot separate the candidates (a thruster
+    and the sensor of the motion it drives), the model can: each candidate's failure
+    predicts a b on every DMS run during the fault; candidates whose prediction differs from
+    what was seen are dropped (never all of them)."""
+    kept = list(active.candidates)
+    for run, _ in runs:
+        if not shows_fault_period(run, onset_ns) or run.name not in profile.dms:
+            continue
+        predicted = {c: dms_signature(model, profile, run.name, c) for c in kept}
+        agreeing = [c for c in kept if predicted[c] == run.b]
+        if agreeing and len(agreeing) < len(kept):
+            seen = "".join(str(v) for v in run.b.values())
+            dropped = ", ".join(f"{c} ({''.join(str(v) for v in predicted[c].values())})"
+                                for c in kept if c not in agreeing)
+            diagnosis.notes.append(f"{run.name} in {run.log} gave b = {seen}, which the model "
+                                   f"predicts for {', '.join(agreeing)} and not for {dropped}")
+            kept = agreeing
+    active.candidates = kept
+    # The DMSs on which the remaining candidates' failures look different decide next time.
+    active.recommended_dms = [] if len(kept) == 1 else [
+        name for name in profile.dms
+        if len({tuple(dms_signature(model, profile, name, c).values()) for c in kept}) > 1]
 
 
 def _with_model_thresholds(profile: Profile, model: LoadedModel) -> Profile:

@@ -12,6 +12,7 @@ from auvdiag_cli.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.toml_reader import TableReader, positive
 
 MISSION_MODE = "mission"
+ROUTINE_THRESHOLDS = "routine"     # thresholds shared by every DMS without its own table
 
 
 @dataclass(frozen=True)
@@ -111,8 +112,13 @@ class Profile:
         return next(s for s in self.sensors if s.name == name)
 
     def thresholds_for(self, mode: str) -> dict[str, float]:
-        """Thresholds of a DMS name or of the mission mode; unknown modes use the mission's."""
-        return self.thresholds.get(mode, self.thresholds[MISSION_MODE])
+        """Thresholds of a DMS name or of the mission mode. A DMS without its own table uses
+        the ``routine`` table when there is one; anything else the mission's."""
+        if mode in self.thresholds:
+            return self.thresholds[mode]
+        if mode in self.dms and ROUTINE_THRESHOLDS in self.thresholds:
+            return self.thresholds[ROUTINE_THRESHOLDS]
+        return self.thresholds[MISSION_MODE]
 
 
 def parse_profile(data: dict[str, Any], source_path: str) -> Profile:

@@ -31,7 +31,7 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
             for e in d.active.evidence:
                 verdict = "fault among" if e.faulty else "clears"
                 lines.append(f"  active diagnosis: {e.segment} at {e.start_s:.1f} s "
-                             f"({e.log}) moved {', '.join(e.tested)}: b = "
+                             f"({e.log}) tests {', '.join(e.tested)}: b = "
                              + ", ".join(str(v) for v in e.b.values())
                              + f" -> {verdict} {', '.join(e.tested)}")
             if d.active.recommended_dms:

@@ -183,14 +183,15 @@ class _Dive:
         spec = phase.mission
         assert spec is not None
         waypoints = rectangle_waypoints(spec.length_m, spec.width_m, spec.clockwise)
-        gains = ControllerGains(cruise_speed_mps=spec.cruise_speed_mps)
-        depths = self.spec.mission_depths_m
-        depths_m = [depths[i % len(depths)] for i in range(len(waypoints))] if depths else []
-        follower = PathFollower(waypoints, gains, depths_m)
         profile = self.profile
         if profile.controller is None:
             raise ValueError(f"profile {profile.name!r} describes no [controller] to fly "
                              "missions with")
+        gains = ControllerGains(**{**profile.controller.gains,
+                                   "cruise_speed_mps": spec.cruise_speed_mps})
+        depths = self.spec.mission_depths_m
+        depths_m = [depths[i % len(depths)] for i in range(len(waypoints))] if depths else []
+        follower = PathFollower(waypoints, gains, depths_m)
         controller = VehicleController(profile.controller, profile.sensor_names,
                                        profile.command_names, follower)
         plan: dict[str, object] = {"start_s": round(self.time_s, 6), "waypoints": waypoints,

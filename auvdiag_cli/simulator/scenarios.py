@@ -139,12 +139,18 @@ def _generated(profile: Profile) -> list[Scenario]:
     if every_dms:
         scenarios.append(Scenario("all-dms-and-mission", f"{', '.join(profile.dms)} then the "
                                   "paper's mission, no fault", every_dms + PAPER_MISSION))
+    if every_dms:
+        scenarios += [Scenario(
+            f"routine-{component.replace('_', '-')}-dead",
+            f"{component} dead at 10 s, during {every_dms[0].name}; then the other DMSs and "
+            "the mission", every_dms + PAPER_MISSION, Fault(component, "dead", 10.0),
+            run_after_fault_s=400.0) for component in fault_kinds(profile)]
     for component, kinds in fault_kinds(profile).items():
         for kind in kinds:
             severity = WEAK_THRUST_FRACTION if kind == "weak" else 0.0
-            if kind in ("bias", "drift"):
-                continue     # their size depends on the sensor's range: named scenarios set it
-            what = f"at {severity:.0%} power" if kind == "weak" else kind
+            if kind in ("bias", "drift", "covered"):
+                continue     # a bias's size depends on the sensor: named scenarios set it
+            what = f"at {severity * 100:.0f} % power" if kind == "weak" else kind
             scenarios.append(Scenario(
                 f"mission-{component.replace('_', '-')}-{kind}",
                 f"paper mission, {component} {what} from {MISSION_FAULT_AT_S:.0f} s",

@@ -1,0 +1,128 @@
+"""The other built-in vehicles: a three-thruster surge/yaw/heave AUV and a BlueROV2-style
+ArduSub ROV, flown by the simulator from their profiles, logged in their formats, judged by
+their shipped models."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from adapters import read_log
+from auvdiag_cli.cli import app
+from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.profile import load_profile
+from auvdiag_cli.simulator.run import simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.truth import mission_path, truth_paths
+
+runner = CliRunner()
+
+
+def run(*args: str) -> tuple[int, str]:
+    result = runner.invoke(app, list(args))
+    return result.exit_code, result.output
+
+
+def write(tmp_path: Path, profile_name: str, scenario: str, fmt: str, seed: int = 5) -> Path:
+    profile = load_profile(Path(profile_name))
+    path = tmp_path / f"{profile_name}-{scenario}.{fmt}"
+    write_log(simulate(get_scenario(scenario, profile), profile, seed), profile, path, fmt)
+    return path
+
+
+@pytest.mark.parametrize("fmt", ["bag", "mcap", "tlog", "bin"])
+def test_three_thruster_signals_round_trip(tmp_path, fmt):
+    profile = load_profile(Path("three_thruster"))
+    dive = simulate(get_scenario("dms-zd", profile), profile, 3)
+    path = tmp_path / f"zd.{fmt}"
+    write_log(dive, profile, path, fmt)
+    signals = read_log(path, profile.sources)
+    commands = np.asarray(dive.commands.values)
+    np.testing.assert_allclose(signals.series["thruster_2"].to_numpy(), commands[:, 2],
+                               atol=0.0013)   # PWM formats quantise to 1/400
+    np.testing.assert_allclose(signals.series["heave"].to_numpy(),
+                               np.asarray(dive.sensors["heave"].values)[:, 0], atol=1e-6)
+    assert [m.label for m in signals.markers] == ["ZD"]
+    # Both DVL velocities travel in one message on ROS and DataFlash, in two on MAVLink.
+    assert len(signals.series["surge"]) == len(dive.sensors["surge"].times_s)
+
+
+def test_three_thruster_vehicle_keeps_the_mission_depths(tmp_path):
+    log = write(tmp_path, "three_thruster", "paper-normal", "mcap")
+    truth = pd.read_csv(truth_paths(log)[1])
+    # Legs at 1.0 m and 1.5 m: it ends the last one at 1.5 m and never overshoots by 0.2 m.
+    assert abs(truth["depth_m"].iloc[-1] - 1.5) < 0.05
+    assert truth["depth_m"].max() < 1.7
+    plan = json.loads(mission_path(log).read_text())
+    assert plan["missions"][0]["depths_m"] == [1.0, 1.5, 1.0, 1.5]
+
+
+def test_derived_three_thruster_table_equals_its_profile():
+    code, output = run("derive-table", "--profile", "three_thruster")
+    assert code == 0, output
+    assert "derived table equals the profile's" in output
+    # The larger table: thrusters 0/1 together, each sensor alone, vertical thruster and
+    # heave sensor together.
+    assert "thruster_2, heave_sensor" in output or "heave_sensor, thruster_2" in output
+
+
+def test_derived_twin_burger_table_is_unchanged():
+    code, output = run("derive-table")
+    assert code == 0, output
+
+
+def test_bluerov2_dead_thruster_is_named_from_the_motor_tests(tmp_path):
+    log = write(tmp_path, "bluerov2", "routine-thruster-3-dead", "tlog")
+    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
+    assert code == 1, output
+    report = json.loads(output)
+    assert report["verdict"] == "fault"
+    assert report["component"] == "thruster_3"
+    assert report["model"]["vehicle"] == "bluerov2"
+
+
+def test_bluerov2_normal_dive_raises_no_alarm(tmp_path):
+    log = write(tmp_path, "bluerov2", "all-dms-and-mission", "tlog")
+    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
+    assert code == 0, output
+    assert json.loads(output)["verdict"] == "normal"
+
+
+def test_bluerov2_sensor_fault_is_named(tmp_path):
+    log = write(tmp_path, "bluerov2", "mission-dvl-surge-dead", "tlog")
+    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
+    assert code == 1, output
+    assert json.loads(output)["component"] == "dvl_surge"
+
+
+def test_formats_a_profile_cannot_write_are_refused(tmp_path):
+    code, output = run("simulate", "paper-normal", "--profile", "bluerov2", "--format", "bag",
+                       "-o", str(tmp_path / "x.bag"))
+    assert code == 2
+    assert "no [sources.ros] table" in output
+
+
+def test_twin_burger_model_is_refused_for_another_vehicle(tmp_path):
+    log = write(tmp_path, "bluerov2", "dms-m1", "tlog")
+    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--model",
+                       str(Path(__file__).parents[1] / "models" / "twin_burger"))
+    assert code == 2
+    assert "model" in output and "bluerov2" in output.lower()
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    ("[simulation.dofs.roll]\ninertia = 1.0\nlinear_drag = 1.0\nquadratic_drag = 1.0\n",
+     "simulation.dofs' must name some of surge, sway, heave, yaw"),
+    ('[[simulation.sensors]]\nsensor = "ghost"\nmeasures = "surge"\nrate_hz = 10.0\n'
+     'noise = 0.0\nquantum = 0.001\n', "simulation.sensors' must describe the sensors"),
+])
+def test_simulation_table_errors_name_the_key(tmp_path, edit, message):
+    source = (Path(__file__).parents[1] / "auvdiag_cli" / "profiles" / "twin_burger.toml")
+    path = tmp_path / "edited.toml"
+    path.write_text(source.read_text() + "\n" + edit)
+    with pytest.raises(ProfileError, match=message):
+        load_profile(path)
