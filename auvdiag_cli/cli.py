@@ -317,6 +317,9 @@ def derive_table(
         bits = ", ".join(f"{n}={row.b[n]}" for n in names)
         typer.echo(f"  case {row.case}: {bits}  ->  "
                    + (" or ".join(row.components) or "nothing"))
+    if result.unseen_on_mission:
+        typer.echo("  not seen on the mission (only on the DMSs above): "
+                   + ", ".join(result.unseen_on_mission))
     typer.echo("matches the profile's table" if result.matches_profile
                else "DIFFERS from the profile's table")
     if json_path is not None:

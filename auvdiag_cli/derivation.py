@@ -34,6 +34,7 @@ class DerivedTable:
     signatures: list[Signature]
     rows: list[PatternRow]            # grouped by the mission signature
     matches_profile: bool
+    unseen_on_mission: tuple[str, ...] = ()
 
 
 def _bits(measured: np.ndarray, modelled: np.ndarray, profile: Profile, mode: str,
@@ -125,7 +126,11 @@ def derive_table(model: LoadedModel, profile: Profile,
     for signature in signatures:
         key = tuple(signature.b[MISSION_MODE][n] for n in profile.sensor_names)
         groups.setdefault(key, []).append(signature.component)
-    groups.setdefault(tuple(0 for _ in profile.sensor_names), [])
+    # A failure the mission never shows is no row of the table (the DMS columns show where
+    # it can be seen); the all-zero row stays "nothing".
+    quiet = tuple(0 for _ in profile.sensor_names)
+    unseen = tuple(groups.pop(quiet, []))
+    groups[quiet] = []
     rows = []
     for key, components in sorted(groups.items(), key=lambda item: (sum(item[0]) > 0,
                                                                     -sum(item[0]), item[0])):
@@ -136,4 +141,5 @@ def derive_table(model: LoadedModel, profile: Profile,
                                tuple(components)))
     wanted = {(tuple(r.b.values()), tuple(sorted(r.components))) for r in profile.pattern}
     derived = {(tuple(r.b.values()), tuple(sorted(r.components))) for r in rows}
-    return DerivedTable(signatures, sorted(rows, key=lambda r: r.case), wanted == derived)
+    return DerivedTable(signatures, sorted(rows, key=lambda r: r.case), wanted == derived,
+                        unseen)

@@ -64,10 +64,35 @@ def test_three_thruster_vehicle_keeps_the_mission_depths(tmp_path):
 def test_derived_three_thruster_table_equals_its_profile():
     code, output = run("derive-table", "--profile", "three_thruster")
     assert code == 0, output
-    assert "derived table equals the profile's" in output
-    # The larger table: thrusters 0/1 together, each sensor alone, vertical thruster and
-    # heave sensor together.
-    assert "thruster_2, heave_sensor" in output or "heave_sensor, thruster_2" in output
+    assert "matches the profile's table" in output
+    # The larger table: thrusters 0/1 together, each sensor alone, and the vertical thruster
+    # together with the heave sensor; the DMS columns show ZA-ZC see the heave sensor's
+    # failure (the vehicle floats up) but not the idle vertical thruster's.
+    assert "thruster_0 or thruster_1" in output
+    assert "thruster_2 or heave_sensor" in output
+    rows = {line.split()[0]: line.split()[1:] for line in output.splitlines()[1:8]}
+    assert rows["thruster_2"] == ["000", "000", "000", "001", "001"]
+    assert rows["heave_sensor"] == ["001", "001", "001", "001", "001"]
+
+
+def test_heave_sensor_is_told_from_the_vertical_thruster_by_the_dms(tmp_path):
+    log = write(tmp_path, "three_thruster", "routine-heave-sensor-dead", "mcap")
+    code, output = run("diagnose", str(log), "--profile", "three_thruster", "--json", "-", "-q")
+    assert code == 1
+    report = json.loads(output)
+    assert report["component"] == "heave_sensor"
+    assert report["case"] == 4
+
+
+def test_vertical_thruster_seen_only_on_zd_keeps_both_and_names_the_deciding_dms(tmp_path):
+    # Dead from 10 s but idle until ZD: ZA-ZC look healthy, so the onset is at ZD and a
+    # heave sensor failing there would look the same. ZA would tell them apart.
+    log = write(tmp_path, "three_thruster", "routine-thruster-2-dead", "mcap")
+    code, output = run("diagnose", str(log), "--profile", "three_thruster", "--json", "-", "-q")
+    assert code == 1
+    report = json.loads(output)
+    assert report["candidates"] == ["thruster_2", "heave_sensor"]
+    assert report["active_diagnosis"]["recommended_dms"] == ["ZA", "ZB", "ZC"]
 
 
 def test_derived_twin_burger_table_is_unchanged():
