@@ -100,28 +100,28 @@ def test_derived_twin_burger_table_is_unchanged():
     assert code == 0, output
 
 
-def test_bluerov2_dead_thruster_is_named_from_the_motor_tests(tmp_path):
-    log = write(tmp_path, "bluerov2", "routine-thruster-3-dead", "tlog")
-    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
-    assert code == 1, output
-    report = json.loads(output)
-    assert report["verdict"] == "fault"
-    assert report["component"] == "thruster_3"
-    assert report["model"]["vehicle"] == "bluerov2"
+def test_bluerov2_signals_round_trip_through_a_tlog(tmp_path):
+    profile = load_profile(Path("bluerov2"))
+    dive = simulate(get_scenario("dms-m3", profile), profile, 3)
+    path = tmp_path / "m3.tlog"
+    write_log(dive, profile, path, "tlog")
+    signals = read_log(path, profile.sources)
+    commands = np.asarray(dive.commands.values)
+    np.testing.assert_allclose(signals.series["motor_3"].to_numpy(), commands[:, 2],
+                               atol=0.0013)
+    # Heave is the negated VFR_HUD climb; surge and sway are two NAMED_VALUE_FLOATs.
+    for name in ("heave", "surge", "sway"):
+        np.testing.assert_allclose(signals.series[name].to_numpy(),
+                                   np.asarray(dive.sensors[name].values)[:, 0], atol=1e-6)
+    assert [m.label for m in signals.markers] == ["M3"]
 
 
-def test_bluerov2_normal_dive_raises_no_alarm(tmp_path):
-    log = write(tmp_path, "bluerov2", "all-dms-and-mission", "tlog")
-    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
-    assert code == 0, output
-    assert json.loads(output)["verdict"] == "normal"
-
-
-def test_bluerov2_sensor_fault_is_named(tmp_path):
-    log = write(tmp_path, "bluerov2", "mission-dvl-surge-dead", "tlog")
-    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
-    assert code == 1, output
-    assert json.loads(output)["component"] == "dvl_surge"
+def test_bluerov2_without_a_trained_model_says_how_to_get_one(tmp_path):
+    log = write(tmp_path, "bluerov2", "dms-m1", "tlog")
+    code, output = run("diagnose", str(log), "--profile", "bluerov2")
+    assert code == 2
+    assert "no model is shipped for vehicle 'bluerov2'" in output
+    assert "auvdiag train" in output
 
 
 def test_formats_a_profile_cannot_write_are_refused(tmp_path):
