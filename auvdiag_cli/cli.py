@@ -5,12 +5,18 @@ import os
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated, Any, NoReturn
 
 import typer
 
 from auvdiag_cli import __version__
+from auvdiag_cli.errors import UsageError
+
+if TYPE_CHECKING:
+    from auvdiag_cli.audit.job import AuditResult
+    from auvdiag_cli.report_series import Series
 
 EXIT_NORMAL, EXIT_FAULT, EXIT_UNUSABLE = 0, 1, 2
 
@@ -83,8 +89,13 @@ def diagnose(
     model: ModelOption = None,
     profile: ProfileOption = None,
     json_path: Annotated[str | None, typer.Option(
-        "--json", help="Write the JSON report to PATH, or to standard output with '-'.",
+        "--json", help="Write the JSON report to PATH, or to standard output with '-'. "
+                       "Beside a JSON file go its time histories (NAME.series.npz), from "
+                       "which 'auvdiag report' draws the PDF again.",
         metavar="PATH|-")] = None,
+    pdf_path: Annotated[Path | None, typer.Option(
+        "--pdf", help="Write the PDF report (summary page, time histories, Substituting "
+                      "Control) to PATH.", dir_okay=False)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
     mission: Annotated[Path | None, typer.Option(
         "--mission", help="Mission plan JSON for the closed-loop Substituting Control replay "
@@ -102,7 +113,8 @@ def diagnose(
     from adapters import detect_format
     from auvdiag_cli.diagnosis import diagnose as run_diagnosis
     from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_json import diagnosis_to_dict, write_json
+    from auvdiag_cli.report_json import diagnosis_to_dict
+    from auvdiag_cli.report_series import series_from_diagnosis
     from auvdiag_cli.report_text import summary_lines
     from models.store import load_model
 
@@ -111,15 +123,146 @@ def diagnose(
         vehicle = load_profile(profile)
         result = run_diagnosis(log, vehicle, load_model(model, vehicle.name), companions or (),
                                mission)
-        document = diagnosis_to_dict(result)
+        document, series = diagnosis_to_dict(result), series_from_diagnosis(result)
         if json_path == "-":
             typer.echo(json.dumps(document, indent=2))
         elif json_path is not None:
-            write_json(document, Path(json_path))
+            _save_report(document, series, Path(json_path))
+        if pdf_path is not None:
+            _render_pdf(document, series, pdf_path)
         if not quiet:
             for line in summary_lines(result):
                 typer.echo(line, err=json_path == "-")
     raise typer.Exit(EXIT_FAULT if result.verdict == "fault" else EXIT_NORMAL)
+
+
+def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:
+    """The JSON report and, beside it, the time histories it refers to."""
+    from auvdiag_cli.report_json import write_json
+    from auvdiag_cli.report_series import save_series, series_path
+
+    sidecar = series_path(target)
+    save_series(series, sidecar)
+    write_json({**document, "series_file": sidecar.name}, target)
+
+
+def _render_pdf(document: dict[str, Any], series: "Series | None", target: Path) -> None:
+    from auvdiag_cli.pdf.dive import render_dive_report
+
+    try:
+        render_dive_report(document, series, target)
+    except OSError as error:
+        raise UsageError(f"{target}: cannot write the PDF: {error.strerror or error}") from None
+
+
+@app.command()
+def report(
+    json_report: Annotated[Path, typer.Argument(help="A JSON report written by 'auvdiag "
+                                                     "diagnose --json PATH' or by an audit.",
+                                                dir_okay=False)],
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="PDF to write (default: the JSON's name with .pdf).",
+        dir_okay=False)] = None,
+) -> None:
+    """Draw the PDF report of a saved diagnosis, without the log or the model.
+
+    The time histories come from the NAME.series.npz file written beside the JSON; without
+    it the report has its summary pages only."""
+    from auvdiag_cli.report_series import load_series
+
+    with _user_errors(json_report):
+        document = _read_report(json_report)
+        sidecar = json_report.with_name(str(document.get("series_file") or ""))
+        series = load_series(sidecar) if document.get("series_file") and sidecar.is_file() \
+            else None
+        if series is None:
+            typer.echo(f"auvdiag: note: {json_report}: no time histories beside it; the PDF "
+                       "has its summary pages only", err=True)
+        target = output or json_report.with_suffix(".pdf")
+        _render_pdf(document, series, target)
+        typer.echo(f"report written to {target}")
+
+
+def _read_report(path: Path) -> dict[str, Any]:
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UsageError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise UsageError(f"{path}: not a readable JSON report: {error}") from None
+    if not isinstance(document, dict) or "verdict" not in document or "log" not in document:
+        raise UsageError(f"{path}: not an auvdiag JSON report (no 'verdict' or 'log')")
+    return document
+
+
+class FailOn(StrEnum):
+    """What makes an audit's exit status non-zero."""
+
+    ANY = "any"
+    FAULT = "fault"
+    ERROR = "error"
+    NONE = "none"
+
+
+def _audit_exit(result: "AuditResult", fail_on: FailOn) -> int:
+    counted = {FailOn.ANY: ("fault", "error"), FailOn.FAULT: ("fault",),
+               FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
+    if "error" in counted and result.errors:
+        return EXIT_UNUSABLE
+    if "fault" in counted and result.count("fault"):
+        return EXIT_FAULT
+    return EXIT_NORMAL
+
+
+def _terminate_as_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+@app.command()
+def audit(
+    paths: Annotated[list[str], typer.Argument(
+        help="Logs, folders (walked for logs of every format) or glob patterns.")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Folder for the results.",
+                                         file_okay=False)],
+    model: ModelOption = None,
+    profile: ProfileOption = None,
+    jobs: Annotated[int, typer.Option(
+        "--jobs", "-j", help="Logs diagnosed side by side (default: all cores).", min=1)
+    ] = os.cpu_count() or 1,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Address of a Dask scheduler (e.g. tcp://host:8786) to run on "
+                            "instead of local processes; needs the 'dask' extra, and the "
+                            "workers need the logs at the same paths.")] = None,
+    fail_on: Annotated[FailOn, typer.Option(
+        "--fail-on", help="What makes the exit status non-zero: any (faults: 1, logs not "
+                          "analysable: 2), fault, error, or none.")] = FailOn.ANY,
+) -> None:
+    """Diagnose every log under PATHS and write one table and a fleet summary.
+
+    Writes OUTPUT/audit.csv and OUTPUT/audit.parquet (a row per log; a log that cannot be
+    analysed is a row with its error), OUTPUT/audit.pdf, and OUTPUT/logs/ with each log's
+    JSON report. Results are saved as each log finishes: an interrupted audit loses nothing
+    finished, and running it again only diagnoses what is missing or whose log or model
+    changed. Exit status: 0 all normal, 1 a fault found, 2 a log not analysable."""
+    import signal
+
+    from auvdiag_cli.audit.job import AuditOptions, run_audit
+    from auvdiag_cli.audit.progress import reporter_for_stderr
+    from auvdiag_cli.pdf.fleet import render_fleet_report
+
+    signal.signal(signal.SIGTERM, _terminate_as_interrupt)
+    options = AuditOptions(paths, output, profile, model, jobs, scheduler)
+    with _user_errors(output):
+        result = run_audit(options, reporter_for_stderr())
+        render_fleet_report(result.records, result.skipped, output / "audit.pdf",
+                            result.companions, result.interrupted)
+    typer.echo(f"{len(result.records)} logs: {result.count('normal')} normal, "
+               f"{result.count('fault')} fault, {result.count('undetermined')} undetermined, "
+               f"{result.errors} not analysable; {len(result.skipped)} files skipped; "
+               f"{result.computed} diagnosed now, {result.reused} reused; results in {output}")
+    if result.interrupted:
+        _fail(f"audit interrupted after {result.computed} logs; run it again to finish")
+    raise typer.Exit(_audit_exit(result, fail_on))
 
 
 @app.command()

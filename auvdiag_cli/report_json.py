@@ -2,12 +2,13 @@
 
 import json
 import math
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 from auvdiag_cli import __version__
 from auvdiag_cli.closed_loop import ClosedLoopReplay
-from auvdiag_cli.diagnosis import PAPER_ASSUMPTIONS, Diagnosis
+from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
 
 SCHEMA_VERSION = 1
 
@@ -29,9 +30,11 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "candidates": diagnosis.candidates,
         "case": diagnosis.case,
         "b": diagnosis.b,
+        "units": diagnosis.sensor_units,
         "detected_at_s": diagnosis.detected_at_s,
         "onset_s": diagnosis.onset_s,
         "duration_s": round(float(diagnosis.time_s[-1]), 3) if diagnosis.time_s.size else None,
+        "start_time_utc": _utc(diagnosis.start_ns),
         "segments": [
             {
                 "name": r.segment.name,
@@ -76,6 +79,13 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         },
         "notes": diagnosis.notes,
     }
+
+
+def _utc(time_ns: int) -> str | None:
+    """The log's first message as UTC, when its clock is Unix time (not time since boot)."""
+    if time_ns <= EPOCH_CLOCK_NS:
+        return None
+    return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec="seconds")
 
 
 def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:

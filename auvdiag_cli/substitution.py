@@ -37,6 +37,7 @@ class Substitution:
     unit: str
     expected_error_rms: float | None     # the model's free-run error on held-out normal logs
     substituted: np.ndarray = field(default_factory=lambda: np.empty(0))
+    truth: np.ndarray | None = None           # the true signal, when the log has it
     truth_error_rms: float | None = None      # SM_i − truth after the onset
     failed_error_rms: float | None = None     # SS_i − truth after the onset
     tracks: dict[str, Track] = field(default_factory=dict)   # substituted, failed, truth
@@ -71,6 +72,7 @@ def substitute(log: Path, sensor: Sensor, sensor_names: tuple[str, ...], time_s:
     truth = truth_series(log, truth_columns, time_s) if sensor.truth_column else None
     if truth is not None and sensor.truth_column is not None:
         true_signal = truth[sensor.truth_column]
+        result.truth = true_signal
         result.truth_error_rms = _rms(modelled[after, column] - true_signal[after])
         result.failed_error_rms = _rms(measured[after, column] - true_signal[after])
     if navigation is not None:

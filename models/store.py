@@ -33,7 +33,9 @@ class LoadedModel:
         """What a report needs to say which model judged the log."""
         meta = self.metadata
         return {"name": meta.get("name"), "vehicle": meta.get("vehicle"), "path": self.path,
-                "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created")}
+                "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
+                "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
+                "thresholds_calibrated": "calibration" in meta}
 
     @property
     def command_names(self) -> tuple[str, ...]:

@@ -19,15 +19,22 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 mapfile -t dms < <(auvdiag scenarios --profile "$profile" | awk '$1 ~ /^dms-[^-]+$/ {print $1}')
 # Full-range excitation of six motors spins the BlueROV2 far beyond anything its missions
-# do; its model learns from its DMSs (one per motor) and missions only.
-excitation=(excitation)
-[[ $profile == bluerov2 ]] && excitation=()
+# do; its model learns from its DMSs (one per motor, more runs of each: they are short) and
+# missions, with a larger recurrent context trained longer, and its thresholds are then
+# calibrated on further normal dives (seeds 201-203), as a new vehicle's should be.
+excitation=(excitation) dms_seeds=(1 2 3) train_options=() calibrate=false
+if [[ $profile == bluerov2 ]]; then
+  excitation=() dms_seeds=(1 2 3 4 5 6) train_options=(--hidden 48 --iterations-scale 2)
+  calibrate=true
+fi
 scenarios=("${dms[@]}" paper-normal mission-ccw mission-large-cw mission-large-ccw
            mission-fast-cw mission-fast-ccw mission-sprint-cw mission-sprint-ccw
            all-dms-and-mission "${excitation[@]}")
 train=() holdout=()
 for scenario in "${scenarios[@]}"; do
-  for seed in 1 2 3; do
+  seeds=(1 2 3)
+  [[ $scenario == dms-* ]] && seeds=("${dms_seeds[@]}")
+  for seed in "${seeds[@]}"; do
     auvdiag simulate "$scenario" --profile "$profile" --format "$format" --seed "$seed" \
       --output "$work/$scenario-s$seed" >/dev/null
     train+=("$work/$scenario-s$seed")
@@ -36,7 +43,19 @@ for scenario in "${scenarios[@]}"; do
     --output "$work/heldout-$scenario" >/dev/null
   holdout+=(--holdout "$work/heldout-$scenario")
 done
-auvdiag train "${train[@]}" "${holdout[@]}" --profile "$profile" --output "$work/model" --seed 0
+auvdiag train "${train[@]}" "${holdout[@]}" --profile "$profile" --output "$work/model" \
+  --seed 0 "${train_options[@]}"
+if $calibrate; then
+  normal=()
+  for scenario in all-dms-and-mission paper-normal mission-large-ccw mission-sprint-cw; do
+    for seed in 201 202 203; do
+      auvdiag simulate "$scenario" --profile "$profile" --format "$format" --seed "$seed" \
+        --output "$work/calibration-$scenario-s$seed" >/dev/null
+      normal+=("$work/calibration-$scenario-s$seed")
+    done
+  done
+  auvdiag calibrate "${normal[@]}" --model "$work/model" --profile "$profile"
+fi
 rm -rf "$output"
 mkdir -p "$output"
 cp "$work/model"/* "$output"/

@@ -1,0 +1,97 @@
+"""Finding the logs under the paths an audit is given: files, folders (walked), and glob
+patterns. A log is recognised by its content; a file named like a log whose content is not
+one is kept (it becomes an error row: most likely a damaged log), anything else is skipped
+and listed."""
+
+import glob
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from adapters import detect_format
+from adapters.errors import LogError
+
+LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin"}
+ROS2_METADATA = "metadata.yaml"
+
+
+@dataclass
+class Discovery:
+    logs: list[Path] = field(default_factory=list)
+    skipped: list[tuple[Path, str]] = field(default_factory=list)
+    companions: list[Path] = field(default_factory=list)   # NAME.* beside a log NAME.ext
+
+
+def _set_companions_apart(found: Discovery) -> None:
+    """Files named after a log beside it (its truth, mission plan, reports) are not
+    'unrelated': they are counted, not listed one by one."""
+    stems: dict[Path, set[str]] = {}
+    for log in found.logs:
+        stems.setdefault(log.parent.resolve(), set()).add(log.stem)
+    unrelated = []
+    for path, reason in found.skipped:
+        beside = stems.get(path.parent.resolve(), set())
+        if any(path.name.startswith(f"{stem}.") for stem in beside):
+            found.companions.append(path)
+        else:
+            unrelated.append((path, reason))
+    found.skipped = unrelated
+
+
+def _expand(pattern: str) -> list[Path]:
+    path = Path(pattern)
+    if path.exists():
+        return [path]
+    if glob.has_magic(pattern):
+        return sorted(Path(p) for p in glob.glob(pattern, recursive=True))
+    return [path]
+
+
+def _is_log(path: Path) -> bool:
+    try:
+        detect_format(path)
+    except LogError:
+        return False
+    return True
+
+
+def _classify(path: Path, found: Discovery) -> None:
+    if _is_log(path):
+        found.logs.append(path)
+    elif path.suffix.lower() in LOG_SUFFIXES:
+        found.logs.append(path)          # named like a log: its error row says what is wrong
+    else:
+        found.skipped.append((path, "not a log this tool reads"))
+
+
+def _walk(folder: Path, found: Discovery, exclude: set[Path]) -> None:
+    if (folder / ROS2_METADATA).is_file():
+        found.logs.append(folder)        # a ROS 2 bag: one log, its files are not walked
+        return
+    for entry in sorted(folder.iterdir()):
+        if entry.name.startswith(".") or entry.resolve() in exclude:
+            continue
+        if entry.is_dir():
+            _walk(entry, found, exclude)
+        elif entry.is_file():
+            _classify(entry, found)
+
+
+def discover(paths: Sequence[str], exclude: Sequence[Path] = ()) -> Discovery:
+    """Logs in the order found (each once), and what was skipped and why."""
+    found = Discovery()
+    excluded = {p.resolve() for p in exclude}
+    for pattern in paths:
+        for path in _expand(pattern):
+            if not path.exists():
+                found.skipped.append((path, "no such file or directory"))
+            elif path.is_dir():
+                _walk(path, found, excluded)
+            else:
+                _classify(path, found)
+    unique: dict[Path, Path] = {}
+    for log in found.logs:
+        unique.setdefault(log.resolve(), log)
+    found.logs = list(unique.values())
+    _set_companions_apart(found)
+    return found

@@ -1,0 +1,71 @@
+"""Running audit tasks: in this process (one job), on a local process pool, or on a Dask
+cluster. Outcomes come back in completion order, as soon as each is known."""
+
+import multiprocessing
+from collections.abc import Iterator, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, as_completed
+
+from auvdiag_cli.audit.worker import AuditOutcome, AuditTask, analyse
+from auvdiag_cli.errors import UsageError
+
+
+def run_serial(tasks: Sequence[AuditTask]) -> Iterator[AuditOutcome]:
+    for task in tasks:
+        yield analyse(task)
+
+
+def _lost(task: AuditTask, error: BaseException) -> AuditOutcome:
+    """A worker that died (killed, out of memory) loses its log for this run only."""
+    return AuditOutcome(task.log, None, error=f"{task.log}: worker failed: "
+                        f"{type(error).__name__}: {error}", final=False)
+
+
+def run_local(tasks: Sequence[AuditTask], jobs: int) -> Iterator[AuditOutcome]:
+    # spawn: fresh interpreters, no inherited threads or locks (the progress bar has some).
+    executor = ProcessPoolExecutor(max_workers=jobs,
+                                   mp_context=multiprocessing.get_context("spawn"))
+    futures: dict[Future[AuditOutcome], AuditTask] = {executor.submit(analyse, task): task
+                                                      for task in tasks}
+    try:
+        for future in as_completed(futures):
+            try:
+                yield future.result()
+            except Exception as error:
+                yield _lost(futures[future], error)
+    finally:
+        executor.shutdown(wait=False, cancel_futures=True)
+
+
+def run_dask(tasks: Sequence[AuditTask], address: str) -> Iterator[AuditOutcome]:
+    """On an existing cluster; its workers need auvdiag installed and the logs at the same
+    paths (a shared filesystem). Results come back here and are written by this process."""
+    try:
+        from distributed import Client
+        from distributed import as_completed as dask_completed
+    except ImportError:
+        raise UsageError("--scheduler needs Dask: pip install 'auvdiag[dask]'") from None
+    try:
+        client = Client(address, timeout="10s")
+    except (OSError, TimeoutError) as error:
+        raise UsageError(f"cannot reach the Dask scheduler at {address}: {error}") from None
+    try:
+        futures = client.map(analyse, list(tasks), pure=False)
+        owner = {future.key: task for future, task in zip(futures, tasks, strict=True)}
+        for future in dask_completed(futures):
+            try:
+                yield future.result()
+            except Exception as error:
+                yield _lost(owner[future.key], error)
+    finally:
+        client.close()
+
+
+def run_tasks(tasks: Sequence[AuditTask], jobs: int, scheduler: str | None
+              ) -> Iterator[AuditOutcome]:
+    if not tasks:
+        return iter(())
+    if scheduler is not None:
+        return run_dask(tasks, scheduler)
+    if jobs <= 1 or len(tasks) == 1:
+        return run_serial(tasks)
+    return run_local(tasks, min(jobs, len(tasks)))

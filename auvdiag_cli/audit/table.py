@@ -1,0 +1,78 @@
+"""The audit table: one row per log, the JSON report's fields flattened (SPEC §5), written as
+CSV and Parquet, each atomically."""
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "verdict",
+                 "component", "candidates", "case", "onset_s", "detected_at_s",
+                 "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
+                 "substituted_signal", "weakened_thrust_fraction", "recommended_dms",
+                 "model", "error", "log_sha256", "result_file", "seconds"]
+
+
+def _worst_g(segments: list[dict[str, Any]]) -> tuple[float | None, str | None]:
+    """The largest g relative to its threshold over all segments and signals."""
+    worst: tuple[float | None, str | None] = (None, None)
+    for segment in segments:
+        for signal, g in segment["max_g"].items():
+            threshold = segment["thresholds"].get(signal)
+            if g is not None and threshold and (worst[0] is None or g / threshold > worst[0]):
+                worst = (round(g / threshold, 4), signal)
+    return worst
+
+
+def flatten(record: dict[str, Any]) -> dict[str, Any]:
+    """One table row from a stored per-log record (a report, or an error)."""
+    segments = record.get("segments") or []
+    worst, signal = _worst_g(segments)
+    substitution = record.get("substitution") or {}
+    degradation = record.get("degradation") or {}
+    active = record.get("active_diagnosis") or {}
+    audit = record.get("audit", {})
+    row: dict[str, Any] = {
+        "log": record["log"], "format": record.get("format"), "vehicle": record.get("vehicle"),
+        "start_time_utc": record.get("start_time_utc"), "duration_s": record.get("duration_s"),
+        "verdict": record.get("verdict", "error" if record.get("error") else None),
+        "component": record.get("component"),
+        "candidates": ";".join(record.get("candidates") or []),
+        "case": record.get("case"), "onset_s": record.get("onset_s"),
+        "detected_at_s": record.get("detected_at_s"),
+        "worst_g_ratio": worst, "worst_g_signal": signal,
+        "segments": len(segments),
+        "routine_segments": sum(1 for s in segments if s["mode"] == "routine"),
+        "substituted_signal": substitution.get("signal"),
+        "weakened_thrust_fraction": degradation.get("thrust_fraction"),
+        "recommended_dms": ";".join(active.get("recommended_dms") or []),
+        "model": (record.get("model") or {}).get("name"),
+        "error": record.get("error"), "log_sha256": audit.get("log_sha256"),
+        "result_file": audit.get("result_file"), "seconds": audit.get("seconds"),
+    }
+    for name, bit in (record.get("b") or {}).items():
+        row[f"b_{name}"] = bit
+    return row
+
+
+def build_table(records: Sequence[dict[str, Any]]) -> "pd.DataFrame":
+    import pandas as pd
+
+    rows = [flatten(r) for r in records]
+    frame = pd.DataFrame(rows)
+    extra = sorted(c for c in frame.columns if c not in FIXED_COLUMNS)
+    frame = frame.reindex(columns=FIXED_COLUMNS + extra)
+    for column in ("case", *extra):
+        frame[column] = frame[column].astype("Int64")
+    return frame.sort_values("log", kind="stable").reset_index(drop=True)
+
+
+def write_tables(frame: "pd.DataFrame", output: Path) -> None:
+    for name, write in (("audit.csv", lambda p: frame.to_csv(p, index=False)),
+                        ("audit.parquet", lambda p: frame.to_parquet(p, index=False))):
+        target = output / name
+        temporary = target.with_name(f".{name}.tmp")
+        write(temporary)
+        temporary.replace(target)

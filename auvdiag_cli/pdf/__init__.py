@@ -1,0 +1,1 @@
+"""Matplotlib PDF reports: one dive (`dive`) and a fleet audit (`fleet`)."""

@@ -1,0 +1,121 @@
+"""PDF reports, rendered for real and read back: page count, text, metadata, and pixels."""
+
+from pathlib import Path
+
+import numpy as np
+import pypdf
+import pypdfium2
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+MEASURED_RGB = (0x1F, 0x4E, 0x79)      # the sensor (and the first command)
+MODELLED_RGB = (0xE0, 0x7B, 0x00)      # the model's output, the substituted signal
+
+
+def page_pixels(pdf: Path, index: int) -> np.ndarray:
+    document = pypdfium2.PdfDocument(pdf)
+    try:
+        return np.asarray(document[index].render(scale=1.0).to_pil().convert("RGB"))
+    finally:
+        document.close()
+
+
+def inked_fraction(pixels: np.ndarray) -> float:
+    return float((pixels.min(axis=2) < 200).mean())
+
+
+def has_colour(pixels: np.ndarray, rgb: tuple[int, int, int], tolerance: int = 40) -> bool:
+    return bool((np.abs(pixels.astype(int) - rgb).max(axis=2) < tolerance).sum() > 200)
+
+
+@pytest.fixture(scope="module")
+def paper_report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    """The paper's scenario (flow sensor covered at 115 s), as a user would produce it."""
+    folder = tmp_path_factory.mktemp("report")
+    log = folder / "paper.bag"
+    simulated = runner.invoke(app, ["simulate", "paper-flow-sensor-covered", "--format", "bag",
+                                    "--output", str(log), "--seed", "11"])
+    assert simulated.exit_code == 0, simulated.output
+    json_path, pdf_path = folder / "paper.json", folder / "paper.pdf"
+    result = runner.invoke(app, ["diagnose", str(log), "--json", str(json_path),
+                                 "--pdf", str(pdf_path), "--quiet"])
+    assert result.exit_code == 1, result.output
+    return log, json_path, pdf_path
+
+
+def test_paper_scenario_report_reads_right(paper_report):
+    _, _, pdf = paper_report
+    reader = pypdf.PdfReader(pdf)
+    # summary, segments, sensors, g and b, commands, Substituting Control
+    assert len(reader.pages) == 6
+    assert reader.metadata.title == "auvdiag report: paper.bag"
+    assert reader.metadata.creator.startswith("auvdiag ")
+    first = reader.pages[0].extract_text()
+    assert "FAULT: flow sensor" in first
+    assert "Component:  flow sensor" in first
+    assert "onset about 115" in first and "detected at 11" in first
+    assert "case 2, b = flow=1 yaw_rate=0" in first
+    assert "the controller reaches the last waypoint" in first
+    assert "At most one sensor or actuator is defective at a time." in first
+    assert "Residual index g" in reader.pages[3].extract_text()
+    assert "Substituting Control" in reader.pages[5].extract_text()
+
+
+def test_plot_pages_are_drawn_not_blank(paper_report):
+    _, _, pdf = paper_report
+    curves = {2: [MEASURED_RGB, MODELLED_RGB], 3: [MEASURED_RGB], 4: [MEASURED_RGB],
+              5: [MODELLED_RGB]}
+    for page, colours in curves.items():
+        pixels = page_pixels(pdf, page)
+        assert inked_fraction(pixels) > 0.01, f"page {page + 1} is nearly blank"
+        for colour in colours:
+            assert has_colour(pixels, colour), f"page {page + 1} lacks the curve in {colour}"
+
+
+def test_report_command_redraws_the_saved_diagnosis(paper_report, tmp_path):
+    _, json_path, pdf = paper_report
+    assert (json_path.parent / "paper.series.npz").is_file()
+    redrawn = tmp_path / "again.pdf"
+    result = runner.invoke(app, ["report", str(json_path), "--output", str(redrawn)])
+    assert result.exit_code == 0, result.output
+    original, again = pypdf.PdfReader(pdf), pypdf.PdfReader(redrawn)
+    assert len(again.pages) == len(original.pages)
+    assert again.pages[0].extract_text() == original.pages[0].extract_text()
+
+
+def test_report_without_time_histories_has_summary_pages_only(paper_report, tmp_path):
+    _, json_path, _ = paper_report
+    lone = tmp_path / "lone.json"
+    lone.write_text(json_path.read_text())          # its series file is not beside it
+    result = runner.invoke(app, ["report", str(lone)])
+    assert result.exit_code == 0, result.output
+    assert "no time histories" in result.output
+    reader = pypdf.PdfReader(tmp_path / "lone.pdf")
+    assert len(reader.pages) == 2
+    assert "not checked (no time histories" in reader.pages[0].extract_text()
+
+
+def test_normal_dive_report(make_log, tmp_path):
+    pdf = tmp_path / "normal.pdf"
+    result = runner.invoke(app, ["diagnose", str(make_log("routine-and-mission", 11)),
+                                 "--pdf", str(pdf), "--quiet"])
+    assert result.exit_code == 0, result.output
+    reader = pypdf.PdfReader(pdf)
+    assert len(reader.pages) == 5                  # no Substituting Control page
+    first = reader.pages[0].extract_text()
+    assert "NORMAL: no fault detected" in first
+    assert "4 (3 Diagnosis Motion Sequences)" in first
+    segments = reader.pages[1].extract_text()
+    assert all(name in segments for name in ("ZA", "ZB", "ZC", "MISSION"))
+
+
+@pytest.mark.parametrize("content", ["{not json", '{"a": 1}'])
+def test_report_refuses_what_is_not_a_report(tmp_path, content):
+    path = tmp_path / "bad.json"
+    path.write_text(content)
+    result = runner.invoke(app, ["report", str(path)])
+    assert result.exit_code == 2
+    assert str(path) in result.output and len(result.output.strip().splitlines()) == 1
