@@ -1,0 +1,179 @@
+"""`auvdiag audit` on a real folder: every format, a damaged log, an unrelated file; killed
+halfway and resumed; changed inputs redone; and the same audit on a Dask LocalCluster."""
+
+import json
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pypdf
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from models.store import default_model_dir
+
+runner = CliRunner()
+# (scenario, format, expected verdict, expected component or candidates)
+FLEET = [
+    ("paper-flow-sensor-covered", "bag", "fault", "flow_sensor"),
+    ("paper-normal", "db3", "normal", None),
+    ("mission-yaw-rate-sensor-dead", "ros2-mcap", "fault", "yaw_rate_sensor"),
+    ("mission-thruster-0-dead", "mcap", "fault", "thruster_0;thruster_1"),
+    ("mission-fast-ccw", "tlog", "normal", None),
+    ("mission-large-cw", "bin", "normal", None),
+]
+STABLE_COLUMNS = ["log", "format", "verdict", "component", "candidates", "case", "onset_s",
+                  "detected_at_s", "worst_g_ratio", "error"]
+
+
+def _copy(source: Path, target: Path) -> Path:
+    if source.is_dir():
+        shutil.copytree(source, target)
+    else:
+        shutil.copy(source, target)
+    return target
+
+
+@pytest.fixture(scope="module")
+def fleet(make_log, tmp_path_factory) -> Path:
+    folder = tmp_path_factory.mktemp("fleet")
+    suffixes = {"bag": ".bag", "mcap": ".mcap", "tlog": ".tlog", "bin": ".bin"}
+    for scenario, fmt, _, _ in FLEET:
+        _copy(make_log(scenario, 11, fmt), folder / f"{scenario}{suffixes.get(fmt, '')}")
+    whole = (folder / "paper-flow-sensor-covered.bag").read_bytes()
+    (folder / "damaged.bag").write_bytes(whole[:20_000])     # cut inside the first chunk
+    (folder / "notes.txt").write_text("dive notes, not a log\n")
+    (folder / "paper-normal.truth.json").write_text("{}")      # a companion file
+    return folder
+
+
+def audit(*args: str) -> tuple[int, str]:
+    result = runner.invoke(app, ["audit", *args])
+    return result.exit_code, result.output
+
+
+def table(output: Path) -> pd.DataFrame:
+    return pd.read_csv(output / "audit.csv")
+
+
+@pytest.fixture(scope="module")
+def full_audit(fleet, tmp_path_factory) -> Path:
+    output = tmp_path_factory.mktemp("audit")
+    code, text = audit(str(fleet), "--output", str(output), "--jobs", "2")
+    assert code == 2, text          # a log could not be analysed
+    return output
+
+
+def test_every_format_gets_its_row(full_audit, fleet):
+    rows = table(full_audit).set_index("log")
+    assert len(rows) == len(FLEET) + 1
+    for scenario, fmt, verdict, component in FLEET:
+        name = f"{scenario}{'' if fmt in ('db3', 'ros2-mcap') else '.' + fmt}"
+        row = rows.loc[str(fleet / name)]
+        assert row["format"] == fmt
+        assert row["verdict"] == verdict
+        named = row["component"] if isinstance(row["component"], str) else row["candidates"]
+        assert (named if isinstance(named, str) else None) == component
+        assert pd.isna(row["error"])
+    damaged = rows.loc[str(fleet / "damaged.bag")]
+    assert damaged["verdict"] == "error"
+    assert "damaged.bag" in damaged["error"]
+
+
+def test_parquet_matches_csv_and_json_per_log(full_audit):
+    csv, parquet = table(full_audit), pd.read_parquet(full_audit / "audit.parquet")
+    assert list(parquet["log"]) == list(csv["log"])
+    assert list(parquet["verdict"]) == list(csv["verdict"])
+    for result_file in csv["result_file"]:
+        report = json.loads((full_audit / "logs" / result_file).read_text())
+        assert report["audit"]["result_file"] == result_file
+
+
+def test_fleet_pdf_lists_problems_and_skipped_files(full_audit):
+    reader = pypdf.PdfReader(full_audit / "audit.pdf")
+    assert len(reader.pages) >= 2
+    summary = reader.pages[0].extract_text()
+    assert "7 logs: 3 normal, 3 with a fault, 0 undetermined, 1 not analysable" in summary
+    assert "damaged.bag" in summary
+    assert "notes.txt" in summary                       # the unrelated file, listed
+    assert "paper-normal.truth.json" not in summary     # a log's companion, only counted
+    assert "1 files named after a log" in summary
+    assert "Verdicts by vehicle and date" in reader.pages[-1].extract_text()
+
+
+def test_fail_on_chooses_what_counts(full_audit, fleet):
+    assert audit(str(fleet), "--output", str(full_audit), "--fail-on", "fault")[0] == 1
+    assert audit(str(fleet), "--output", str(full_audit), "--fail-on", "none")[0] == 0
+
+
+def test_killed_audit_resumes_without_redoing_finished_logs(fleet, full_audit, tmp_path):
+    output = tmp_path / "audit"
+    process = subprocess.Popen(
+        [sys.executable, "-m", "auvdiag_cli", "audit", str(fleet), "--output", str(output),
+         "--jobs", "1"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    results = output / "logs"
+    deadline = time.monotonic() + 120
+    while len(list(results.glob("*.json"))) < 3 and process.poll() is None:
+        assert time.monotonic() < deadline, "the audit never got going"
+        time.sleep(0.05)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    finished = {p.name: p.stat().st_mtime_ns for p in results.glob("*.json")}
+    assert 3 <= len(finished) < len(FLEET) + 1, "killed too late to test resuming"
+
+    code, text = audit(str(fleet), "--output", str(output), "--jobs", "2")
+    assert code == 2
+    assert f"{len(finished)} reused" in text
+    for name, mtime in finished.items():
+        assert (results / name).stat().st_mtime_ns == mtime, f"{name} was recomputed"
+    resumed, reference = table(output), table(full_audit)
+    pd.testing.assert_frame_equal(resumed[STABLE_COLUMNS], reference[STABLE_COLUMNS])
+
+
+def test_changed_log_or_model_is_redone(make_log, tmp_path):
+    folder, output = tmp_path / "logs", tmp_path / "audit"
+    folder.mkdir()
+    model = _copy(default_model_dir(), tmp_path / "model")
+    log = _copy(make_log("paper-normal", 11, "bag"), folder / "dive.bag")
+    assert "1 diagnosed now, 0 reused" in audit(str(folder), "-o", str(output), "--model",
+                                                 str(model))[1]
+    assert "0 diagnosed now, 1 reused" in audit(str(folder), "-o", str(output), "--model",
+                                                 str(model))[1]
+    shutil.copy(make_log("mission-thruster-0-dead", 11, "bag"), log)
+    code, text = audit(str(folder), "-o", str(output), "--model", str(model))
+    assert code == 1 and "1 diagnosed now, 0 reused" in text
+    metadata = json.loads((model / "model.json").read_text())
+    metadata["thresholds"]["mission"]["flow"] = 20.0
+    (model / "model.json").write_text(json.dumps(metadata))
+    assert "1 diagnosed now, 0 reused" in audit(str(folder), "-o", str(output), "--model",
+                                                 str(model))[1]
+
+
+def test_bad_model_stops_the_audit_before_it_starts(fleet, tmp_path):
+    code, text = audit(str(fleet), "-o", str(tmp_path / "out"), "--model", str(tmp_path))
+    assert code == 2 and "not a model directory" in text
+    assert not (tmp_path / "out" / "audit.csv").exists()
+
+
+def test_audit_on_a_dask_local_cluster(fleet, full_audit, tmp_path):
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        output = tmp_path / "dask"
+        code, text = audit(str(fleet), "--output", str(output), "--scheduler",
+                           cluster.scheduler_address)
+    assert code == 2, text
+    pd.testing.assert_frame_equal(table(output)[STABLE_COLUMNS],
+                                  table(full_audit)[STABLE_COLUMNS])
+
+
+def test_unreachable_scheduler_is_one_line(fleet, tmp_path):
+    code, text = audit(str(fleet), "-o", str(tmp_path / "out"), "--scheduler",
+                       "tcp://127.0.0.1:9")
+    assert code == 2
+    assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in text
