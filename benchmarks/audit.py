@@ -1,0 +1,126 @@
+"""Audit throughput: logs per minute through `auvdiag audit`, serial vs the local process
+pool vs a Dask LocalCluster, and the peak memory of each worker.
+
+Simulates --distinct one-hour dives of the Twin-Burger (16 x ZA, ZB, ZC and the paper's
+mission; every other one with a fault from 30 min on), writes them as standalone MCAP and
+copies them to --logs files (a copy is a separate log to the audit: its own row, its own
+diagnosis). Each mode audits the folder from scratch into its own output folder, as a
+fresh `auvdiag audit` process; the wall time includes starting the workers.
+
+Usage: python benchmarks/audit.py [--logs 200] [--distinct 8] [--jobs 2] [--workdir DIR]
+       [--modes serial,pool,dask] [--json results.json]
+"""
+
+import argparse
+import json
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from datetime import date
+from pathlib import Path
+
+HOUR_REPEATS = 16
+FAULTS = [("thruster_0", "dead"), ("flow_sensor", "covered"), ("thruster_1", "dead"),
+          ("yaw_rate_sensor", "dead")]
+
+
+def make_fleet(folder: Path, logs: int, distinct: int) -> None:
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.faults import Fault
+    from auvdiag_cli.simulator.run import LOG_EPOCH_NS, simulate
+    from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
+    from auvdiag_cli.simulator.writers import write_log
+
+    profile = load_profile()
+    steps = (DMS_ALL + PAPER_MISSION) * HOUR_REPEATS
+    sources = []
+    for index in range(distinct):
+        fault = Fault(*FAULTS[(index // 2) % len(FAULTS)], 1800.0) if index % 2 else None
+        scenario = Scenario(f"hour-{index}", "one-hour dive", steps, fault,
+                            run_after_fault_s=3600.0)
+        dive = simulate(scenario, profile, seed=100 + index,
+                        start_ns=LOG_EPOCH_NS + index * 86_400 * 10**9)
+        path = folder / f"source-{index}.mcap"
+        write_log(dive, profile, path, "mcap")
+        sources.append(path)
+        print(f"  simulated {path.name} ({dive.duration_s / 60:.0f} min, fault: "
+              f"{fault.component if fault else 'none'})", flush=True)
+    fleet = folder / "fleet"
+    fleet.mkdir()
+    for number in range(logs):
+        shutil.copy(sources[number % distinct], fleet / f"dive-{number:03d}.mcap")
+
+
+def run_audit(fleet: Path, output: Path, extra: list[str]) -> tuple[float, list[dict]]:
+    started = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "auvdiag_cli", "audit", str(fleet), "--output",
+                    str(output), "--fail-on", "none", *extra], check=True,
+                   stderr=subprocess.DEVNULL, stdout=subprocess.DEVNULL)
+    seconds = time.perf_counter() - started
+    records = [json.loads(p.read_text()) for p in (output / "logs").glob("*.json")]
+    return seconds, records
+
+
+def measure(fleet: Path, workdir: Path, mode: str, jobs: int) -> dict:
+    output = workdir / f"out-{mode}"
+    if mode == "dask":
+        from distributed import LocalCluster
+
+        with LocalCluster(n_workers=jobs, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster:
+            seconds, records = run_audit(fleet, output,
+                                         ["--scheduler", cluster.scheduler_address])
+    else:
+        seconds, records = run_audit(fleet, output, ["--jobs", "1" if mode == "serial"
+                                                     else str(jobs)])
+    errors = [r for r in records if r.get("error")]
+    return {"mode": mode, "workers": 1 if mode == "serial" else jobs, "logs": len(records),
+            "errors": len(errors), "seconds": round(seconds, 1),
+            "logs_per_minute": round(60 * len(records) / seconds, 2),
+            "diagnosis_s_median": round(sorted(r["audit"]["seconds"] for r in records)
+                                        [len(records) // 2], 2),
+            "peak_rss_mb_per_worker": max(r["audit"]["peak_rss_mb"] for r in records)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--logs", type=int, default=200)
+    parser.add_argument("--distinct", type=int, default=8)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--modes", default="serial,pool,dask")
+    parser.add_argument("--workdir", type=Path)
+    parser.add_argument("--json", type=Path, help="Also write the results here.")
+    args = parser.parse_args()
+    workdir = args.workdir or Path(tempfile.mkdtemp(prefix="auvdiag-audit-bench-"))
+    workdir.mkdir(parents=True, exist_ok=True)
+    print(f"simulating {args.distinct} one-hour dives into {workdir}", flush=True)
+    if not (workdir / "fleet").is_dir():
+        make_fleet(workdir, args.logs, args.distinct)
+    results = []
+    for mode in args.modes.split(","):
+        shutil.rmtree(workdir / f"out-{mode}", ignore_errors=True)
+        result = measure(workdir / "fleet", workdir, mode, args.jobs)
+        results.append(result)
+        print(json.dumps(result), flush=True)
+    serial = next((r for r in results if r["mode"] == "serial"), None)
+    print(f"\n{args.logs} one-hour logs ({args.distinct} distinct), {os.cpu_count()} cores, "
+          f"{platform.machine()}, {date.today()}")
+    print("| mode | workers | logs/min | speed-up vs serial | median s/log | peak RSS/worker |")
+    print("|---|---|---|---|---|---|")
+    for r in results:
+        ratio = (f"{r['logs_per_minute'] / serial['logs_per_minute']:.2f}x" if serial
+                 else "-")
+        print(f"| {r['mode']} | {r['workers']} | {r['logs_per_minute']:.1f} | {ratio} | "
+              f"{r['diagnosis_s_median']:.1f} | {r['peak_rss_mb_per_worker']:.0f} MB |")
+    if args.json:
+        args.json.write_text(json.dumps({"date": str(date.today()), "machine":
+                                         platform.machine(), "cores": os.cpu_count(),
+                                         "logs": args.logs, "results": results}, indent=2))
+
+
+if __name__ == "__main__":
+    main()
