@@ -70,8 +70,12 @@ def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
 
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
-              faulty_logs: Sequence[Path] = (), margin: float = 1.5) -> CalibrationResult:
-    """Derive thresholds; the model object's metadata is updated (not yet written)."""
+              faulty_logs: Sequence[Path] = (), margin: float = 1.5,
+              floor_at_profile: bool = False) -> CalibrationResult:
+    """Derive thresholds; the model object's metadata is updated (not yet written).
+    ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
+    sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
+    trip on the next dive's noise)."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
@@ -91,7 +95,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         peaks = {name: float(np.nanmax(g[:, i])) for i, name in enumerate(profile.sensor_names)}
         keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
         if not keep:
-            thresholds[mode] = {name: round(margin * peak, 2) for name, peak in peaks.items()}
+            floor = profile.thresholds_for(mode) if floor_at_profile else {}
+            thresholds[mode] = {name: round(max(margin * peak, floor.get(name, 0.0)), 2)
+                                for name, peak in peaks.items()}
         modes.append(ModeCalibration(mode, count, count * dt_h,
                                      {k: round(v, 3) for k, v in peaks.items()},
                                      thresholds.get(mode, profile.thresholds_for(mode)), keep))

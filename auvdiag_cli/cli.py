@@ -313,6 +313,10 @@ def calibrate(
         "--output", "-o", help="Write a calibrated copy here instead of updating --model.",
         file_okay=False)] = None,
     profile: ProfileOption = None,
+    floor_at_profile: Annotated[bool, typer.Option(
+        "--floor-at-profile", help="Never set a threshold below the profile's for its mode "
+                                   "(for few calibration logs, or signals a DMS hardly moves)."
+    )] = False,
 ) -> None:
     """Set the model's thresholds from the g it reaches on normal logs.
 
@@ -327,7 +331,8 @@ def calibrate(
 
     with _user_errors(model):
         loaded = load_model(model)
-        result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin)
+        result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin,
+                                 floor_at_profile)
         write_metadata(loaded, output or model)
     typer.echo(f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
                f"{result.margin:g}; false alarms on those logs: 0 (rate < "

@@ -132,11 +132,15 @@ def derive_table(model: LoadedModel, profile: Profile,
     unseen = tuple(groups.pop(quiet, []))
     groups[quiet] = []
     rows = []
+    next_case = max((r.case for r in profile.pattern), default=-1) + 1   # for rows not in it
     for key, components in sorted(groups.items(), key=lambda item: (sum(item[0]) > 0,
                                                                     -sum(item[0]), item[0])):
         existing = next((r for r in profile.pattern
                          if tuple(r.b[n] for n in profile.sensor_names) == key), None)
-        case = existing.case if existing is not None else -1
+        if existing is not None:
+            case = existing.case
+        else:
+            case, next_case = next_case, next_case + 1
         rows.append(PatternRow(case, dict(zip(profile.sensor_names, key, strict=True)),
                                tuple(components)))
     wanted = {(tuple(r.b.values()), tuple(sorted(r.components))) for r in profile.pattern}

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide, shows_fault_period
+from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.closed_loop import replay_closed_loop
 from auvdiag_cli.degradation import WeakenedThruster, explain_by_weak_thruster
 from auvdiag_cli.derivation import dms_signature
@@ -238,21 +238,24 @@ def _narrow_by_predicted_signatures(diagnosis: Diagnosis, active: ActiveDiagnosi
                                     onset_ns: int, runs: list[tuple[DmsRun, int]],
                                     profile: Profile, model: LoadedModel) -> None:
     """Where moving or not moving a component cannot separate the candidates (a thruster
-    and the sensor of the motion it drives), the model can: each candidate's failure
-    predicts a b on every DMS run during the fault; candidates whose prediction differs from
-    what was seen are dropped (never all of them)."""
+    and the sensor of the motion it drives), the model can: it predicts each candidate's b
+    on every DMS run made wholly with the fault present. A run that stayed quiet (b = 0)
+    clears the candidates whose failure would have shown on it; a run that raised an alarm
+    clears those whose failure would not have. Which bits an alarm raises is left out: near
+    a threshold the model cannot call single bits reliably. Never all are cleared."""
     kept = list(active.candidates)
     for run, _ in runs:
-        if not shows_fault_period(run, onset_ns) or run.name not in profile.dms:
+        if run.start_ns < onset_ns or run.name not in profile.dms:
             continue
-        predicted = {c: dms_signature(model, profile, run.name, c) for c in kept}
-        agreeing = [c for c in kept if predicted[c] == run.b]
+        alarm = any(run.b.values())
+        predicted = {c: any(dms_signature(model, profile, run.name, c).values()) for c in kept}
+        agreeing = [c for c in kept if predicted[c] == alarm]
         if agreeing and len(agreeing) < len(kept):
             seen = "".join(str(v) for v in run.b.values())
-            dropped = ", ".join(f"{c} ({''.join(str(v) for v in predicted[c].values())})"
-                                for c in kept if c not in agreeing)
-            diagnosis.notes.append(f"{run.name} in {run.log} gave b = {seen}, which the model "
-                                   f"predicts for {', '.join(agreeing)} and not for {dropped}")
+            dropped = [c for c in kept if c not in agreeing]
+            would = "would have shown on it" if not alarm else "would not have shown on it"
+            diagnosis.notes.append(f"{run.name} in {run.log} gave b = {seen}: the model says "
+                                   f"a failed {' or '.join(dropped)} {would}")
             kept = agreeing
     active.candidates = kept
     # The DMSs on which the remaining candidates' failures look different decide next time.
@@ -281,15 +284,40 @@ def _apply_detection(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, on
     diagnosis.detected_at_s = round(float(alarm_s), 3)
     diagnosis.onset_s = round(float(onset_s), 3)
     row = look_up(profile.pattern, b)
-    if row is None:
-        diagnosis.case = None
+    diagnosis.case = None if row is None else row.case
+    candidates = (list(row.components) if row is not None
+                  else _predicted_on_dms(diagnosis, b, alarm_s, profile, model))
+    if not candidates:
         diagnosis.notes.append(f"b = {b} fits no row of the pattern table: more than one fault, "
                                "or one the table does not describe")
-        return
-    diagnosis.case = row.case
-    diagnosis.candidates = list(row.components)
-    if len(row.components) == 1:
-        _name_component(diagnosis, row.components[0], profile, model)
+    diagnosis.candidates = candidates
+    if len(candidates) == 1:
+        _name_component(diagnosis, candidates[0], profile, model)
+
+
+def _predicted_on_dms(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float,
+                      profile: Profile, model: LoadedModel) -> list[str]:
+    """The table describes the mission; a DMS moves the vehicle otherwise, so a failure can
+    show there with a b of its own. When the alarm came on a DMS, the candidates are the
+    components whose failure, the model predicts, raises one of the same bits on it (the
+    DMS runs that follow narrow them down)."""
+    segment = next((r.segment for r in diagnosis.segments
+                    if r.segment.mode == ROUTINE_MODE and r.segment.name in profile.dms
+                    and r.segment.start_s <= alarm_s <= r.segment.end_s), None)
+    if segment is None:
+        return []
+    components = [c.component for c in profile.commands] + [s.component
+                                                            for s in profile.sensors]
+    matching = [c for c in components
+                if any(b[k] and v for k, v in
+                       dms_signature(model, profile, segment.name, c).items())]
+    if matching:
+        bits = "".join(str(v) for v in b.values())
+        diagnosis.notes.append(f"b = {bits} on {segment.name} fits no row of the pattern table "
+                               "(which describes the mission); the model predicts an alarm on "
+                               f"one of these signals on {segment.name} for: "
+                               f"{', '.join(matching)}")
+    return matching
 
 
 def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,

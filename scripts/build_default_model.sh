@@ -8,7 +8,7 @@
 #   PROFILE: twin_burger (default), three_thruster or bluerov2; OUTPUT_DIR: models/PROFILE;
 #   FORMAT: the log format the dives are written in (default ros2-mcap; tlog for bluerov2,
 #   which is described for MAVLink logs only).
-#   About 4-5 minutes on 2 cores for the Twin-Burger, longer for vehicles with more DMSs.
+#   About 4-5 minutes on 2 cores for the Twin-Burger, 6 for three_thruster, 10 for bluerov2.
 set -euo pipefail
 profile=${1:-twin_burger}
 output=${2:-models/$profile}
@@ -54,7 +54,7 @@ if $calibrate; then
       normal+=("$work/calibration-$scenario-s$seed")
     done
   done
-  auvdiag calibrate "${normal[@]}" --model "$work/model" --profile "$profile"
+  auvdiag calibrate "${normal[@]}" --model "$work/model" --profile "$profile" --floor-at-profile
 fi
 rm -rf "$output"
 mkdir -p "$output"

@@ -116,12 +116,62 @@ def test_bluerov2_signals_round_trip_through_a_tlog(tmp_path):
     assert [m.label for m in signals.markers] == ["M3"]
 
 
-def test_bluerov2_without_a_trained_model_says_how_to_get_one(tmp_path):
+def test_vehicle_without_a_shipped_model_says_how_to_get_one(tmp_path):
+    source = Path(__file__).parents[1] / "auvdiag_cli" / "profiles" / "bluerov2.toml"
+    custom = tmp_path / "myrov.toml"
+    custom.write_text(source.read_text().replace('name = "bluerov2"', 'name = "myrov"'))
     log = write(tmp_path, "bluerov2", "dms-m1", "tlog")
-    code, output = run("diagnose", str(log), "--profile", "bluerov2")
+    code, output = run("diagnose", str(log), "--profile", str(custom))
     assert code == 2
-    assert "no model is shipped for vehicle 'bluerov2'" in output
+    assert "no model is shipped for vehicle 'myrov'" in output
     assert "auvdiag train" in output
+
+
+def bluerov2_report(tmp_path: Path, scenario: str, seed: int = 301) -> tuple[int, dict]:
+    log = write(tmp_path, "bluerov2", scenario, "tlog", seed)
+    code, output = run("diagnose", str(log), "--profile", "bluerov2", "--json", "-", "-q")
+    return code, json.loads(output)
+
+
+def test_bluerov2_normal_dive_with_every_dms_is_silent(tmp_path):
+    code, report = bluerov2_report(tmp_path, "all-dms-and-mission")
+    assert code == 0, report["segments"]
+    assert [s["name"] for s in report["segments"]] == ["ZA", "ZV", "M1", "M2", "M3", "M4", "M5",
+                                                      "M6", "MISSION"]
+    assert report["model"]["thresholds_calibrated"] is True
+
+
+@pytest.mark.parametrize("motor", [1, 3, 5])
+def test_bluerov2_dead_motor_is_named_by_the_motor_tests(tmp_path, motor):
+    # Dead from 10 s, during ZA: ZA (or ZV) raises the alarm, the motor tests that follow
+    # clear every other motor and, with the model's predictions, the sensors.
+    code, report = bluerov2_report(tmp_path, f"routine-thruster-{motor}-dead")
+    assert code == 1
+    assert report["component"] == f"thruster_{motor}"
+    evidence = {e["segment"]: e["faulty"] for e in report["active_diagnosis"]["evidence"]}
+    assert evidence[f"M{motor}"] is True
+    assert not any(faulty for name, faulty in evidence.items()
+                   if name.startswith("M") and name != f"M{motor}")
+
+
+@pytest.mark.parametrize(("scenario", "component"), [("routine-dvl-sway-dead", "dvl_sway"),
+                                                     ("routine-gyro-dead", "gyro"),
+                                                     ("mission-dvl-surge-dead", "dvl_surge")])
+def test_bluerov2_failed_sensor_is_named(tmp_path, scenario, component):
+    code, report = bluerov2_report(tmp_path, scenario)
+    assert code == 1
+    assert report["component"] == component
+    assert report["substitution"]["signal"] == component.replace("dvl_", "").replace(
+        "gyro", "yaw_rate")
+
+
+def test_bluerov2_yaw_alarm_on_a_mission_asks_for_the_motor_tests(tmp_path):
+    code, report = bluerov2_report(tmp_path, "mission-gyro-dead")
+    assert code == 1
+    assert report["case"] == 1 and report["component"] is None
+    assert report["candidates"] == ["thruster_1", "thruster_2", "thruster_3", "thruster_4",
+                                    "gyro"]
+    assert {"M1", "M2", "M3", "M4"} <= set(report["active_diagnosis"]["recommended_dms"])
 
 
 def test_formats_a_profile_cannot_write_are_refused(tmp_path):
