@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.resample import AlignedFrame
-from models.dynamics import replay
+from models.fast import fast_replay_batch
 from models.store import LoadedModel
 
 
@@ -55,12 +55,16 @@ def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
     g = np.full_like(measured, np.nan)
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
     cuts = sorted({0, len(measured), *frame.restarts, *restarts})
+    stretches = []                      # (first cut, first finite row, end)
     for begin, end in itertools.pairwise(cuts):
         finite_rows = np.flatnonzero(np.isfinite(measured[begin:end]).all(axis=1))
-        if finite_rows.size == 0:
-            continue
-        start = begin + int(finite_rows[0])
-        modelled[start:end] = replay(model.network, model.normaliser,
-                                     frame.commands[start:end], measured[start])
+        if finite_rows.size:
+            stretches.append((begin, begin + int(finite_rows[0]), end))
+    # The stretches are independent free runs: replayed side by side in one batch.
+    replays = fast_replay_batch(model.fast, model.normaliser,
+                                [frame.commands[start:end] for _, start, end in stretches],
+                                [measured[start] for _, start, _ in stretches])
+    for (begin, start, end), replayed in zip(stretches, replays, strict=True):
+        modelled[start:end] = replayed
         g[begin:end] = residual_index(measured[begin:end], modelled[begin:end], scales, window)
     return Matching(measured, modelled, g)

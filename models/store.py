@@ -4,6 +4,7 @@ no code runs) and ``model.json`` (readable, versioned metadata)."""
 import hashlib
 import json
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -11,6 +12,7 @@ from typing import Any
 import torch
 
 from models.dynamics import Normaliser, RecurrentDynamics
+from models.fast import FastDynamics
 
 FORMAT_NAME = "auvdiag-model"
 FORMAT_VERSION = 1
@@ -36,6 +38,11 @@ class LoadedModel:
                 "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
                 "thresholds_calibrated": "calibration" in meta}
+
+    @cached_property
+    def fast(self) -> FastDynamics:
+        """The NumPy replay path of the same network (the diagnosis hot path)."""
+        return FastDynamics.from_module(self.network)
 
     @property
     def command_names(self) -> tuple[str, ...]:
