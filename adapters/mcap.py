@@ -59,6 +59,27 @@ def salvage_mcap(path: Path, collector: SignalCollector, fmt: str, reason: str) 
     return collector.finish(fmt, None, None, topics)
 
 
+def _cdr_decoder(summary: Any, topics: list[str]) -> Callable[[bytes, str], Any] | None:
+    """The fast path for ROS 2 channels: rosbags' generated CDR deserialisers, built from
+    the file's own message definitions (about twice the speed of mcap_ros2's decoder).
+    None when a wanted channel is not CDR with a ros2msg schema."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.EMPTY)
+    for channel in summary.channels.values():
+        if channel.topic not in topics:
+            continue
+        schema = summary.schemas.get(channel.schema_id)
+        if (channel.message_encoding != "cdr" or schema is None
+                or schema.encoding != "ros2msg"):
+            return None
+        try:
+            store.register(get_types_from_msg(schema.data.decode(), schema.name))
+        except Exception:  # a definition rosbags cannot parse: the generic decoder will do
+            return None
+    return store.deserialize_cdr
+
+
 class McapAdapter:
     """A standalone .mcap file (any profile: ros2, ros1 or JSON-encoded channels)."""
 
@@ -92,10 +113,19 @@ class McapAdapter:
         missing = collector.missing_topics(set(topics))
         if missing:
             raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
+        wanted = sorted(collector.topics & set(topics))
         try:
-            for _, channel, message, decoded in reader.iter_decoded_messages(
-                    topics=sorted(collector.topics & set(topics))):
-                collector.add(channel.topic, message.log_time, decoded)
+            decode = _cdr_decoder(summary, wanted)
+            if decode is None:
+                for _, channel, message, decoded in reader.iter_decoded_messages(topics=wanted):
+                    collector.add(channel.topic, message.log_time, decoded)
+            else:
+                # File order, not a merge by log time (the merge costs more than decoding);
+                # resampling sorts a series if its messages were stored out of order.
+                for schema, channel, message in reader.iter_messages(topics=wanted,
+                                                                      log_time_order=False):
+                    collector.add(channel.topic, message.log_time,
+                                  decode(message.data, schema.name))
         except LogError:
             raise
         except Exception as error:  # a damaged chunk: keep what came before it

@@ -10,7 +10,7 @@ import numpy as np
 
 from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
 from auvdiag_cli.profile import ControllerSpec
-from models.dynamics import Stepper
+from models.fast import FastStepper
 from models.store import LoadedModel
 
 SETTLE_AFTER_LAST_WAYPOINT_S = 5.0
@@ -54,7 +54,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     # Before the onset the sensors were sound: they bring the controller to its state then.
     for row in np.nan_to_num(measured[first:onset]):
         vehicle.step(row, dt_s)
-    stepper = Stepper(model.network, model.normaliser)
+    stepper = FastStepper(model.fast, model.normaliser)
     state = stepper.warm_up(commands[first:onset], np.nan_to_num(measured[first]))
     path, issued = [(controller.x, controller.y)], []
     settle = round(SETTLE_AFTER_LAST_WAYPOINT_S / dt_s)

@@ -15,7 +15,7 @@ from auvdiag_cli.errors import UsageError
 from auvdiag_cli.matching import residual_index
 from auvdiag_cli.profile import MISSION_MODE, PatternRow, Profile
 from auvdiag_cli.segments import dms_template
-from models.dynamics import Stepper, replay
+from models.fast import FastStepper, fast_replay
 from models.store import LoadedModel
 
 FAULT_AT_S = 20.0          # into the mission: after the first leg has begun
@@ -70,11 +70,11 @@ def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | Non
             sensor: int | None) -> dict[str, int]:
     commands = dms_template(profile.dms[name], profile.dt_s)
     start = np.zeros(len(profile.sensor_names))
-    modelled = replay(model.network, model.normaliser, commands, start)
+    modelled = fast_replay(model.fast, model.normaliser, commands, start)
     executed = commands.copy()
     if actuator is not None:
         executed[:, actuator] = 0.0
-    measured = replay(model.network, model.normaliser, executed, start)
+    measured = fast_replay(model.fast, model.normaliser, executed, start)
     if sensor is not None:
         measured[:, sensor] = 0.0
     return _bits(measured, modelled, profile, name, model)
@@ -88,7 +88,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
     controller = PathFollower(waypoints, ControllerGains(**spec.gains),
                               [depths[i % len(depths)] for i in range(len(waypoints))]
                               if depths else [])
-    plant = Stepper(model.network, model.normaliser)
+    plant = FastStepper(model.fast, model.normaliser)
     plant.warm_up(np.empty((0, len(profile.command_names))),
                   np.zeros(len(profile.sensor_names)))
     vehicle = VehicleController(spec, profile.sensor_names, profile.command_names, controller)
@@ -105,7 +105,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
         if actuator is not None and step >= fault_step:
             executed[actuator] = 0.0
         plant.step(executed)
-    modelled = replay(model.network, model.normaliser, np.asarray(commands), readings[0])
+    modelled = fast_replay(model.fast, model.normaliser, np.asarray(commands), readings[0])
     return _bits(np.asarray(readings), modelled, profile, MISSION_MODE, model)
 
 

@@ -48,7 +48,7 @@ def make_fleet(folder: Path, logs: int, distinct: int) -> None:
         write_log(dive, profile, path, "mcap")
         sources.append(path)
         print(f"  simulated {path.name} ({dive.duration_s / 60:.0f} min, fault: "
-              f"{fault.component if fault else 'none'})", flush=True)
+              f"{fault.component if fault else 'none'})", file=sys.stderr, flush=True)
     fleet = folder / "fleet"
     fleet.mkdir()
     for number in range(logs):
@@ -97,7 +97,8 @@ def main() -> None:
     args = parser.parse_args()
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="auvdiag-audit-bench-"))
     workdir.mkdir(parents=True, exist_ok=True)
-    print(f"simulating {args.distinct} one-hour dives into {workdir}", flush=True)
+    print(f"simulating {args.distinct} one-hour dives into {workdir}", file=sys.stderr,
+          flush=True)
     if not (workdir / "fleet").is_dir():
         make_fleet(workdir, args.logs, args.distinct)
     results = []
@@ -105,10 +106,11 @@ def main() -> None:
         shutil.rmtree(workdir / f"out-{mode}", ignore_errors=True)
         result = measure(workdir / "fleet", workdir, mode, args.jobs)
         results.append(result)
-        print(json.dumps(result), flush=True)
+        print(json.dumps(result), file=sys.stderr, flush=True)
     serial = next((r for r in results if r["mode"] == "serial"), None)
-    print(f"\n{args.logs} one-hour logs ({args.distinct} distinct), {os.cpu_count()} cores, "
-          f"{platform.machine()}, {date.today()}")
+    print(f"Measured {date.today()} on {platform.machine()}, {os.cpu_count()} cores: "
+          f"{args.logs} simulated dives of 61-90 min ({args.distinct} distinct, copied), "
+          "standalone MCAP, shipped model.\n")
     print("| mode | workers | logs/min | speed-up vs serial | median s/log | peak RSS/worker |")
     print("|---|---|---|---|---|---|")
     for r in results:

@@ -10,32 +10,11 @@ x̂(k+1) = x̂(k) + Δ · f(c(k), x̂(k), h(k)),  h(k+1) = GRU(h(k), [c(k), x̂(
 Everything is in normalised units; `Normaliser` converts.
 """
 
-from dataclasses import dataclass
-
 import numpy as np
 import torch
 from torch import nn
 
-
-@dataclass(frozen=True)
-class Normaliser:
-    """Per-signal scales: states are divided by ``state_scale``; a model step moves the
-    normalised state by ``delta_ratio`` times the network output."""
-
-    command_scale: tuple[float, ...]
-    state_scale: tuple[float, ...]
-    delta_ratio: float = 0.1
-
-    def commands(self, values: np.ndarray) -> torch.Tensor:
-        return torch.as_tensor(values / np.asarray(self.command_scale), dtype=torch.float32)
-
-    def states(self, values: np.ndarray) -> torch.Tensor:
-        return torch.as_tensor(values / np.asarray(self.state_scale), dtype=torch.float32)
-
-    def to_units(self, states: torch.Tensor) -> np.ndarray:
-        result: np.ndarray = states.detach().numpy().astype(np.float64) * np.asarray(
-            self.state_scale)
-        return result
+from models.normaliser import Normaliser
 
 
 class RecurrentDynamics(nn.Module):
@@ -73,34 +52,3 @@ def replay(model: RecurrentDynamics, normaliser: Normaliser, commands: np.ndarra
         predicted = model(normaliser.commands(commands)[None],
                           normaliser.states(initial_state)[None])
     return normaliser.to_units(predicted[0])
-
-
-class Stepper:
-    """The model one step at a time, for closed-loop use: a controller reads its state and
-    chooses the next command. ``warm_up`` replays a command history first, exactly as
-    `replay` does, so the context matches the free run up to that point."""
-
-    def __init__(self, model: RecurrentDynamics, normaliser: Normaliser) -> None:
-        self.model, self.normaliser = model, normaliser
-        self.hidden = torch.zeros(1, model.hidden)
-        self.state = torch.zeros(1, model.n_states)
-
-    def warm_up(self, commands: np.ndarray, initial_state: np.ndarray) -> np.ndarray:
-        """Run over ``commands`` from ``initial_state``; return the state after the last."""
-        self.state = self.normaliser.states(initial_state)[None]
-        for command in commands:
-            self.step(command)
-        return self.current
-
-    @property
-    def current(self) -> np.ndarray:
-        return self.normaliser.to_units(self.state[0])
-
-    def step(self, command: np.ndarray) -> np.ndarray:
-        with torch.inference_mode():
-            features = torch.cat((self.normaliser.commands(np.asarray(command))[None],
-                                  self.state), dim=1)
-            self.hidden = self.model.cell(features, self.hidden)
-            delta = self.model.head(torch.cat((self.hidden, features), dim=1))
-            self.state = self.state + self.model.delta_ratio * delta
-        return self.current

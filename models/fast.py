@@ -6,11 +6,12 @@ advance together as one batch, so the per-step cost of Python is paid once for a
 
 Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from models.dynamics import Normaliser, RecurrentDynamics
+from models.normaliser import Normaliser
 
 
 @dataclass(frozen=True)
@@ -31,22 +32,24 @@ class FastDynamics:
     delta_ratio: float
 
     @classmethod
-    def from_module(cls, network: RecurrentDynamics) -> "FastDynamics":
-        def weight(tensor: object) -> np.ndarray:
-            return np.ascontiguousarray(tensor.detach().numpy(), dtype=np.float32)  # type: ignore[attr-defined]
+    def from_state(cls, state: Mapping[str, np.ndarray], n_commands: int,
+                   delta_ratio: float) -> "FastDynamics":
+        """From the network's state dict (names as `RecurrentDynamics` has them)."""
+        def weight(name: str) -> np.ndarray:
+            return np.asarray(state[name], dtype=np.float32)
 
-        nc, hidden = network.n_commands, network.hidden
-        w_ih, w_hh = weight(network.cell.weight_ih), weight(network.cell.weight_hh)
-        first, last = network.head[0], network.head[2]
-        w1 = weight(first.weight)            # (H, H + nc + ns): [hidden, commands, states]
+        nc = n_commands
+        w_ih, w_hh, w1 = weight("cell.weight_ih"), weight("cell.weight_hh"), weight(
+            "head.0.weight")                     # w1: (H, H + nc + ns): [hidden, c, x]
+        hidden = w_hh.shape[1]
         return cls(
             input_commands=w_ih[:, :nc].T.copy(), input_states=w_ih[:, nc:].T.copy(),
-            input_bias=weight(network.cell.bias_ih), hidden_weights=w_hh.T.copy(),
-            hidden_bias=weight(network.cell.bias_hh), head_hidden=w1[:, :hidden].T.copy(),
+            input_bias=weight("cell.bias_ih"), hidden_weights=w_hh.T.copy(),
+            hidden_bias=weight("cell.bias_hh"), head_hidden=w1[:, :hidden].T.copy(),
             head_commands=w1[:, hidden:hidden + nc].T.copy(),
-            head_states=w1[:, hidden + nc:].T.copy(), head_bias=weight(first.bias),
-            out_weights=weight(last.weight).T.copy(), out_bias=weight(last.bias),
-            delta_ratio=float(network.delta_ratio))
+            head_states=w1[:, hidden + nc:].T.copy(), head_bias=weight("head.0.bias"),
+            out_weights=weight("head.2.weight").T.copy(), out_bias=weight("head.2.bias"),
+            delta_ratio=float(delta_ratio))
 
     @property
     def hidden(self) -> int:
@@ -66,17 +69,56 @@ class FastDynamics:
         hidden = np.zeros((batch, h), np.float32)
         states[:, 0] = state
         for k in range(steps - 1):
-            x_gates = gates_from_commands[:, k] + state @ self.input_states
-            h_gates = hidden @ self.hidden_weights + self.hidden_bias
-            reset_update = 1.0 / (1.0 + np.exp(-(x_gates[:, :2 * h] + h_gates[:, :2 * h])))
-            reset, update = reset_update[:, :h], reset_update[:, h:]
-            candidate = np.tanh(x_gates[:, 2 * h:] + reset * h_gates[:, 2 * h:])
-            hidden = candidate + update * (hidden - candidate)
-            layer = np.tanh(hidden @ self.head_hidden + head_from_commands[:, k]
-                            + state @ self.head_states)
-            state = state + self.delta_ratio * (layer @ self.out_weights + self.out_bias)
+            state, hidden = self.advance(gates_from_commands[:, k], head_from_commands[:, k],
+                                         state, hidden)
             states[:, k + 1] = state
         return states
+
+
+    def advance(self, gates_from_command: np.ndarray, head_from_command: np.ndarray,
+                state: np.ndarray, hidden: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One step, given what the command contributes (see `rollout`)."""
+        h = self.hidden
+        x_gates = gates_from_command + state @ self.input_states
+        h_gates = hidden @ self.hidden_weights + self.hidden_bias
+        reset_update = 1.0 / (1.0 + np.exp(-(x_gates[:, :2 * h] + h_gates[:, :2 * h])))
+        reset, update = reset_update[:, :h], reset_update[:, h:]
+        candidate = np.tanh(x_gates[:, 2 * h:] + reset * h_gates[:, 2 * h:])
+        hidden = candidate + update * (hidden - candidate)
+        layer = np.tanh(hidden @ self.head_hidden + head_from_command + state @ self.head_states)
+        return state + self.delta_ratio * (layer @ self.out_weights + self.out_bias), hidden
+
+
+class FastStepper:
+    """The model one step at a time, for closed-loop use: a controller reads its state and
+    chooses the next command. ``warm_up`` replays a command history first, exactly as a
+    free run does, so the context matches the replay up to that point."""
+
+    def __init__(self, dynamics: FastDynamics, normaliser: Normaliser) -> None:
+        self.dynamics, self.normaliser = dynamics, normaliser
+        self.command_scale = np.asarray(normaliser.command_scale)
+        self.state_scale = np.asarray(normaliser.state_scale)
+        self.hidden = np.zeros((1, dynamics.hidden), np.float32)
+        self.state = np.zeros((1, dynamics.out_bias.size), np.float32)
+
+    def warm_up(self, commands: np.ndarray, initial_state: np.ndarray) -> np.ndarray:
+        """Run over ``commands`` from ``initial_state``; return the state after the last."""
+        self.state = (np.asarray(initial_state) / self.state_scale).astype(np.float32)[None]
+        for command in commands:
+            self.step(command)
+        return self.current
+
+    @property
+    def current(self) -> np.ndarray:
+        return self.state[0].astype(np.float64) * self.state_scale
+
+    def step(self, command: np.ndarray) -> np.ndarray:
+        d = self.dynamics
+        scaled = (np.asarray(command) / self.command_scale).astype(np.float32)[None]
+        self.state, self.hidden = d.advance(scaled @ d.input_commands + d.input_bias,
+                                            scaled @ d.head_commands + d.head_bias,
+                                            self.state, self.hidden)
+        return self.current
 
 
 def fast_replay(dynamics: FastDynamics, normaliser: Normaliser, commands: np.ndarray,

@@ -1,5 +1,8 @@
-"""Model directories: ``weights.pt`` (a plain state dict, loaded with ``weights_only=True`` so
-no code runs) and ``model.json`` (readable, versioned metadata)."""
+"""Model directories: ``weights.npz`` (the network's state dict as plain arrays, loaded with
+``allow_pickle=False`` so no code runs) and ``model.json`` (readable, versioned metadata).
+Diagnosis runs on the NumPy path and never imports torch; the torch module is built only
+when asked for (training, comparisons). Version 1 directories (``weights.pt``, a torch state
+dict read with ``weights_only=True``) still load."""
 
 import hashlib
 import json
@@ -7,16 +10,20 @@ from dataclasses import dataclass
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import torch
+import numpy as np
 
-from models.dynamics import Normaliser, RecurrentDynamics
 from models.fast import FastDynamics
+from models.normaliser import Normaliser
+
+if TYPE_CHECKING:
+    from models.dynamics import RecurrentDynamics
 
 FORMAT_NAME = "auvdiag-model"
-FORMAT_VERSION = 1
-WEIGHTS_FILE, METADATA_FILE = "weights.pt", "model.json"
+FORMAT_VERSION = 2
+WEIGHTS_FILE, METADATA_FILE = "weights.npz", "model.json"
+LEGACY_WEIGHTS_FILE = "weights.pt"          # format version 1
 
 
 class ModelFileError(Exception):
@@ -25,10 +32,30 @@ class ModelFileError(Exception):
 
 @dataclass
 class LoadedModel:
-    network: RecurrentDynamics
+    state: dict[str, np.ndarray]     # the network's state dict, as arrays
     normaliser: Normaliser
     metadata: dict[str, Any]
     path: str
+
+    @cached_property
+    def network(self) -> "RecurrentDynamics":
+        """The torch module (imports torch; diagnosis does not need it)."""
+        import torch
+
+        from models.dynamics import RecurrentDynamics
+
+        arch = self.metadata["architecture"]
+        network = RecurrentDynamics(arch["n_commands"], arch["n_states"], arch["hidden"],
+                                    self.normaliser.delta_ratio)
+        network.load_state_dict({k: torch.from_numpy(v) for k, v in self.state.items()})
+        network.eval()
+        return network
+
+    @cached_property
+    def fast(self) -> FastDynamics:
+        """The NumPy replay path of the same network (the diagnosis hot path)."""
+        return FastDynamics.from_state(self.state, self.metadata["architecture"]["n_commands"],
+                                       self.normaliser.delta_ratio)
 
     @property
     def identity(self) -> dict[str, Any]:
@@ -38,11 +65,6 @@ class LoadedModel:
                 "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
                 "thresholds_calibrated": "calibration" in meta}
-
-    @cached_property
-    def fast(self) -> FastDynamics:
-        """The NumPy replay path of the same network (the diagnosis hot path)."""
-        return FastDynamics.from_module(self.network)
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -58,12 +80,13 @@ def default_model_dir(vehicle: str = "twin-burger") -> Path:
     return Path(str(resources.files("models") / vehicle.replace("-", "_")))
 
 
-def save_model(directory: Path, network: RecurrentDynamics, normaliser: Normaliser,
+def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normaliser,
                metadata: dict[str, Any]) -> None:
     """Write weights and metadata; the metadata gains the architecture and weight digest."""
     directory.mkdir(parents=True, exist_ok=True)
     weights = directory / WEIGHTS_FILE
-    torch.save({k: v.detach().clone() for k, v in network.state_dict().items()}, weights)
+    arrays = {k: v.detach().numpy().copy() for k, v in network.state_dict().items()}
+    np.savez(weights, **arrays)  # type: ignore[arg-type]
     full = {
         "format": FORMAT_NAME,
         "format_version": FORMAT_VERSION,
@@ -78,6 +101,17 @@ def save_model(directory: Path, network: RecurrentDynamics, normaliser: Normalis
     (directory / METADATA_FILE).write_text(json.dumps(full, indent=2) + "\n", encoding="utf-8")
 
 
+def _read_weights(directory: Path, version: int) -> dict[str, np.ndarray]:
+    if version == 1:
+        import torch
+
+        state = torch.load(directory / LEGACY_WEIGHTS_FILE, map_location="cpu",
+                           weights_only=True)
+        return {k: v.numpy() for k, v in state.items()}
+    with np.load(directory / WEIGHTS_FILE, allow_pickle=False) as archive:
+        return {name: archive[name] for name in archive.files}
+
+
 def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> LoadedModel:
     """Load a model directory, or when ``directory`` is None the model shipped for
     ``vehicle`` (a profile's ``vehicle.name``)."""
@@ -87,8 +121,9 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         if not (directory / METADATA_FILE).is_file():
             raise ModelFileError(f"no model is shipped for vehicle {vehicle!r}: train one "
                                  "with 'auvdiag train' and pass it with --model")
-    meta_path, weights_path = directory / METADATA_FILE, directory / WEIGHTS_FILE
-    if not meta_path.is_file() or not weights_path.is_file():
+    meta_path = directory / METADATA_FILE
+    if not meta_path.is_file() or not any((directory / name).is_file() for name in
+                                          (WEIGHTS_FILE, LEGACY_WEIGHTS_FILE)):
         raise ModelFileError(f"{directory}: not a model directory "
                              f"(needs {METADATA_FILE} and {WEIGHTS_FILE})")
     try:
@@ -97,18 +132,18 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         raise ModelFileError(f"{meta_path}: unreadable metadata: {error}") from None
     if metadata.get("format") != FORMAT_NAME:
         raise ModelFileError(f"{meta_path}: not an auvdiag model file")
-    if metadata.get("format_version") != FORMAT_VERSION:
-        raise ModelFileError(f"{meta_path}: model format version {metadata.get('format_version')}"
-                             f" is not supported (this tool reads version {FORMAT_VERSION})")
+    version = metadata.get("format_version")
+    if version not in (1, FORMAT_VERSION):
+        raise ModelFileError(f"{meta_path}: model format version {version} is not supported "
+                             f"(this tool reads versions 1 to {FORMAT_VERSION})")
     try:
         arch, norm = metadata["architecture"], metadata["normalisation"]
-        network = RecurrentDynamics(arch["n_commands"], arch["n_states"], arch["hidden"],
-                                    norm["delta_ratio"])
-        state = torch.load(weights_path, map_location="cpu", weights_only=True)
-        network.load_state_dict(state)
         normaliser = Normaliser(tuple(norm["command_scale"]), tuple(norm["state_scale"]),
                                 norm["delta_ratio"])
-    except Exception as error:  # torch raises many types (pickle refusals, zip, shape)
+        model = LoadedModel(_read_weights(directory, version), normaliser, metadata, label)
+        fast = model.fast        # checks every weight is there with the architecture's shape
+        if (fast.hidden, fast.input_states.shape[0]) != (arch["hidden"], arch["n_states"]):
+            raise ValueError("weights do not match the architecture in the metadata")
+    except Exception as error:  # bad archives, pickle refusals, missing or misshapen weights
         raise ModelFileError(f"{directory}: model does not load: {error}") from None
-    network.eval()
-    return LoadedModel(network, normaliser, metadata, label)
+    return model

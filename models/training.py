@@ -11,7 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from models.dynamics import Normaliser, RecurrentDynamics, replay
+from models.dynamics import RecurrentDynamics, replay
+from models.normaliser import Normaliser
 
 
 @dataclass(frozen=True)

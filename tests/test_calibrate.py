@@ -14,7 +14,7 @@ runner = CliRunner()
 def test_calibrated_thresholds_hold_on_held_out_logs_and_still_detect(make_log, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(default_model_dir(), model)
-    weights = (model / "weights.pt").read_bytes()
+    weights = (model / "weights.npz").read_bytes()
     normal = [make_log(name, seed) for name, seed in (
         ("paper-normal", 61), ("paper-normal", 62), ("mission-ccw", 61),
         ("mission-large-cw", 61), ("routine-and-mission", 61), ("routine-and-mission", 62))]
@@ -25,7 +25,7 @@ def test_calibrated_thresholds_hold_on_held_out_logs_and_still_detect(make_log, 
     assert "false alarms on those logs: 0" in result.stdout
     assert f"faulty {faulty}: fault flow_sensor" in result.stdout
     meta = json.loads((model / "model.json").read_text())
-    assert (model / "weights.pt").read_bytes() == weights
+    assert (model / "weights.npz").read_bytes() == weights
     calibration = meta["calibration"]
     assert calibration["margin"] == 1.5 and len(calibration["normal_logs"]) == 6
     mission = next(m for m in calibration["modes"] if m["mode"] == "mission")
@@ -60,7 +60,7 @@ def test_calibrate_to_a_copy_leaves_the_model_alone(make_log, tmp_path):
     assert result.exit_code == 0, result.output
     assert (model / "model.json").read_text() == before
     assert json.loads((copy / "model.json").read_text())["calibration"]["margin"] == 2.0
-    assert (copy / "weights.pt").read_bytes() == (model / "weights.pt").read_bytes()
+    assert (copy / "weights.npz").read_bytes() == (model / "weights.npz").read_bytes()
     bad = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
                               str(model), "--margin", "0.5"])
     assert bad.exit_code == 2 and "margin below 1" in bad.stderr

@@ -31,7 +31,7 @@ def quick_model(make_log, tmp_path_factory):
 def test_train_writes_readable_metadata_and_error_figures(quick_model, profile):
     output, result = quick_model
     meta = json.loads((output / "model.json").read_text())
-    assert meta["format"] == "auvdiag-model" and meta["format_version"] == 1
+    assert meta["format"] == "auvdiag-model" and meta["format_version"] == 2
     assert meta["dt_s"] == 0.1
     assert meta["signals"]["commands"] == ["thruster_0", "thruster_1"]
     assert [s["name"] for s in meta["signals"]["sensors"]] == ["flow", "yaw_rate"]
@@ -77,14 +77,32 @@ def test_model_loads_identically(quick_model):
         assert torch.equal(x, y), name
 
 
-def test_weights_that_need_code_to_load_are_refused(quick_model, tmp_path):
+@pytest.mark.parametrize("version", [1, 2])
+def test_weights_that_need_code_to_load_are_refused(quick_model, tmp_path, version):
     output, _ = quick_model
     target = tmp_path / "evil"
     target.mkdir()
-    (target / "model.json").write_text((output / "model.json").read_text())
-    torch.save({"payload": np.dtype}, target / "weights.pt")   # unpickling needs a callable
+    meta = json.loads((output / "model.json").read_text())
+    (target / "model.json").write_text(json.dumps({**meta, "format_version": version}))
+    if version == 1:     # a torch state dict whose unpickling needs a callable
+        torch.save({"payload": np.dtype}, target / "weights.pt")
+    else:                # an archive with an object array (only pickle can load it)
+        np.savez(target / "weights.npz", payload=np.array([{"a": 1}], dtype=object))
     with pytest.raises(ModelFileError, match="does not load"):
         load_model(target)
+
+
+def test_version_1_models_still_load(quick_model, tmp_path):
+    output, _ = quick_model
+    model = load_model(output)
+    target = tmp_path / "v1"
+    target.mkdir()
+    torch.save({k: torch.from_numpy(v) for k, v in model.state.items()}, target / "weights.pt")
+    (target / "model.json").write_text(json.dumps({**model.metadata, "format_version": 1}))
+    old = load_model(target)
+    commands = np.full((50, 2), 0.4)
+    np.testing.assert_array_equal(old.fast.rollout(commands[None], np.zeros((1, 2))),
+                                  model.fast.rollout(commands[None], np.zeros((1, 2))))
 
 
 def test_unknown_model_version_is_refused(quick_model, tmp_path):
@@ -94,7 +112,7 @@ def test_unknown_model_version_is_refused(quick_model, tmp_path):
     meta = json.loads((output / "model.json").read_text())
     meta["format_version"] = 99
     (target / "model.json").write_text(json.dumps(meta))
-    (target / "weights.pt").write_bytes((output / "weights.pt").read_bytes())
+    (target / "weights.npz").write_bytes((output / "weights.npz").read_bytes())
     with pytest.raises(ModelFileError, match="version 99 is not supported"):
         load_model(target)
 

@@ -1,0 +1,31 @@
+# `make bench` reruns every benchmark and rewrites its figures in README.md (with the
+# machine and the date). About 1.5 hours on 2 cores, most of it the 200-log audit.
+PYTHON ?= .venv/bin/python
+OUT := .bench
+
+.PHONY: bench bench-reference bench-ingest bench-speed bench-audit test
+
+bench: bench-reference bench-ingest bench-speed bench-audit
+
+bench-reference:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/reference_experiment.py --seeds 20 > $(OUT)/reference.md
+	$(PYTHON) benchmarks/readme.py reference $(OUT)/reference.md
+
+bench-ingest:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/ingest.py > $(OUT)/ingest.md
+	$(PYTHON) benchmarks/readme.py ingest $(OUT)/ingest.md
+
+bench-speed:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/speed.py > $(OUT)/speed.md
+	$(PYTHON) benchmarks/readme.py speed $(OUT)/speed.md
+
+bench-audit:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/audit.py --logs 200 --jobs 2 > $(OUT)/audit.md
+	$(PYTHON) benchmarks/readme.py audit $(OUT)/audit.md
+
+test:
+	$(PYTHON) -m ruff check . && $(PYTHON) -m pytest -q
