@@ -1,16 +1,21 @@
 # `make bench` reruns every benchmark and rewrites its figures in README.md (with the
-# machine and the date). About 1.5 hours on 2 cores, most of it the 200-log audit.
+# machine and the date). About an hour on 2 cores, most of it the 200-log audit.
 PYTHON ?= .venv/bin/python
 OUT := .bench
 
-.PHONY: bench bench-reference bench-ingest bench-speed bench-audit test
+.PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit test
 
-bench: bench-reference bench-ingest bench-speed bench-audit
+bench: bench-reference bench-detection bench-ingest bench-speed bench-audit
 
 bench-reference:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/reference_experiment.py --seeds 20 > $(OUT)/reference.md
 	$(PYTHON) benchmarks/readme.py reference $(OUT)/reference.md
+
+bench-detection:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/detection.py --seeds 2 --normal-seeds 12 > $(OUT)/detection.md
+	$(PYTHON) benchmarks/readme.py detection $(OUT)/detection.md
 
 bench-ingest:
 	@mkdir -p $(OUT)

@@ -3,7 +3,9 @@ that lost part of its power. Its signature can look like a sensor fault to the p
 table (at 50 % the yaw residual grows first), so when the table names a sensor the log is
 also replayed under "thruster k gives only a fraction of its thrust from the onset on". If
 one such replay explains every sensor (no g reaches its threshold after the onset) while the
-table's sensor hypothesis cannot, the weakened thruster is the better diagnosis."""
+table's sensor hypothesis cannot, the weakened thruster is the better diagnosis. Fraction 0
+is tried too: a thruster that dies in a turn can raise the yaw bit alone at first, which
+the table reads as the yaw-rate sensor."""
 
 from dataclasses import dataclass, replace
 
@@ -14,7 +16,7 @@ from auvdiag_cli.profile import Profile
 from auvdiag_cli.resample import AlignedFrame
 from models.store import LoadedModel
 
-THRUST_FRACTIONS = (0.25, 0.5, 0.75)
+THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
 
 
 @dataclass(frozen=True)

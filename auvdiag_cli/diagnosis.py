@@ -202,18 +202,29 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
             weak = explain_by_weak_thruster(model, profile, frame, thresholds,
                                             detection.onset_index, dms_starts)
             if weak is not None:
-                _apply_weakened_thruster(diagnosis, weak)
+                _apply_weakened_thruster(diagnosis, weak, profile)
     return diagnosis
 
 
-def _apply_weakened_thruster(diagnosis: Diagnosis, weak: WeakenedThruster) -> None:
+def _apply_weakened_thruster(diagnosis: Diagnosis, weak: WeakenedThruster,
+                             profile: Profile) -> None:
     table_says = diagnosis.component
     diagnosis.component, diagnosis.candidates = weak.component, [weak.component]
     diagnosis.substitution = None
+    explained = (f"the pattern table reads b as {table_says}, but the log is explained by "
+                 f"{weak.component} ")
+    if weak.thrust_fraction == 0.0:
+        # A thruster dying in a turn or at low speed raises one bit before the other: the
+        # decision window saw only that one, and it is a sensor's row.
+        row = next((r for r in profile.pattern if weak.component in r.components), None)
+        diagnosis.case = None if row is None else row.case
+        diagnosis.notes.append(
+            explained + f"dead from the onset (g then stays at {weak.peak_g_ratio:.0%} of its "
+            "threshold at most): its failure raised the bits of its row one after the other")
+        return
     diagnosis.degradation = weak
     diagnosis.notes.append(
-        f"the pattern table reads b as {table_says}, but the log is explained by "
-        f"{weak.component} giving {weak.thrust_fraction:.0%} of its thrust from the onset "
+        explained + f"giving {weak.thrust_fraction:.0%} of its thrust from the onset "
         f"(g then stays at {weak.peak_g_ratio:.0%} of its threshold at most): a partial "
         "failure, which the paper's table (assumption 3) does not describe")
 

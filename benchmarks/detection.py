@@ -207,7 +207,13 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--normal-seeds", type=int, default=6)
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--from-json", type=Path,
+                        help="Print the table of an earlier run's --json output.")
     args = parser.parse_args()
+    if args.from_json:
+        saved = json.loads(args.from_json.read_text())
+        print(render(saved["scores"], saved["seconds"]))
+        return
 
     from auvdiag_cli.calibration import calibrate
     from auvdiag_cli.ingest import ingest
@@ -243,8 +249,9 @@ def main() -> None:
     scores = {name: score(results, name, zb_zc) for name in models}
     print(render(scores, time.perf_counter() - started))
     if args.json:
-        args.json.write_text(json.dumps({"scores": scores, "results": results}, indent=2,
-                                        default=str))
+        args.json.write_text(json.dumps({"scores": scores, "results": results,
+                                         "seconds": time.perf_counter() - started,
+                                         "date": str(date.today())}, indent=2, default=str))
 
 
 def render(scores: dict, seconds: float) -> str:
@@ -256,30 +263,33 @@ def render(scores: dict, seconds: float) -> str:
     def s(value: float | None) -> str:
         return "-" if value is None else f"{value:.1f} s"
 
-    rows = [("detection rate", pct(learned["detection_rate"]), pct(base["detection_rate"])),
-            ("component named exactly", pct(learned["isolation_exact"]),
-             pct(base["isolation_exact"])),
-            ("truth among the candidates", pct(learned["isolation_contains"]),
-             pct(base["isolation_contains"])),
-            ("sensor faults isolated", pct(learned["sensors_isolated"]),
-             pct(base["sensors_isolated"])),
-            ("thrusters isolated when ZB/ZC exist", pct(learned["thrusters_isolated_with_zb_zc"]),
-             pct(base["thrusters_isolated_with_zb_zc"])),
-            ("faulty logs alarmed before the fault began", str(learned["alarms_before_the_fault"]),
-             str(base["alarms_before_the_fault"])),
-            ("false alarms per hour of normal logs",
-             f"{learned['false_alarms_per_hour']:.2f} ({learned['false_alarms']})",
-             f"{base['false_alarms_per_hour']:.2f} ({base['false_alarms']})"),
-            ("detection delay median / 95 % / worst",
-             f"{s(learned['delay_median_s'])} / {s(learned['delay_p95_s'])} / "
-             f"{s(learned['delay_worst_s'])}",
-             f"{s(base['delay_median_s'])} / {s(base['delay_p95_s'])} / "
-             f"{s(base['delay_worst_s'])}")]
+    def ratio(a: float | None, b: float | None) -> str:
+        return "-" if not a or not b else f"{a / b:.2f}"
+
+    rows = [(label, pct(learned[key]), pct(base[key]), ratio(learned[key], base[key]))
+            for label, key in (("detection rate", "detection_rate"),
+                               ("component named exactly", "isolation_exact"),
+                               ("truth among the candidates", "isolation_contains"),
+                               ("sensor faults isolated", "sensors_isolated"),
+                               ("thrusters isolated when ZB/ZC exist",
+                                "thrusters_isolated_with_zb_zc"))]
+    rows += [("faulty logs alarmed before the fault began",
+              str(learned["alarms_before_the_fault"]), str(base["alarms_before_the_fault"]),
+              "-"),
+             ("false alarms per hour of normal logs",
+              f"{learned['false_alarms_per_hour']:.2f} ({learned['false_alarms']})",
+              f"{base['false_alarms_per_hour']:.2f} ({base['false_alarms']})", "-"),
+             ("detection delay median / 95 % / worst",
+              f"{s(learned['delay_median_s'])} / {s(learned['delay_p95_s'])} / "
+              f"{s(learned['delay_worst_s'])}",
+              f"{s(base['delay_median_s'])} / {s(base['delay_p95_s'])} / "
+              f"{s(base['delay_worst_s'])}",
+              f"{ratio(learned['delay_p95_s'], base['delay_p95_s'])} (95 %)")]
     lines = [f"Measured {date.today()} on {platform.machine()}: {learned['faulty_logs']} faulty "
              f"and {learned['normal_logs']} normal logs ({learned['normal_hours']:.2f} h), "
              f"{seconds:.0f} s.", "",
-             "| | learned model | linear baseline |", "|---|---|---|"]
-    lines += [f"| {name} | {a} | {b} |" for name, a, b in rows]
+             "| | learned model | linear baseline | learned / baseline |", "|---|---|---|---|"]
+    lines += [f"| {name} | {a} | {b} | {r} |" for name, a, b, r in rows]
     if learned["missed"] or base["missed"]:
         lines += ["", f"Missed by the learned model: {', '.join(learned['missed']) or 'none'}. "
                   f"Missed by the baseline: {', '.join(base['missed']) or 'none'}."]

@@ -31,6 +31,29 @@ def test_dead_sensors_are_not_explained_away(make_log, scenario, component):
     assert report["component"] == component and report["degradation"] is None
 
 
+@pytest.mark.parametrize("onset_s", [77.2, 49.2])    # in a turn; at low speed after one
+def test_thruster_dying_in_a_turn_is_not_read_as_the_yaw_sensor(tmp_path, onset_s):
+    # The 5 m x 2.5 m clockwise rectangle, seed 2002: the yaw bit rises alone first, which
+    # the table reads as the yaw-rate sensor; replaying with the thruster dead explains all.
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.faults import Fault
+    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli.simulator.scenarios import Scenario, _mission
+    from auvdiag_cli.simulator.writers import write_log
+
+    profile = load_profile()
+    scenario = Scenario("turn", "thruster 0 dies in a turn", _mission(length_m=5.0, width_m=2.5),
+                        Fault("thruster_0", "dead", onset_s))
+    log = tmp_path / "turn.mcap"
+    write_log(simulate(scenario, profile, 2002), profile, log, "mcap")
+    report = json.loads(CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "-q"]
+                                           ).stdout)
+    assert report["component"] == "thruster_0" and report["case"] == 1
+    assert report["degradation"] is None and report["substitution"] is None
+    assert any("reads b as yaw_rate_sensor" in note and "dead from the onset" in note
+               for note in report["notes"])
+
+
 def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     from importlib import resources
 

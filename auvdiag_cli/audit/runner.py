@@ -2,6 +2,7 @@
 cluster. Outcomes come back in completion order, as soon as each is known."""
 
 import multiprocessing
+import os
 from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 
@@ -21,6 +22,10 @@ def _lost(task: AuditTask, error: BaseException) -> AuditOutcome:
 
 
 def run_local(tasks: Sequence[AuditTask], jobs: int) -> Iterator[AuditOutcome]:
+    # Parallelism comes from logs side by side: one math thread per worker, or N workers
+    # each starting N BLAS threads oversubscribe the cores.
+    for variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(variable, "1")
     # spawn: fresh interpreters, no inherited threads or locks (the progress bar has some).
     executor = ProcessPoolExecutor(max_workers=jobs,
                                    mp_context=multiprocessing.get_context("spawn"))

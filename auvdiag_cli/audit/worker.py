@@ -49,13 +49,10 @@ def _peak_rss_mb() -> float:
 
 def analyse(task: AuditTask) -> AuditOutcome:
     """Diagnose one log; never raises (a failure is the outcome's ``error``)."""
-    import torch
-
     from auvdiag_cli.diagnosis import diagnose
     from auvdiag_cli.report_json import diagnosis_to_dict
     from auvdiag_cli.report_series import series_from_diagnosis
 
-    torch.set_num_threads(1)       # parallelism comes from running logs side by side
     started = time.perf_counter()
     outcome = AuditOutcome(task.log, None)
     try:
