@@ -113,15 +113,17 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         checks.append(FaultyCheck(str(path), d.verdict, d.component, d.candidates,
                                   round(ratio, 2)))
     result = CalibrationResult(margin, modes, thresholds, hours, 3.0 / hours, checks)
-    model.metadata["calibration"] = _record(result, normal_logs)
+    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
 
 
-def _record(result: CalibrationResult, normal_logs: Sequence[Path]) -> dict[str, Any]:
+def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
+            ) -> dict[str, Any]:
     return {
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "method": "threshold = margin x largest g on the normal logs, per mode and signal",
         "margin": result.margin,
+        "floor_at_profile": floor_at_profile,
         "normal_logs": [p.name for p in normal_logs],
         "normal_hours": round(result.normal_hours, 4),
         "false_alarms_on_normal_logs": 0,

@@ -64,3 +64,25 @@ def test_calibrate_to_a_copy_leaves_the_model_alone(make_log, tmp_path):
     bad = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
                               str(model), "--margin", "0.5"])
     assert bad.exit_code == 2 and "margin below 1" in bad.stderr
+
+
+def test_floor_keeps_thresholds_at_or_above_the_profiles(make_log, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model)
+    normal = [make_log("routine-and-mission", seed) for seed in (61, 62)]
+    result = runner.invoke(app, ["calibrate", *map(str, normal), "--model", str(model),
+                                 "--floor-at-profile"])
+    assert result.exit_code == 0, result.output
+    meta = json.loads((model / "model.json").read_text())
+    assert meta["calibration"]["floor_at_profile"] is True
+    paper = {"mission": {"flow": 15.0, "yaw_rate": 10.0}, "ZA": {"flow": 8.0, "yaw_rate": 7.0}}
+    for mode, floors in paper.items():
+        for signal, floor in floors.items():
+            assert meta["thresholds"][mode][signal] >= floor
+    # Without the floor the same logs give a lower mission threshold (the model is better
+    # than the paper's): the floor is what kept it.
+    plain = runner.invoke(app, ["calibrate", *map(str, normal), "--model", str(model),
+                                "--output", str(tmp_path / "plain")])
+    assert plain.exit_code == 0
+    lower = json.loads((tmp_path / "plain" / "model.json").read_text())["thresholds"]
+    assert lower["mission"]["flow"] < 15.0
