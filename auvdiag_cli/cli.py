@@ -85,7 +85,8 @@ def main_options(
 @app.command()
 def diagnose(
     log: Annotated[Path, typer.Argument(help="Log: ROS 1 .bag, ROS 2 bag directory (or its "
-                                             ".db3/.mcap file).")],
+                                             ".db3/.mcap file), standalone .mcap, MAVLink "
+                                             ".tlog or DataFlash .bin.")],
     model: ModelOption = None,
     profile: ProfileOption = None,
     json_path: Annotated[str | None, typer.Option(
