@@ -3,15 +3,41 @@ NumPy with everything that does not depend on the model's own state computed for
 command history at once (the command half of the GRU's input gates and of the head's first
 layer). Several rollouts (logs, or the independent stretches between restarts of one log)
 advance together as one batch, so the per-step cost of Python is paid once for all of them.
+Long rollouts go to the numba-compiled loop in `models.compiled` when numba is installed.
 
 Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 
+import importlib.util
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cache
+from typing import Literal
 
 import numpy as np
 
 from models.normaliser import Normaliser
+
+Engine = Literal["auto", "numpy", "compiled"]
+# Loading the compiled kernel costs about 0.4 s a process; the NumPy loop about 20 µs a
+# step. Below this many steps the NumPy loop is done before numba would have loaded.
+COMPILED_PAYS_FROM_STEPS = 20_000
+
+
+@cache
+def compiled_available() -> bool:
+    return importlib.util.find_spec("numba") is not None
+
+
+def _use_compiled(engine: Engine, steps: int) -> bool:
+    if engine == "numpy":
+        return False
+    if engine == "compiled":
+        if not compiled_available():
+            raise RuntimeError("the compiled replay needs numba (pip install numba)")
+        return True
+    already_loaded = "models.compiled" in sys.modules
+    return compiled_available() and (already_loaded or steps >= COMPILED_PAYS_FROM_STEPS)
 
 
 @dataclass(frozen=True)
@@ -55,18 +81,21 @@ class FastDynamics:
     def hidden(self) -> int:
         return self.hidden_weights.shape[0]
 
-    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray:
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
+                engine: Engine = "auto") -> np.ndarray:
         """Free-run ``batch`` rollouts in normalised units: commands (batch, steps, n_c),
         initial states (batch, n_s) → states x̂(0 … steps−1), (batch, steps, n_s)."""
         commands = commands.astype(np.float32, copy=False)
         batch, steps, _ = commands.shape
-        h = self.hidden
         # Everything the commands contribute, for every step at once.
         gates_from_commands = commands @ self.input_commands + self.input_bias
         head_from_commands = commands @ self.head_commands + self.head_bias
         states = np.empty((batch, steps, self.out_bias.size), np.float32)
         state = initial_states.astype(np.float32)
-        hidden = np.zeros((batch, h), np.float32)
+        if _use_compiled(engine, steps):
+            self._compiled_rollout(gates_from_commands, head_from_commands, state, states)
+            return states
+        hidden = np.zeros((batch, self.hidden), np.float32)
         states[:, 0] = state
         for k in range(steps - 1):
             state, hidden = self.advance(gates_from_commands[:, k], head_from_commands[:, k],
@@ -74,6 +103,22 @@ class FastDynamics:
             states[:, k + 1] = state
         return states
 
+    def _compiled_rollout(self, gates_from_commands: np.ndarray,
+                          head_from_commands: np.ndarray, initial_states: np.ndarray,
+                          states: np.ndarray) -> None:
+        from models.compiled import rollout_kernel
+
+        def outputs_by_inputs(weights: np.ndarray) -> np.ndarray:
+            return np.ascontiguousarray(weights.T)
+
+        rollout_kernel(np.ascontiguousarray(gates_from_commands),
+                       np.ascontiguousarray(head_from_commands),
+                       np.ascontiguousarray(initial_states),
+                       outputs_by_inputs(self.input_states),
+                       outputs_by_inputs(self.hidden_weights), self.hidden_bias,
+                       outputs_by_inputs(self.head_hidden), outputs_by_inputs(self.head_states),
+                       outputs_by_inputs(self.out_weights), self.out_bias,
+                       np.float32(self.delta_ratio), states)
 
     def advance(self, gates_from_command: np.ndarray, head_from_command: np.ndarray,
                 state: np.ndarray, hidden: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,14 +167,14 @@ class FastStepper:
 
 
 def fast_replay(dynamics: FastDynamics, normaliser: Normaliser, commands: np.ndarray,
-                initial_state: np.ndarray) -> np.ndarray:
+                initial_state: np.ndarray, engine: Engine = "auto") -> np.ndarray:
     """`models.dynamics.replay` on the NumPy path: SM(t) in physical units, (steps, n_s)."""
-    return fast_replay_batch(dynamics, normaliser, [commands], [initial_state])[0]
+    return fast_replay_batch(dynamics, normaliser, [commands], [initial_state], engine)[0]
 
 
 def fast_replay_batch(dynamics: FastDynamics, normaliser: Normaliser,
-                      commands: list[np.ndarray], initial_states: list[np.ndarray]
-                      ) -> list[np.ndarray]:
+                      commands: list[np.ndarray], initial_states: list[np.ndarray],
+                      engine: Engine = "auto") -> list[np.ndarray]:
     """Several independent replays advanced together; each keeps its own length (shorter
     ones are padded with their last command and the padding is dropped)."""
     if not commands:
@@ -140,6 +185,6 @@ def fast_replay_batch(dynamics: FastDynamics, normaliser: Normaliser,
     padded = np.stack([np.pad(c, ((0, longest - len(c)), (0, 0)), mode="edge") if len(c)
                        else np.zeros((longest, command_scale.size)) for c in commands])
     starts = np.stack([np.asarray(s, float) for s in initial_states])
-    states = dynamics.rollout(padded / command_scale, starts / state_scale)
+    states = dynamics.rollout(padded / command_scale, starts / state_scale, engine)
     return [states[i, :len(c)].astype(np.float64) * state_scale
             for i, c in enumerate(commands)]

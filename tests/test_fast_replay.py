@@ -9,34 +9,60 @@ from models.dynamics import replay
 from models.fast import fast_replay, fast_replay_batch
 from models.store import load_model
 
+ENGINES = ["numpy", "compiled"]
 
+
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("vehicle", ["twin-burger", "three-thruster", "bluerov2"])
-def test_numpy_path_matches_torch_on_random_command_steps(vehicle):
+def test_numpy_path_matches_torch_on_random_command_steps(vehicle, engine):
     model = load_model(None, vehicle)
     rng = np.random.default_rng(4)
     commands = np.repeat(rng.uniform(-0.8, 0.8, (60, len(model.command_names))), 40, axis=0)
     start = rng.normal(0.0, 0.05, len(model.sensor_names))
     reference = replay(model.network, model.normaliser, commands, start)
-    fast = fast_replay(model.fast, model.normaliser, commands, start)
+    fast = fast_replay(model.fast, model.normaliser, commands, start, engine)
     np.testing.assert_allclose(fast, reference, rtol=0, atol=1e-6)
 
 
-def test_numpy_path_matches_torch_on_a_logged_mission(make_log, profile):
+@pytest.mark.parametrize("engine", ENGINES)
+def test_numpy_path_matches_torch_on_a_logged_mission(make_log, profile, engine):
     model = load_model()
     frame = ingest(make_log("paper-flow-sensor-covered", 11), profile).frame
     reference = replay(model.network, model.normaliser, frame.commands, frame.sensors[0])
-    fast = fast_replay(model.fast, model.normaliser, frame.commands, frame.sensors[0])
+    fast = fast_replay(model.fast, model.normaliser, frame.commands, frame.sensors[0], engine)
     assert len(fast) > 1500
     np.testing.assert_allclose(fast, reference, rtol=0, atol=1e-6)
 
 
-def test_batched_replays_equal_separate_ones():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_batched_replays_equal_separate_ones(engine):
     model = load_model()
     rng = np.random.default_rng(5)
     histories = [rng.uniform(-0.5, 0.5, (length, 2)) for length in (300, 17, 1, 120)]
     starts = [rng.normal(0.0, 0.05, 2) for _ in histories]
-    batched = fast_replay_batch(model.fast, model.normaliser, histories, starts)
+    batched = fast_replay_batch(model.fast, model.normaliser, histories, starts, engine)
     for history, start, result in zip(histories, starts, batched, strict=True):
         assert result.shape == (len(history), 2)
-        np.testing.assert_allclose(result, fast_replay(model.fast, model.normaliser, history,
-                                                       start), rtol=0, atol=1e-6)
+        alone = fast_replay(model.fast, model.normaliser, history, start, "numpy")
+        np.testing.assert_allclose(result, alone, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_nan_command_poisons_what_follows_and_nothing_before(engine):
+    model = load_model()
+    commands = np.full((200, 2), 0.3)
+    commands[120, 0] = np.nan
+    states = fast_replay(model.fast, model.normaliser, commands, np.zeros(2), engine)
+    assert np.isfinite(states[:121]).all()
+    assert np.isnan(states[121:]).all()
+
+
+def test_long_replays_take_the_compiled_loop_and_short_ones_need_not(monkeypatch):
+    import sys
+
+    from models import fast
+
+    monkeypatch.delitem(sys.modules, "models.compiled", raising=False)
+    assert not fast._use_compiled("auto", 600)
+    assert fast._use_compiled("auto", fast.COMPILED_PAYS_FROM_STEPS)
+    assert not fast._use_compiled("numpy", 10**6)
