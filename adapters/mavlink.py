@@ -1,48 +1,26 @@
-"""MAVLink telemetry logs (.tlog) and ArduPilot DataFlash logs (.bin) through pymavlink.
+"""MAVLink telemetry logs (.tlog) and ArduPilot DataFlash logs (.bin).
 
-Only the message types the profile names are decoded (pymavlink's type filter). A tlog's
-times are the ground station's receive times; a DataFlash log's are the autopilot's TimeUS
-(µs since boot)."""
+The records are walked once (`adapters.mavlink_scan`) and only the message types the
+profile names are decoded, each type all at once (`adapters.mavlink_columns`), with
+pymavlink's message definitions for MAVLink and the log's FMT records for DataFlash. A
+tlog's times are the ground station's receive times; a DataFlash log's are the autopilot's
+TimeUS (µs since boot)."""
 
-import contextlib
-import io
 import struct
-from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 from typing import Any
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.mavlink_scan import RecordScan, scan_file
+from adapters.mavlink_columns import UnknownFormat, decode_dataflash, decode_mavlink
+from adapters.mavlink_scan import RecordIndex, index_file
 from adapters.signals import LogSources, Signals
 
 MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
 PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
 DATAFLASH_HEADER = b"\xa3\x95\x80"       # record header + FMT type
-
-
-def _read_messages(path: Path, reader: Any, collector: SignalCollector,
-                   time_ns: Callable[[Any], int]) -> None:
-    """Feed the wanted messages to the collector; keep what precedes any damage."""
-    wanted = sorted(collector.topics)
-    try:
-        while (message := reader.recv_match(type=wanted, blocking=False)) is not None:
-            collector.add(message.get_type(), time_ns(message), message)
-    except LogError:
-        raise
-    except Exception as error:  # pymavlink raises assorted types on damaged records
-        if collector.count == 0:
-            raise LogError(path, f"damaged log: {error}") from None
-        collector.notes.append(f"log damaged after {collector.count} messages ({error}); "
-                               "analysed the part before the damage")
-
-
-@contextlib.contextmanager
-def _quiet() -> Any:
-    """pymavlink prints 'bad header' and progress to stdout/stderr; a library must not."""
-    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        yield
 
 
 class TlogAdapter:
@@ -60,27 +38,30 @@ class TlogAdapter:
         return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
 
     def read(self, path: Path, sources: LogSources) -> Signals:
-        from pymavlink import mavutil
-
         collector = SignalCollector(path, sources)
-        with path.open("rb") as stream:
-            (first_us,) = struct.unpack(">Q", stream.read(8))
-        with _quiet():
+        index = index_file(path, "tlog", _message_names())
+        classes = _message_classes()
+        dropped = 0
+        for topic in sorted(collector.topics):
+            message_class = classes.get(topic)
+            if message_class is None:
+                continue           # not in the dialect: finish() names the signal
             try:
-                reader = mavutil.mavmmaplog(str(path))
-            except Exception as error:  # pymavlink's index build fails in assorted ways
-                raise LogError(path, f"cannot open tlog: {error}") from None
-            try:
-                # The low bits of the record time carry a link id; whole µs are enough here.
-                _read_messages(path, reader, collector,
-                               lambda m: round(m._timestamp * 1e6) * 1000)
-            finally:
-                reader.close()
-        return _finish(collector, "tlog", first_us * 1000,
-                       scan_file(path, "tlog", _message_names()), "MAVLink")
+                times_us, rows, failed = decode_mavlink(index, message_class)
+            except UnknownFormat as error:
+                raise LogError(path, f"cannot decode {topic}: {error}") from None
+            dropped += failed
+            collector.add_columns(topic, times_us * 1000,
+                                  {name: rows[name] for name in rows.dtype.names or ()})
+        if dropped:
+            collector.notes.append(f"{dropped} MAVLink frames failed their checksum and were "
+                                   "left out")
+        first_us = int(index.times_us[0]) if index.times_us.size else None
+        return _finish(collector, "tlog", None if first_us is None else first_us * 1000,
+                       index, "MAVLink")
 
     def inventory(self, path: Path) -> LogInventory:
-        return _inventory("tlog", scan_file(path, "tlog", _message_names()), "MAVLink")
+        return _inventory("tlog", index_file(path, "tlog", _message_names()), "MAVLink")
 
 
 class DataflashAdapter:
@@ -94,22 +75,27 @@ class DataflashAdapter:
             return "bin" if stream.read(3) == DATAFLASH_HEADER else None
 
     def read(self, path: Path, sources: LogSources) -> Signals:
-        from pymavlink import DFReader
-
         collector = SignalCollector(path, sources)
-        with _quiet():
+        index = index_file(path, "bin")
+        type_ids = {declared.name: type_id for type_id, declared in index.formats.items()}
+        for topic in sorted(collector.topics & type_ids.keys()):
             try:
-                reader = DFReader.DFReader_binary(str(path), zero_time_base=True)
-            except Exception as error:  # the indexer fails in assorted ways on damage
-                raise LogError(path, f"cannot open DataFlash log: {error}") from None
-            _read_messages(path, reader, collector, lambda m: int(m.TimeUS) * 1000)
-        return _finish(collector, "bin", None, scan_file(path, "bin"), "DataFlash")
+                times_us, rows, divisors = decode_dataflash(index, type_ids[topic])
+            except UnknownFormat as error:
+                raise LogError(path, f"cannot decode {topic}: {error}") from None
+            if rows.size and times_us.min() < 0:
+                raise LogError(path, f"{topic} records carry no TimeUS, so they cannot be "
+                                     "placed in time")
+            columns = {name: rows[name] / divisors[name] if name in divisors else rows[name]
+                       for name in rows.dtype.names or ()}
+            collector.add_columns(topic, times_us * 1000, columns)
+        return _finish(collector, "bin", None, index, "DataFlash")
 
     def inventory(self, path: Path) -> LogInventory:
-        return _inventory("bin", scan_file(path, "bin"), "DataFlash")
+        return _inventory("bin", index_file(path, "bin"), "DataFlash")
 
 
-def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: RecordScan,
+def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: RecordIndex,
             kind: str) -> Signals:
     """The record walk names the message types and says where the file breaks, if it does."""
     if scan.problem:
@@ -117,13 +103,19 @@ def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: Re
     return collector.finish(fmt, start_ns, None, {name: kind for name in scan.counts})
 
 
-def _message_names() -> dict[int, str]:
+@cache
+def _message_classes() -> dict[str, Any]:
+    """pymavlink's generated message classes (ArduPilot dialect, a superset of common)."""
     from pymavlink.dialects.v20 import ardupilotmega
 
-    return {msgid: cls.msgname for msgid, cls in ardupilotmega.mavlink_map.items()}
+    return {cls.msgname: cls for cls in ardupilotmega.mavlink_map.values()}
 
 
-def _inventory(fmt: str, scan: RecordScan, kind: str) -> LogInventory:
+def _message_names() -> dict[int, str]:
+    return {cls.id: name for name, cls in _message_classes().items()}
+
+
+def _inventory(fmt: str, scan: RecordIndex, kind: str) -> LogInventory:
     return LogInventory(
         fmt, None if scan.first_us is None else scan.first_us * 1000,
         None if scan.last_us is None else scan.last_us * 1000,

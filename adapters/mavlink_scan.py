@@ -1,23 +1,66 @@
-"""Walk the records of a tlog or DataFlash file without decoding payloads: counts per
-message type, first and last time, and the first place the framing breaks (pymavlink
-stops or resyncs there silently, so this is how a report learns what was lost)."""
+"""Walk the records of a tlog or DataFlash file without decoding payloads: where each
+record starts, its message type, and the first place the framing breaks (the analysis
+covers the records before it, and the report says so).
+
+The walk is the only per-record Python; everything after it (times, counts, payload
+decoding in `adapters.mavlink_columns`) works on whole arrays."""
 
 import mmap
-import struct
+from array import array
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 DATAFLASH_FMT = 0x80
 DATAFLASH_FMT_LENGTH = 89
+DATAFLASH_HEADER_LENGTH = 3                  # A3 95 <type>
+MAVLINK1_HEADER, MAVLINK2_HEADER = 6, 10     # magic … msgid
+TLOG_TIME_LENGTH = 8                         # big-endian µs before each frame
+
+
+@dataclass(frozen=True)
+class DataflashFormat:
+    """One FMT record: the payload layout of a message type."""
+
+    name: str
+    length: int          # whole record, header included
+    types: str           # DataFlash format characters, one per column
+    columns: tuple[str, ...]
 
 
 @dataclass
-class RecordScan:
-    counts: Counter[str] = field(default_factory=Counter)
-    first_us: int | None = None
-    last_us: int | None = None
+class RecordIndex:
+    """Every whole record of a file, in file order."""
+
+    data: np.ndarray                       # the file, uint8, memory-mapped
+    offsets: np.ndarray                    # int64: where each record starts
+    type_ids: np.ndarray                   # int64: msgid (MAVLink) or type (DataFlash)
+    names: dict[int, str]                  # type id → message name
+    times_us: np.ndarray                   # int64 µs per record; -1 where it has none
     problem: str | None = None
+    formats: dict[int, DataflashFormat] = field(default_factory=dict)
+
+    @property
+    def counts(self) -> Counter[str]:
+        ids, counts = np.unique(self.type_ids, return_counts=True)
+        return Counter({self.names.get(int(i), f"id {int(i)}"): int(n)
+                        for i, n in zip(ids, counts, strict=True)})
+
+    @property
+    def first_us(self) -> int | None:
+        timed = self.times_us[self.times_us >= 0]
+        return int(timed.min()) if timed.size else None
+
+    @property
+    def last_us(self) -> int | None:
+        timed = self.times_us[self.times_us >= 0]
+        return int(timed.max()) if timed.size else None
+
+    def of_type(self, type_id: int) -> np.ndarray:
+        """Record positions (into `offsets`) of one message type."""
+        return np.flatnonzero(self.type_ids == type_id)
 
 
 def _problem(size: int, position: int, what: str) -> str:
@@ -25,70 +68,108 @@ def _problem(size: int, position: int, what: str) -> str:
             "there; the analysis covers the records before it")
 
 
-def scan_tlog(data: bytes | mmap.mmap, message_names: dict[int, str]) -> RecordScan:
+def _walk_tlog(data: mmap.mmap | bytes) -> "tuple[array[int], str | None]":
     """Records are an 8-byte big-endian µs time and a MAVLink 1 or 2 frame."""
-    scan, size, position = RecordScan(), len(data), 0
+    offsets, size, position = array("q"), len(data), 0
     while position < size:
-        if position + 18 > size:
-            scan.problem = _problem(size, position, "the file ends inside a record")
-            break
+        if position + TLOG_TIME_LENGTH + MAVLINK2_HEADER > size:
+            return offsets, _problem(size, position, "the file ends inside a record")
         magic, length = data[position + 8], data[position + 9]
         if magic == 0xFE:
-            frame, msgid = 6 + length + 2, data[position + 13]
+            frame = MAVLINK1_HEADER + length + 2
         elif magic == 0xFD:
-            frame = 10 + length + 2 + (13 if data[position + 10] & 1 else 0)
-            msgid = int.from_bytes(data[position + 15:position + 18], "little")
+            frame = MAVLINK2_HEADER + length + 2 + (13 if data[position + 10] & 1 else 0)
         else:
-            scan.problem = _problem(size, position, "bytes that are not a MAVLink frame")
-            break
-        if position + 8 + frame > size:
-            scan.problem = _problem(size, position, "the file ends inside a record")
-            break
-        (time_us,) = struct.unpack_from(">Q", data, position)
-        scan.first_us = time_us if scan.first_us is None else scan.first_us
-        scan.last_us = time_us
-        scan.counts[message_names.get(msgid, f"id {msgid}")] += 1
-        position += 8 + frame
-    return scan
+            return offsets, _problem(size, position, "bytes that are not a MAVLink frame")
+        if position + TLOG_TIME_LENGTH + frame > size:
+            return offsets, _problem(size, position, "the file ends inside a record")
+        offsets.append(position)
+        position += TLOG_TIME_LENGTH + frame
+    return offsets, None
 
 
-def scan_dataflash(data: bytes | mmap.mmap) -> RecordScan:
-    """Records are ``A3 95 <type>`` and a payload whose length an FMT record declared;
-    TimeUS, when a format starts with it, is the first 8 payload bytes."""
-    scan, size, position = RecordScan(), len(data), 0
-    formats: dict[int, tuple[int, str, bool]] = {DATAFLASH_FMT: (DATAFLASH_FMT_LENGTH, "FMT",
-                                                                 False)}
+def tlog_frame_fields(data: np.ndarray, offsets: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per frame: MAVLink version (1 or 2), msgid, payload start and payload length."""
+    frames = offsets + TLOG_TIME_LENGTH
+    version2 = data[frames] == 0xFD
+    v2_frames = np.where(version2, frames, 0)      # keeps the v2 reads inside the file
+    msgid = np.where(version2,
+                     data[v2_frames + 7].astype(np.int64) | data[v2_frames + 8].astype(
+                         np.int64) << 8 | data[v2_frames + 9].astype(np.int64) << 16,
+                     data[frames + 5])
+    starts = frames + np.where(version2, MAVLINK2_HEADER, MAVLINK1_HEADER)
+    return np.where(version2, 2, 1), msgid, starts, data[frames + 1].astype(np.int64)
+
+
+def index_tlog(data: mmap.mmap | bytes, message_names: dict[int, str]) -> RecordIndex:
+    raw = np.frombuffer(data, np.uint8)
+    walked, problem = _walk_tlog(data)
+    offsets = np.frombuffer(walked, np.int64) if walked else np.zeros(0, np.int64)
+    _, msgid, _, _ = tlog_frame_fields(raw, offsets)
+    time_bytes = raw[offsets[:, None] + np.arange(TLOG_TIME_LENGTH)]
+    times = time_bytes.copy().view(">u8").reshape(-1).astype(np.int64)
+    return RecordIndex(raw, offsets, msgid.astype(np.int64), dict(message_names), times,
+                       problem)
+
+
+def _walk_dataflash(data: mmap.mmap | bytes
+                    ) -> "tuple[array[int], dict[int, DataflashFormat], str | None]":
+    """Records are ``A3 95 <type>`` and a payload whose length an FMT record declared."""
+    offsets, size, position = array("q"), len(data), 0
+    formats = {DATAFLASH_FMT: DataflashFormat("FMT", DATAFLASH_FMT_LENGTH, "BBnNZ",
+                                              ("Type", "Length", "Name", "Format", "Columns"))}
+    lengths = {DATAFLASH_FMT: DATAFLASH_FMT_LENGTH}
     while position < size:
-        if position + 3 > size:
-            scan.problem = _problem(size, position, "the file ends inside a record")
-            break
+        if position + DATAFLASH_HEADER_LENGTH > size:
+            return offsets, formats, _problem(size, position, "the file ends inside a record")
         if data[position] != 0xA3 or data[position + 1] != 0x95:
-            scan.problem = _problem(size, position, "bytes that are not a DataFlash record")
-            break
-        known = formats.get(data[position + 2])
-        if known is None:
-            scan.problem = _problem(size, position, "a record of an undeclared type")
-            break
-        length, name, timed = known
+            return offsets, formats, _problem(size, position,
+                                              "bytes that are not a DataFlash record")
+        kind = data[position + 2]
+        length = lengths.get(kind)
+        if length is None:
+            return offsets, formats, _problem(size, position, "a record of an undeclared type")
         if position + length > size:
-            scan.problem = _problem(size, position, "the file ends inside a record")
-            break
-        if data[position + 2] == DATAFLASH_FMT:
-            declared = bytes(data[position + 5:position + 9]).rstrip(b"\0").decode("ascii",
-                                                                                    "replace")
-            columns = bytes(data[position + 25:position + 89])
-            formats[data[position + 3]] = (data[position + 4], declared,
-                                           columns.startswith(b"TimeUS"))
-        elif timed:
-            (time_us,) = struct.unpack_from("<Q", data, position + 3)
-            scan.first_us = time_us if scan.first_us is None else min(scan.first_us, time_us)
-            scan.last_us = time_us if scan.last_us is None else max(scan.last_us, time_us)
-        scan.counts[name] += 1
+            return offsets, formats, _problem(size, position, "the file ends inside a record")
+        if kind == DATAFLASH_FMT:
+            declared = _parse_fmt(bytes(data[position:position + DATAFLASH_FMT_LENGTH]))
+            formats[data[position + 3]] = declared
+            lengths[data[position + 3]] = declared.length
+        offsets.append(position)
         position += length
-    return scan
+    return offsets, formats, None
 
 
-def scan_file(path: Path, kind: str, message_names: dict[int, str] | None = None
-              ) -> RecordScan:
-    with path.open("rb") as stream, mmap.mmap(stream.fileno(), 0, access=mmap.ACCESS_READ) as m:
-        return scan_tlog(m, message_names or {}) if kind == "tlog" else scan_dataflash(m)
+def _parse_fmt(record: bytes) -> DataflashFormat:
+    def text(raw: bytes) -> str:
+        return raw.split(b"\0", 1)[0].decode("ascii", "replace")
+
+    return DataflashFormat(text(record[5:9]), record[4], text(record[9:25]),
+                           tuple(c for c in text(record[25:89]).split(",") if c))
+
+
+def index_dataflash(data: mmap.mmap | bytes) -> RecordIndex:
+    """TimeUS, when a format starts with it, is the first 8 payload bytes."""
+    raw = np.frombuffer(data, np.uint8)
+    walked, formats, problem = _walk_dataflash(data)
+    offsets = np.frombuffer(walked, np.int64) if walked else np.zeros(0, np.int64)
+    type_ids = raw[offsets + 2].astype(np.int64)
+    timed = np.zeros(256, bool)
+    for type_id, declared in formats.items():
+        timed[type_id] = declared.columns[:1] == ("TimeUS",) and declared.types[:1] in "Qq"
+    times = np.full(offsets.size, -1, np.int64)
+    has_time = timed[type_ids]
+    starts = offsets[has_time] + DATAFLASH_HEADER_LENGTH
+    times[has_time] = raw[starts[:, None] + np.arange(8)].copy().view("<u8").reshape(-1)
+    names = {type_id: declared.name for type_id, declared in formats.items()}
+    return RecordIndex(raw, offsets, type_ids, names, times, problem, formats)
+
+
+def index_file(path: Path, kind: str, message_names: dict[int, str] | None = None
+               ) -> RecordIndex:
+    """The file stays memory-mapped for as long as the index (and arrays cut from it) live."""
+    with path.open("rb") as stream:
+        data: mmap.mmap | bytes = (mmap.mmap(stream.fileno(), 0, access=mmap.ACCESS_READ)
+                                   if path.stat().st_size else b"")
+    return index_tlog(data, message_names or {}) if kind == "tlog" else index_dataflash(data)
