@@ -1,7 +1,7 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
 from array import array
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -9,10 +9,11 @@ import numpy as np
 import pandas as pd
 
 from adapters.errors import LogError
-from adapters.fieldpath import column_getter, field_getter
+from adapters.fieldpath import field_getter
 from adapters.signals import FieldSource, LogSources, SegmentMarker, Signals
 
-Columns = Mapping[str, np.ndarray]
+# A topic's messages as columns: field path → one value per message.
+ColumnSource = Callable[[str], np.ndarray]
 
 
 class _Extractor:
@@ -25,11 +26,11 @@ class _Extractor:
     def matches(self, message: Any) -> bool:
         return all(_text(get(message)) == value for get, value in self.where)
 
-    def rows_matching(self, table: Columns, rows: int) -> np.ndarray:
-        """The `where` filter on a table: each distinct value is compared once."""
+    def rows_matching(self, column: ColumnSource, rows: int) -> np.ndarray:
+        """The `where` filter on columns: each distinct value is compared once."""
         keep = np.ones(rows, bool)
         for key, value in self.source.where:
-            distinct, which = np.unique(column_getter(key)(table), return_inverse=True)
+            distinct, which = np.unique(column(key), return_inverse=True)
             keep &= np.array([_text(d) == value for d in distinct.tolist()], bool)[which]
         return keep
 
@@ -64,6 +65,15 @@ class SignalCollector:
     def topics(self) -> set[str]:
         return self.sources.topics
 
+    def field_paths(self, topic: str) -> list[str]:
+        """Every field path read on ``topic``: values, `where` filters, segment labels."""
+        paths = [path for extractor in self.by_topic.get(topic, ())
+                 for path in (extractor.source.field, *(k for k, _ in extractor.source.where))]
+        segment = self.sources.segment
+        if segment is not None and segment.topic == topic:
+            paths.append(segment.field)
+        return list(dict.fromkeys(paths))
+
     def add(self, topic: str, time_ns: int, message: Any) -> None:
         self.count += 1
         segment = self.sources.segment
@@ -82,14 +92,14 @@ class SignalCollector:
             self.times[extractor.name].append(time_ns)
             self.values[extractor.name].append(value * extractor.scale + extractor.offset)
 
-    def add_columns(self, topic: str, times_ns: np.ndarray, table: Columns) -> None:
+    def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource) -> None:
         """Every message of ``topic`` at once, as columns (readers that decode whole
-        message types into arrays: MAVLink, DataFlash). Same result as `add` per row."""
+        message types into arrays). Same result as `add` per message."""
         rows = times_ns.size
         self.count += rows
         segment = self.sources.segment
         if segment is not None and topic == segment.topic:
-            texts = column_getter(segment.field)(table).tolist()
+            texts = column(segment.field).tolist()
             for time_ns, raw in zip(times_ns.tolist(), texts, strict=True):
                 text = _text(raw)
                 if text.startswith(segment.prefix):
@@ -97,14 +107,14 @@ class SignalCollector:
                                                       text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
             try:
-                keep = extractor.rows_matching(table, rows) if extractor.where else slice(None)
-                column = column_getter(extractor.source.field)(table)[keep]
-                if column.dtype.kind not in "biuf":
-                    raise TypeError(f"{column.dtype} is not a number")
+                keep = extractor.rows_matching(column, rows) if extractor.where else slice(None)
+                numbers = column(extractor.source.field)[keep]
+                if numbers.dtype.kind not in "biuf":
+                    raise TypeError(f"{numbers.dtype} is not a number")
             except (IndexError, KeyError, TypeError, ValueError) as error:
                 raise LogError(self.path, f"field {extractor.name!r} does not resolve on "
                                           f"{topic}: {error!r}") from None
-            values = column.astype(np.float64) * extractor.scale + extractor.offset
+            values = numbers.astype(np.float64) * extractor.scale + extractor.offset
             self.times[extractor.name].frombytes(times_ns[keep].astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())
 

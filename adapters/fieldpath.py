@@ -1,11 +1,9 @@
 """Resolve a field path such as ``twist.linear.x`` or ``data[1]`` on a decoded message."""
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
-
-import numpy as np
 
 _STEP = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
 
@@ -44,20 +42,3 @@ def field_getter(path: str) -> Callable[[Any], Any]:
 
     return get
 
-
-def column_getter(path: str) -> Callable[[Mapping[str, np.ndarray]], np.ndarray]:
-    """Like `field_getter`, for a table of columns (one row per message): ``name`` picks a
-    column and ``[i]`` element i of an array field, for every row at once."""
-    name, *rest = parse_field_path(path)
-    indices = [step for step in rest if isinstance(step, int)]
-    if not isinstance(name, str) or len(indices) != len(rest):
-        raise ValueError(f"field path {path!r}: these messages are flat, so a path is a "
-                         "field name with optional [index]")
-
-    def get(table: Mapping[str, np.ndarray]) -> np.ndarray:
-        column = table[name]
-        for index in indices:
-            column = column[:, index]
-        return column
-
-    return get

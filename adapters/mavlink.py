@@ -11,10 +11,18 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from adapters.collect import SignalCollector
+import numpy as np
+
+from adapters.collect import ColumnSource, SignalCollector
 from adapters.errors import LogError
+from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.mavlink_columns import UnknownFormat, decode_dataflash, decode_mavlink
+from adapters.mavlink_columns import (
+    UnknownFormat,
+    decode_dataflash,
+    decode_mavlink,
+    field_column,
+)
 from adapters.mavlink_scan import RecordIndex, index_file
 from adapters.signals import LogSources, Signals
 
@@ -51,8 +59,7 @@ class TlogAdapter:
             except UnknownFormat as error:
                 raise LogError(path, f"cannot decode {topic}: {error}") from None
             dropped += failed
-            collector.add_columns(topic, times_us * 1000,
-                                  {name: rows[name] for name in rows.dtype.names or ()})
+            collector.add_columns(topic, times_us * 1000, _columns_of(rows, {}))
         if dropped:
             collector.notes.append(f"{dropped} MAVLink frames failed their checksum and were "
                                    "left out")
@@ -86,13 +93,21 @@ class DataflashAdapter:
             if rows.size and times_us.min() < 0:
                 raise LogError(path, f"{topic} records carry no TimeUS, so they cannot be "
                                      "placed in time")
-            columns = {name: rows[name] / divisors[name] if name in divisors else rows[name]
-                       for name in rows.dtype.names or ()}
-            collector.add_columns(topic, times_us * 1000, columns)
+            collector.add_columns(topic, times_us * 1000, _columns_of(rows, divisors))
         return _finish(collector, "bin", None, index, "DataFlash")
 
     def inventory(self, path: Path) -> LogInventory:
         return _inventory("bin", index_file(path, "bin"), "DataFlash")
+
+
+def _columns_of(rows: np.ndarray, divisors: dict[str, float]) -> ColumnSource:
+    """Field paths on decoded rows; DataFlash's scaled integer columns divided back."""
+    def column(path: str) -> np.ndarray:
+        name = str(parse_field_path(path)[0])
+        values = field_column(rows, path)
+        return values / divisors[name] if name in divisors else values
+
+    return column
 
 
 def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: RecordIndex,

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from adapters.fieldpath import parse_field_path
 from adapters.mavlink_scan import DATAFLASH_HEADER_LENGTH, RecordIndex, tlog_frame_fields
 
 _STRUCT_TO_NUMPY = {"b": "i1", "B": "u1", "h": "i2", "H": "u2", "i": "i4", "I": "u4",
@@ -28,6 +29,19 @@ _STRUCT_TOKEN = re.compile(r"(\d*)([a-zA-Z?])")
 
 class UnknownFormat(ValueError):
     """A payload layout this decoder cannot express."""
+
+
+def field_column(rows: np.ndarray, path: str) -> np.ndarray:
+    """A field of every decoded row: ``name``, or ``name[i]`` for element i of an array."""
+    name, *rest = parse_field_path(path)
+    indices = [step for step in rest if isinstance(step, int)]
+    if not isinstance(name, str) or len(indices) != len(rest):
+        raise ValueError(f"field path {path!r}: these messages are flat, so a path is a "
+                         "field name with optional [index]")
+    column = rows[name]
+    for index in indices:
+        column = column[:, index]
+    return column
 
 
 def gather_payloads(data: np.ndarray, starts: np.ndarray, lengths: np.ndarray,

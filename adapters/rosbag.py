@@ -11,6 +11,7 @@ from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, salvage_mcap
+from adapters.ros_columns import RawMessages, add_topics
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
 
@@ -140,15 +141,22 @@ class RosbagAdapter:
         if missing:
             raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
         connections = [c for c in reader.connections if c.topic in collector.topics]
+        batches = {c.topic: RawMessages(cdr=reader.is2) for c in connections}
+        damage: Exception | None = None
         try:
             for connection, timestamp, raw in reader.messages(connections=connections):
-                collector.add(connection.topic, int(timestamp),
-                              reader.deserialize(raw, connection.msgtype))
+                batches[connection.topic].append(int(timestamp), raw)
+        except Exception as error:  # damaged data surfaces as several unrelated types
+            damage = error
+        try:
+            add_topics(collector, batches, topics, reader.typestore, reader.deserialize)
         except LogError:
             raise
-        except Exception as error:  # damaged data surfaces as several unrelated types
+        except Exception as error:  # a message its own definition does not describe
+            damage = damage or error
+        if damage is not None:
             if collector.count == 0:
-                raise LogError(collector.path, f"damaged log: {error}") from None
-            collector.notes.append(f"log damaged after {collector.count} messages ({error}); "
+                raise LogError(collector.path, f"damaged log: {damage}") from None
+            collector.notes.append(f"log damaged after {collector.count} messages ({damage}); "
                                    "analysed the part before the damage")
         return collector.finish(fmt, int(reader.start_time), int(reader.end_time), topics)

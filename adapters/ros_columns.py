@@ -1,0 +1,196 @@
+"""Pull one field out of every message of a topic at once, straight from the serialised
+bytes (ROS 1 or little-endian CDR), instead of building a Python object per message.
+
+The message definitions come from the log (rosbags' type store, the same definitions its
+deserialisers are generated from). Walking a definition moves an array of read positions,
+one per message, past the fields before the wanted one: fixed-size fields by a constant,
+strings and sequences by the length each message stores. CDR aligns every primitive to its
+size from the start of the body, and a non-empty sequence of primitives to its element
+size, exactly as rosbags' deserialiser does; ROS 1 does not align.
+
+Anything the walker does not handle (big-endian CDR, wide strings, a message shorter than
+its definition) raises `NotColumnar`, and the adapter decodes that topic message by
+message instead."""
+
+from array import array
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from itertools import pairwise
+from typing import Any
+
+import numpy as np
+
+from adapters.collect import SignalCollector
+from adapters.fieldpath import parse_field_path
+
+PRIMITIVES = {"bool": "u1", "byte": "u1", "char": "u1", "int8": "i1", "uint8": "u1",
+              "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
+              "int64": "<i8", "uint64": "<u8", "float32": "<f4", "float64": "<f8"}
+CDR_HEADER = 4                               # encapsulation kind and options
+CDR_LITTLE_ENDIAN = (0x01, 0x03)             # CDR_LE, PL_CDR_LE
+
+
+class NotColumnar(ValueError):
+    """This field of these messages cannot be read column-wise."""
+
+
+@dataclass
+class RawMessages:
+    """The serialised messages of one topic, appended as the log is read."""
+
+    cdr: bool
+    buffer: bytearray = field(default_factory=bytearray)
+    starts: "array[int]" = field(default_factory=lambda: array("q"))
+    times_ns: "array[int]" = field(default_factory=lambda: array("q"))
+
+    def append(self, time_ns: int, raw: bytes | memoryview) -> None:
+        self.starts.append(len(self.buffer))
+        self.times_ns.append(time_ns)
+        self.buffer += raw
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+    def messages(self) -> list[bytes]:
+        """Each message's bytes (for the per-message fallback)."""
+        bounds = [*self.starts, len(self.buffer)]
+        return [bytes(self.buffer[a:b]) for a, b in pairwise(bounds)]
+
+
+class ColumnReader:
+    """Field paths → one NumPy column per path (numbers) or object column (strings)."""
+
+    def __init__(self, messages: RawMessages, msgtype: str, typestore: Any) -> None:
+        self.msgtype, self.typestore, self.cdr = msgtype, typestore, messages.cdr
+        self.raw = messages.buffer
+        self.data = np.frombuffer(self.raw, np.uint8)
+        starts = np.frombuffer(messages.starts, np.int64) if len(messages) else np.zeros(
+            0, np.int64)
+        self.ends = np.append(starts[1:], self.data.size)
+        if self.cdr:
+            if starts.size and not np.isin(self.data[starts + 1], CDR_LITTLE_ENDIAN).all():
+                raise NotColumnar("big-endian CDR")
+            starts = starts + CDR_HEADER
+        self.origin = starts
+
+    def column(self, path: str) -> np.ndarray:
+        rows = np.arange(self.origin.size)
+        return self._descend(("NAME", self.msgtype), parse_field_path(path), self.origin, rows)
+
+    # -- reading: ``rows`` says which messages ``positions`` belong to ---------------------
+    def _align(self, positions: np.ndarray, size: int, rows: np.ndarray) -> np.ndarray:
+        if not self.cdr or size == 1:
+            return positions
+        size, origin = min(size, 8), self.origin[rows]
+        return origin + (positions - origin + size - 1) // size * size
+
+    def _read(self, positions: np.ndarray, dtype: np.dtype, rows: np.ndarray) -> np.ndarray:
+        if (positions + dtype.itemsize > self.ends[rows]).any():
+            raise NotColumnar("a message is shorter than its definition")
+        taken = self.data[positions[:, None] + np.arange(dtype.itemsize)]
+        return taken.view(dtype).reshape(-1)
+
+    def _string(self, positions: np.ndarray, rows: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """(values as bytes objects, positions after the strings)."""
+        positions = self._align(positions, 4, rows)
+        lengths = self._read(positions, np.dtype("<u4"), rows).astype(np.int64)
+        after = positions + 4 + lengths
+        if (after > self.ends[rows]).any():
+            raise NotColumnar("a string runs past its message")
+        text_end = after - 1 if self.cdr else after          # CDR counts the trailing NUL
+        raw = self.raw
+        values = np.array([bytes(raw[a:b]) for a, b in zip((positions + 4).tolist(),
+                                                     text_end.tolist(), strict=True)], object)
+        return values, after
+
+    # -- walking the definition -----------------------------------------------------------
+    def _node(self, desc: tuple[Any, ...]) -> tuple[str, Any]:
+        kind, detail = desc
+        return kind.name, detail
+
+    def _fields(self, typename: str) -> list[tuple[str, tuple[str, Any]]]:
+        return [(name, self._node(desc))
+                for name, desc in self.typestore.get_msgdef(typename).fields]
+
+    def _counts(self, node: tuple[str, Any], positions: np.ndarray, rows: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+        """An array's element count per message, and where its elements start."""
+        kind, detail = node
+        if kind == "ARRAY":
+            return np.full(positions.size, detail[1], np.int64), positions
+        positions = self._align(positions, 4, rows)
+        counts = self._read(positions, np.dtype("<u4"), rows).astype(np.int64)
+        return counts, positions + 4
+
+    def _skip(self, node: tuple[str, Any], positions: np.ndarray, rows: np.ndarray
+              ) -> np.ndarray:
+        kind, detail = node
+        if kind == "BASE":
+            typename = detail[0]
+            if typename == "string":
+                return self._string(positions, rows)[1]
+            if typename not in PRIMITIVES:
+                raise NotColumnar(f"type {typename}")
+            size = np.dtype(PRIMITIVES[typename]).itemsize
+            return self._align(positions, size, rows) + size
+        if kind == "NAME":
+            for _, child in self._fields(detail):
+                positions = self._skip(child, positions, rows)
+            return positions
+        element = self._node(detail[0])
+        counts, positions = self._counts(node, positions, rows)
+        if element[0] == "BASE" and element[1][0] in PRIMITIVES:
+            size = np.dtype(PRIMITIVES[element[1][0]]).itemsize
+            aligned = np.where(counts > 0, self._align(positions, size, rows), positions)
+            return aligned + counts * size
+        positions = positions.copy()
+        for index in range(int(counts.max(initial=0))):     # strings, messages: one by one
+            present = counts > index
+            positions[present] = self._skip(element, positions[present], rows[present])
+        return positions
+
+    def _descend(self, node: tuple[str, Any], steps: tuple[str | int, ...],
+                 positions: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        kind, detail = node
+        if not steps:
+            if kind == "BASE" and detail[0] == "string":
+                return self._string(positions, rows)[0]
+            if kind == "BASE" and detail[0] in PRIMITIVES:
+                dtype = np.dtype(PRIMITIVES[detail[0]])
+                return self._read(self._align(positions, dtype.itemsize, rows), dtype, rows)
+            raise NotColumnar(f"{kind.lower()} is not a value")
+        step, rest = steps[0], steps[1:]
+        if kind == "NAME" and isinstance(step, str):
+            for name, child in self._fields(detail):
+                if name == step:
+                    return self._descend(child, rest, positions, rows)
+                positions = self._skip(child, positions, rows)
+            raise KeyError(f"{detail} has no field {step!r}")
+        if kind in ("ARRAY", "SEQUENCE") and isinstance(step, int):
+            element = self._node(detail[0])
+            counts, positions = self._counts(node, positions, rows)
+            if (counts <= step).any():
+                raise IndexError(f"index {step} outside an array of {int(counts.min())}")
+            for _ in range(step):
+                positions = self._skip(element, positions, rows)
+            return self._descend(element, rest, positions, rows)
+        raise KeyError(f"cannot apply {step!r} to a {kind.lower()}")
+
+
+def add_topics(collector: SignalCollector, batches: dict[str, RawMessages],
+               msgtypes: dict[str, str], typestore: Any,
+               deserialize: Callable[[bytes, str], Any]) -> None:
+    """Hand each topic's messages to the collector: column-wise when every field the
+    profile reads there can be walked, else deserialised one message at a time (which also
+    gives the usual error when a field does not resolve)."""
+    for topic, batch in batches.items():
+        try:
+            reader = ColumnReader(batch, msgtypes[topic], typestore)
+            columns = {path: reader.column(path) for path in collector.field_paths(topic)}
+        except (NotColumnar, KeyError, IndexError):
+            for time_ns, raw in zip(batch.times_ns, batch.messages(), strict=True):
+                collector.add(topic, time_ns, deserialize(raw, msgtypes[topic]))
+            continue
+        collector.add_columns(topic, np.frombuffer(batch.times_ns, np.int64),
+                              columns.__getitem__)
