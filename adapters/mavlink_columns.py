@@ -9,6 +9,7 @@ import re
 from typing import Any
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from adapters.fieldpath import parse_field_path
 from adapters.mavlink_scan import DATAFLASH_HEADER_LENGTH, RecordIndex, tlog_frame_fields
@@ -47,11 +48,18 @@ def field_column(rows: np.ndarray, path: str) -> np.ndarray:
 def gather_payloads(data: np.ndarray, starts: np.ndarray, lengths: np.ndarray,
                     width: int) -> np.ndarray:
     """(n, width) uint8: each payload from its start, cut or zero-padded to ``width``
-    (MAVLink 2 drops trailing zero bytes on the wire; the receiver puts them back)."""
-    columns = np.arange(width)
-    inside = columns < np.minimum(lengths, width)[:, None]
-    rows = data[np.where(inside, starts[:, None] + columns, 0)]
-    rows[~inside] = 0
+    (MAVLink 2 drops trailing zero bytes on the wire; the receiver puts them back). Rows
+    are copied from a sliding window over the file, so no index array of n × width."""
+    rows = np.zeros((starts.size, width), np.uint8)
+    if width == 0 or starts.size == 0:
+        return rows
+    fits = starts <= data.size - width
+    if data.size >= width:
+        rows[fits] = sliding_window_view(data, width)[starts[fits]]
+    for row in np.flatnonzero(~fits):           # the last record or two of the file
+        tail = data[starts[row]:]
+        rows[row, :tail.size] = tail
+    rows[np.arange(width) >= np.minimum(lengths, width)[:, None]] = 0
     return rows
 
 

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from adapters.packed import gather_words
+
 DATAFLASH_FMT = 0x80
 DATAFLASH_FMT_LENGTH = 89
 DATAFLASH_HEADER_LENGTH = 3                  # A3 95 <type>
@@ -107,8 +109,7 @@ def index_tlog(data: mmap.mmap | bytes, message_names: dict[int, str]) -> Record
     walked, problem = _walk_tlog(data)
     offsets = np.frombuffer(walked, np.int64) if walked else np.zeros(0, np.int64)
     _, msgid, _, _ = tlog_frame_fields(raw, offsets)
-    time_bytes = raw[offsets[:, None] + np.arange(TLOG_TIME_LENGTH)]
-    times = time_bytes.copy().view(">u8").reshape(-1).astype(np.int64)
+    times = gather_words(raw, offsets, ">u8").astype(np.int64)
     return RecordIndex(raw, offsets, msgid.astype(np.int64), dict(message_names), times,
                        problem)
 
@@ -161,7 +162,7 @@ def index_dataflash(data: mmap.mmap | bytes) -> RecordIndex:
     times = np.full(offsets.size, -1, np.int64)
     has_time = timed[type_ids]
     starts = offsets[has_time] + DATAFLASH_HEADER_LENGTH
-    times[has_time] = raw[starts[:, None] + np.arange(8)].copy().view("<u8").reshape(-1)
+    times[has_time] = gather_words(raw, starts, "<u8")
     names = {type_id: declared.name for type_id, declared in formats.items()}
     return RecordIndex(raw, offsets, type_ids, names, times, problem, formats)
 

@@ -4,14 +4,14 @@ channels and the log's time span without scanning, and a damaged file is read up
 damage."""
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any, BinaryIO
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.ros_columns import RawMessages, add_topics
+from adapters.ros_columns import TopicBatches
 from adapters.signals import LogSources, Signals
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -81,6 +81,31 @@ def _cdr_typestore(summary: Any, topics: list[str]) -> Any | None:
     return store
 
 
+def _file_order(reader: Any, stream: BinaryIO, summary: Any, topics: list[str]
+                ) -> Iterator[tuple[Any, Any]]:
+    """(channel, message) of ``topics`` in file order, one chunk in memory at a time. The
+    library's own file-order iteration queues every chunk's messages behind the remaining
+    chunks, so it holds the whole file's messages before yielding the last chunk's."""
+    from mcap.data_stream import ReadDataStream
+    from mcap.records import Chunk, Message
+    from mcap.stream_reader import breakup_chunk
+
+    if not summary.chunk_indexes:
+        for _, channel, message in reader.iter_messages(topics=topics, log_time_order=False):
+            yield channel, message
+        return
+    wanted = {c.id: c for c in summary.channels.values() if c.topic in topics}
+    for index in sorted(summary.chunk_indexes, key=lambda i: i.chunk_start_offset):
+        if index.message_index_offsets and wanted.keys().isdisjoint(
+                index.message_index_offsets):
+            continue                                  # no wanted channel in this chunk
+        stream.seek(index.chunk_start_offset + 1 + 8)  # opcode and record length
+        chunk = Chunk.read(ReadDataStream(stream))
+        for record in breakup_chunk(chunk, validate_crc=True):
+            if isinstance(record, Message) and record.channel_id in wanted:
+                yield wanted[record.channel_id], record
+
+
 class McapAdapter:
     """A standalone .mcap file (any profile: ros2, ros1 or JSON-encoded channels)."""
 
@@ -123,11 +148,10 @@ class McapAdapter:
             else:
                 # File order, not a merge by log time (the merge costs more than decoding);
                 # resampling sorts a series if its messages were stored out of order.
-                batches = {topic: RawMessages(cdr=True) for topic in wanted}
-                for _, channel, message in reader.iter_messages(topics=wanted,
-                                                                log_time_order=False):
-                    batches[channel.topic].append(message.log_time, message.data)
-                add_topics(collector, batches, topics, store, store.deserialize_cdr)
+                batches = TopicBatches(collector, topics, True, store, store.deserialize_cdr)
+                for channel, message in _file_order(reader, stream, summary, wanted):
+                    batches.append(channel.topic, message.log_time, message.data)
+                batches.flush()
         except LogError:
             raise
         except Exception as error:  # a damaged chunk: keep what came before it

@@ -22,6 +22,7 @@ import numpy as np
 
 from adapters.collect import SignalCollector
 from adapters.fieldpath import parse_field_path
+from adapters.packed import gather_words
 
 PRIMITIVES = {"bool": "u1", "byte": "u1", "char": "u1", "int8": "i1", "uint8": "u1",
               "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
@@ -87,22 +88,25 @@ class ColumnReader:
     def _read(self, positions: np.ndarray, dtype: np.dtype, rows: np.ndarray) -> np.ndarray:
         if (positions + dtype.itemsize > self.ends[rows]).any():
             raise NotColumnar("a message is shorter than its definition")
-        taken = self.data[positions[:, None] + np.arange(dtype.itemsize)]
-        return taken.view(dtype).reshape(-1)
+        return gather_words(self.data, positions, dtype.str)
 
-    def _string(self, positions: np.ndarray, rows: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """(values as bytes objects, positions after the strings)."""
+    def _string_bounds(self, positions: np.ndarray, rows: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray]:
+        """Where each string's text starts, and where the field after it starts."""
         positions = self._align(positions, 4, rows)
         lengths = self._read(positions, np.dtype("<u4"), rows).astype(np.int64)
         after = positions + 4 + lengths
         if (after > self.ends[rows]).any():
             raise NotColumnar("a string runs past its message")
-        text_end = after - 1 if self.cdr else after          # CDR counts the trailing NUL
+        return positions + 4, after
+
+    def _strings(self, positions: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """The strings as bytes objects (an object column)."""
+        starts, after = self._string_bounds(positions, rows)
+        text_ends = after - 1 if self.cdr else after          # CDR counts the trailing NUL
         raw = self.raw
-        values = np.array([bytes(raw[a:b]) for a, b in zip((positions + 4).tolist(),
-                                                     text_end.tolist(), strict=True)], object)
-        return values, after
+        return np.array([bytes(raw[a:b]) for a, b in zip(starts.tolist(), text_ends.tolist(),
+                                                          strict=True)], object)
 
     # -- walking the definition -----------------------------------------------------------
     def _node(self, desc: tuple[Any, ...]) -> tuple[str, Any]:
@@ -129,7 +133,7 @@ class ColumnReader:
         if kind == "BASE":
             typename = detail[0]
             if typename == "string":
-                return self._string(positions, rows)[1]
+                return self._string_bounds(positions, rows)[1]
             if typename not in PRIMITIVES:
                 raise NotColumnar(f"type {typename}")
             size = np.dtype(PRIMITIVES[typename]).itemsize
@@ -155,7 +159,7 @@ class ColumnReader:
         kind, detail = node
         if not steps:
             if kind == "BASE" and detail[0] == "string":
-                return self._string(positions, rows)[0]
+                return self._strings(positions, rows)
             if kind == "BASE" and detail[0] in PRIMITIVES:
                 dtype = np.dtype(PRIMITIVES[detail[0]])
                 return self._read(self._align(positions, dtype.itemsize, rows), dtype, rows)
@@ -178,19 +182,39 @@ class ColumnReader:
         raise KeyError(f"cannot apply {step!r} to a {kind.lower()}")
 
 
-def add_topics(collector: SignalCollector, batches: dict[str, RawMessages],
-               msgtypes: dict[str, str], typestore: Any,
-               deserialize: Callable[[bytes, str], Any]) -> None:
-    """Hand each topic's messages to the collector: column-wise when every field the
+class TopicBatches:
+    """Serialised messages gathered per topic and handed to the collector a batch at a
+    time (so memory stays bounded however long the log): column-wise when every field the
     profile reads there can be walked, else deserialised one message at a time (which also
     gives the usual error when a field does not resolve)."""
-    for topic, batch in batches.items():
+
+    BATCH_BYTES = 8 << 20
+
+    def __init__(self, collector: SignalCollector, msgtypes: dict[str, str], cdr: bool,
+                 typestore: Any, deserialize: Callable[[bytes, str], Any]) -> None:
+        self.collector, self.msgtypes, self.cdr = collector, msgtypes, cdr
+        self.typestore, self.deserialize = typestore, deserialize
+        self.pending: dict[str, RawMessages] = {}
+
+    def append(self, topic: str, time_ns: int, raw: bytes | memoryview) -> None:
+        batch = self.pending.setdefault(topic, RawMessages(self.cdr))
+        batch.append(time_ns, raw)
+        if len(batch.buffer) >= self.BATCH_BYTES:
+            self._add(topic, self.pending.pop(topic))
+
+    def flush(self) -> None:
+        while self.pending:
+            self._add(*self.pending.popitem())
+
+    def _add(self, topic: str, batch: RawMessages) -> None:
+        msgtype = self.msgtypes[topic]
         try:
-            reader = ColumnReader(batch, msgtypes[topic], typestore)
-            columns = {path: reader.column(path) for path in collector.field_paths(topic)}
+            reader = ColumnReader(batch, msgtype, self.typestore)
+            columns = {path: reader.column(path)
+                       for path in self.collector.field_paths(topic)}
         except (NotColumnar, KeyError, IndexError):
             for time_ns, raw in zip(batch.times_ns, batch.messages(), strict=True):
-                collector.add(topic, time_ns, deserialize(raw, msgtypes[topic]))
-            continue
-        collector.add_columns(topic, np.frombuffer(batch.times_ns, np.int64),
-                              columns.__getitem__)
+                self.collector.add(topic, time_ns, self.deserialize(raw, msgtype))
+            return
+        self.collector.add_columns(topic, np.frombuffer(batch.times_ns, np.int64),
+                                   columns.__getitem__)

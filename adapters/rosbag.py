@@ -11,7 +11,7 @@ from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, salvage_mcap
-from adapters.ros_columns import RawMessages, add_topics
+from adapters.ros_columns import TopicBatches
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
 
@@ -141,15 +141,18 @@ class RosbagAdapter:
         if missing:
             raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
         connections = [c for c in reader.connections if c.topic in collector.topics]
-        batches = {c.topic: RawMessages(cdr=reader.is2) for c in connections}
+        batches = TopicBatches(collector, topics, reader.is2, reader.typestore,
+                               reader.deserialize)
         damage: Exception | None = None
         try:
             for connection, timestamp, raw in reader.messages(connections=connections):
-                batches[connection.topic].append(int(timestamp), raw)
+                batches.append(connection.topic, int(timestamp), raw)
+        except LogError:
+            raise
         except Exception as error:  # damaged data surfaces as several unrelated types
             damage = error
         try:
-            add_topics(collector, batches, topics, reader.typestore, reader.deserialize)
+            batches.flush()
         except LogError:
             raise
         except Exception as error:  # a message its own definition does not describe

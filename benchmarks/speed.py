@@ -29,6 +29,7 @@ ONE_THREAD = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
 FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]
 REPLAY_STEPS, BATCH = 36_000, 16
+FAULTY = "mcap, faulty"
 
 
 def peak_rss_mb() -> float:
@@ -39,21 +40,29 @@ def peak_rss_mb() -> float:
 
 
 def make_logs(workdir: Path, formats: list[str]) -> dict[str, Path]:
+    """The one-hour dive in every format, and (key ``mcap, faulty``) the same hour with
+    thruster 0 dead from minute 30, whose diagnosis also runs the isolation steps."""
     from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.faults import Fault
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
     from auvdiag_cli.simulator.writers import write_log
 
     profile = load_profile()
-    dive = simulate(Scenario("one-hour", "16 x (ZA, ZB, ZC, mission)",
-                             (DMS_ALL + PAPER_MISSION) * 16), profile, seed=1)
+    steps = (DMS_ALL + PAPER_MISSION) * 16
+    dives = {"normal": Scenario("one-hour", "16 x (ZA, ZB, ZC, mission)", steps),
+             "faulty": Scenario("one-hour-fault", "thruster 0 dead from 30 min", steps,
+                                Fault("thruster_0", "dead", 1800.0),
+                                run_after_fault_s=1800.0)}
+    wanted = {fmt: (fmt, "normal") for fmt in formats} | {FAULTY: ("mcap", "faulty")}
     paths = {}
-    for fmt in formats:
-        path = workdir / {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
-                          "bin": "dive.bin"}.get(fmt, f"dive_{fmt}")
+    for key, (fmt, kind) in wanted.items():
+        name = {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
+                "bin": "dive.bin"}.get(fmt, f"dive_{fmt}")
+        path = workdir / (name if kind == "normal" else f"faulty-{name}")
         if not path.exists():
-            write_log(dive, profile, path, fmt)
-        paths[fmt] = path
+            write_log(simulate(dives[kind], profile, seed=1), profile, path, fmt)
+        paths[key] = path
     return paths
 
 
@@ -195,7 +204,7 @@ def main() -> None:
     report["formats"] = {}
     for fmt, path in paths.items():
         diagnosed = in_child("diagnose", str(path))
-        raw = in_child("raw", str(path), fmt)
+        raw = in_child("raw", str(path), fmt.split(",")[0])
         report["formats"][fmt] = {**diagnosed, "raw_read_s": raw["seconds"],
                                   "raw_messages": raw["messages"]}
         print(fmt, json.dumps(report["formats"][fmt]), file=sys.stderr, flush=True)
@@ -236,7 +245,7 @@ def render(report: dict) -> str:
         "|---|---|---|---|---|---|---|---|",
     ]
     for fmt, f in report["formats"].items():
-        lines.append(f"| {fmt} | {f['total_s']:.2f} s | {f['imports_s']:.2f} s | "
+        lines.append(f"| {fmt} ({f['verdict']}) | {f['total_s']:.2f} s | {f['imports_s']:.2f} s | "
                      f"{f['read_s']:.2f} s | {f['replay_s']:.2f} s | {f['rest_s']:.2f} s | "
                      f"{f['peak_mb']:.0f} MB | {f['raw_read_s']:.2f} s |")
     return "\n".join(lines)
