@@ -67,7 +67,7 @@ class ColumnReader:
         self.data = np.frombuffer(self.raw, np.uint8)
         starts = np.frombuffer(messages.starts, np.int64) if len(messages) else np.zeros(
             0, np.int64)
-        self.ends = np.append(starts[1:], self.data.size)
+        self.ends = np.append(starts[1:], self.data.size)[:starts.size]
         if self.cdr:
             if starts.size and not np.isin(self.data[starts + 1], CDR_LITTLE_ENDIAN).all():
                 raise NotColumnar("big-endian CDR")
