@@ -10,8 +10,11 @@ import pandas as pd
 
 from adapters.errors import LogError
 from adapters.fieldpath import field_getter
-from adapters.signals import FieldSource, LogSources, SegmentMarker, Signals
+from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals
+from adapters.timebase import MAX_TIME_NS, spikes
 
+# How far a container's recorded start or end may lie outside the data it holds.
+MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
 # A topic's messages as columns: field path → one value per message.
 ColumnSource = Callable[[str], np.ndarray]
 
@@ -60,6 +63,20 @@ class SignalCollector:
         self.segment_get = field_getter(sources.segment.field) if sources.segment else None
         self.count = 0
         self.notes: list[str] = []
+        self.damage: Damage | None = None
+        self.impossible_times = 0
+
+    def accepts_time(self, time_ns: int) -> bool:
+        """False (and counted) for a stored time no clock can show: a corrupted record."""
+        if 0 <= time_ns < MAX_TIME_NS:
+            return True
+        self.impossible_times += 1
+        return False
+
+    def damaged(self, reason: str, at_byte: int | None = None) -> None:
+        """The file could be read only up to here (the first damage found is kept)."""
+        if self.damage is None:
+            self.damage = Damage(reason, at_byte)
 
     @property
     def topics(self) -> set[str]:
@@ -75,6 +92,8 @@ class SignalCollector:
         return list(dict.fromkeys(paths))
 
     def add(self, topic: str, time_ns: int, message: Any) -> None:
+        if not self.accepts_time(time_ns):
+            return
         self.count += 1
         segment = self.sources.segment
         if segment is not None and topic == segment.topic and self.segment_get is not None:
@@ -123,19 +142,41 @@ class SignalCollector:
         return sorted({s.topic for s in self.sources.signals.values()} - available)
 
     def finish(self, fmt: str, start_ns: int | None, end_ns: int | None,
-               topics: dict[str, str]) -> Signals:
+               topics: dict[str, str], require_all: bool = True) -> Signals:
+        """The collected signals. A sample whose time is a lone spike (a corrupted record)
+        is dropped and counted. With ``require_all`` a signal without samples is an error;
+        without it (inspection) such a signal is simply absent."""
+        if self.impossible_times:
+            self.notes.append(f"{self.impossible_times} message(s) with an impossible time "
+                              "left out")
         empty = sorted(name for name, times in self.times.items() if not times)
-        if empty:
+        if empty and require_all:
             where = ", ".join(f"{n} ({self.sources.signals[n].topic})" for n in empty)
             raise LogError(self.path, f"no messages for signal(s) {where}")
-        series = {name: pd.Series(np.frombuffer(self.values[name], dtype=np.float64),
-                                  index=np.frombuffer(self.times[name], dtype=np.int64),
-                                  name=name)
-                  for name in self.times}
-        first = min([int(s.index.min()) for s in series.values()]
-                    + [m.time_ns for m in self.markers])
-        last = max(int(s.index.max()) for s in series.values())
+        series = {name: self._series(name) for name in self.times if name not in empty}
+        firsts = [int(s.index.min()) for s in series.values() if s.size]
+        lasts = [int(s.index.max()) for s in series.values() if s.size]
+        firsts += [m.time_ns for m in self.markers]
+        # The container's own span (index, statistics) widens the data's, unless it is so
+        # far from it that the container's record of it must be damaged.
+        if start_ns is not None and (not firsts or 0 <= min(firsts) - start_ns <= MAX_LEAD_NS):
+            firsts.append(start_ns)
+        if end_ns is not None and (not lasts or 0 <= end_ns - max(lasts) <= MAX_LEAD_NS):
+            lasts.append(end_ns)
+        first = min(firsts, default=None)
+        last = max(lasts, default=first)
         return Signals(path=self.path, format=fmt,
-                       start_ns=first if start_ns is None else min(start_ns, first),
-                       end_ns=last if end_ns is None else max(end_ns, last),
-                       series=series, markers=self.markers, topics=topics, notes=self.notes)
+                       start_ns=0 if first is None else first,
+                       end_ns=0 if last is None else last,
+                       series=series, markers=self.markers, topics=topics, notes=self.notes,
+                       damage=self.damage, messages_read=self.count)
+
+    def _series(self, name: str) -> pd.Series:
+        times = np.frombuffer(self.times[name], dtype=np.int64)
+        values = np.frombuffer(self.values[name], dtype=np.float64)
+        corrupt = spikes(times)
+        if corrupt.any():
+            self.notes.append(f"{name}: {int(corrupt.sum())} sample(s) with a corrupted "
+                              "timestamp left out")
+            times, values = times[~corrupt], values[~corrupt]
+        return pd.Series(values, index=times, name=name)

@@ -1,12 +1,5 @@
-"""Errors raised while reading a log. Messages name the file and the problem."""
+"""Errors raised while reading a log (the shared tree lives in `auvdiag_errors`)."""
 
-from pathlib import Path
+from auvdiag_errors import LogError
 
-
-class LogError(Exception):
-    """A log could not be read, or lacks what the profile needs."""
-
-    def __init__(self, path: Path | str, problem: str) -> None:
-        super().__init__(f"{path}: {problem}")
-        self.path = Path(path)
-        self.problem = problem
+__all__ = ["LogError"]

@@ -23,7 +23,7 @@ from adapters.mavlink_columns import (
     decode_mavlink,
     field_column,
 )
-from adapters.mavlink_scan import RecordIndex, index_file
+from adapters.mavlink_scan import NO_TIME, RecordIndex, index_file
 from adapters.signals import LogSources, Signals
 
 MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
@@ -59,11 +59,11 @@ class TlogAdapter:
             except UnknownFormat as error:
                 raise LogError(path, f"cannot decode {topic}: {error}") from None
             dropped += failed
-            collector.add_columns(topic, times_us * 1000, _columns_of(rows, {}))
+            _add_timed(collector, topic, times_us, rows, {})
         if dropped:
             collector.notes.append(f"{dropped} MAVLink frames failed their checksum and were "
                                    "left out")
-        first_us = int(index.times_us[0]) if index.times_us.size else None
+        first_us = index.span_us[0]
         return _finish(collector, "tlog", None if first_us is None else first_us * 1000,
                        index, "MAVLink")
 
@@ -90,14 +90,25 @@ class DataflashAdapter:
                 times_us, rows, divisors = decode_dataflash(index, type_ids[topic])
             except UnknownFormat as error:
                 raise LogError(path, f"cannot decode {topic}: {error}") from None
-            if rows.size and times_us.min() < 0:
+            if rows.size and (times_us == NO_TIME).all():
                 raise LogError(path, f"{topic} records carry no TimeUS, so they cannot be "
                                      "placed in time")
-            collector.add_columns(topic, times_us * 1000, _columns_of(rows, divisors))
+            _add_timed(collector, topic, times_us, rows, divisors)
         return _finish(collector, "bin", None, index, "DataFlash")
 
     def inventory(self, path: Path) -> LogInventory:
         return _inventory("bin", index_file(path, "bin"), "DataFlash")
+
+
+def _add_timed(collector: SignalCollector, topic: str, times_us: np.ndarray, rows: np.ndarray,
+               divisors: dict[str, float]) -> None:
+    """Hand one message type's rows to the collector, without those whose time is corrupt."""
+    timed = times_us >= 0
+    if not timed.all():
+        collector.notes.append(f"{topic}: {int((~timed).sum())} record(s) with an impossible "
+                               "time left out")
+        times_us, rows = times_us[timed], rows[timed]
+    collector.add_columns(topic, times_us * 1000, _columns_of(rows, divisors))
 
 
 def _columns_of(rows: np.ndarray, divisors: dict[str, float]) -> ColumnSource:
@@ -114,7 +125,8 @@ def _finish(collector: SignalCollector, fmt: str, start_ns: int | None, scan: Re
             kind: str) -> Signals:
     """The record walk names the message types and says where the file breaks, if it does."""
     if scan.problem:
-        collector.notes.append(scan.problem)
+        collector.notes.append(scan.problem.reason)
+        collector.damaged(scan.problem.reason, scan.problem.at_byte)
     return collector.finish(fmt, start_ns, None, {name: kind for name in scan.counts})
 
 
@@ -131,8 +143,9 @@ def _message_names() -> dict[int, str]:
 
 
 def _inventory(fmt: str, scan: RecordIndex, kind: str) -> LogInventory:
+    first_us, last_us = scan.span_us
     return LogInventory(
-        fmt, None if scan.first_us is None else scan.first_us * 1000,
-        None if scan.last_us is None else scan.last_us * 1000,
+        fmt, None if first_us is None else first_us * 1000,
+        None if last_us is None else last_us * 1000,
         [TopicInfo(name, kind, count) for name, count in sorted(scan.counts.items())],
-        [scan.problem] if scan.problem else [])
+        [scan.problem.reason] if scan.problem else [])

@@ -14,12 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from adapters.packed import gather_words
+from adapters.signals import Damage
+from adapters.timebase import plausible_us, robust_span
 
 DATAFLASH_FMT = 0x80
 DATAFLASH_FMT_LENGTH = 89
 DATAFLASH_HEADER_LENGTH = 3                  # A3 95 <type>
 MAVLINK1_HEADER, MAVLINK2_HEADER = 6, 10     # magic … msgid
 TLOG_TIME_LENGTH = 8                         # big-endian µs before each frame
+NO_TIME, BAD_TIME = -1, -2                   # a record type without time; a corrupt time
 
 
 @dataclass(frozen=True)
@@ -40,8 +43,8 @@ class RecordIndex:
     offsets: np.ndarray                    # int64: where each record starts
     type_ids: np.ndarray                   # int64: msgid (MAVLink) or type (DataFlash)
     names: dict[int, str]                  # type id → message name
-    times_us: np.ndarray                   # int64 µs per record; -1 where it has none
-    problem: str | None = None
+    times_us: np.ndarray                   # int64 µs per record, or NO_TIME / BAD_TIME
+    problem: Damage | None = None
     formats: dict[int, DataflashFormat] = field(default_factory=dict)
 
     @property
@@ -51,26 +54,24 @@ class RecordIndex:
                         for i, n in zip(ids, counts, strict=True)})
 
     @property
-    def first_us(self) -> int | None:
+    def span_us(self) -> tuple[int | None, int | None]:
+        """First and last record time, ignoring corrupt and lone outlying times."""
         timed = self.times_us[self.times_us >= 0]
-        return int(timed.min()) if timed.size else None
-
-    @property
-    def last_us(self) -> int | None:
-        timed = self.times_us[self.times_us >= 0]
-        return int(timed.max()) if timed.size else None
+        first, last = robust_span(timed * 1000)
+        return (None if first is None else first // 1000,
+                None if last is None else last // 1000)
 
     def of_type(self, type_id: int) -> np.ndarray:
         """Record positions (into `offsets`) of one message type."""
         return np.flatnonzero(self.type_ids == type_id)
 
 
-def _problem(size: int, position: int, what: str) -> str:
-    return (f"{what} at byte {position} of {size}: the recording was cut short or damaged "
-            "there; the analysis covers the records before it")
+def _problem(size: int, position: int, what: str) -> Damage:
+    return Damage(f"{what} at byte {position} of {size}: the recording was cut short or "
+                  "damaged there; the analysis covers the records before it", position)
 
 
-def _walk_tlog(data: mmap.mmap | bytes) -> "tuple[array[int], str | None]":
+def _walk_tlog(data: mmap.mmap | bytes) -> "tuple[array[int], Damage | None]":
     """Records are an 8-byte big-endian µs time and a MAVLink 1 or 2 frame."""
     offsets, size, position = array("q"), len(data), 0
     while position < size:
@@ -109,13 +110,13 @@ def index_tlog(data: mmap.mmap | bytes, message_names: dict[int, str]) -> Record
     walked, problem = _walk_tlog(data)
     offsets = np.frombuffer(walked, np.int64) if walked else np.zeros(0, np.int64)
     _, msgid, _, _ = tlog_frame_fields(raw, offsets)
-    times = gather_words(raw, offsets, ">u8").astype(np.int64)
+    times = _checked_times(gather_words(raw, offsets, ">u8"))
     return RecordIndex(raw, offsets, msgid.astype(np.int64), dict(message_names), times,
                        problem)
 
 
 def _walk_dataflash(data: mmap.mmap | bytes
-                    ) -> "tuple[array[int], dict[int, DataflashFormat], str | None]":
+                    ) -> "tuple[array[int], dict[int, DataflashFormat], Damage | None]":
     """Records are ``A3 95 <type>`` and a payload whose length an FMT record declared."""
     offsets, size, position = array("q"), len(data), 0
     formats = {DATAFLASH_FMT: DataflashFormat("FMT", DATAFLASH_FMT_LENGTH, "BBnNZ",
@@ -135,6 +136,12 @@ def _walk_dataflash(data: mmap.mmap | bytes
             return offsets, formats, _problem(size, position, "the file ends inside a record")
         if kind == DATAFLASH_FMT:
             declared = _parse_fmt(bytes(data[position:position + DATAFLASH_FMT_LENGTH]))
+            if declared.length < DATAFLASH_HEADER_LENGTH or (
+                    data[position + 3] == DATAFLASH_FMT
+                    and declared.length != DATAFLASH_FMT_LENGTH):
+                return offsets, formats, _problem(size, position, "an FMT record that cannot "
+                                                  "be right (a length shorter than a header, "
+                                                  "or FMT's own length changed)")
             formats[data[position + 3]] = declared
             lengths[data[position + 3]] = declared.length
         offsets.append(position)
@@ -159,12 +166,19 @@ def index_dataflash(data: mmap.mmap | bytes) -> RecordIndex:
     timed = np.zeros(256, bool)
     for type_id, declared in formats.items():
         timed[type_id] = declared.columns[:1] == ("TimeUS",) and declared.types[:1] in "Qq"
-    times = np.full(offsets.size, -1, np.int64)
+    times = np.full(offsets.size, NO_TIME, np.int64)
     has_time = timed[type_ids]
     starts = offsets[has_time] + DATAFLASH_HEADER_LENGTH
-    times[has_time] = gather_words(raw, starts, "<u8")
+    times[has_time] = _checked_times(gather_words(raw, starts, "<u8"))
     names = {type_id: declared.name for type_id, declared in formats.items()}
     return RecordIndex(raw, offsets, type_ids, names, times, problem, formats)
+
+
+def _checked_times(raw_us: np.ndarray) -> np.ndarray:
+    """uint64 µs as int64, with times no clock can show marked BAD_TIME."""
+    times = raw_us.astype(np.int64)
+    times[~plausible_us(raw_us.astype(np.float64))] = BAD_TIME
+    return times
 
 
 def index_file(path: Path, kind: str, message_names: dict[int, str] | None = None

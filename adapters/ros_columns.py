@@ -125,6 +125,10 @@ class ColumnReader:
             return np.full(positions.size, detail[1], np.int64), positions
         positions = self._align(positions, 4, rows)
         counts = self._read(positions, np.dtype("<u4"), rows).astype(np.int64)
+        if (positions + 4 + counts > self.ends[rows]).any():
+            # Every element takes a byte at least: a larger count is damage, and walking it
+            # element by element would take as long as the count says.
+            raise NotColumnar("a sequence count runs past its message")
         return counts, positions + 4
 
     def _skip(self, node: tuple[str, Any], positions: np.ndarray, rows: np.ndarray
@@ -197,6 +201,8 @@ class TopicBatches:
         self.pending: dict[str, RawMessages] = {}
 
     def append(self, topic: str, time_ns: int, raw: bytes | memoryview) -> None:
+        if not self.collector.accepts_time(time_ns):
+            return
         batch = self.pending.setdefault(topic, RawMessages(self.cdr))
         batch.append(time_ns, raw)
         if len(batch.buffer) >= self.BATCH_BYTES:

@@ -10,7 +10,7 @@ from typing import Any
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.mcap import MCAP_MAGIC, McapAdapter, salvage_mcap
+from adapters.mcap import MCAP_MAGIC, McapAdapter, read_sequential
 from adapters.ros_columns import TopicBatches
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
@@ -86,7 +86,7 @@ class RosbagAdapter:
             except Exception as error:  # rosbags raises several unrelated types on damage
                 if fmt == "ros2-mcap":
                     # The storage is plain MCAP: read what is readable, say what was lost.
-                    return salvage_mcap(self._mcap_file(path), collector, fmt, str(error))
+                    return read_sequential(self._mcap_file(path), collector, fmt)
                 if fmt == "bag":
                     return self._salvage_bag1(path, collector, str(error))
                 raise LogError(path, f"cannot open {fmt} log: {error}") from None
@@ -129,6 +129,8 @@ class RosbagAdapter:
         collector.notes.append(
             f"bag index unusable ({reason}); read {collector.count} messages record by record"
             + (f" up to the damage ({stopped})" if stopped else ""))
+        if stopped:
+            collector.damaged(f"bag damaged: {stopped}")
         return collector.finish("bag", None, None, topics)
 
     @staticmethod
@@ -160,6 +162,8 @@ class RosbagAdapter:
         if damage is not None:
             if collector.count == 0:
                 raise LogError(collector.path, f"damaged log: {damage}") from None
-            collector.notes.append(f"log damaged after {collector.count} messages ({damage}); "
-                                   "analysed the part before the damage")
+            reason = (f"log damaged after {collector.count} messages ({damage}); analysed "
+                      "the part before the damage")
+            collector.notes.append(reason)
+            collector.damaged(reason)
         return collector.finish(fmt, int(reader.start_time), int(reader.end_time), topics)

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from adapters.collect import SignalCollector
+from adapters.limits import MAX_CHUNK_BYTES
 
 MAGIC = b"#ROSBAG V2.0\n"
 OP_MESSAGE, OP_CHUNK, OP_CONNECTION = 0x02, 0x05, 0x07
@@ -56,16 +57,21 @@ def _records(data: bytes | memoryview, base: int = 0
 
 
 def _decompress(header: dict[str, bytes], payload: memoryview) -> bytes:
+    """A chunk's records, never more than the size its header declares (itself capped)."""
     compression = header.get("compression", b"none")
+    (size,) = struct.unpack("<I", header.get("size", b"\0\0\0\0")[:4].ljust(4, b"\0"))
+    if size > MAX_CHUNK_BYTES:
+        raise _Damaged(f"a chunk declares {size} bytes uncompressed")
     if compression == b"none":
         return bytes(payload)
     if compression == b"bz2":
-        return bz2.decompress(payload)
+        return bz2.BZ2Decompressor().decompress(payload, max_length=size)
     if compression == b"lz4":
         import lz4.frame
 
-        return bytes(lz4.frame.decompress(bytes(payload)))
-    raise _Damaged(f"unknown chunk compression {compression!r}")
+        return bytes(lz4.frame.LZ4FrameDecompressor().decompress(bytes(payload),
+                                                                 max_length=size))
+    raise _Damaged(f"unknown chunk compression {compression[:20]!r}")
 
 
 class _Decoder:

@@ -57,6 +57,14 @@ class SegmentMarker:
     label: str
 
 
+@dataclass(frozen=True)
+class Damage:
+    """Where and why reading stopped short: the log was analysed up to here."""
+
+    reason: str                   # one line
+    at_byte: int | None = None    # offset in the (storage) file where the damage begins
+
+
 @dataclass
 class Signals:
     """Everything diagnosis needs from one log, on each signal's own time base."""
@@ -69,3 +77,5 @@ class Signals:
     markers: list[SegmentMarker] = field(default_factory=list)
     topics: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)
+    damage: Damage | None = None          # None: the whole file was read
+    messages_read: int = 0                # messages of the profile's topics

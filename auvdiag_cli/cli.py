@@ -49,15 +49,13 @@ def _fail(message: str) -> NoReturn:
 @contextmanager
 def _user_errors(subject: Path | str) -> Iterator[None]:
     """Turn every failure into one line on stderr and exit status 2 (never a traceback)."""
-    from auvdiag_cli.errors import INPUT_ERRORS
-    from models.store import ModelFileError
+    from auvdiag_cli.errors import AuvdiagError
 
-    expected: tuple[type[Exception], ...] = (*INPUT_ERRORS, ModelFileError)
     try:
         yield
     except typer.Exit:
         raise
-    except expected as error:
+    except AuvdiagError as error:
         _fail(str(error))
     except KeyboardInterrupt:
         _fail("interrupted")
@@ -180,7 +178,13 @@ def report(
             typer.echo(f"auvdiag: note: {json_report}: no time histories beside it; the PDF "
                        "has its summary pages only", err=True)
         target = output or json_report.with_suffix(".pdf")
-        _render_pdf(document, series, target)
+        try:
+            _render_pdf(document, series, target)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
+            # The document came from a file: a field missing or of the wrong kind is the
+            # file's problem, not a bug (reports this version writes are drawn in tests).
+            raise UsageError(f"{json_report}: not a complete auvdiag report "
+                             f"({type(error).__name__}: {error})") from None
         typer.echo(f"report written to {target}")
 
 
@@ -200,15 +204,18 @@ class FailOn(StrEnum):
     """What makes an audit's exit status non-zero."""
 
     ANY = "any"
+    DAMAGED = "damaged"
     FAULT = "fault"
     ERROR = "error"
     NONE = "none"
 
 
 def _audit_exit(result: "AuditResult", fail_on: FailOn) -> int:
-    counted = {FailOn.ANY: ("fault", "error"), FailOn.FAULT: ("fault",),
-               FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
+    counted = {FailOn.ANY: ("fault", "error"), FailOn.DAMAGED: ("fault", "error", "damaged"),
+               FailOn.FAULT: ("fault",), FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
     if "error" in counted and result.errors:
+        return EXIT_UNUSABLE
+    if "damaged" in counted and result.damaged:
         return EXIT_UNUSABLE
     if "fault" in counted and result.count("fault"):
         return EXIT_FAULT
@@ -236,7 +243,8 @@ def audit(
                             "workers need the logs at the same paths.")] = None,
     fail_on: Annotated[FailOn, typer.Option(
         "--fail-on", help="What makes the exit status non-zero: any (faults: 1, logs not "
-                          "analysable: 2), fault, error, or none.")] = FailOn.ANY,
+                          "analysable: 2), damaged (as any, and a log analysed only up to "
+                          "damage also gives 2), fault, error, or none.")] = FailOn.ANY,
 ) -> None:
     """Diagnose every log under PATHS and write one table and a fleet summary.
 
@@ -259,7 +267,8 @@ def audit(
                             result.companions, result.interrupted)
     typer.echo(f"{len(result.records)} logs: {result.count('normal')} normal, "
                f"{result.count('fault')} fault, {result.count('undetermined')} undetermined, "
-               f"{result.errors} not analysable; {len(result.skipped)} files skipped; "
+               f"{result.errors} not analysable, {result.damaged} partial (damaged); "
+               f"{len(result.skipped)} files skipped; "
                f"{result.computed} diagnosed now, {result.reused} reused; results in {output}")
     if result.interrupted:
         _fail(f"audit interrupted after {result.computed} logs; run it again to finish")
@@ -407,7 +416,9 @@ def inspect(
 
     Lists the format, time span, topics or message types with their types, counts and rates,
     and for each profile signal whether it resolved (or why not, with the closest topics).
-    Exit status 0 when every signal resolves, 2 otherwise."""
+    Exit status 0 when every signal resolves, 2 otherwise (also when the log holds none of
+    them, or the profile has no mapping for its format: the listing still shows what the
+    log holds)."""
     from auvdiag_cli.inspection import inspect_log
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.report_text import inspection_lines
@@ -416,7 +427,7 @@ def inspect(
         result = inspect_log(log, load_profile(profile))
     for line in inspection_lines(result):
         typer.echo(line)
-    if not all(s.resolved for s in result.signals):
+    if not result.usable:
         raise typer.Exit(EXIT_UNUSABLE)
 
 

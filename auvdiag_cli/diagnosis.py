@@ -10,6 +10,7 @@ import numpy as np
 
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.closed_loop import replay_closed_loop
+from auvdiag_cli.completeness import Completeness, completeness_of
 from auvdiag_cli.degradation import WeakenedThruster, explain_by_weak_thruster
 from auvdiag_cli.derivation import dms_signature
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
@@ -79,6 +80,7 @@ class Diagnosis:
     matching: Matching | None = None
     thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    completeness: Completeness | None = None
 
 
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
@@ -191,7 +193,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         sensor_units={s.name: s.unit for s in profile.sensors}, notes=notes,
         time_s=frame.time_s, commands=frame.commands, command_names=frame.command_names,
         sensor_names=frame.sensor_names, matching=matching, thresholds=thresholds,
-        b_series=b_series, start_ns=signals.start_ns, mission_legs=list(mission_legs))
+        b_series=b_series, start_ns=signals.start_ns, mission_legs=list(mission_legs),
+        completeness=completeness_of(signals))
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)

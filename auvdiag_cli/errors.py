@@ -1,23 +1,6 @@
-"""The application's error tree. Only the CLI prints these and turns them into exit codes."""
+"""The application's errors: the one tree every layer shares. Only the CLI prints these
+and turns them into exit codes; audit workers record them as the log's error."""
 
-from adapters.errors import LogError
+from auvdiag_errors import AuvdiagError, LogError, ModelError, ProfileError, UsageError
 
-
-class AuvdiagError(Exception):
-    """Base of the errors a user can act on; the message is one line."""
-
-
-class ProfileError(AuvdiagError):
-    """A vehicle profile does not validate; the message names the key."""
-
-
-class ModelError(AuvdiagError):
-    """A model directory is missing, unreadable, or does not fit the log."""
-
-
-class UsageError(AuvdiagError):
-    """The options given do not make sense together."""
-
-
-# Errors that mean "this input cannot be analysed" (exit status 2), not a bug.
-INPUT_ERRORS: tuple[type[Exception], ...] = (AuvdiagError, LogError)
+__all__ = ["AuvdiagError", "LogError", "ModelError", "ProfileError", "UsageError"]

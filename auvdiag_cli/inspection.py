@@ -30,6 +30,12 @@ class Inspection:
     inventory: LogInventory
     signals: list[SignalResolution]
     markers: list[str]
+    mapped: bool = True          # False: the profile says nothing about this format family
+
+    @property
+    def usable(self) -> bool:
+        """Every signal the diagnosis needs resolves in this log."""
+        return self.mapped and all(s.resolved for s in self.signals)
 
 
 def _closest(name: str, choices: list[str]) -> tuple[str, ...]:
@@ -41,15 +47,15 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
     contents, family = inventory(path)
     sources = profile.sources.get(family)
     if sources is None:
-        raise LogError(path, f"the profile has no [sources.{family}] mapping for "
-                             f"{contents.format} logs")
+        return Inspection(path, family, contents, [], [], mapped=False)
     available = {topic.name for topic in contents.topics}
     present = {n: s for n, s in sources.signals.items() if s.topic in available}
     read: dict[str, Signals] = {}
     problems: dict[str, str] = {}
     try:  # one pass for all signals; per signal only to pin down a failure
-        everything = read_log(path, {family: LogSources(present, sources.segment)})
-        read = {name: everything for name in present}
+        if present:
+            everything = read_log(path, {family: LogSources(present, sources.segment)})
+            read = {name: everything for name in present}
     except LogError:
         for name, source in present.items():
             try:

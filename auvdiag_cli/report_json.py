@@ -34,7 +34,9 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "detected_at_s": diagnosis.detected_at_s,
         "onset_s": diagnosis.onset_s,
         "duration_s": round(float(diagnosis.time_s[-1]), 3) if diagnosis.time_s.size else None,
-        "start_time_utc": _utc(diagnosis.start_ns),
+        "start_time_utc": utc_text(diagnosis.start_ns),
+        "completeness": None if diagnosis.completeness is None
+        else diagnosis.completeness.to_dict(),
         "segments": [
             {
                 "name": r.segment.name,
@@ -81,11 +83,14 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
     }
 
 
-def _utc(time_ns: int) -> str | None:
-    """The log's first message as UTC, when its clock is Unix time (not time since boot)."""
+def utc_text(time_ns: int, timespec: str = "seconds") -> str | None:
+    """A time as UTC, when its clock is Unix time (not time since boot) and a date at all."""
     if time_ns <= EPOCH_CLOCK_NS:
         return None
-    return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec="seconds")
+    try:
+        return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec=timespec)
+    except (OverflowError, ValueError, OSError):  # a damaged clock is no date
+        return None
 
 
 def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:

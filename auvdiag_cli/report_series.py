@@ -2,11 +2,13 @@
 `auvdiag report` can draw the same PDF later without the log or the model. Only plain
 arrays are stored (numbers and strings): loading never unpickles anything."""
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
 from auvdiag_cli.diagnosis import Diagnosis
+from auvdiag_cli.errors import UsageError
 
 Series = dict[str, np.ndarray]
 SERIES_SUFFIX = ".series.npz"
@@ -56,5 +58,8 @@ def save_series(series: Series, target: Path) -> None:
 
 
 def load_series(source: Path) -> Series:
-    with np.load(source, allow_pickle=False) as archive:
-        return {name: archive[name] for name in archive.files}
+    try:
+        with np.load(source, allow_pickle=False) as archive:
+            return {name: archive[name] for name in archive.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise UsageError(f"{source}: unreadable time histories: {error}") from None

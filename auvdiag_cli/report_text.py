@@ -1,9 +1,8 @@
 """The short human summary printed on the terminal."""
 
-from datetime import UTC, datetime
-
-from auvdiag_cli.diagnosis import Diagnosis
+from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, Diagnosis
 from auvdiag_cli.inspection import Inspection
+from auvdiag_cli.report_json import utc_text
 
 
 def _components(names: list[str]) -> str:
@@ -14,6 +13,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     d = diagnosis
     duration = float(d.time_s[-1]) if d.time_s.size else 0.0
     lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
+    if d.completeness is not None and not d.completeness.complete:
+        lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
     if d.verdict == "normal":
         lines.append("verdict: NORMAL: no fault detected")
     else:
@@ -75,9 +76,9 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
 def _utc(time_ns: int | None) -> str:
     if time_ns is None:
         return "?"
-    if time_ns < 10**17:  # a clock since boot, not since the epoch
+    if time_ns <= EPOCH_CLOCK_NS:  # a clock since boot, not since the epoch
         return f"{time_ns / 1e9:.3f} s since boot"
-    return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec="milliseconds")
+    return utc_text(time_ns, "milliseconds") or f"{time_ns} ns (not a date)"
 
 
 def inspection_lines(inspection: Inspection) -> list[str]:
@@ -91,7 +92,11 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
         lines.append(f"  {topic.name:<32} {topic.type:<34} {topic.count:>8} {rate:>9}")
-    lines.append("  profile signals:")
+    if not inspection.mapped:
+        lines.append(f"  profile signals: none to look for: the profile has no "
+                     f"[sources.{inspection.family}] mapping for {inv.format} logs")
+    else:
+        lines.append("  profile signals:")
     for s in inspection.signals:
         where = f"{s.topic} {s.field}"
         if s.resolved:

@@ -24,8 +24,13 @@ import numpy as np
 import pandas as pd
 
 from adapters.signals import Signals
+from adapters.timebase import MAX_TIME_NS
 
 NS_PER_S = 1_000_000_000
+# The grid is sized from the times; times can be damaged. A grid far longer than the
+# samples could fill means a broken clock, and is refused rather than allocated.
+GRID_STEPS_PER_SAMPLE = 10
+MIN_GRID_LIMIT = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -62,7 +67,10 @@ def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes:
         return series
     period = int(np.median(steps[steps > 0])) if (steps > 0).any() else 0
     for i in jumps:
-        back = int(times[i] - times[i + 1])
+        back = int(times[i]) - int(times[i + 1])
+        if int(times[i + 1:].max()) + back + period >= MAX_TIME_NS:
+            raise ValueError(f"{name}: the clock jumps back by {back / NS_PER_S:.3g} s, "
+                             "further than any log could run: its timestamps are damaged")
         times[i + 1:] += back + period
         notes.append(f"{name}: clock jumps back by {back / NS_PER_S:.1f} s at "
                      f"{(times[i] - start_ns) / NS_PER_S:.1f} s; later samples re-timed")
@@ -125,6 +133,10 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     last_ns = min(int(s.index[-1]) for s in cleaned.values())
     if last_ns - first_ns < 2 * dt_ns:
         raise ValueError("the signals overlap for less than two model steps")
+    most = max(s.size for s in cleaned.values())
+    if (last_ns - first_ns) // dt_ns > max(GRID_STEPS_PER_SAMPLE * most, MIN_GRID_LIMIT):
+        raise ValueError(f"the signals span {(last_ns - first_ns) / NS_PER_S:.3g} s but hold "
+                         f"at most {most} samples each: the timestamps are damaged")
     grid_ns = np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}

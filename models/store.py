@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from auvdiag_errors import ModelError
 from models.fast import FastDynamics
 from models.normaliser import Normaliser
 
@@ -26,7 +27,7 @@ WEIGHTS_FILE, METADATA_FILE = "weights.npz", "model.json"
 LEGACY_WEIGHTS_FILE = "weights.pt"          # format version 1
 
 
-class ModelFileError(Exception):
+class ModelFileError(ModelError):
     """A model directory cannot be used; the message names the path and the problem."""
 
 

@@ -46,6 +46,12 @@ class AuditResult:
     def errors(self) -> int:
         return sum(1 for r in self.records if r.get("error"))
 
+    @property
+    def damaged(self) -> int:
+        """Logs analysed only up to damage (salvaged), not counting errors."""
+        return sum(1 for r in self.records if not r.get("error")
+                   and (r.get("completeness") or {}).get("status") == "partial")
+
 
 def _inputs(options: AuditOptions) -> tuple[Inputs, str]:
     """Validate the profile and the model once (a bad one fails the audit before it

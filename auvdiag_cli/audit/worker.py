@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.errors import INPUT_ERRORS
+from auvdiag_cli.errors import AuvdiagError
 
 
 @dataclass(frozen=True)
@@ -60,7 +60,7 @@ def analyse(task: AuditTask) -> AuditOutcome:
         result = diagnose(Path(task.log), profile, model)
         outcome.document = diagnosis_to_dict(result)
         outcome.series = series_from_diagnosis(result)
-    except INPUT_ERRORS as error:
+    except AuvdiagError as error:
         outcome.error = str(error)
     except MemoryError:
         outcome.error, outcome.final = f"{task.log}: out of memory", False

@@ -28,8 +28,24 @@ def _banner(document: dict[str, Any]) -> Line:
     return Line(text, size=20, bold=True, banner=COLOURS.get(verdict, COLOURS["error"]))
 
 
+def partial_log_text(document: dict[str, Any]) -> str | None:
+    """"PARTIAL LOG: ..." when the report covers only the readable part of a damaged log."""
+    completeness = document.get("completeness") or {}
+    if completeness.get("status") != "partial":
+        return None
+    read = completeness.get("seconds_read")
+    at = completeness.get("damage_at_byte")
+    where = f" (damage at byte {at} of {completeness.get('bytes_total')})" if at else ""
+    span = f" the first {read:.1f} s" if isinstance(read, int | float) else " part"
+    return f"PARTIAL LOG: only{span} could be read{where}"
+
+
 def first_page_lines(document: dict[str, Any], series: Series | None) -> list[Line]:
-    lines = [_banner(document), Line("")]
+    lines = [_banner(document)]
+    partial = partial_log_text(document)
+    if partial is not None:
+        lines.append(Line(partial, size=13, bold=True, banner=COLOURS["error"]))
+    lines.append(Line(""))
     for label, value in summary_facts(document):
         lines += paragraph(f"{label}:  {value}", size=10.5)
     lines += heading("The paper's assumptions, and what they mean for this log")

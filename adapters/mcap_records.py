@@ -1,0 +1,170 @@
+"""MCAP records front to back, with every size a file states checked before it is trusted,
+and each wanted channel's messages routed to the collector.
+
+The walk needs nothing from the summary section (the specification makes it optional, and
+lets a writer leave Channel and Schema records out of it); unknown opcodes are skipped.
+Chunks are decompressed here, never beyond the size they declare, and a declared size is
+itself capped: a flipped length byte costs a chunk, not the machine's memory."""
+
+from collections.abc import Callable, Iterator
+from typing import Any, BinaryIO
+
+from adapters.collect import SignalCollector
+from adapters.errors import LogError
+from adapters.limits import MAX_CHUNK_BYTES
+from adapters.ros_columns import TopicBatches
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+_READ_STEP = 1 << 20
+
+
+class ChunkDamaged(ValueError):
+    """A chunk's declared size or compression cannot be right."""
+
+
+def decoder_factories() -> list[Any]:
+    from mcap.decoder import DecoderFactory
+    from mcap_ros1.decoder import DecoderFactory as Ros1DecoderFactory
+    from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
+
+    class JsonDecoderFactory(DecoderFactory):
+        def decoder_for(self, message_encoding: str, schema: Any
+                        ) -> Callable[[bytes], Any] | None:
+            import json
+
+            return json.loads if message_encoding == "json" else None
+
+    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory()]
+
+
+def _decompressed(chunk: Any) -> bytes:
+    """The chunk's records, at most ``uncompressed_size`` bytes of them."""
+    size = chunk.uncompressed_size
+    if size > MAX_CHUNK_BYTES:
+        raise ChunkDamaged(f"a chunk declares {size} bytes uncompressed")
+    if chunk.compression == "":
+        return bytes(chunk.data)
+    if chunk.compression == "zstd":
+        import io
+
+        import zstandard
+
+        parts, total = [], 0
+        with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(chunk.data)) as reader:
+            while total < size:
+                part = reader.read(min(_READ_STEP, size - total))
+                if not part:
+                    break
+                parts.append(part)
+                total += len(part)
+        return b"".join(parts)
+    if chunk.compression == "lz4":
+        import lz4.frame
+
+        return bytes(lz4.frame.LZ4FrameDecompressor().decompress(chunk.data, max_length=size))
+    raise ChunkDamaged(f"unknown chunk compression {chunk.compression[:20]!r}")
+
+
+def chunk_records(chunk: Any) -> Iterator[Any]:
+    """The records inside a chunk (its CRC checked when it has one)."""
+    from dataclasses import replace
+
+    from mcap.stream_reader import breakup_chunk
+
+    data = _decompressed(chunk)
+    plain = replace(chunk, compression="", data=data, uncompressed_size=len(data))
+    yield from breakup_chunk(plain, validate_crc=True)
+
+
+class Progress:
+    """How far a walk got: the byte after the last whole record."""
+
+    def __init__(self) -> None:
+        self.good_bytes = 0
+
+
+def walk_records(stream: BinaryIO, size: int, progress: Progress) -> Iterator[Any]:
+    """Every record of the file in file order, chunks opened in place."""
+    from mcap.records import Chunk
+    from mcap.stream_reader import StreamReader
+
+    reader = StreamReader(stream, emit_chunks=True, record_size_limit=size)
+    progress.good_bytes = stream.tell()
+    for record in reader.records:
+        if isinstance(record, Chunk):
+            yield from chunk_records(record)
+        else:
+            yield record
+        progress.good_bytes = stream.tell()
+
+
+class ChannelRouter:
+    """Sends each message of a wanted topic to the collector: CDR messages whose schema
+    rosbags can parse are batched for the column walker; any other channel is decoded one
+    message at a time by the mcap decoder for its encoding."""
+
+    def __init__(self, collector: SignalCollector) -> None:
+        from rosbags.typesys import Stores, get_typestore
+
+        self.collector = collector
+        self.schemas: dict[int, Any] = {}
+        self.topics: dict[str, str] = {}                 # every topic seen → schema name
+        self.routes: dict[int, tuple[str, Callable[[bytes], Any] | None]] = {}
+        self.msgtypes: dict[str, str] = {}               # batched topic → message type
+        self.store = get_typestore(Stores.EMPTY)
+        self.batches = TopicBatches(collector, self.msgtypes, True, self.store,
+                                    self.store.deserialize_cdr)
+        self.factories = decoder_factories()
+
+    def take(self, record: Any) -> None:
+        from mcap.records import Channel, Message, Schema
+
+        if isinstance(record, Message):
+            self.message(record.channel_id, record.log_time, record.data)
+        elif isinstance(record, Schema):
+            self.schemas[record.id] = record
+        elif isinstance(record, Channel):
+            self.channel(record)
+
+    def channel(self, channel: Any) -> None:
+        schema = self.schemas.get(channel.schema_id)
+        self.topics[channel.topic] = schema.name if schema is not None else ""
+        if channel.topic in self.collector.topics and channel.id not in self.routes:
+            self.routes[channel.id] = (channel.topic, self._decoder(channel, schema))
+
+    def message(self, channel_id: int, time_ns: int, data: bytes) -> None:
+        route = self.routes.get(channel_id)
+        if route is None:
+            return
+        topic, decode = route
+        if decode is None:
+            self.batches.append(topic, time_ns, data)
+        else:
+            self.collector.add(topic, time_ns, decode(data))
+
+    def flush(self) -> None:
+        self.batches.flush()
+
+    def _decoder(self, channel: Any, schema: Any) -> Callable[[bytes], Any] | None:
+        """None: batch it (CDR with a ros2msg schema of one type per topic)."""
+        if (channel.message_encoding == "cdr" and schema is not None
+                and schema.encoding == "ros2msg"
+                and self.msgtypes.get(channel.topic, schema.name) == schema.name
+                and self._register(schema)):
+            self.msgtypes[channel.topic] = schema.name
+            return None
+        for factory in self.factories:
+            decoder = factory.decoder_for(channel.message_encoding, schema)
+            if decoder is not None:
+                return decoder
+        raise LogError(self.collector.path, f"cannot decode {channel.topic}: no decoder for "
+                                            f"message encoding {channel.message_encoding!r}")
+
+    def _register(self, schema: Any) -> bool:
+        from rosbags.typesys import get_types_from_msg
+
+        try:
+            self.store.register(get_types_from_msg(schema.data.decode(), schema.name))
+        except Exception:  # a definition rosbags cannot parse: the generic decoder will do
+            return False
+        return True
