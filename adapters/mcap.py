@@ -46,16 +46,21 @@ def read_sequential(path: Path, collector: SignalCollector, fmt: str) -> Signals
         raise
     except Exception as error:  # a message its own schema does not describe
         damage = damage or _problem(error)
+    for at_byte, why in progress.skipped:
+        reason = f"damaged chunk at byte {at_byte} left out ({why})"
+        collector.notes.append(reason)
+        collector.damaged(reason, at_byte)
+    if (damage is not None or progress.skipped) and collector.count == 0:
+        first = damage or progress.skipped[0][1]
+        raise LogError(path, f"damaged MCAP, nothing readable ({first})")
     if damage is not None:
-        if collector.count == 0:
-            raise LogError(path, f"damaged MCAP, nothing readable ({damage})")
         reason = (f"log damaged at byte {progress.good_bytes} ({damage}); read "
                   f"{collector.count} messages up to the damage and analysed that part")
         collector.notes.append(reason)
         collector.damaged(reason, progress.good_bytes)
     missing = collector.missing_topics(set(router.topics))
     if missing:
-        where = " in the readable part" if damage else ""
+        where = " in the readable part" if damage or progress.skipped else ""
         raise LogError(path, f"missing topic(s) {', '.join(missing)}{where}")
     return collector.finish(fmt, None, None, router.topics)
 
@@ -181,6 +186,7 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
     except Exception as error:  # truncated or damaged: report what was readable
         notes.append(f"damaged at byte {progress.good_bytes} after {sum(counts.values())} "
                      f"messages: {_problem(error)}")
+    notes += [f"damaged chunk at byte {at} left out ({why})" for at, why in progress.skipped]
     totals: dict[tuple[str, str], int] = {}
     for channel_id, count in counts.items():
         key = channels.get(channel_id, (f"channel {channel_id}", ""))

@@ -6,6 +6,8 @@ lets a writer leave Channel and Schema records out of it); unknown opcodes are s
 Chunks are decompressed here, never beyond the size they declare, and a declared size is
 itself capped: a flipped length byte costs a chunk, not the machine's memory."""
 
+import contextlib
+import io
 from collections.abc import Callable, Iterator
 from typing import Any, BinaryIO
 
@@ -45,8 +47,6 @@ def _decompressed(chunk: Any) -> bytes:
     if chunk.compression == "":
         return bytes(chunk.data)
     if chunk.compression == "zstd":
-        import io
-
         import zstandard
 
         parts, total = [], 0
@@ -77,14 +77,17 @@ def chunk_records(chunk: Any) -> Iterator[Any]:
 
 
 class Progress:
-    """How far a walk got: the byte after the last whole record."""
+    """How far a walk got (the byte after the last whole record), and the chunks it had to
+    leave out because their contents were damaged while the file's framing held."""
 
     def __init__(self) -> None:
         self.good_bytes = 0
+        self.skipped: list[tuple[int, str]] = []     # (chunk offset, why)
 
 
 def walk_records(stream: BinaryIO, size: int, progress: Progress) -> Iterator[Any]:
-    """Every record of the file in file order, chunks opened in place."""
+    """Every record of the file in file order, chunks opened in place; a chunk whose
+    contents cannot be read is skipped (and noted in ``progress``), the walk goes on."""
     from mcap.records import Chunk
     from mcap.stream_reader import StreamReader
 
@@ -92,7 +95,13 @@ def walk_records(stream: BinaryIO, size: int, progress: Progress) -> Iterator[An
     progress.good_bytes = stream.tell()
     for record in reader.records:
         if isinstance(record, Chunk):
-            yield from chunk_records(record)
+            try:
+                inner = list(chunk_records(record))
+            except Exception as error:  # zstd, lz4, CRC or record errors inside the chunk
+                progress.skipped.append((progress.good_bytes,
+                                         str(error).strip() or type(error).__name__))
+                inner = []
+            yield from inner
         else:
             yield record
         progress.good_bytes = stream.tell()
@@ -154,7 +163,10 @@ class ChannelRouter:
             self.msgtypes[channel.topic] = schema.name
             return None
         for factory in self.factories:
-            decoder = factory.decoder_for(channel.message_encoding, schema)
+            # The vendored ROS 2 definition parser prints to stderr about a schema it cannot
+            # parse, and then raises: the exception is what we report.
+            with contextlib.redirect_stderr(io.StringIO()):
+                decoder = factory.decoder_for(channel.message_encoding, schema)
             if decoder is not None:
                 return decoder
         raise LogError(self.collector.path, f"cannot decode {channel.topic}: no decoder for "

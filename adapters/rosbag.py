@@ -19,6 +19,10 @@ ROS1_MAGIC = b"#ROSBAG V2.0"
 SQLITE_MAGIC = b"SQLite format 3\x00"
 
 
+def _problem(error: BaseException) -> str:
+    return str(error).strip() or type(error).__name__
+
+
 def _head(path: Path, size: int) -> bytes:
     with path.open("rb") as stream:
         return stream.read(size)
@@ -89,7 +93,7 @@ class RosbagAdapter:
                     return read_sequential(self._mcap_file(path), collector, fmt)
                 if fmt == "bag":
                     return self._salvage_bag1(path, collector, str(error))
-                raise LogError(path, f"cannot open {fmt} log: {error}") from None
+                raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
             try:
                 return self._extract(reader, collector, fmt)
             finally:
@@ -102,12 +106,14 @@ class RosbagAdapter:
         with _named_for_rosbags(path, fmt) as readable:
             try:
                 reader = _open_reader(readable)
-            except Exception as error:  # damaged: the storage may still be plain MCAP
+            except Exception as error:  # damaged: read what the records still say
                 if fmt == "ros2-mcap":
                     inventory = McapAdapter().inventory(self._mcap_file(path))
                     inventory.format = fmt
                     return inventory
-                raise LogError(path, f"cannot open {fmt} log: {error}") from None
+                if fmt == "bag":
+                    return self._salvaged_inventory(path, _problem(error))
+                raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
             counts: dict[tuple[str, str], int] = {}
             for c in reader.connections:
                 counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
@@ -119,7 +125,8 @@ class RosbagAdapter:
 
     @staticmethod
     def _salvage_bag1(path: Path, collector: SignalCollector, reason: str) -> Signals:
-        topics, stopped = salvage_bag1(path, collector)
+        salvaged = salvage_bag1(path, collector)
+        topics, stopped = salvaged.topics, salvaged.stopped
         if collector.count == 0:
             raise LogError(path, f"cannot open bag log ({reason}) and no message is "
                                  f"readable without its index ({stopped})")
@@ -132,6 +139,18 @@ class RosbagAdapter:
         if stopped:
             collector.damaged(f"bag damaged: {stopped}")
         return collector.finish("bag", None, None, topics)
+
+    @staticmethod
+    def _salvaged_inventory(path: Path, reason: str) -> LogInventory:
+        salvaged = salvage_bag1(path, SignalCollector(path, LogSources({})))
+        if not salvaged.counts:
+            raise LogError(path, f"cannot open bag log ({reason}) and no message is readable "
+                                 f"without its index ({salvaged.stopped})")
+        topics = [TopicInfo(topic, salvaged.topics[topic], count)
+                  for topic, count in sorted(salvaged.counts.items())]
+        notes = [f"bag index unusable ({reason}); messages counted record by record"
+                 + (f" up to the damage ({salvaged.stopped})" if salvaged.stopped else "")]
+        return LogInventory("bag", None, None, topics, notes)
 
     @staticmethod
     def _mcap_file(path: Path) -> Path:

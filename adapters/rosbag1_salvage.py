@@ -82,6 +82,7 @@ class _Decoder:
 
         self.store = get_typestore(Stores.EMPTY)
         self.connections: dict[int, _Connection] = {}
+        self.counts: dict[str, int] = {}                 # messages per topic
 
     def connection(self, header: dict[str, bytes], payload: memoryview) -> None:
         from rosbags.typesys import get_types_from_msg
@@ -101,6 +102,7 @@ class _Decoder:
         if connection is None:
             return
         topics[connection.topic] = connection.msgtype
+        self.counts[connection.topic] = self.counts.get(connection.topic, 0) + 1
         if connection.topic in collector.topics:
             secs, nsecs = struct.unpack("<II", header["time"])
             decoded: Any = self.store.deserialize_ros1(bytes(payload), connection.msgtype)
@@ -119,17 +121,26 @@ def _walk(view: bytes | memoryview, decoder: _Decoder, collector: SignalCollecto
             _walk(_decompress(header, payload), decoder, collector, topics, inside_chunk=True)
 
 
-def salvage_bag1(path: Path, collector: SignalCollector) -> tuple[dict[str, str], str | None]:
-    """Feed every readable message to ``collector``; return the topics seen and a note on
-    where the walk stopped (None when the whole file was read)."""
+@dataclass
+class SalvagedBag:
+    topics: dict[str, str]           # topic → message type, of every message read
+    counts: dict[str, int]           # messages per topic
+    stopped: str | None              # where and why the walk stopped (None: the whole file)
+
+
+def salvage_bag1(path: Path, collector: SignalCollector) -> SalvagedBag:
+    """Feed every readable message to ``collector``; say what was seen and where the walk
+    stopped."""
     data = path.read_bytes()
+    decoder = _Decoder()
     topics: dict[str, str] = {}
+    stopped: str | None = None
     try:
         if not data.startswith(MAGIC):
             raise _Damaged("not a ROS 1 bag")
-        _walk(memoryview(data)[len(MAGIC):], _Decoder(), collector, topics)
+        _walk(memoryview(data)[len(MAGIC):], decoder, collector, topics)
     except _Damaged as error:
-        return topics, str(error)
+        stopped = str(error)
     except Exception as error:  # a damaged chunk fails inside lz4/bz2 or the decoder
-        return topics, f"{type(error).__name__}: {error}"
-    return topics, None
+        stopped = f"{type(error).__name__}: {error}"
+    return SalvagedBag(topics, decoder.counts, stopped)

@@ -18,6 +18,7 @@ import numpy as np
 from auvdiag_cli.diagnosis import Diagnosis, diagnose_ingested
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.ingest import ingest
+from auvdiag_cli.numeric import peak
 from auvdiag_cli.profile import MISSION_MODE, Profile
 from auvdiag_cli.report_json import write_json
 from models.store import METADATA_FILE, LoadedModel
@@ -92,7 +93,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         g = np.concatenate(parts)
         finite = np.isfinite(g).all(axis=1)
         count = int(finite.sum())
-        peaks = {name: float(np.nanmax(g[:, i])) for i, name in enumerate(profile.sensor_names)}
+        peaks = {name: peak(g[:, i]) for i, name in enumerate(profile.sensor_names)}
         keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
         if not keep:
             floor = profile.thresholds_for(mode) if floor_at_profile else {}
@@ -109,7 +110,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     checks = []
     for path in faulty_logs:
         d = diagnose_ingested(ingest(path, profile), profile, calibrated)
-        ratio = float(np.nanmax(d.matching.g_percent / d.thresholds)) if d.matching else 0.0
+        ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
         checks.append(FaultyCheck(str(path), d.verdict, d.component, d.candidates,
                                   round(ratio, 2)))
     result = CalibrationResult(margin, modes, thresholds, hours, 3.0 / hours, checks)

@@ -42,7 +42,9 @@ ProfileOption = Annotated[Path | None, typer.Option(
 
 
 def _fail(message: str) -> NoReturn:
-    typer.echo(f"auvdiag: error: {message}", err=True)
+    from auvdiag_errors import one_line
+
+    typer.echo(f"auvdiag: error: {one_line(message, 1000)}", err=True)
     raise typer.Exit(EXIT_UNUSABLE)
 
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from auvdiag_cli.matching import match
+from auvdiag_cli.numeric import peak
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.resample import AlignedFrame
 from models.store import LoadedModel
@@ -41,7 +42,7 @@ def explain_by_weak_thruster(model: LoadedModel, profile: Profile, frame: Aligne
             commands[onset_index:, index] *= np.sqrt(fraction)
             trial = match(model, replace(frame, commands=commands), full_scale, window,
                           restarts)
-            ratio = float(np.nanmax(trial.g_percent[judged_from:] / thresholds[judged_from:]))
+            ratio = peak(trial.g_percent[judged_from:] / thresholds[judged_from:])
             if best is None or ratio < best.peak_g_ratio:
                 best = WeakenedThruster(command.component, fraction, round(ratio, 3))
     return best if best is not None and best.peak_g_ratio < 1.0 else None

@@ -17,6 +17,7 @@ from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm,
 from auvdiag_cli.errors import ModelError, UsageError
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.matching import Matching, match
+from auvdiag_cli.numeric import peak
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.segments import (
     ROUTINE_MODE,
@@ -360,9 +361,7 @@ def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matc
     for segment in segments:
         inside = (time_s >= segment.start_s) & (time_s <= segment.end_s)
         g = matching.g_percent[inside]
-        max_g = {name: (round(float(np.nanmax(g[:, i])), 3)
-                        if g.size and np.isfinite(g[:, i]).any() else float("nan"))
-                 for i, name in enumerate(sensor_names)}
+        max_g = {name: round(peak(g[:, i]), 3) for i, name in enumerate(sensor_names)}
         rows = b_series[inside]
         alarm = first_alarm(rows)
         bits = np.zeros(len(sensor_names), bool) if alarm is None else decided_b(

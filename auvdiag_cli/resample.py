@@ -8,7 +8,8 @@ Method (documented for users in the README):
 - sensors are averaged over the bin (t − Δt, t]: a faster sensor (the 50 Hz IMU) is low-pass
   filtered to the model rate; an empty bin takes the linear interpolation of its neighbours;
 - before that, each series is sorted by time, exact duplicate timestamps keep the last value,
-  and non-finite values are dropped (and counted);
+  and non-finite values, or values beyond ±1e12 (corrupted floats), are dropped (and
+  counted);
 - a silence longer than ``max_gap_s`` on any signal is a gap: grid points inside it are NaN
   (never interpolated across) and the gap is reported. A gap in a *command* means the
   actuators' history is unknown there: all sensors are NaN inside it and the model replay
@@ -31,6 +32,9 @@ NS_PER_S = 1_000_000_000
 # samples could fill means a broken clock, and is refused rather than allocated.
 GRID_STEPS_PER_SAMPLE = 10
 MIN_GRID_LIMIT = 1_000_000
+# No quantity a vehicle logs reaches this in SI units; a float whose exponent bits were
+# corrupted does (1e300 is one flipped bit away from 1.0).
+MAX_ABS_VALUE = 1e12
 
 
 @dataclass(frozen=True)
@@ -79,10 +83,13 @@ def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes:
 
 def _clean(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
            ) -> pd.Series:
-    finite = np.isfinite(series.to_numpy())
-    if not finite.all():
-        notes.append(f"{name}: dropped {int((~finite).sum())} non-finite value(s)")
-        series = series[finite]
+    values = series.to_numpy()
+    with np.errstate(invalid="ignore"):
+        usable = np.isfinite(values) & (np.abs(values) < MAX_ABS_VALUE)
+    if not usable.all():
+        notes.append(f"{name}: dropped {int((~usable).sum())} non-finite or impossible "
+                     "value(s)")
+        series = series[usable]
     series = _unjump(series, name, max_gap_ns, start_ns, notes)
     if not series.index.is_monotonic_increasing:
         notes.append(f"{name}: messages out of time order, sorted")

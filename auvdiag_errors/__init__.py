@@ -7,6 +7,14 @@ exceptions are wrapped at the boundary where they arise, ``from None``."""
 
 from pathlib import Path
 
+MAX_PROBLEM_CHARS = 400
+
+
+def one_line(text: str, limit: int = MAX_PROBLEM_CHARS) -> str:
+    """``text`` on one line (a wrapped library message may span many), cut to ``limit``."""
+    flat = " ".join(text.split())
+    return flat if len(flat) <= limit else flat[:limit - 1] + "…"
+
 
 class AuvdiagError(Exception):
     """Root of every error caused by the input: a log, a profile, a model, an option."""
@@ -16,9 +24,9 @@ class LogError(AuvdiagError):
     """A log could not be read, or lacks what the profile needs."""
 
     def __init__(self, path: Path | str, problem: str) -> None:
-        super().__init__(f"{path}: {problem}")
         self.path = Path(path)
-        self.problem = problem
+        self.problem = one_line(problem)
+        super().__init__(f"{path}: {self.problem}")
 
 
 class ProfileError(AuvdiagError):
@@ -34,4 +42,4 @@ class UsageError(AuvdiagError):
     command expects (e.g. a JSON that is not an auvdiag report)."""
 
 
-__all__ = ["AuvdiagError", "LogError", "ModelError", "ProfileError", "UsageError"]
+__all__ = ["AuvdiagError", "LogError", "ModelError", "ProfileError", "UsageError", "one_line"]

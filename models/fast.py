@@ -126,7 +126,8 @@ class FastDynamics:
         h = self.hidden
         x_gates = gates_from_command + state @ self.input_states
         h_gates = hidden @ self.hidden_weights + self.hidden_bias
-        reset_update = 1.0 / (1.0 + np.exp(-(x_gates[:, :2 * h] + h_gates[:, :2 * h])))
+        # The logistic function as tanh: equal, and it cannot overflow on extreme inputs.
+        reset_update = 0.5 + 0.5 * np.tanh(0.5 * (x_gates[:, :2 * h] + h_gates[:, :2 * h]))
         reset, update = reset_update[:, :h], reset_update[:, h:]
         candidate = np.tanh(x_gates[:, 2 * h:] + reset * h_gates[:, 2 * h:])
         hidden = candidate + update * (hidden - candidate)
