@@ -142,10 +142,13 @@ class SignalCollector:
         return sorted({s.topic for s in self.sources.signals.values()} - available)
 
     def finish(self, fmt: str, start_ns: int | None, end_ns: int | None,
-               topics: dict[str, str], require_all: bool = True) -> Signals:
+               topics: dict[str, str], require_all: bool = True,
+               time_ordered: bool = False) -> Signals:
         """The collected signals. A sample whose time is a lone spike (a corrupted record)
         is dropped and counted. With ``require_all`` a signal without samples is an error;
-        without it (inspection) such a signal is simply absent."""
+        without it (inspection) such a signal is simply absent. ``time_ordered``: the
+        format defines order by time stamp, not storage (MCAP chunks may come in any
+        order), so each signal is sorted here and a later jump back is no clock reset."""
         if self.impossible_times:
             self.notes.append(f"{self.impossible_times} message(s) with an impossible time "
                               "left out")
@@ -153,7 +156,8 @@ class SignalCollector:
         if empty and require_all:
             where = ", ".join(f"{n} ({self.sources.signals[n].topic})" for n in empty)
             raise LogError(self.path, f"no messages for signal(s) {where}")
-        series = {name: self._series(name) for name in self.times if name not in empty}
+        series = {name: self._series(name, time_ordered) for name in self.times
+                  if name not in empty}
         firsts = [int(s.index.min()) for s in series.values() if s.size]
         lasts = [int(s.index.max()) for s in series.values() if s.size]
         firsts += [m.time_ns for m in self.markers]
@@ -171,9 +175,12 @@ class SignalCollector:
                        series=series, markers=self.markers, topics=topics, notes=self.notes,
                        damage=self.damage, messages_read=self.count)
 
-    def _series(self, name: str) -> pd.Series:
+    def _series(self, name: str, time_ordered: bool) -> pd.Series:
         times = np.frombuffer(self.times[name], dtype=np.int64)
         values = np.frombuffer(self.values[name], dtype=np.float64)
+        if time_ordered:
+            order = np.argsort(times, kind="stable")
+            times, values = times[order], values[order]
         corrupt = spikes(times)
         if corrupt.any():
             self.notes.append(f"{name}: {int(corrupt.sum())} sample(s) with a corrupted "

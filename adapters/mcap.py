@@ -62,7 +62,7 @@ def read_sequential(path: Path, collector: SignalCollector, fmt: str) -> Signals
     if missing:
         where = " in the readable part" if damage or progress.skipped else ""
         raise LogError(path, f"missing topic(s) {', '.join(missing)}{where}")
-    return collector.finish(fmt, None, None, router.topics)
+    return collector.finish(fmt, None, None, router.topics, time_ordered=True)
 
 
 def _summary(stream: BinaryIO, size: int) -> Any | None:
@@ -134,7 +134,8 @@ class McapAdapter:
         router.flush()
         stats = summary.statistics
         return collector.finish("mcap", stats.message_start_time if stats else None,
-                                stats.message_end_time if stats else None, router.topics)
+                                stats.message_end_time if stats else None, router.topics,
+                                time_ordered=True)
 
     def inventory(self, path: Path) -> LogInventory:
         """From the summary when it has statistics, else by a raw scan (nothing decoded)."""
