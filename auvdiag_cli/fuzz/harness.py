@@ -16,7 +16,7 @@ import signal
 import tempfile
 import time
 import traceback
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -103,8 +103,11 @@ def _virtual_bytes() -> int:
         return int(statm.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
 
 
+Check = Callable[[Path, Profile, LoadedModel], tuple[str, str]]
+
+
 def _child(case_path: Path, profile: Profile, model: LoadedModel, limits: Limits,
-           write_fd: int) -> None:
+           write_fd: int, check: Check) -> None:
     """Runs in the forked child; reports on ``write_fd`` and never returns."""
     code = 0
     try:
@@ -117,7 +120,7 @@ def _child(case_path: Path, profile: Profile, model: LoadedModel, limits: Limits
         os.dup2(printed.fileno(), 1)
         os.dup2(printed.fileno(), 2)
         try:
-            outcome, detail = exercise(case_path, profile, model)
+            outcome, detail = check(case_path, profile, model)
             printed.seek(0)
             stray = printed.read(300)
             if stray:
@@ -147,8 +150,8 @@ class _Running:
     chunks: list[bytes] = field(default_factory=list)
 
 
-def _start(case: Case, profile: Profile, model: LoadedModel, limits: Limits, workdir: Path
-           ) -> tuple[int, _Running]:
+def _start(case: Case, profile: Profile, model: LoadedModel, limits: Limits, workdir: Path,
+           check: Check) -> tuple[int, _Running]:
     folder = Path(tempfile.mkdtemp(prefix="case-", dir=workdir))
     log_path, storage = case.seed_log.copy_to(folder)
     damaged, mutations = mutate(storage.read_bytes(), case.seed)
@@ -157,7 +160,7 @@ def _start(case: Case, profile: Profile, model: LoadedModel, limits: Limits, wor
     pid = os.fork()
     if pid == 0:
         os.close(read_fd)
-        _child(log_path, profile, model, limits, write_fd)
+        _child(log_path, profile, model, limits, write_fd, check)
     os.close(write_fd)
     return pid, _Running(case, mutations, folder, read_fd, time.perf_counter())
 
@@ -186,8 +189,9 @@ def _finish(running: _Running, status: int, usage: Any, timed_out: bool) -> Case
 
 
 def run_cases(cases: Iterable[Case], profile: Profile, model: LoadedModel, limits: Limits,
-              jobs: int) -> Iterator[CaseResult]:
-    """Each case in its own forked child, ``jobs`` at a time; results as they finish."""
+              jobs: int, check: Check = exercise) -> Iterator[CaseResult]:
+    """Each case in its own forked child, ``jobs`` at a time; results as they finish.
+    ``check`` is what a child does with its damaged log (the CLI's path by default)."""
     pending = iter(cases)
     running: dict[int, _Running] = {}
     with tempfile.TemporaryDirectory(prefix="auvdiag-fuzz-") as workdir:
@@ -198,7 +202,7 @@ def run_cases(cases: Iterable[Case], profile: Profile, model: LoadedModel, limit
                 if case is None:
                     exhausted = True
                     break
-                pid, started = _start(case, profile, model, limits, Path(workdir))
+                pid, started = _start(case, profile, model, limits, Path(workdir), check)
                 running[pid] = started
             if not running:
                 break

@@ -90,5 +90,9 @@ def mutate(data: bytes, seed: int) -> tuple[bytes, list[str]]:
     """One to three mutations of ``data``, chosen and placed by ``seed``."""
     rng = random.Random(seed)
     damaged = bytearray(data)
-    done = [rng.choice(MUTATIONS)(damaged, rng) for _ in range(rng.choice((1, 1, 2, 3)))]
+    done = []
+    for _ in range(rng.choice((1, 1, 2, 3))):
+        if not damaged:          # truncated to nothing: no more to damage
+            break
+        done.append(rng.choice(MUTATIONS)(damaged, rng))
     return bytes(damaged), done
