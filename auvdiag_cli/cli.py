@@ -173,9 +173,9 @@ def report(
 
     with _user_errors(json_report):
         document = _read_report(json_report)
-        sidecar = json_report.with_name(str(document.get("series_file") or ""))
-        series = load_series(sidecar) if document.get("series_file") and sidecar.is_file() \
-            else None
+        named = document.get("series_file")
+        sidecar = json_report.with_name(named) if isinstance(named, str) and named else None
+        series = load_series(sidecar) if sidecar is not None and sidecar.is_file() else None
         if series is None:
             typer.echo(f"auvdiag: note: {json_report}: no time histories beside it; the PDF "
                        "has its summary pages only", err=True)
