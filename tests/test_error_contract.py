@@ -171,3 +171,32 @@ def test_report_with_damaged_time_histories_is_one_line(make_log, tmp_path):
     (tmp_path / "r.series.npz").write_bytes(b"PK\x03\x04 not really a zip")
     result = run("report", target)
     assert result.exit_code == 2 and "unreadable time histories" in result.output
+
+
+def _first_mcap_chunk(data: bytes) -> int:
+    position = 8                                           # after the magic
+    while data[position] != 0x06:                          # the Chunk opcode
+        position += 9 + struct.unpack_from("<Q", data, position + 1)[0]
+    return position
+
+
+@pytest.mark.parametrize("value", [2**40, 2**63 + 5, 2**64 - 1])
+def test_a_chunk_declaring_a_huge_size_is_damage_not_an_allocation(make_log, tmp_path, value):
+    """The chunk's uncompressed size (after start and end times) is a length field."""
+    data = bytearray(make_log("paper-normal", 11, "mcap").read_bytes())
+    struct.pack_into("<Q", data, _first_mcap_chunk(bytes(data)) + 9 + 16, value)
+    damaged = tmp_path / "huge.mcap"
+    damaged.write_bytes(bytes(data))
+    result = run("diagnose", damaged, "--quiet")
+    assert result.exit_code == 2 and f"a chunk declares {value} bytes" in result.output
+
+
+@pytest.mark.parametrize("value", [0, 2**31 - 1, 2**32 - 1])
+def test_a_ros1_chunk_size_field_is_not_trusted(make_log, tmp_path, value):
+    data = bytearray(make_log("paper-normal", 11, "bag").read_bytes())
+    for match in re.finditer(rb"size=", bytes(data)):
+        struct.pack_into("<I", data, match.end(), value)
+    damaged = tmp_path / "sizes.bag"
+    damaged.write_bytes(bytes(data))
+    result = run("diagnose", damaged, "--quiet")
+    assert result.exit_code in (0, 2)
