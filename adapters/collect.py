@@ -1,7 +1,7 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
 from array import array
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -9,12 +9,15 @@ import numpy as np
 import pandas as pd
 
 from adapters.errors import LogError
+from adapters.fieldnames import object_field_paths, unresolved
 from adapters.fieldpath import field_getter
 from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals
 from adapters.timebase import MAX_TIME_NS, spikes
 
 # How far a container's recorded start or end may lie outside the data it holds.
 MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
+# Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one).
+INSTANCE_FIELDS = ("I", "Instance")
 # A topic's messages as columns: field path → one value per message.
 ColumnSource = Callable[[str], np.ndarray]
 
@@ -36,6 +39,26 @@ class _Extractor:
             distinct, which = np.unique(column(key), return_inverse=True)
             keep &= np.array([_text(d) == value for d in distinct.tolist()], bool)[which]
         return keep
+
+    def mixed_instances(self, column: ColumnSource, fields: Sequence[str], keep: Any
+                        ) -> tuple[str, list[str]] | None:
+        """The instance field and its values when the kept rows mix several instances of
+        one sensor (and the profile neither chose one nor asked for a merge)."""
+        chosen = {key for key, _ in self.source.where}
+        for key in INSTANCE_FIELDS:
+            if key in fields and key not in chosen and not self.source.merge_instances:
+                values = np.unique(column(key)[keep])
+                if values.size > 1:
+                    return key, [_text(v) for v in values.tolist()]
+        return None
+
+
+def _resolves(message: Any, path: str) -> bool:
+    try:
+        field_getter(path)(message)
+    except (AttributeError, IndexError, KeyError, TypeError, ValueError):
+        return False
+    return True
 
 
 def _text(value: Any) -> str:
@@ -101,19 +124,23 @@ class SignalCollector:
             if text.startswith(segment.prefix):
                 self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
-            if extractor.where and not extractor.matches(message):
-                continue
             try:
+                if extractor.where and not extractor.matches(message):
+                    continue
                 value = float(extractor.get(message))
-            except (AttributeError, IndexError, KeyError, TypeError, ValueError) as error:
-                raise LogError(self.path, f"field {extractor.name!r} does not resolve on "
-                                          f"{topic}: {error!r}") from None
+            except (AttributeError, IndexError, KeyError, TypeError, ValueError):
+                wrong = next((key for key, _ in extractor.source.where
+                              if not _resolves(message, key)), extractor.source.field)
+                raise LogError(self.path, unresolved(
+                    topic, wrong, extractor.name, object_field_paths(message))) from None
             self.times[extractor.name].append(time_ns)
             self.values[extractor.name].append(value * extractor.scale + extractor.offset)
 
-    def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource) -> None:
+    def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource,
+                    fields: Sequence[str] = ()) -> None:
         """Every message of ``topic`` at once, as columns (readers that decode whole
-        message types into arrays). Same result as `add` per message."""
+        message types into arrays). Same result as `add` per message. ``fields``: the
+        paths these messages offer (for errors, and to find sensor instances)."""
         rows = times_ns.size
         self.count += rows
         segment = self.sources.segment
@@ -125,14 +152,27 @@ class SignalCollector:
                     self.markers.append(SegmentMarker(time_ns,
                                                       text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
+            wanted = extractor.source.field
             try:
+                for wanted in (*(key for key, _ in extractor.source.where),
+                               extractor.source.field):
+                    column(wanted)
                 keep = extractor.rows_matching(column, rows) if extractor.where else slice(None)
                 numbers = column(extractor.source.field)[keep]
-                if numbers.dtype.kind not in "biuf":
-                    raise TypeError(f"{numbers.dtype} is not a number")
-            except (IndexError, KeyError, TypeError, ValueError) as error:
-                raise LogError(self.path, f"field {extractor.name!r} does not resolve on "
-                                          f"{topic}: {error!r}") from None
+            except (IndexError, KeyError, TypeError, ValueError):
+                raise LogError(self.path, unresolved(topic, wanted, extractor.name,
+                                                     fields)) from None
+            if numbers.dtype.kind not in "biuf":
+                raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
+                                          f"holds {numbers.dtype}, not numbers")
+            mixed = extractor.mixed_instances(column, fields, keep)
+            if mixed is not None:
+                key, instances = mixed
+                raise LogError(self.path, f"{topic} holds {len(instances)} sensor instances "
+                               f"({key} = {', '.join(instances)}) that signal "
+                               f"{extractor.name} would merge: choose one with where = "
+                               f"{{ {key} = {instances[0]} }} in the profile, or set "
+                               "merge_instances = true")
             values = numbers.astype(np.float64) * extractor.scale + extractor.offset
             self.times[extractor.name].frombytes(times_ns[keep].astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())

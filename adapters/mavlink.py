@@ -108,7 +108,8 @@ def _add_timed(collector: SignalCollector, topic: str, times_us: np.ndarray, row
         collector.notes.append(f"{topic}: {int((~timed).sum())} record(s) with an impossible "
                                "time left out")
         times_us, rows = times_us[timed], rows[timed]
-    collector.add_columns(topic, times_us * 1000, _columns_of(rows, divisors))
+    collector.add_columns(topic, times_us * 1000, _columns_of(rows, divisors),
+                          rows.dtype.names or ())
 
 
 def _columns_of(rows: np.ndarray, divisors: dict[str, float]) -> ColumnSource:

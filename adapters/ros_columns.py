@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from adapters.collect import SignalCollector
+from adapters.fieldnames import ros_field_paths
 from adapters.fieldpath import parse_field_path
 from adapters.packed import gather_words
 
@@ -223,4 +224,5 @@ class TopicBatches:
                 self.collector.add(topic, time_ns, self.deserialize(raw, msgtype))
             return
         self.collector.add_columns(topic, np.frombuffer(batch.times_ns, np.int64),
-                                   columns.__getitem__)
+                                   columns.__getitem__,
+                                   ros_field_paths(self.typestore, msgtype))

@@ -24,6 +24,7 @@ class FieldSource:
     scale: float = 1.0
     offset: float = 0.0
     where: tuple[tuple[str, str], ...] = ()
+    merge_instances: bool = False     # True: several sensor instances make one signal
 
 
 @dataclass(frozen=True)

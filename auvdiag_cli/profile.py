@@ -244,7 +244,8 @@ def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
         where = entry.sub("where").table if "where" in entry.table else {}
         signals[name] = FieldSource(
             _topic(entry), entry.get("field", str), entry.get("scale", float, 1.0),
-            entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()))
+            entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
+            entry.get("merge_instances", bool, False))
     segment = None
     if "segment" in reader.table:
         entry = reader.sub("segment")

@@ -1,0 +1,73 @@
+"""The field paths a message offers, for messages that tell a user what to write in a profile:
+`inspect` lists them, and a field that does not resolve names the ones that would."""
+
+import difflib
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+# How deep nested ROS messages are listed, and how many entries a message shows.
+MAX_DEPTH = 4
+MAX_LISTED = 12
+
+
+def closest_first(wanted: str, names: Iterable[str], limit: int = MAX_LISTED) -> list[str]:
+    """``names`` ordered by likeness to ``wanted`` (the likeliest typo fix first)."""
+    unique = list(dict.fromkeys(names))
+    likeness = {name: difflib.SequenceMatcher(None, wanted.lower(), name.lower()).ratio()
+                for name in unique}
+    return sorted(unique, key=lambda name: -likeness[name])[:limit]
+
+
+def unresolved(topic: str, path: str, signal: str, names: Sequence[str]) -> str:
+    """The problem text for a field path that a topic's messages do not have."""
+    offered = ", ".join(closest_first(path, names)) if names else "none known"
+    return f"{topic} has no field {path!r} (signal {signal}); its fields, closest first: {offered}"
+
+
+def ros_field_paths(typestore: Any, msgtype: str, prefix: str = "", depth: int = 0
+                    ) -> list[str]:
+    """Every value's path in a ROS message definition: ``twist.linear.x``, ``data[0]``
+    (a sequence or array is shown by its first element)."""
+    paths: list[str] = []
+    try:
+        fields = typestore.get_msgdef(msgtype).fields
+    except Exception:  # a type the store does not know: nothing to list
+        return paths
+    for name, (kind, detail) in fields:
+        path = f"{prefix}{name}"
+        kind_name = kind.name
+        if kind_name in ("ARRAY", "SEQUENCE"):
+            element_kind, element = detail[0]
+            path += "[0]"
+            kind_name, detail = element_kind.name, element
+        if kind_name == "NAME" and depth < MAX_DEPTH:
+            paths += ros_field_paths(typestore, detail, f"{path}.", depth + 1)
+        elif kind_name == "BASE":
+            paths.append(path)
+    return paths
+
+
+def object_field_paths(message: Any, prefix: str = "", depth: int = 0) -> list[str]:
+    """Paths of a decoded message object (dataclass-like or a mapping)."""
+    if isinstance(message, dict):
+        items = list(message.items())
+    elif hasattr(message, "__dataclass_fields__"):
+        items = [(name, getattr(message, name)) for name in message.__dataclass_fields__]
+    elif hasattr(message, "__slots__"):
+        items = [(name, getattr(message, name, None)) for name in message.__slots__]
+    else:
+        return [prefix.rstrip(".")] if prefix else []
+    paths: list[str] = []
+    for name, value in items:
+        if str(name).startswith("_"):
+            continue
+        if isinstance(value, list | tuple | np.ndarray) and len(value):
+            name, value = f"{name}[0]", value[0]
+        if depth < MAX_DEPTH and (isinstance(value, dict) or hasattr(value, "__dataclass_fields__")
+                                  or hasattr(value, "__slots__")):
+            paths += object_field_paths(value, f"{prefix}{name}.", depth + 1)
+        else:
+            paths.append(f"{prefix}{name}")
+    return paths

@@ -1,0 +1,101 @@
+"""A profile that names a field the log does not have gets an answer that says what to write:
+the field (not the signal) named, the message's fields listed closest first; a `where` on a
+key that does not exist says so; several instances of one sensor are never merged silently."""
+
+import re
+import shutil
+from importlib import resources
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+PROFILE = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+
+
+def _profile(tmp_path, old, new):
+    assert old in PROFILE
+    path = tmp_path / "edited.toml"
+    path.write_text(PROFILE.replace(old, new))
+    return path
+
+
+def _refusal(log, profile):
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(profile), "--quiet"])
+    assert result.exit_code == 2 and "unexpected" not in result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and str(log) in lines[0]
+    return lines[0]
+
+
+@pytest.mark.parametrize(("fmt", "old", "new", "first"), [
+    ("bin", 'field = "GyrZ"', 'field = "GyroZ"', "GyrZ"),
+    ("tlog", 'field = "yawspeed"', 'field = "yaw_speed"', "yawspeed"),
+    ("mcap", 'field = "angular_velocity.z"', 'field = "angular_velocity.zz"',
+     "angular_velocity.z"),
+    ("bag", 'field = "twist.linear.x"', 'field = "twist.linear.xx"', "twist.linear.x"),
+    ("db3", 'field = "data[0]"', 'field = "dat[0]"', "data[0]"),
+])
+def test_a_misspelt_field_names_the_field_and_the_valid_ones(make_log, tmp_path, fmt, old, new,
+                                                             first):
+    line = _refusal(make_log("paper-normal", 11, fmt), _profile(tmp_path, old, new))
+    wrong = re.search(r'field = "([^"]+)"', new).group(1)
+    assert f"has no field {wrong!r}" in line
+    assert re.search(r"closest first: ([^,]+)", line).group(1) == first
+
+
+def test_a_where_on_a_key_that_does_not_exist_says_so(make_log, tmp_path):
+    profile = _profile(tmp_path, 'where = { name = "FLOW" }', 'where = { nam = "FLOW" }')
+    line = _refusal(make_log("paper-normal", 11, "tlog"), profile)
+    assert "NAMED_VALUE_FLOAT has no field 'nam' (signal flow)" in line
+    assert "closest first: name" in line
+
+
+def _with_second_imu(source, target):
+    """The DataFlash log with every IMU record followed by instance 1 of the same sensor."""
+    from adapters.mavlink_scan import index_file
+
+    index = index_file(source, "bin")
+    imu = next(t for t, f in index.formats.items() if f.name == "IMU")
+    assert index.formats[imu].types[:2] == "QB"                    # TimeUS, then I
+    assert index.formats[imu].columns[:2] == ("TimeUS", "I")
+    at = 3 + 8                                                     # header, TimeUS
+    data, ends = bytes(index.data), np.append(index.offsets[1:], index.data.size)
+    parts = []
+    for start, end, kind in zip(index.offsets.tolist(), ends.tolist(),
+                                index.type_ids.tolist(), strict=True):
+        record = data[start:end]
+        parts.append(record)
+        if kind == imu:
+            parts.append(record[:at] + b"\x01" + record[at + 1:])
+    target.write_bytes(b"".join(parts))
+    return target
+
+
+def test_interleaved_sensor_instances_are_refused_with_the_choice(make_log, tmp_path):
+    log = _with_second_imu(make_log("paper-normal", 11, "bin"), tmp_path / "two_imus.bin")
+    line = _refusal(log, _profile(tmp_path, 'field = "GyrZ"', 'field = "GyrZ"'))
+    assert "IMU holds 2 sensor instances (I = 0, 1)" in line
+    assert "where = { I = 0 }" in line and "merge_instances = true" in line
+
+
+@pytest.mark.parametrize("choice", ['field = "GyrZ", where = { I = 1 }',
+                                    'field = "GyrZ", merge_instances = true'])
+def test_a_chosen_or_merged_instance_is_read(make_log, tmp_path, choice):
+    log = _with_second_imu(make_log("paper-normal", 11, "bin"), tmp_path / "two_imus.bin")
+    profile = _profile(tmp_path, 'field = "GyrZ"', choice)
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(profile), "--quiet"])
+    assert result.exit_code == 0, result.output
+
+
+def test_inspect_shows_the_valid_fields_of_a_misspelt_one(make_log, tmp_path):
+    log = make_log("paper-normal", 11, "bin")
+    shutil.copy(log, tmp_path / "log.bin")
+    profile = _profile(tmp_path, 'field = "GyrZ"', 'field = "Gyr_Z"')
+    result = runner.invoke(app, ["inspect", str(tmp_path / "log.bin"), "--profile",
+                                 str(profile)])
+    assert result.exit_code == 2
+    assert "MISSING  yaw_rate" in result.stdout and "closest first: GyrZ" in result.stdout
