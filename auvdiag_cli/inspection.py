@@ -1,11 +1,12 @@
 """`auvdiag inspect`: what a log holds and which of the profile's signals it provides."""
 
 import difflib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from adapters import LogError, LogInventory, LogSources, Signals, inventory, read_log
 from auvdiag_cli.profile import Profile
+from auvdiag_cli.resample import slow_command_note
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,7 @@ class Inspection:
     signals: list[SignalResolution]
     markers: list[str]
     mapped: bool = True          # False: the profile says nothing about this format family
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def usable(self) -> bool:
@@ -79,4 +81,6 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
                                             _closest(source.topic, sorted(available))))
     first = next(iter(read.values()), None)
     markers = [m.label for m in first.markers] if first is not None else []
-    return Inspection(path, family, contents, results, markers)
+    warnings = [note for s in results if s.name in profile.command_names
+                if (note := slow_command_note(s.name, s.rate_hz, profile.dt_s)) is not None]
+    return Inspection(path, family, contents, results, markers, warnings=warnings)

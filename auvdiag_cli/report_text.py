@@ -107,5 +107,6 @@ def inspection_lines(inspection: Inspection) -> list[str]:
             lines.append(f"    MISSING  {s.name:<12} {where}  ({s.problem}{hint})")
     if inspection.markers:
         lines.append(f"  segment markers: {' '.join(inspection.markers)}")
+    lines += [f"  warning: {warning}" for warning in inspection.warnings]
     lines += [f"  note: {note}" for note in inv.notes]
     return lines

@@ -35,6 +35,9 @@ MIN_GRID_LIMIT = 1_000_000
 # No quantity a vehicle logs reaches this in SI units; a float whose exponent bits were
 # corrupted does (1e300 is one flipped bit away from 1.0).
 MAX_ABS_VALUE = 1e12
+# A command logged at less than 1 / (factor · Δt) is flagged: the zero-order hold then
+# spans more than this many model steps.
+SLOW_COMMAND_FACTOR = 1.5
 
 
 @dataclass(frozen=True)
@@ -57,6 +60,7 @@ class AlignedFrame:
     gaps: list[Gap] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     restarts: list[int] = field(default_factory=list)   # grid indices where replay restarts
+    slow_commands: list[str] = field(default_factory=list)   # also in notes
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
@@ -99,6 +103,25 @@ def _clean(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: 
         notes.append(f"{name}: {int(duplicated.sum())} duplicate timestamp(s), kept the last")
         series = series[~duplicated]
     return series
+
+
+def slow_command_note(name: str, rate_hz: float | None, dt_s: float) -> str | None:
+    """A warning when a command is logged more slowly than the model steps: the replay then
+    holds each command over several steps, a coarser history than the model learnt from
+    (ground stations often log actuator outputs at 2-4 Hz)."""
+    if rate_hz is None or rate_hz * dt_s * SLOW_COMMAND_FACTOR >= 1.0:
+        return None
+    return (f"{name} is logged at {rate_hz:.1f} Hz, below the model's {1 / dt_s:g} Hz step: "
+            f"each command is held about {1 / rate_hz:.2f} s, so changes faster than that are "
+            "invisible to the replay and residuals after them are larger (raise the logging "
+            "rate, e.g. ArduSub's SR0_RC_CHAN / SR1_RC_CHAN for SERVO_OUTPUT_RAW)")
+
+
+def _rate_hz(times_ns: np.ndarray) -> float | None:
+    """Messages a second, from the median spacing (gaps do not lower it)."""
+    steps = np.diff(times_ns)
+    steps = steps[steps > 0]
+    return NS_PER_S / float(np.median(steps)) if steps.size else None
 
 
 def _gaps(times_ns: np.ndarray, max_gap_ns: int) -> list[tuple[int, int]]:
@@ -148,12 +171,16 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}
     blind = np.zeros(len(grid_ns), dtype=bool)     # inside a command gap
+    slow_commands: list[str] = []
     restarts: set[int] = set()
     for name, series in cleaned.items():
         times_ns = series.index.to_numpy(dtype=np.int64)
         values = series.to_numpy(dtype=np.float64)
         if name in command_names:
             columns[name] = _held(times_ns, values, grid_ns)
+            slow = slow_command_note(name, _rate_hz(times_ns), dt_s)
+            if slow is not None:
+                slow_commands.append(slow)
         else:
             columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
         for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
@@ -175,6 +202,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         sensor_names=sensor_names,
         dt_s=dt_s,
         gaps=gaps,
-        notes=notes,
+        notes=notes + slow_commands,
+        slow_commands=slow_commands,
         restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
     )

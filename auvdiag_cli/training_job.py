@@ -48,6 +48,8 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
 
     def load(path: Path) -> TrainingLog:
         frame = ingest(path, profile).frame
+        for note in frame.slow_commands:
+            progress(f"warning: {path.name}: {note}")
         return TrainingLog(path.name, frame.commands, frame.sensors)
 
     progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
