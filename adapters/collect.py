@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from adapters.errors import LogError
-from adapters.fieldnames import object_field_paths, unresolved
+from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
 from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals
 from adapters.timebase import MAX_TIME_NS, spikes
@@ -88,6 +88,8 @@ class SignalCollector:
         self.notes: list[str] = []
         self.damage: Damage | None = None
         self.impossible_times = 0
+        # Signals whose `where` matched no message: the values the first key did take.
+        self.filtered_out: dict[str, list[str]] = {}
 
     def accepts_time(self, time_ns: int) -> bool:
         """False (and counted) for a stored time no clock can show: a corrupted record."""
@@ -165,6 +167,10 @@ class SignalCollector:
             if numbers.dtype.kind not in "biuf":
                 raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
                                           f"holds {numbers.dtype}, not numbers")
+            if extractor.where and not numbers.size and rows:
+                key = extractor.source.where[0][0]
+                self.filtered_out[extractor.name] = sorted(
+                    {_text(v) for v in np.unique(column(key)).tolist()})
             mixed = extractor.mixed_instances(column, fields, keep)
             if mixed is not None:
                 key, instances = mixed
@@ -194,7 +200,7 @@ class SignalCollector:
                               "left out")
         empty = sorted(name for name, times in self.times.items() if not times)
         if empty and require_all:
-            where = ", ".join(f"{n} ({self.sources.signals[n].topic})" for n in empty)
+            where = ", ".join(self._why_empty(n) for n in empty)
             raise LogError(self.path, f"no messages for signal(s) {where}")
         series = {name: self._series(name, time_ordered) for name in self.times
                   if name not in empty}
@@ -214,6 +220,15 @@ class SignalCollector:
                        end_ns=0 if last is None else last,
                        series=series, markers=self.markers, topics=topics, notes=self.notes,
                        damage=self.damage, messages_read=self.count)
+
+    def _why_empty(self, name: str) -> str:
+        source = self.sources.signals[name]
+        offered = self.filtered_out.get(name)
+        if offered is None:
+            return f"{name} ({source.topic})"
+        wanted = " and ".join(f"{key} = {value}" for key, value in source.where)
+        return (f"{name} ({source.topic} has no message with {wanted}; its values: "
+                f"{', '.join(closest_first(source.where[0][1], offered))})")
 
     def _series(self, name: str, time_ordered: bool) -> pd.Series:
         times = np.frombuffer(self.times[name], dtype=np.int64)

@@ -8,6 +8,9 @@ class TopicInfo:
     name: str
     type: str
     count: int
+    fields: tuple[str, ...] = ()                        # field paths a profile can name
+    instances: tuple[tuple[str, tuple[str, ...]], ...] = ()   # instance key → its values
+    names: tuple[str, ...] = ()                         # NAMED_VALUE_* names it carries
 
 
 @dataclass

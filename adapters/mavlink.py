@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from adapters.collect import ColumnSource, SignalCollector
+from adapters.collect import INSTANCE_FIELDS, ColumnSource, SignalCollector
 from adapters.errors import LogError
 from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
@@ -145,8 +145,33 @@ def _message_names() -> dict[int, str]:
 
 def _inventory(fmt: str, scan: RecordIndex, kind: str) -> LogInventory:
     first_us, last_us = scan.span_us
-    return LogInventory(
-        fmt, None if first_us is None else first_us * 1000,
-        None if last_us is None else last_us * 1000,
-        [TopicInfo(name, kind, count) for name, count in sorted(scan.counts.items())],
-        [scan.problem.reason] if scan.problem else [])
+    topics = [_topic_info(scan, fmt, kind, name, count)
+              for name, count in sorted(scan.counts.items())]
+    return LogInventory(fmt, None if first_us is None else first_us * 1000,
+                        None if last_us is None else last_us * 1000, topics,
+                        [scan.problem.reason] if scan.problem else [])
+
+
+def _topic_info(scan: RecordIndex, fmt: str, kind: str, name: str, count: int) -> TopicInfo:
+    """A message type's fields, with the values of its instance key or NAMED_VALUE name."""
+    try:
+        if fmt == "tlog":
+            message_class = _message_classes().get(name)
+            if message_class is None:
+                return TopicInfo(name, kind, count)
+            _, rows, _ = decode_mavlink(scan, message_class)
+        else:
+            type_id = next(t for t, f in scan.formats.items() if f.name == name)
+            _, rows, _ = decode_dataflash(scan, type_id)
+    except (StopIteration, UnknownFormat, ValueError):   # a layout this reader cannot show
+        return TopicInfo(name, kind, count)
+    fields = tuple(rows.dtype.names or ())
+    instances = tuple((key, _distinct(rows[key])) for key in INSTANCE_FIELDS if key in fields)
+    names = _distinct(rows["name"]) if name.startswith("NAMED_VALUE") else ()
+    return TopicInfo(name, kind, count, fields, instances, names)
+
+
+def _distinct(column: np.ndarray) -> tuple[str, ...]:
+    values = [v.split(b"\0", 1)[0].decode("utf-8", "replace") if isinstance(v, bytes)
+              else str(v) for v in np.unique(column).tolist()]
+    return tuple(values)

@@ -16,6 +16,7 @@ from adapters.mcap_records import (
     ChannelRouter,
     Progress,
     chunk_records,
+    schema_fields,
     walk_records,
 )
 from adapters.signals import LogSources, Signals
@@ -143,8 +144,10 @@ class McapAdapter:
             summary = _summary(stream, path.stat().st_size)
             if summary is not None and summary.statistics is not None:
                 stats = summary.statistics
+                fields = schema_fields(summary.schemas)
                 topics = [TopicInfo(c.topic, _schema_name(summary.schemas, c.schema_id),
-                                    stats.channel_message_counts.get(c.id, 0))
+                                    stats.channel_message_counts.get(c.id, 0),
+                                    fields.get(c.schema_id, ()))
                           for c in summary.channels.values()]
                 return LogInventory("mcap", stats.message_start_time, stats.message_end_time,
                                     sorted(topics, key=lambda t: t.name))
@@ -168,8 +171,8 @@ def _wanted_chunks(stream: BinaryIO, summary: Any, wanted: set[int]) -> Iterator
 def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
     from mcap.records import Channel, Message, Schema
 
-    names: dict[int, str] = {}
-    channels: dict[int, tuple[str, str]] = {}
+    schemas: dict[int, Any] = {}
+    channels: dict[int, tuple[str, int]] = {}
     counts: dict[int, int] = {}
     first = last = None
     notes: list[str] = []
@@ -177,9 +180,9 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
     try:
         for record in walk_records(stream, size, progress):
             if isinstance(record, Schema):
-                names[record.id] = record.name
+                schemas[record.id] = record
             elif isinstance(record, Channel):
-                channels[record.id] = (record.topic, names.get(record.schema_id, ""))
+                channels[record.id] = (record.topic, record.schema_id)
             elif isinstance(record, Message):
                 counts[record.channel_id] = counts.get(record.channel_id, 0) + 1
                 first = record.log_time if first is None else min(first, record.log_time)
@@ -188,9 +191,11 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
         notes.append(f"damaged at byte {progress.good_bytes} after {sum(counts.values())} "
                      f"messages: {_problem(error)}")
     notes += [f"damaged chunk at byte {at} left out ({why})" for at, why in progress.skipped]
-    totals: dict[tuple[str, str], int] = {}
+    totals: dict[tuple[str, int], int] = {}
     for channel_id, count in counts.items():
-        key = channels.get(channel_id, (f"channel {channel_id}", ""))
+        key = channels.get(channel_id, (f"channel {channel_id}", -1))
         totals[key] = totals.get(key, 0) + count
-    topics = [TopicInfo(t, n, c) for (t, n), c in sorted(totals.items())]
+    fields = schema_fields(schemas)
+    topics = [TopicInfo(t, _schema_name(schemas, s), c, fields.get(s, ()))
+              for (t, s), c in sorted(totals.items())]
     return LogInventory("mcap", first, last, topics, notes)

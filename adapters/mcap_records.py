@@ -76,6 +76,23 @@ def chunk_records(chunk: Any) -> Iterator[Any]:
     yield from breakup_chunk(plain, validate_crc=True)
 
 
+def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
+    """Field paths of each ros2msg schema (others, e.g. JSON, list none)."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    from adapters.fieldnames import ros_field_paths
+
+    store, fields = get_typestore(Stores.EMPTY), {}
+    for schema_id, schema in schemas.items():
+        try:
+            if schema.encoding == "ros2msg":
+                store.register(get_types_from_msg(schema.data.decode(), schema.name))
+                fields[schema_id] = tuple(ros_field_paths(store, schema.name))
+        except Exception:  # a definition rosbags cannot parse lists no fields
+            continue
+    return fields
+
+
 class Progress:
     """How far a walk got (the byte after the last whole record), and the chunks it had to
     leave out because their contents were damaged while the file's framing held."""

@@ -9,6 +9,7 @@ from typing import Any
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
+from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, read_sequential
 from adapters.ros_columns import TopicBatches
@@ -118,8 +119,10 @@ class RosbagAdapter:
             for c in reader.connections:
                 counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
             span = (int(reader.start_time), int(reader.end_time))
+            fields = {msgtype: tuple(ros_field_paths(reader.typestore, msgtype))
+                      for _, msgtype in counts}
             reader.close()
-        topics = [TopicInfo(topic, msgtype, count)
+        topics = [TopicInfo(topic, msgtype, count, fields[msgtype])
                   for (topic, msgtype), count in sorted(counts.items())]
         return LogInventory(fmt, *span, topics)
 

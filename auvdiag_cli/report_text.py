@@ -1,8 +1,13 @@
 """The short human summary printed on the terminal."""
 
+import textwrap
+
+from adapters import TopicInfo
 from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, Diagnosis
 from auvdiag_cli.inspection import Inspection
 from auvdiag_cli.report_json import utc_text
+
+DETAIL_WIDTH = 100
 
 
 def _components(names: list[str]) -> str:
@@ -81,6 +86,23 @@ def _utc(time_ns: int | None) -> str:
     return utc_text(time_ns, "milliseconds") or f"{time_ns} ns (not a date)"
 
 
+def _wrapped(label: str, items: list[str]) -> list[str]:
+    return textwrap.wrap(", ".join(items), width=DETAIL_WIDTH,
+                         initial_indent=f"      {label:<10}", subsequent_indent=" " * 16)
+
+
+def _topic_details(topic: TopicInfo) -> list[str]:
+    """What a profile can name on this topic: fields, instance values, NAMED_VALUE names."""
+    lines = _wrapped("fields", list(topic.fields)) if topic.fields else []
+    for key, values in topic.instances:
+        choose = f" (several: choose with where = {{ {key} = {values[0]} }})" \
+            if len(values) > 1 else ""
+        lines += _wrapped("instances", [f"{key} = {', '.join(values)}{choose}"])
+    if topic.names:
+        lines += _wrapped("names", [f'{", ".join(topic.names)} (where = {{ name = "…" }})'])
+    return lines
+
+
 def inspection_lines(inspection: Inspection) -> list[str]:
     inv = inspection.inventory
     duration = inv.duration_s
@@ -92,6 +114,7 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
         lines.append(f"  {topic.name:<32} {topic.type:<34} {topic.count:>8} {rate:>9}")
+        lines += _topic_details(topic)
     if not inspection.mapped:
         lines.append(f"  profile signals: none to look for: the profile has no "
                      f"[sources.{inspection.family}] mapping for {inv.format} logs")

@@ -99,3 +99,29 @@ def test_inspect_shows_the_valid_fields_of_a_misspelt_one(make_log, tmp_path):
                                  str(profile)])
     assert result.exit_code == 2
     assert "MISSING  yaw_rate" in result.stdout and "closest first: GyrZ" in result.stdout
+
+
+@pytest.mark.parametrize(("fmt", "topic", "field"), [
+    ("bag", "/imu/data", "angular_velocity.z"), ("db3", "/thrusters/command", "data[0]"),
+    ("ros2-mcap", "/flow/velocity", "twist.linear.x"), ("mcap", "/imu/data", "header.frame_id"),
+    ("tlog", "ATTITUDE", "yawspeed"), ("bin", "RCOU", "C2")])
+def test_inspect_lists_every_topics_fields(make_log, fmt, topic, field):
+    result = runner.invoke(app, ["inspect", str(make_log("paper-normal", 11, fmt))])
+    lines = result.stdout.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.strip().startswith(topic + " "))
+    listed = " ".join(line.strip() for line in lines[at + 1:at + 4])
+    assert listed.startswith("fields") and re.search(rf"[ ,]{re.escape(field)}(,|$| )", listed)
+
+
+def test_inspect_lists_instances_and_named_values(make_log, tmp_path):
+    log = _with_second_imu(make_log("paper-normal", 11, "bin"), tmp_path / "two_imus.bin")
+    shown = runner.invoke(app, ["inspect", str(log)]).stdout
+    assert "instances I = 0, 1 (several: choose with where = { I = 0 })" in shown
+    shown = runner.invoke(app, ["inspect", str(make_log("paper-normal", 11, "tlog"))]).stdout
+    assert re.search(r"names\s+FLOW \(where = \{ name", shown)
+
+
+def test_a_where_value_no_message_has_lists_the_values_there_are(make_log, tmp_path):
+    profile = _profile(tmp_path, 'where = { name = "FLOW" }', 'where = { name = "FLOWS" }')
+    line = _refusal(make_log("paper-normal", 11, "tlog"), profile)
+    assert "NAMED_VALUE_FLOAT has no message with name = FLOWS; its values: FLOW" in line
