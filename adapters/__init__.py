@@ -4,6 +4,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Protocol
 
+from adapters.csv_log import CsvAdapter
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mavlink import DataflashAdapter, TlogAdapter
@@ -31,7 +32,7 @@ class Adapter(Protocol):
 
     @property
     def family(self) -> str:
-        """Which profile mapping it reads: ``ros``, ``mavlink`` or ``dataflash``."""
+        """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash`` or ``csv``."""
 
     @property
     def formats(self) -> tuple[str, ...]: ...
@@ -44,8 +45,9 @@ class Adapter(Protocol):
 
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
+# CSV last: it is recognised by being text with a header, which the binary formats are not.
 ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(), McapAdapter(), TlogAdapter(),
-                                 DataflashAdapter())
+                                 DataflashAdapter(), CsvAdapter())
 
 
 def _find_adapter(path: Path) -> tuple[Adapter, str]:

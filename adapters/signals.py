@@ -36,12 +36,28 @@ class SegmentSource:
     prefix: str = ""
 
 
+# CSV logs have no topics: a column is both a signal's topic and its field.
+TIME_UNITS = ("s", "ms", "us", "ns", "iso", "hhmmss")
+
+
+@dataclass(frozen=True)
+class TimeColumn:
+    """Where a CSV log keeps its clock: a column, in seconds, milliseconds, microseconds or
+    nanoseconds (since the epoch or since boot), ISO 8601 text, or ``HHMMSS`` (a clock with
+    one-second resolution)."""
+
+    column: str
+    unit: str = "s"
+
+
 @dataclass(frozen=True)
 class LogSources:
-    """What an adapter must extract: one source per signal, plus the segment markers."""
+    """What an adapter must extract: one source per signal, plus the segment markers (and for
+    CSV logs, the time column)."""
 
     signals: dict[str, FieldSource]
     segment: SegmentSource | None = None
+    time: TimeColumn | None = None
 
     @property
     def topics(self) -> set[str]:

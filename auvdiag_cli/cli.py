@@ -37,7 +37,7 @@ ModelOption = Annotated[Path | None, typer.Option(
     file_okay=False)]
 ProfileOption = Annotated[Path | None, typer.Option(
     "--profile", help="Vehicle profile TOML, or a built-in one by name: twin_burger (the "
-                      "default), three_thruster, bluerov2.",
+                      "default), three_thruster, bluerov2, haizhe.",
     dir_okay=False)]
 
 
@@ -86,7 +86,8 @@ def main_options(
 def diagnose(
     log: Annotated[Path, typer.Argument(help="Log: ROS 1 .bag, ROS 2 bag directory (or its "
                                              ".db3/.mcap file), standalone .mcap, MAVLink "
-                                             ".tlog or DataFlash .bin.")],
+                                             ".tlog, DataFlash .bin or CSV with a header "
+                                             "row.")],
     model: ModelOption = None,
     profile: ProfileOption = None,
     json_path: Annotated[str | None, typer.Option(
@@ -372,7 +373,8 @@ def simulate(
     output: Annotated[Path, typer.Option("--output", "-o", help="Log path to write.")],
     log_format: Annotated[str, typer.Option(
         "--format", help="Log format: bag (ROS 1), db3 (ROS 2, sqlite3), ros2-mcap (ROS 2, "
-                         "mcap storage), mcap (standalone), tlog (MAVLink), bin (DataFlash)."
+                         "mcap storage), mcap (standalone), tlog (MAVLink), bin (DataFlash), "
+                         "csv (the profile's [sources.csv] columns)."
     )] = "ros2-mcap",
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
     fault_at: Annotated[float | None, typer.Option(

@@ -1,10 +1,10 @@
 """`auvdiag inspect`: what a log holds and which of the profile's signals it provides."""
 
 import difflib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from adapters import LogError, LogInventory, LogSources, Signals, inventory, read_log
+from adapters import LogError, LogInventory, Signals, inventory, read_log
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.resample import slow_command_note
 
@@ -56,12 +56,13 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
     problems: dict[str, str] = {}
     try:  # one pass for all signals; per signal only to pin down a failure
         if present:
-            everything = read_log(path, {family: LogSources(present, sources.segment)})
+            everything = read_log(path, {family: replace(sources, signals=present)})
             read = {name: everything for name in present}
     except LogError:
         for name, source in present.items():
             try:
-                read[name] = read_log(path, {family: LogSources({name: source})})
+                read[name] = read_log(path, {family: replace(sources, signals={name: source},
+                                                             segment=None)})
             except LogError as error:
                 problems[name] = error.problem
     results = []

@@ -6,7 +6,13 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from adapters.signals import FieldSource, LogSources, SegmentSource
+from adapters.signals import (
+    TIME_UNITS,
+    FieldSource,
+    LogSources,
+    SegmentSource,
+    TimeColumn,
+)
 from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.toml_reader import TableReader, positive
@@ -230,10 +236,17 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
 
 
 def _topic(reader: TableReader) -> str:
-    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key."""
+    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key; a CSV
+    `column` is its own topic."""
+    if "column" in reader.table:
+        return str(reader.get("column", str))
     if "topic" not in reader.table and "message" in reader.table:
         return str(reader.get("message", str))
     return str(reader.get("topic", str))
+
+
+def _field(reader: TableReader) -> str:
+    return str(reader.get("column" if "column" in reader.table else "field", str))
 
 
 def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
@@ -243,15 +256,21 @@ def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
         entry = signals_table.sub(name)
         where = entry.sub("where").table if "where" in entry.table else {}
         signals[name] = FieldSource(
-            _topic(entry), entry.get("field", str), entry.get("scale", float, 1.0),
+            _topic(entry), _field(entry), entry.get("scale", float, 1.0),
             entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
             entry.get("merge_instances", bool, False))
     segment = None
     if "segment" in reader.table:
         entry = reader.sub("segment")
-        segment = SegmentSource(_topic(entry), entry.get("field", str),
-                                entry.get("prefix", str, ""))
-    return LogSources(signals, segment)
+        segment = SegmentSource(_topic(entry), _field(entry), entry.get("prefix", str, ""))
+    time = None
+    if "time" in reader.table:
+        entry = reader.sub("time")
+        time = TimeColumn(entry.get("column", str), entry.get("unit", str, "s").lower())
+        if time.unit not in TIME_UNITS:
+            raise ProfileError(f"key '{entry.key('unit')}' must be one of "
+                               f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
+    return LogSources(signals, segment, time)
 
 
 def _pattern_row(reader: TableReader, sensor_names: list[str]) -> PatternRow:
@@ -277,7 +296,7 @@ def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
     return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
 
 
-BUILTIN_PROFILES = ("twin_burger", "three_thruster", "bluerov2")
+BUILTIN_PROFILES = ("twin_burger", "three_thruster", "bluerov2", "haizhe")
 
 
 def load_profile(path: Path | None = None) -> Profile:

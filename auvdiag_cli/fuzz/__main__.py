@@ -18,8 +18,9 @@ def _arguments(argv: list[str] | None) -> argparse.Namespace:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--cases", type=int, default=300, help="cases per seed log")
     parser.add_argument("--first-case", type=int, default=0, help="number of the first case")
-    parser.add_argument("--formats", default="bag,db3,ros2-mcap,mcap,tlog,bin",
-                        help="simulated seed logs to write, comma-separated ('' for none)")
+    parser.add_argument("--formats", default=None,
+                        help="simulated seed logs to write, comma-separated ('' for none; "
+                             "default: every format the simulator writes)")
     parser.add_argument("--seed-log", type=Path, action="append", default=[],
                         help="a real log to damage as well (repeatable)")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
@@ -39,6 +40,7 @@ def main(argv: list[str] | None = None) -> int:
     from auvdiag_cli.fuzz.harness import Case, Limits, exercise, run_cases, summarise
     from auvdiag_cli.fuzz.seeds import real_seed, simulated_seeds
     from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.writers import LOG_FORMATS
     from models.store import load_model
 
     options = _arguments(argv)
@@ -49,7 +51,8 @@ def main(argv: list[str] | None = None) -> int:
                                  "time_limit_s": limits.time_s,
                                  "memory_limit_mb": limits.memory_mb, "seeds": {}}
     with tempfile.TemporaryDirectory(prefix="auvdiag-seeds-") as folder:
-        formats = tuple(f for f in options.formats.split(",") if f)
+        formats = LOG_FORMATS if options.formats is None else tuple(
+            f for f in options.formats.split(",") if f)
         try:
             seeds = simulated_seeds(Path(folder), profile, formats)
             seeds += [real_seed(path) for path in options.seed_log]

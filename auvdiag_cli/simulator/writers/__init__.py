@@ -6,6 +6,7 @@ from pathlib import Path
 
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
+from auvdiag_cli.simulator.writers.csv_log import write_csv
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
 from auvdiag_cli.simulator.writers.records import first_message_s
@@ -14,7 +15,7 @@ from auvdiag_cli.truth import mission_path, truth_paths
 
 __all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
 
-LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin")
+LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "csv")
 
 
 def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
@@ -31,6 +32,8 @@ def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
         write_mcap(dive, profile, path, extra)
     elif fmt == "tlog":
         write_tlog(dive, profile, path)
+    elif fmt == "csv":
+        write_csv(dive, profile, path)
     else:
         write_dataflash(dive, profile, path)
     _write_truth(dive, path, fmt)

@@ -1,0 +1,134 @@
+"""CSV logs: written by the simulator from the profile's [sources.csv] columns, read back with
+every time unit; bad rows counted, never fatal; recognised by content; the real Haizhe runs
+read as they are."""
+
+import json
+import re
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+PROFILE = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+HAIZHE = Path(__file__).resolve().parents[2] / "shared" / "data" / "haizhe" / "train"
+
+
+def diagnose(log, *options):
+    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
+    assert "unexpected" not in result.output and "Traceback" not in result.output
+    return result.exit_code, (json.loads(result.stdout) if result.exit_code < 2 else
+                              result.output.strip())
+
+
+@pytest.fixture(scope="module")
+def reference(make_log):
+    return diagnose(make_log("paper-flow-sensor-covered", 31, "mcap"))[1]
+
+
+@pytest.mark.parametrize("unit", ["s", "ms", "us", "ns", "iso", "hhmmss"])
+def test_csv_round_trip_in_every_time_unit(tmp_path, dive_cache, reference, unit):
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.writers import write_log
+
+    profile_path = tmp_path / "p.toml"
+    profile_path.write_text(PROFILE.replace('unit = "s" }', f'unit = "{unit}" }}'))
+    profile = load_profile(profile_path)
+    log = tmp_path / "dive.csv"
+    write_log(dive_cache("paper-flow-sensor-covered", 31), profile, log, "csv")
+    code, report = diagnose(log, "--profile", str(profile_path))
+    assert code == 1 and report["format"] == "csv"
+    assert report["component"] == reference["component"] == "flow_sensor"
+    if unit == "hhmmss":   # rows spread over each second: times are right to a fraction of it
+        assert abs(report["onset_s"] - reference["onset_s"]) < 1.0
+        assert any("one-second resolution" in note for note in report["notes"])
+    else:
+        assert report["onset_s"] == pytest.approx(reference["onset_s"], abs=0.01)
+        assert report["segments"][0]["max_g"] == pytest.approx(
+            reference["segments"][0]["max_g"], rel=1e-3)
+
+
+def _rows(log: Path) -> list[str]:
+    return log.read_text().splitlines()
+
+
+def test_bad_rows_are_counted_not_fatal(make_log, tmp_path):
+    lines = _rows(make_log("paper-normal", 11, "csv"))
+    width = lines[0].count(",")
+    damaged = lines[:200] + ["1,2,3"] + lines[200:400] + ["not a time" + "," * width] \
+        + [re.sub(r",([-\d.e]+)$", ",oops", line) for line in lines[400:403]] + lines[403:] \
+        + [lines[-1][:7]]                                          # a row cut short
+    log = tmp_path / "damaged.csv"
+    log.write_text("\n".join(damaged) + "\n")
+    code, report = diagnose(log)
+    assert code == 0
+    note = next(n for n in report["notes"] if n.startswith("left out:"))
+    assert "2 row(s) with the wrong number of cells" in note
+    assert "1 row(s) whose time does not read" in note
+    assert re.search(r"[1-3] cell\(s\) that are not numbers", note)
+
+
+def test_a_csv_with_no_usable_row_is_one_line(tmp_path):
+    log = tmp_path / "empty.csv"
+    log.write_text("time_s,thruster_0,thruster_1,flow_mps,yaw_rate_rps,sequence\n"
+                   "x,1,2,3,4,\n")
+    code, line = diagnose(log)
+    assert code == 2 and str(log) in line and "\n" not in line
+
+
+def test_a_missing_column_names_it_and_the_closest(make_log, tmp_path):
+    text = make_log("paper-normal", 11, "csv").read_text()
+    log = tmp_path / "renamed.csv"
+    log.write_text(text.replace("flow_mps", "flow_m_s", 1))
+    code, line = diagnose(log)
+    assert code == 2 and "no column(s) flow_mps in the header" in line
+    assert "closest first: flow_m_s" in line
+
+
+def test_csv_is_recognised_by_content_not_by_name(make_log, tmp_path):
+    from adapters import detect_format
+    from auvdiag_cli.errors import LogError
+
+    text = make_log("paper-normal", 11, "csv").read_text()
+    (tmp_path / "dive.txt").write_text(text)
+    assert detect_format(tmp_path / "dive.txt") == "csv"
+    (tmp_path / "notes.csv").write_text("just some notes\nabout the dive\n")
+    (tmp_path / "binary.csv").write_bytes(bytes(range(256)) * 4)
+    for name in ("notes.csv", "binary.csv"):
+        with pytest.raises(LogError, match="not a log"):
+            detect_format(tmp_path / name)
+
+
+def test_hhmmss_rows_are_spread_evenly_over_each_second():
+    from adapters.csv_log import _times_ns
+    from adapters.signals import TimeColumn
+
+    texts = ["235958"] * 3 + ["235959"] * 4 + ["000000"] * 4 + ["000001"] * 2
+    notes: list[str] = []
+    times = _times_ns(texts, TimeColumn("time", "hhmmss"), notes) / 1e9
+    assert np.all(np.diff(times) > 0)                       # midnight does not go back
+    assert times[3:7] == pytest.approx(86399 + np.arange(4) / 4)
+    assert times[:3] == pytest.approx(86398 + 1 - np.arange(3, 0, -1) / 4)   # end of its second
+    assert times[-2:] == pytest.approx(86401 + np.arange(2) / 4)             # start of its own
+    assert "about 4 rows a second" in notes[0]
+
+
+@pytest.mark.skipif(not HAIZHE.is_dir(), reason=f"real Haizhe data not found at {HAIZHE}")
+def test_real_haizhe_runs_are_read_directly():
+    from adapters import read_log
+    from auvdiag_cli.profile import load_profile
+
+    profile = load_profile(Path("haizhe"))
+    log = HAIZHE / "Normal" / "Normal_0.csv"
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", "haizhe"])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout
+    signals = read_log(log, profile.sources)
+    times = signals.series["depth"].index.to_numpy()
+    rows = len(log.read_text().splitlines()) - 1
+    assert len(times) == rows and np.all(np.diff(times) > 0)
+    assert 18 <= rows / ((times[-1] - times[0]) / 1e9) <= 22          # about 20 rows a second
+    assert signals.series["yaw_rate"].abs().max() < 2.0               # deg/s read as rad/s
