@@ -26,7 +26,6 @@ class _Extractor:
     def __init__(self, name: str, source: FieldSource) -> None:
         self.name, self.source = name, source
         self.get: Callable[[Any], Any] = field_getter(source.field)
-        self.scale, self.offset = source.scale, source.offset
         self.where = [(field_getter(key), value) for key, value in source.where]
 
     def matches(self, message: Any) -> bool:
@@ -136,7 +135,8 @@ class SignalCollector:
                 raise LogError(self.path, unresolved(
                     topic, wrong, extractor.name, object_field_paths(message))) from None
             self.times[extractor.name].append(time_ns)
-            self.values[extractor.name].append(value * extractor.scale + extractor.offset)
+            self.values[extractor.name].append(float(extractor.source.convert(
+                np.float64(value))))
 
     def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource,
                     fields: Sequence[str] = ()) -> None:
@@ -179,7 +179,7 @@ class SignalCollector:
                                f"{extractor.name} would merge: choose one with where = "
                                f"{{ {key} = {instances[0]} }} in the profile, or set "
                                "merge_instances = true")
-            values = numbers.astype(np.float64) * extractor.scale + extractor.offset
+            values = extractor.source.convert(numbers)
             self.times[extractor.name].frombytes(times_ns[keep].astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())
 

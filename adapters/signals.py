@@ -9,7 +9,9 @@ report times are seconds from it.
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pandas as pd
 
 
@@ -25,6 +27,14 @@ class FieldSource:
     offset: float = 0.0
     where: tuple[tuple[str, str], ...] = ()
     merge_instances: bool = False     # True: several sensor instances make one signal
+    bits: int = 0                     # a flag field: 1 where value & bits, else 0
+
+    def convert(self, raw: Any) -> Any:
+        """Raw field values (an array, or a NumPy scalar) to the signal's units, or to 0/1
+        for a flag."""
+        if self.bits:
+            return ((raw.astype(np.int64) & self.bits) != 0).astype(np.float64)
+        return raw.astype(np.float64) * self.scale + self.offset
 
 
 @dataclass(frozen=True)
@@ -36,6 +46,9 @@ class SegmentSource:
     prefix: str = ""
 
 
+# The reserved signal that says when the vehicle is operating (armed, under way): where a
+# profile names one, only that time is trained on and judged.
+OPERATING = "operating"
 # CSV logs have no topics: a column is both a signal's topic and its field.
 TIME_UNITS = ("s", "ms", "us", "ns", "iso", "hhmmss")
 

@@ -1,5 +1,6 @@
 """Diagnosis Part over time: alarms from b, the decided b vector, and the onset estimate."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,16 +22,19 @@ def binary_vector(g_percent: np.ndarray, thresholds: np.ndarray) -> np.ndarray:
 
 
 def detect(b: np.ndarray, residual_fraction: np.ndarray, thresholds: np.ndarray,
-           sensor_names: tuple[str, ...], decision_steps: int, lookback_steps: int
-           ) -> Detection | None:
+           sensor_names: tuple[str, ...], decision_steps: int, lookback_steps: int,
+           restarts: Sequence[int] = ()) -> Detection | None:
     """Find the first alarm; decide b over ``decision_steps`` after it; estimate the onset
-    within ``lookback_steps`` before the alarm."""
+    within ``lookback_steps`` before the alarm, and never before the replay's last restart
+    (what came before it, e.g. time not operating, cannot hold the onset)."""
     alarm = first_alarm(b)
     if alarm is None:
         return None
     decided = decided_b(b, alarm, decision_steps)
+    earliest = max([r for r in restarts if r <= alarm], default=0)
+    window = min(lookback_steps, alarm - earliest)
     onsets = [
-        _onset(residual_fraction[:, i], thresholds[alarm, i] / 100.0, alarm, lookback_steps)
+        _onset(residual_fraction[:, i], thresholds[alarm, i] / 100.0, alarm, window)
         for i in np.flatnonzero(decided)
     ]
     return Detection(alarm, {name: int(decided[i]) for i, name in enumerate(sensor_names)},

@@ -82,6 +82,7 @@ class Diagnosis:
     thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     completeness: Completeness | None = None
+    not_operating_s: float = 0.0      # time the operating flag excluded from judgement
 
 
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
@@ -178,7 +179,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     residual = np.abs(matching.measured - matching.modelled) / scales
     decision = round(profile.decision_window_s / profile.dt_s)
     detection = detect(b_series, residual, thresholds, frame.sensor_names, decision,
-                       round(ONSET_LOOKBACK_S / profile.dt_s))
+                       round(ONSET_LOOKBACK_S / profile.dt_s), [*frame.restarts, *dms_starts])
     notes = list(signals.notes) + frame.notes
     notes += [f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s "
               "(not interpolated)" for gap in frame.gaps]
@@ -195,7 +196,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         time_s=frame.time_s, commands=frame.commands, command_names=frame.command_names,
         sensor_names=frame.sensor_names, matching=matching, thresholds=thresholds,
         b_series=b_series, start_ns=signals.start_ns, mission_legs=list(mission_legs),
-        completeness=completeness_of(signals))
+        completeness=completeness_of(signals),
+        not_operating_s=round(float((~frame.operating).sum()) * frame.dt_s, 3))
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from adapters.signals import (
+    OPERATING,
     TIME_UNITS,
     FieldSource,
     LogSources,
@@ -147,6 +148,9 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     signal_names = [c.name for c in commands] + sensor_names
     if len(set(signal_names)) != len(signal_names):
         raise ProfileError("signal names in 'commands' and 'sensors' must be unique")
+    if OPERATING in signal_names:
+        raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
+                           "([sources.FAMILY] operating = {...})")
 
     matching = top.sub("matching")
     window = matching.get("window_samples", int)
@@ -249,16 +253,19 @@ def _field(reader: TableReader) -> str:
     return str(reader.get("column" if "column" in reader.table else "field", str))
 
 
+def _field_source(entry: TableReader) -> FieldSource:
+    where = entry.sub("where").table if "where" in entry.table else {}
+    return FieldSource(
+        _topic(entry), _field(entry), entry.get("scale", float, 1.0),
+        entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
+        entry.get("merge_instances", bool, False), entry.get("bits", int, 0))
+
+
 def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
     signals_table = reader.sub("signals")
-    signals = {}
-    for name in signal_names:
-        entry = signals_table.sub(name)
-        where = entry.sub("where").table if "where" in entry.table else {}
-        signals[name] = FieldSource(
-            _topic(entry), _field(entry), entry.get("scale", float, 1.0),
-            entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
-            entry.get("merge_instances", bool, False))
+    signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
+    if "operating" in reader.table:   # a flag: the vehicle is operating where it is not 0
+        signals[OPERATING] = _field_source(reader.sub("operating"))
     segment = None
     if "segment" in reader.table:
         entry = reader.sub("segment")

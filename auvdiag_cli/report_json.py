@@ -37,6 +37,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "start_time_utc": utc_text(diagnosis.start_ns),
         "completeness": None if diagnosis.completeness is None
         else diagnosis.completeness.to_dict(),
+        "not_operating_s": diagnosis.not_operating_s,
         "segments": [
             {
                 "name": r.segment.name,

@@ -14,6 +14,9 @@ Method (documented for users in the README):
   (never interpolated across) and the gap is reported. A gap in a *command* means the
   actuators' history is unknown there: all sensors are NaN inside it and the model replay
   restarts from the measured state after it (``restarts``);
+- where the profile names an operating flag (armed, under way), time when it is clear is
+  treated like a command gap: sensors NaN, never judged or trained on, and the replay
+  restarts from the measured state when operation begins again;
 - a clock that jumps back by more than ``max_gap_s`` in the order the log stored the
   samples (a clock reset) is re-timed: the samples after the jump are shifted to follow on
   one median period after the last sample before it, and the jump is reported.
@@ -24,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from adapters.signals import Signals
+from adapters.signals import OPERATING, Signals
 from adapters.timebase import MAX_TIME_NS
 
 NS_PER_S = 1_000_000_000
@@ -61,6 +64,7 @@ class AlignedFrame:
     notes: list[str] = field(default_factory=list)
     restarts: list[int] = field(default_factory=list)   # grid indices where replay restarts
     slow_commands: list[str] = field(default_factory=list)   # also in notes
+    operating: np.ndarray = field(default_factory=lambda: np.ones(0, bool))
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
@@ -122,6 +126,34 @@ def _rate_hz(times_ns: np.ndarray) -> float | None:
     steps = np.diff(times_ns)
     steps = steps[steps > 0]
     return NS_PER_S / float(np.median(steps)) if steps.size else None
+
+
+def _operating(signals: Signals, grid_ns: np.ndarray, notes: list[str], dt_s: float
+               ) -> np.ndarray:
+    """Where the vehicle operates, from the profile's operating flag (held from each
+    message to the next; not operating before the first). No flag: everywhere."""
+    flag = signals.series.get(OPERATING)
+    if flag is None:
+        return np.ones(grid_ns.size, bool)
+    flag = flag[np.isfinite(flag.to_numpy())].sort_index(kind="stable")
+    times_ns = flag.index.to_numpy(dtype=np.int64)
+    if times_ns.size == 0:
+        raise ValueError("the operating flag has no usable value")
+    index = np.searchsorted(times_ns, grid_ns, side="right") - 1
+    flagged = (index >= 0) & (flag.to_numpy()[np.clip(index, 0, None)] != 0)
+    # A sample averages the step before it: the first step of a stretch still holds
+    # readings from before, so operation counts from the second.
+    operating = flagged & np.concatenate(([False], flagged[:-1]))
+    if not operating.any():
+        raise ValueError("the vehicle never operates in this log (its operating flag is never "
+                         "set, e.g. never armed): there is nothing to judge")
+    if not operating.all():
+        stretches = int(operating[0]) + int((~operating[:-1] & operating[1:]).sum())
+        notes.append(f"not operating (operating flag clear) for "
+                     f"{(~operating).sum() * dt_s:.1f} s of {operating.size * dt_s:.1f} s: "
+                     f"that time is neither judged nor trained on; {stretches} operating "
+                     "stretch(es), each replayed from its own start")
+    return operating
 
 
 def _gaps(times_ns: np.ndarray, max_gap_ns: int) -> list[tuple[int, int]]:
@@ -192,6 +224,9 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
                 columns[name][inside] = np.nan
             gaps.append(Gap(name, (start_ns - signals.start_ns) / NS_PER_S,
                             (end_ns - signals.start_ns) / NS_PER_S))
+    operating = _operating(signals, grid_ns, notes, dt_s)
+    blind |= ~operating
+    restarts.update(int(i) + 1 for i in np.flatnonzero(~operating[:-1] & operating[1:]))
     sensors = np.column_stack([columns[n] for n in sensor_names])
     sensors[blind] = np.nan
     return AlignedFrame(
@@ -205,4 +240,5 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         notes=notes + slow_commands,
         slow_commands=slow_commands,
         restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
+        operating=operating,
     )
