@@ -52,6 +52,14 @@ class _Extractor:
         return None
 
 
+def _with_state_before(flag: pd.Series, start_ns: int) -> pd.Series:
+    """A flag logged only when it changes was, before its first record, the other way."""
+    if flag.empty or int(flag.index[0]) <= start_ns:
+        return flag
+    before = pd.Series([float(flag.iloc[0] == 0)], index=[start_ns], name=flag.name)
+    return pd.concat([before, flag])
+
+
 def _resolves(message: Any, path: str) -> bool:
     try:
         field_getter(path)(message)
@@ -215,6 +223,9 @@ class SignalCollector:
             lasts.append(end_ns)
         first = min(firsts, default=None)
         last = max(lasts, default=first)
+        for name, values in series.items():
+            if self.sources.signals[name].changes_only and first is not None:
+                series[name] = _with_state_before(values, first)
         return Signals(path=self.path, format=fmt,
                        start_ns=0 if first is None else first,
                        end_ns=0 if last is None else last,

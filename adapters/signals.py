@@ -28,6 +28,7 @@ class FieldSource:
     where: tuple[tuple[str, str], ...] = ()
     merge_instances: bool = False     # True: several sensor instances make one signal
     bits: int = 0                     # a flag field: 1 where value & bits, else 0
+    changes_only: bool = False        # logged only when it changes (DataFlash ARM events)
 
     def convert(self, raw: Any) -> Any:
         """Raw field values (an array, or a NumPy scalar) to the signal's units, or to 0/1

@@ -37,7 +37,8 @@ ModelOption = Annotated[Path | None, typer.Option(
     file_okay=False)]
 ProfileOption = Annotated[Path | None, typer.Option(
     "--profile", help="Vehicle profile TOML, or a built-in one by name: twin_burger (the "
-                      "default), three_thruster, bluerov2, haizhe.",
+                      "default), three_thruster, bluerov2 (with DVL), bluerov2_standard, "
+                      "bluerov2_heavy (no DVL), haizhe.",
     dir_okay=False)]
 
 

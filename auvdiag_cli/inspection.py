@@ -82,6 +82,7 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
                                             _closest(source.topic, sorted(available))))
     first = next(iter(read.values()), None)
     markers = [m.label for m in first.markers] if first is not None else []
-    warnings = [note for s in results if s.name in profile.command_names
-                if (note := slow_command_note(s.name, s.rate_hz, profile.dt_s)) is not None]
+    slow = slow_command_note({s.name: s.rate_hz for s in results
+                              if s.name in profile.command_names}, profile.dt_s)
+    warnings = [] if slow is None else [slow]
     return Inspection(path, family, contents, results, markers, warnings=warnings)

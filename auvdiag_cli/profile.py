@@ -258,7 +258,8 @@ def _field_source(entry: TableReader) -> FieldSource:
     return FieldSource(
         _topic(entry), _field(entry), entry.get("scale", float, 1.0),
         entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
-        entry.get("merge_instances", bool, False), entry.get("bits", int, 0))
+        entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
+        entry.get("changes_only", bool, False))
 
 
 def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
@@ -303,14 +304,18 @@ def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
     return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
 
 
-BUILTIN_PROFILES = ("twin_burger", "three_thruster", "bluerov2", "haizhe")
+def builtin_profiles() -> tuple[str, ...]:
+    """The names of the profiles shipped with auvdiag (the files in auvdiag_cli/profiles)."""
+    folder = resources.files("auvdiag_cli") / "profiles"
+    return tuple(sorted(entry.name.removesuffix(".toml") for entry in folder.iterdir()
+                        if entry.name.endswith(".toml")))
 
 
 def load_profile(path: Path | None = None) -> Profile:
-    """Load a profile file, or a built-in profile by name (``twin_burger``, ``three_thruster``,
-    ``bluerov2``); None is the Twin-Burger of the paper."""
+    """Load a profile file, or a built-in profile by name (see `builtin_profiles`); None is
+    the Twin-Burger of the paper."""
     name = "twin_burger" if path is None else str(path)
-    if path is None or (name in BUILTIN_PROFILES and not path.exists()):
+    if path is None or (name in builtin_profiles() and not path.exists()):
         resource = resources.files("auvdiag_cli") / "profiles" / f"{name}.toml"
         text, where = resource.read_text(encoding="utf-8"), f"builtin:{name}"
     else:
@@ -318,7 +323,7 @@ def load_profile(path: Path | None = None) -> Profile:
             text, where = path.read_text(encoding="utf-8"), str(path)
         except OSError as error:
             raise ProfileError(f"{path}: cannot read profile: {error.strerror} (built-in "
-                               f"profiles: {', '.join(BUILTIN_PROFILES)})") from None
+                               f"profiles: {', '.join(builtin_profiles())})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -109,16 +109,22 @@ def _clean(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: 
     return series
 
 
-def slow_command_note(name: str, rate_hz: float | None, dt_s: float) -> str | None:
-    """A warning when a command is logged more slowly than the model steps: the replay then
+def slow_command_note(rates_hz: dict[str, float | None], dt_s: float) -> str | None:
+    """A warning when commands are logged more slowly than the model steps: the replay then
     holds each command over several steps, a coarser history than the model learnt from
     (ground stations often log actuator outputs at 2-4 Hz)."""
-    if rate_hz is None or rate_hz * dt_s * SLOW_COMMAND_FACTOR >= 1.0:
+    slow = {name: rate for name, rate in rates_hz.items()
+            if rate is not None and rate * dt_s * SLOW_COMMAND_FACTOR < 1.0}
+    if not slow:
         return None
-    return (f"{name} is logged at {rate_hz:.1f} Hz, below the model's {1 / dt_s:g} Hz step: "
-            f"each command is held about {1 / rate_hz:.2f} s, so changes faster than that are "
-            "invisible to the replay and residuals after them are larger (raise the logging "
-            "rate, e.g. ArduSub's SR0_RC_CHAN / SR1_RC_CHAN for SERVO_OUTPUT_RAW)")
+    lowest = min(slow.values())
+    rates = f"{lowest:.1f} Hz" if max(slow.values()) - lowest < 0.05 else \
+        f"{lowest:.1f}-{max(slow.values()):.1f} Hz"
+    return (f"{', '.join(slow)} {'is' if len(slow) == 1 else 'are'} logged at {rates}, below "
+            f"the model's {1 / dt_s:g} Hz step: each command is held about "
+            f"{1 / lowest:.2f} s, so changes faster than that are invisible to the replay and "
+            "residuals after them are larger (raise the logging rate, e.g. ArduSub's "
+            "SR0_RC_CHAN / SR1_RC_CHAN for SERVO_OUTPUT_RAW)")
 
 
 def _rate_hz(times_ns: np.ndarray) -> float | None:
@@ -203,16 +209,14 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}
     blind = np.zeros(len(grid_ns), dtype=bool)     # inside a command gap
-    slow_commands: list[str] = []
+    command_rates: dict[str, float | None] = {}
     restarts: set[int] = set()
     for name, series in cleaned.items():
         times_ns = series.index.to_numpy(dtype=np.int64)
         values = series.to_numpy(dtype=np.float64)
         if name in command_names:
             columns[name] = _held(times_ns, values, grid_ns)
-            slow = slow_command_note(name, _rate_hz(times_ns), dt_s)
-            if slow is not None:
-                slow_commands.append(slow)
+            command_rates[name] = _rate_hz(times_ns)
         else:
             columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
         for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
@@ -224,6 +228,8 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
                 columns[name][inside] = np.nan
             gaps.append(Gap(name, (start_ns - signals.start_ns) / NS_PER_S,
                             (end_ns - signals.start_ns) / NS_PER_S))
+    slow = slow_command_note(command_rates, dt_s)
+    slow_commands = [] if slow is None else [slow]
     operating = _operating(signals, grid_ns, notes, dt_s)
     blind |= ~operating
     restarts.update(int(i) + 1 for i in np.flatnonzero(~operating[:-1] & operating[1:]))

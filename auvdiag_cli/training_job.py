@@ -57,8 +57,12 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     heldout = [load(p) for p in heldout_paths]
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
-    network, normaliser = train(training, hidden=hidden, stages=stages, seed=seed,
-                                progress=progress)
+    try:
+        network, normaliser = train(training, hidden=hidden, stages=stages, seed=seed,
+                                    progress=progress)
+    except ValueError as error:   # the logs hold too little complete, operating data
+        raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
+                         f"{error}") from None
     error = free_run_error(network, normaliser, heldout)
     names = profile.sensor_names
     rms = {n: round(v, 6) for n, v in zip(names, error.rms, strict=True)}

@@ -50,17 +50,29 @@ def fit_normaliser(sequences: Sequence[TrainingLog]) -> Normaliser:
                       tuple(float(v) for v in state_scale))
 
 
+def complete_stretches(sensors: np.ndarray) -> list[tuple[int, int]]:
+    """[start, end) of each run of steps with every sensor measured (gaps and time not
+    operating are NaN)."""
+    complete = np.isfinite(sensors).all(axis=1).astype(np.int8)
+    edges = np.flatnonzero(np.diff(np.concatenate(([0], complete, [0]))))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
+
+
+def longest_complete_stretch(sensors: np.ndarray) -> int:
+    return max((end - start for start, end in complete_stretches(sensors)), default=0)
+
+
 def _windows(sequences: Sequence[TrainingLog], horizon: int, normaliser: Normaliser
              ) -> tuple[torch.Tensor, torch.Tensor]:
-    """All windows of ``horizon`` steps (stride horizon/4) without missing sensor values."""
+    """All windows of ``horizon`` steps (stride horizon/4) inside stretches without missing
+    sensor values."""
     commands, states = [], []
+    stride = max(1, horizon // 4)
     for seq in sequences:
-        stride = max(1, horizon // 4)
-        for start in range(0, len(seq.commands) - horizon + 1, stride):
-            window = seq.sensors[start:start + horizon]
-            if np.isfinite(window).all():
+        for first, end in complete_stretches(seq.sensors):
+            for start in range(first, end - horizon + 1, stride):
                 commands.append(seq.commands[start:start + horizon])
-                states.append(window)
+                states.append(seq.sensors[start:start + horizon])
     if not commands:
         raise ValueError(f"no log is longer than {horizon} model steps")
     return normaliser.commands(np.stack(commands)), normaliser.states(np.stack(states))
@@ -76,8 +88,12 @@ def train(sequences: Sequence[TrainingLog], hidden: int = 32,
     normaliser = fit_normaliser(sequences)
     n_commands, n_states = sequences[0].commands.shape[1], sequences[0].sensors.shape[1]
     network = RecurrentDynamics(n_commands, n_states, hidden, normaliser.delta_ratio)
+    longest = max(longest_complete_stretch(s.sensors) for s in sequences)
+    if longest < 2:
+        raise ValueError("no two consecutive samples with every sensor measured")
     for number, stage in enumerate(stages, start=1):
-        horizon = min(stage.horizon_steps, min(len(s.commands) for s in sequences))
+        # A window needs every sensor measured throughout: not longer than the data allow.
+        horizon = min(stage.horizon_steps, longest)
         commands, states = _windows(sequences, horizon, normaliser)
         optimiser = torch.optim.Adam(network.parameters(), lr=stage.learning_rate)
         schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, stage.iterations)
@@ -103,12 +119,17 @@ def train(sequences: Sequence[TrainingLog], hidden: int = 32,
 
 def free_run_error(network: RecurrentDynamics, normaliser: Normaliser,
                    sequences: Sequence[TrainingLog]) -> FreeRunError:
-    """Error of whole-log free-running replays against the sensors, per state signal."""
-    residuals = []
+    """Error of free-running replays against the sensors, per state signal: each stretch
+    with every sensor measured is replayed from its own first state (NaN: no such data)."""
+    residuals = [np.full((0, len(normaliser.state_scale)), np.nan)]
     for seq in sequences:
-        predicted = replay(network, normaliser, seq.commands, seq.sensors[0])
-        residuals.append(seq.sensors - predicted)
+        for start, end in complete_stretches(seq.sensors):
+            predicted = replay(network, normaliser, seq.commands[start:end], seq.sensors[start])
+            residuals.append(seq.sensors[start:end] - predicted)
     stacked = np.concatenate(residuals)
-    rms = np.sqrt(np.nanmean(stacked**2, axis=0))
-    mean_abs = np.nanmean(np.abs(stacked), axis=0)
+    count = np.maximum(np.isfinite(stacked).sum(axis=0), 1)
+    filled = np.where(np.isfinite(stacked), stacked, 0.0)
+    empty = ~np.isfinite(stacked).any(axis=0)
+    rms = np.where(empty, np.nan, np.sqrt((filled**2).sum(axis=0) / count))
+    mean_abs = np.where(empty, np.nan, np.abs(filled).sum(axis=0) / count)
     return FreeRunError(tuple(float(v) for v in rms), tuple(float(v) for v in mean_abs))

@@ -61,7 +61,7 @@ def test_unresolvable_field_names_the_file(make_log, profile):
         **profile.sources["ros"].signals,
         "flow": FieldSource("/flow/velocity", "twist.linear.w")})
     log = make_log("paper-normal", 11)
-    with pytest.raises(LogError, match="has no field .twist.linear.w.") as error:
+    with pytest.raises(LogError, match=r"has no field .twist.linear.w.") as error:
         read_log(log, {"ros": sources})
     assert str(log) in str(error.value)
 

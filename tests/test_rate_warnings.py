@@ -36,11 +36,11 @@ def test_slow_commands_are_reported_by_inspect_and_diagnose(make_log, tmp_path):
     shown = runner.invoke(app, ["inspect", str(log)])
     assert shown.exit_code == 0
     warnings = [line for line in shown.stdout.splitlines() if "warning:" in line]
-    assert len(warnings) == 2 and "thruster_0 is logged at 2.0 Hz" in warnings[0]
+    assert len(warnings) == 1 and "thruster_0, thruster_1 are logged at 2.0 Hz" in warnings[0]
     assert "below the model's 10 Hz step" in warnings[0]
     result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
     notes = json.loads(result.stdout)["notes"]
-    assert sum("is logged at 2.0 Hz" in note for note in notes) == 2
+    assert sum("are logged at 2.0 Hz" in note for note in notes) == 1
 
 
 def test_commands_at_the_model_rate_raise_no_warning(make_log):

@@ -1,0 +1,76 @@
+"""The no-DVL BlueROV2 profiles on the real ArduSub logs of ../shared/data/ardusub
+(clydemcqueen/ardusub_log_tools, MIT): every signal resolves, the operating time found is the
+armed time pymavlink reads from the same logs, and train and diagnose accept them."""
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ardusub"
+LOGS = ["small.tlog", "small.BIN", "pymavlink_bug.tlog"]
+pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"real ArduSub logs not found at {DATA}")
+
+
+def _armed_seconds(log: Path) -> float:
+    """Armed time as pymavlink reads it: the vehicle's HEARTBEAT armed bit (tlog), or the
+    ARM records (DataFlash, whose logging starts armed)."""
+    from pymavlink import DFReader, mavutil
+
+    if log.suffix == ".BIN":
+        reader = DFReader.DFReader_binary(str(log), zero_time_base=True)
+        first = reader.recv_match(type=["RCOU"]).TimeUS
+        reader.rewind()
+        disarm = reader.recv_match(type=["ARM"], condition="ARM.ArmState == 0")
+        return (disarm.TimeUS - first) / 1e6
+    connection = mavutil.mavlink_connection(str(log))
+    armed_since, total = None, 0.0
+    while (message := connection.recv_match(type="HEARTBEAT")) is not None:
+        if message.type != 12:                      # the submarine, not the ground station
+            continue
+        armed = bool(message.base_mode & 128)
+        if armed and armed_since is None:
+            armed_since = message._timestamp
+        elif not armed and armed_since is not None:
+            total += message._timestamp - armed_since
+            armed_since = None
+    return total
+
+
+@pytest.mark.parametrize("profile", ["bluerov2_standard", "bluerov2_heavy"])
+@pytest.mark.parametrize("name", LOGS)
+def test_every_signal_resolves(profile, name):
+    result = runner.invoke(app, ["inspect", str(DATA / name), "--profile", profile])
+    assert result.exit_code == 0 and "MISSING" not in result.stdout, result.stdout
+
+
+@pytest.fixture(scope="module")
+def real_model(tmp_path_factory):
+    output = tmp_path_factory.mktemp("model") / "rov"
+    result = runner.invoke(app, ["train", str(DATA / "small.tlog"), str(DATA / "small.BIN"),
+                                 "--holdout", str(DATA / "small.BIN"), "--profile",
+                                 "bluerov2_standard", "--output", str(output),
+                                 "--iterations-scale", "0.02"])
+    assert result.exit_code == 0, result.output
+    assert "are logged at 2.0 Hz" in result.output             # QGroundControl's rate
+    return output
+
+
+@pytest.mark.parametrize("name", ["small.tlog", "small.BIN"])
+def test_operating_time_is_the_armed_time(real_model, name):
+    result = runner.invoke(app, ["diagnose", str(DATA / name), "--profile", "bluerov2_standard",
+                                 "--model", str(real_model), "--json", "-", "--quiet"])
+    assert result.exit_code in (0, 1), result.output
+    report = json.loads(result.stdout)
+    operating = report["duration_s"] - report["not_operating_s"]
+    assert operating == pytest.approx(_armed_seconds(DATA / name), abs=1.2)
+
+
+def test_a_log_never_armed_is_not_judged(real_model):
+    result = runner.invoke(app, ["diagnose", str(DATA / "pymavlink_bug.tlog"), "--profile",
+                                 "bluerov2_standard", "--model", str(real_model)])
+    assert result.exit_code == 2 and "never operates" in result.output
