@@ -448,6 +448,40 @@ def _unix_ns(text: str) -> int:
     return round(moment.timestamp() * 1e9)
 
 
+@app.command("init-profile")
+def init_profile(
+    log: Annotated[Path, typer.Argument(help="A log of the vehicle, of any supported format.")],
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="Profile file to write (default: print it).", dir_okay=False)
+    ] = None,
+    name: Annotated[str | None, typer.Option(
+        help="The vehicle's name (default: the log's name).")] = None,
+) -> None:
+    """Write a starting vehicle profile from what a log holds.
+
+    Proposes as commands the motor outputs, thrust or PWM fields and as sensors the gyro
+    rates, climb or depth rates and velocities that are in the log and vary there, the
+    log's armed flag as operating time, and for CSV the clock column. What a log cannot
+    tell (units, full scales, components, thresholds, the pattern table) is marked CHECK.
+    The draft loads and resolves on the log it came from: `auvdiag inspect LOG --profile
+    FILE` shows it."""
+    from auvdiag_cli.profile_draft import draft_profile
+
+    with _user_errors(log):
+        from adapters import detect_format
+
+        detect_format(log)
+        text = draft_profile(log, name or log.stem)
+        if output is None:
+            typer.echo(text, nl=False)
+            return
+        if output.exists():
+            raise UsageError(f"{output}: exists already, not overwriting")
+        output.write_text(text, encoding="utf-8")
+    typer.echo(f"profile written to {output}; check the lines marked CHECK, then: auvdiag "
+               f"inspect {log} --profile {output}")
+
+
 @app.command("derive-table")
 def derive_table(
     model: ModelOption = None,

@@ -60,9 +60,9 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     try:
         network, normaliser = train(training, hidden=hidden, stages=stages, seed=seed,
                                     progress=progress)
-    except ValueError as error:   # the logs hold too little complete, operating data
+    except ValueError as problem:   # the logs hold too little complete, operating data
         raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
-                         f"{error}") from None
+                         f"{problem}") from None
     error = free_run_error(network, normaliser, heldout)
     names = profile.sensor_names
     rms = {n: round(v, 6) for n, v in zip(names, error.rms, strict=True)}

@@ -1,0 +1,266 @@
+"""`auvdiag init-profile`: a starting profile written from what a log holds.
+
+The log's message types, fields and values are matched against what vehicles commonly log
+(motor outputs, gyro rates, climb or depth rates, an armed flag); a field is proposed only
+where it is in the log and, for commands and sensors, actually varies. Everything the log
+cannot tell (units, full scales, which component fails how, thresholds) is written with a
+``CHECK`` comment. The draft loads, and every signal in it resolves on the log it came from."""
+
+import re
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from adapters import LogError, LogInventory, inventory, read_log
+from adapters.signals import OPERATING, FieldSource, LogSources, TimeColumn
+from auvdiag_cli.errors import UsageError
+
+PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
+COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|command)",
+                          re.IGNORECASE)
+COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU)",
+                           re.IGNORECASE)
+SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_velocity\.[xyz]|"
+                         r"^w_|gyro|climb|^CRt$|depth|twist\.linear\.[xyz]|velocity|speed|flow|_rate|rate_)",
+                         re.IGNORECASE)
+# Estimator and bookkeeping fields whose names look like sensors but are not measurements.
+NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
+                          r"^EKF_|^REQUEST_|^PARAM)", re.IGNORECASE)
+TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNORECASE)
+MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
+MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
+
+
+@dataclass(frozen=True)
+class Proposal:
+    name: str
+    source: FieldSource
+    unit: str
+    check: str            # what the user must check
+
+
+def _signal_name(topic: str, field: str) -> str:
+    text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
+    return text.lower() or "signal"
+
+
+def _candidates(contents: LogInventory, family: str) -> list[tuple[str, FieldSource]]:
+    """(kind, source) for every field whose name or topic looks like a command or a sensor."""
+    found: list[tuple[str, FieldSource]] = []
+    for topic in contents.topics:
+        if topic.count < 2:
+            continue
+        where = tuple((key, values[0]) for key, values in topic.instances if len(values) > 1)
+        fields = topic.fields or ((topic.name,) if family == "csv" else ())
+        for field in fields:
+            command = COMMAND_NAME.search(field) or (
+                family == "ros" and COMMAND_TOPIC.search(topic.name))
+            if command and (family != "mavlink" or topic.name == "SERVO_OUTPUT_RAW") and (
+                    family != "dataflash" or topic.name == "RCOU"):
+                # An array of commands is listed by its first element: try the next ones.
+                elements = [field] if not field.endswith("[0]") else [
+                    f"{field[:-3]}[{i}]" for i in range(MAX_ARRAY_COMMANDS)]
+                found += [("command", FieldSource(topic.name, path, where=where))
+                          for path in elements]
+            elif SENSOR_NAME.search(field) and not TIME_NAME.match(field) and not (
+                    NOT_A_SENSOR.search(field) or NOT_A_SENSOR.search(topic.name)):
+                found.append(("sensor", FieldSource(topic.name, field, where=where)))
+    return found
+
+
+def _time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
+    """For a CSV log: the column named like a clock, its unit guessed from its values."""
+    named = [t.name for t in contents.topics if TIME_NAME.match(t.name)]
+    if not named:
+        return None
+    import csv
+
+    with path.open(newline="", encoding="utf-8", errors="replace") as stream:
+        rows = csv.reader(stream)
+        header = [cell.strip() for cell in next(rows)]
+        at = header.index(named[0])
+        sample = [row[at] for _, row in zip(range(200), rows, strict=False) if len(row) > at]
+    numbers = np.array([float(v) for v in sample if _number(v)])
+    if numbers.size == 0:
+        return TimeColumn(named[0], "iso")
+    whole = numbers == np.floor(numbers)
+    if whole.all() and numbers.max() <= 235959 and np.unique(numbers).size < numbers.size / 2:
+        return TimeColumn(named[0], "hhmmss")
+    largest = float(np.abs(numbers).max())
+    unit = "ns" if largest > 1e17 else "us" if largest > 1e14 else "ms" if largest > 1e11 \
+        else "s"
+    return TimeColumn(named[0], unit)
+
+
+def _number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
+               time: TimeColumn | None) -> dict[str, np.ndarray]:
+    """The values of every source that reads on this log (one pass; one by one only when
+    some source fails)."""
+    def read(chosen: dict[str, FieldSource]) -> dict[str, np.ndarray]:
+        signals = read_log(path, {family: LogSources(chosen, time=time)})
+        return {name: series.to_numpy() for name, series in signals.series.items()}
+
+    try:
+        return read(sources)
+    except LogError:
+        values: dict[str, np.ndarray] = {}
+        for name, source in sources.items():
+            try:
+                values |= read({name: source})
+            except LogError:
+                continue
+        return values
+
+
+def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None
+               ) -> tuple[list[Proposal], list[Proposal]]:
+    raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
+           for kind, source in _candidates(contents, family)}
+    values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
+    commands, sensors = [], []
+    for key, (kind, source) in raw.items():
+        series = values.get(key)
+        if series is None or series.size < 2 or not np.nanstd(series) > 0:
+            continue                                   # not in the log, or never moves
+        name = _signal_name(source.topic, source.field)
+        if kind == "command":
+            pwm = 800 <= float(np.nanmedian(series)) <= 2200
+            converted = replace(source, scale=PWM_SCALE, offset=-PWM_CENTRE_US * PWM_SCALE) \
+                if pwm else source
+            check = ("PWM µs mapped as ArduPilot does, (pwm - 1500) / 400: check the neutral "
+                     "and the direction; remove outputs that are no thruster (lights, camera "
+                     "mount)" if pwm else "should run -1 … 1: set scale and offset")
+            commands.append(Proposal(name, converted, "1", check))
+        else:
+            unit = "rad/s" if re.search(r"speed$|^Gyr|angular|gyro", source.field) else "?"
+            check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
+            if source.field in ("climb", "CRt"):
+                factor = -0.01 if source.field == "CRt" else -1.0
+                source, unit = replace(source, scale=factor), "m/s"
+                check = "down positive (the log's climb rate negated" + (
+                    ", CTUN CRt in cm/s)" if factor == -0.01 else ")")
+            full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
+            sensors.append(Proposal(name, source, f"{unit}|{_nice(full_scale)}", check))
+    return _unique(commands), _unique(sensors)
+
+
+def _unique(proposals: list[Proposal]) -> list[Proposal]:
+    seen: dict[str, int] = {}
+    unique = []
+    for proposal in proposals:
+        count = seen.get(proposal.name, 0)
+        seen[proposal.name] = count + 1
+        unique.append(replace(proposal, name=f"{proposal.name}_{count}") if count else proposal)
+    return unique
+
+
+def _nice(value: float) -> float:
+    if not np.isfinite(value) or value <= 0:
+        return 1.0
+    exponent = 10.0 ** np.floor(np.log10(value))
+    return float(next(step * exponent for step in (1, 2, 5, 10) if step * exponent >= value))
+
+
+def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource | None:
+    """An armed flag, where the log has one ArduPilot-style."""
+    names = {topic.name for topic in contents.topics}
+    if family == "dataflash" and "ARM" in names:
+        return FieldSource("ARM", "ArmState", changes_only=True)
+    if family != "mavlink" or "HEARTBEAT" not in names:
+        return None
+    read = _read_each(path, family, {"type": FieldSource("HEARTBEAT", "type"),
+                                     "autopilot": FieldSource("HEARTBEAT", "autopilot")}, None)
+    if "type" not in read or "autopilot" not in read:
+        return None
+    # The autopilot's own heartbeats: not the ground station's, nor those of companions and
+    # cameras, which say MAV_AUTOPILOT_INVALID.
+    vehicle = [int(t) for t, a in zip(read["type"], read["autopilot"], strict=True)
+               if int(t) != MAV_TYPE_GCS and int(a) != MAV_AUTOPILOT_INVALID]
+    if not vehicle:
+        return None
+    kind = max(set(vehicle), key=vehicle.count)
+    return FieldSource("HEARTBEAT", "base_mode", where=(("type", str(kind)),), bits=128)
+
+
+def _entry(source: FieldSource, family: str) -> str:
+    key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
+        else "topic"
+    parts = [f'{key} = "{source.topic}"'] if family == "csv" else [
+        f'{key} = "{source.topic}"', f'field = "{source.field}"']
+    if source.scale != 1.0:
+        parts.append(f"scale = {source.scale:g}")
+    if source.offset:
+        parts.append(f"offset = {source.offset:g}")
+    if source.where:
+        parts.append("where = { " + ", ".join(f'{k} = "{v}"' for k, v in source.where) + " }")
+    if source.bits:
+        parts.append(f"bits = {source.bits}")
+    if source.changes_only:
+        parts.append("changes_only = true")
+    return "{ " + ", ".join(parts) + " }"
+
+
+def draft_profile(path: Path, name: str) -> str:
+    """The text of a starting profile for the vehicle that wrote the log at ``path``."""
+    contents, family = inventory(path)
+    time = _time_column(contents, path) if family == "csv" else None
+    if family == "csv" and time is None:
+        raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
+                         "write [sources.csv] time = { column, unit } by hand")
+    commands, sensors = _proposals(path, family, contents, time)
+    if not commands or not sensors:
+        what = "command (motor output, thrust, PWM)" if not commands else "sensor"
+        raise UsageError(f"{path}: found no {what} field that varies in this log; write the "
+                         "profile by hand (see `auvdiag inspect` for the fields)")
+    operating = _operating(path, family, contents)
+    return _render(path, name, family, commands, sensors, operating, time)
+
+
+def _render(path: Path, name: str, family: str, commands: list[Proposal],
+            sensors: list[Proposal], operating: FieldSource | None,
+            time: TimeColumn | None) -> str:
+    lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
+             "# Every signal below is in that log and varies there. Lines marked CHECK are",
+             "# what the log cannot tell: read them before you train.", "",
+             "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
+             "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
+    for proposal in commands:
+        lines += ["[[commands]]", f'name = "{proposal.name}"',
+                  f'component = "{proposal.name}"   # CHECK: the part that fails',
+                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+    for proposal in sensors:
+        unit, full_scale = proposal.unit.split("|")
+        lines += ["[[sensors]]", f'name = "{proposal.name}"',
+                  f'component = "{proposal.name}_sensor"   # CHECK: the part that fails',
+                  f'unit = "{unit}"   # CHECK: {proposal.check}',
+                  f"full_scale = {full_scale}   # CHECK: twice the log's 99th percentile",
+                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+    names = [p.name for p in sensors]
+    lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0", "",
+              "# CHECK: the paper's mission threshold: calibrate on normal logs",
+              "[thresholds.mission]", *(f"{n} = 15.0" for n in names), "",
+              "# CHECK: only 'nothing' is known; name the components each b vector means",
+              "[[pattern]]", "case = 0",
+              "b = { " + ", ".join(f"{n} = 0" for n in names) + " }", "components = []", "",
+              f"[sources.{family}]"]
+    if time is not None:
+        lines.append(f'time = {{ column = "{time.column}", unit = "{time.unit}" }}'
+                     "   # CHECK: the clock's unit")
+    if operating is not None:
+        lines.append(f"{OPERATING} = {_entry(operating, family)}   # armed flag")
+    lines += ["", f"[sources.{family}.signals]"]
+    for proposal in commands:
+        lines.append(f"{proposal.name} = {_entry(proposal.source, family)}   "
+                     f"# CHECK: {proposal.check}")
+    for proposal in sensors:
+        lines.append(f"{proposal.name} = {_entry(proposal.source, family)}")
+    return "\n".join(lines) + "\n"

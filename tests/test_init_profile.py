@@ -1,0 +1,60 @@
+"""`auvdiag init-profile`: a starting profile drafted from a log loads, and every signal it
+proposes resolves on that log; what the log cannot tell is marked CHECK."""
+
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
+# (format, a command the draft must propose, a sensor it must propose)
+EXPECTED = [("tlog", "servo1_raw", "yawspeed"), ("bin", "c1", "gyrz"),
+            ("mcap", "data_0", "angular_velocity_z"), ("bag", "data_1", "angular_velocity_z"),
+            ("csv", "thruster_0", "yaw_rate_rps")]
+
+
+def _draft_and_inspect(log, target):
+    drafted = runner.invoke(app, ["init-profile", str(log), "--output", str(target)])
+    assert drafted.exit_code == 0, drafted.output
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", str(target)])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout, shown.stdout
+    return target.read_text()
+
+
+@pytest.mark.parametrize(("fmt", "command", "sensor"), EXPECTED)
+def test_the_draft_loads_and_resolves_on_its_log(make_log, tmp_path, fmt, command, sensor):
+    text = _draft_and_inspect(make_log("paper-normal", 11, fmt), tmp_path / "draft.toml")
+    assert f'[[commands]]\nname = "{command}"' in text
+    assert f'[[sensors]]\nname = "{sensor}"' in text
+    assert "CHECK" in text
+
+
+def test_an_existing_file_is_not_overwritten(make_log, tmp_path):
+    target = tmp_path / "mine.toml"
+    target.write_text("# my own work\n")
+    result = runner.invoke(app, ["init-profile", str(make_log("paper-normal", 11, "tlog")),
+                                 "--output", str(target)])
+    assert result.exit_code == 2 and "exists already" in result.output
+    assert target.read_text() == "# my own work\n"
+
+
+def test_a_log_with_nothing_that_moves_is_one_line(tmp_path):
+    log = tmp_path / "still.csv"
+    log.write_text("time,pwm1,depth\n" + "".join(f"{t},1100,0.5\n" for t in range(50)))
+    result = runner.invoke(app, ["init-profile", str(log)])
+    assert result.exit_code == 2 and "found no command" in result.output
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason=f"real logs not found at {SHARED}")
+@pytest.mark.parametrize("relative", ["ardusub/small.tlog", "ardusub/small.BIN",
+                                      "haizhe/train/Normal/Normal_0.csv"])
+def test_drafts_from_real_logs_resolve(tmp_path, relative):
+    text = _draft_and_inspect(SHARED / relative, tmp_path / "real.toml")
+    if relative.endswith(".tlog"):     # the autopilot's armed bit, not a companion's
+        assert 'operating = { message = "HEARTBEAT", field = "base_mode", where = { type = ' \
+               '"12" }, bits = 128 }' in text
+    if relative.endswith(".csv"):
+        assert 'time = { column = "time", unit = "hhmmss" }' in text
