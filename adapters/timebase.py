@@ -10,6 +10,7 @@ MAX_TIME_NS = 1 << 62
 # A stored time is a spike when it disagrees with both neighbours by more than this while
 # they agree with each other: one corrupted record, not a clock jump or a gap.
 SPIKE_TOLERANCE_NS = 1_000_000_000
+END_SPIKE_RATIO = 100
 
 
 def plausible_us(times_us: np.ndarray) -> np.ndarray:
@@ -19,7 +20,8 @@ def plausible_us(times_us: np.ndarray) -> np.ndarray:
 
 def spikes(times_ns: np.ndarray, tolerance_ns: int = SPIKE_TOLERANCE_NS) -> np.ndarray:
     """Mask of isolated times, in stored order, that are far from both neighbours while the
-    neighbours are close to each other (at the ends: far from the next two, which agree)."""
+    neighbours are close to each other (at the ends: far from the next, which is close to
+    the one after)."""
     times = np.asarray(times_ns, dtype=np.int64)
     mask = np.zeros(times.size, bool)
     if times.size < 3:
@@ -30,8 +32,10 @@ def spikes(times_ns: np.ndarray, tolerance_ns: int = SPIKE_TOLERANCE_NS) -> np.n
     far_before, far_after = step[:-1] > tolerance_ns, step[1:] > tolerance_ns
     neighbours_agree = np.abs(as_float[2:] - as_float[:-2]) <= tolerance_ns
     mask[1:-1] = far_before & far_after & neighbours_agree
-    mask[0] = step[0] > tolerance_ns and step[1] <= tolerance_ns
-    mask[-1] = step[-1] > tolerance_ns and step[-2] <= tolerance_ns
+    # At the ends one neighbour must do: far from it, and far beyond the usual spacing
+    # (a 1 Hz heartbeat's first gap of 1.05 s is no spike).
+    mask[0] = step[0] > max(tolerance_ns, END_SPIKE_RATIO * step[1])
+    mask[-1] = step[-1] > max(tolerance_ns, END_SPIKE_RATIO * step[-2])
     return mask
 
 
