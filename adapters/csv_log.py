@@ -32,7 +32,7 @@ def _delimiter(line: str) -> str:
     return max(DELIMITERS, key=line.count)
 
 
-def _is_number(text: str) -> bool:
+def is_number(text: str) -> bool:
     try:
         float(text)
     except ValueError:
@@ -53,7 +53,8 @@ def _head_lines(path: Path) -> list[str] | None:
     return text.splitlines()
 
 
-def _rows(path: Path) -> Iterator[list[str]]:
+def csv_rows(path: Path) -> Iterator[list[str]]:
+    """The rows of a CSV log, the header first (the delimiter found in it)."""
     with path.open(newline="", encoding="utf-8", errors="replace") as stream:
         first = stream.readline()
         stream.seek(0)
@@ -70,7 +71,7 @@ class _Parsed:
 
 
 def _parse(path: Path, wanted: list[str], time_column: str) -> tuple[_Parsed, list[str]]:
-    rows = _rows(path)
+    rows = csv_rows(path)
     header = [name.strip() for name in next(rows, [])]
     missing = [name for name in dict.fromkeys([time_column, *wanted]) if name not in header]
     if missing:
@@ -123,7 +124,7 @@ def _times_ns(texts: list[str], time: TimeColumn, notes: list[str]) -> np.ndarra
             return (moment if moment.tzinfo else moment.replace(tzinfo=UTC)).timestamp()
         return np.array([round(iso(t) * 1e9) if _readable(iso, t) else -1 for t in texts],
                         np.int64)
-    values = np.array([float(t) if _is_number(t) else np.nan for t in texts])
+    values = np.array([float(t) if is_number(t) else np.nan for t in texts])
     if time.unit == "hhmmss":
         whole = np.floor(values)
         hours, minutes, seconds = whole // 10_000, whole // 100 % 100, whole % 100
@@ -173,8 +174,8 @@ class CsvAdapter:
         delimiter = _delimiter(lines[0])
         header = [cell.strip() for cell in lines[0].split(delimiter)]
         row = [cell.strip() for cell in lines[1].split(delimiter)]
-        named = len(header) >= 2 and all(header) and not any(map(_is_number, header))
-        return "csv" if named and len(row) == len(header) and any(map(_is_number, row)) \
+        named = len(header) >= 2 and all(header) and not any(map(is_number, header))
+        return "csv" if named and len(row) == len(header) and any(map(is_number, row)) \
             else None
 
     def read(self, path: Path, sources: LogSources) -> Signals:
@@ -195,7 +196,7 @@ class CsvAdapter:
             if segment is not None and name == segment.topic:
                 collector.add_columns(name, times[present], _constant(texts), header)
                 continue
-            readable = np.array([_is_number(text) for text in texts.tolist()], bool)
+            readable = np.array([is_number(text) for text in texts.tolist()], bool)
             numbers = np.array([float(text) for text in texts[readable].tolist()], np.float64)
             bad_values += int((~readable).sum())
             collector.add_columns(name, times[present][readable], _constant(numbers), header)
@@ -215,7 +216,7 @@ class CsvAdapter:
     def inventory(self, path: Path) -> LogInventory:
         """Every column with its count of non-empty cells (the time column is not known
         without a profile, so there is no span)."""
-        rows = _rows(path)
+        rows = csv_rows(path)
         header = [name.strip() for name in next(rows, [])]
         counts = [0] * len(header)
         for row in rows:

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from adapters import LogError, LogInventory, inventory, read_log
+from adapters.csv_log import csv_rows, is_number
 from adapters.signals import OPERATING, FieldSource, LogSources, TimeColumn
 from auvdiag_cli.errors import UsageError
 
@@ -74,14 +75,11 @@ def _time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
     named = [t.name for t in contents.topics if TIME_NAME.match(t.name)]
     if not named:
         return None
-    import csv
-
-    with path.open(newline="", encoding="utf-8", errors="replace") as stream:
-        rows = csv.reader(stream)
-        header = [cell.strip() for cell in next(rows)]
-        at = header.index(named[0])
-        sample = [row[at] for _, row in zip(range(200), rows, strict=False) if len(row) > at]
-    numbers = np.array([float(v) for v in sample if _number(v)])
+    rows = csv_rows(path)
+    header = [cell.strip() for cell in next(rows)]
+    at = header.index(named[0])
+    sample = [row[at] for _, row in zip(range(200), rows, strict=False) if len(row) > at]
+    numbers = np.array([float(v) for v in sample if is_number(v)])
     if numbers.size == 0:
         return TimeColumn(named[0], "iso")
     whole = numbers == np.floor(numbers)
@@ -91,14 +89,6 @@ def _time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
     unit = "ns" if largest > 1e17 else "us" if largest > 1e14 else "ms" if largest > 1e11 \
         else "s"
     return TimeColumn(named[0], unit)
-
-
-def _number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def _read_each(path: Path, family: str, sources: dict[str, FieldSource],

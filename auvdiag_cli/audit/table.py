@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import pandas as pd
 
-FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "verdict",
-                 "completeness", "component", "candidates", "case", "onset_s", "detected_at_s",
+FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "not_operating_s",
+                 "verdict", "completeness", "component", "candidates", "case", "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "recommended_dms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
@@ -37,6 +37,7 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
     row: dict[str, Any] = {
         "log": record["log"], "format": record.get("format"), "vehicle": record.get("vehicle"),
         "start_time_utc": record.get("start_time_utc"), "duration_s": record.get("duration_s"),
+        "not_operating_s": record.get("not_operating_s"),
         "verdict": record.get("verdict", "error" if record.get("error") else None),
         "completeness": (record.get("completeness") or {}).get("status"),
         "component": record.get("component"),
