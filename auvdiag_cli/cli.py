@@ -56,7 +56,7 @@ def _user_errors(subject: Path | str) -> Iterator[None]:
 
     try:
         yield
-    except typer.Exit:
+    except (typer.Exit, BrokenPipeError):   # click quiets a reader that went away (| head)
         raise
     except AuvdiagError as error:
         _fail(str(error))

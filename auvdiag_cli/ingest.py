@@ -19,7 +19,7 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
     signals = read_log(path, profile.sources)
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
-                         max_gap_s)
+                         max_gap_s, profile.idle_after_s)
     except ValueError as error:
         raise LogError(path, str(error)) from None
     return IngestedLog(signals, frame)

@@ -102,6 +102,8 @@ class Profile:
     navigation: Navigation | None = None
     controller: ControllerSpec | None = None
     simulation: SimulationSpec | None = None
+    # Not operating once every command has been neutral this long (None: no such rule).
+    idle_after_s: float | None = None
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -202,6 +204,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         simulation=parse_simulation(top.sub("simulation"), [c.name for c in commands],
                                     sensor_names) if "simulation" in data else None,
         source_path=source_path,
+        idle_after_s=positive(top.sub("operating"), "idle_after_s")
+        if "operating" in data else None,
     )
 
 

@@ -41,6 +41,8 @@ MAX_ABS_VALUE = 1e12
 # A command logged at less than 1 / (factor · Δt) is flagged: the zero-order hold then
 # spans more than this many model steps.
 SLOW_COMMAND_FACTOR = 1.5
+# A command within this of 0 (normalised, −1 … 1) is neutral: the actuator is idle.
+NEUTRAL_COMMAND = 1e-3
 
 
 @dataclass(frozen=True)
@@ -134,8 +136,16 @@ def _rate_hz(times_ns: np.ndarray) -> float | None:
     return NS_PER_S / float(np.median(steps)) if steps.size else None
 
 
-def _operating(signals: Signals, grid_ns: np.ndarray, notes: list[str], dt_s: float
-               ) -> np.ndarray:
+def _commanded(commands: np.ndarray, idle_steps: int) -> np.ndarray:
+    """Operating by command activity: some command was off neutral within the last
+    ``idle_steps`` steps (a log without an armed flag: idle on deck is not a dive)."""
+    active = (np.abs(np.nan_to_num(commands)) > NEUTRAL_COMMAND).any(axis=1)
+    steps = np.arange(active.size)
+    last_active = np.maximum.accumulate(np.where(active, steps, -1))
+    return (last_active >= 0) & (steps - last_active < idle_steps)
+
+
+def _operating(signals: Signals, grid_ns: np.ndarray) -> np.ndarray:
     """Where the vehicle operates, from the profile's operating flag (held from each
     message to the next; not operating before the first). No flag: everywhere."""
     flag = signals.series.get(OPERATING)
@@ -146,20 +156,19 @@ def _operating(signals: Signals, grid_ns: np.ndarray, notes: list[str], dt_s: fl
     if times_ns.size == 0:
         raise ValueError("the operating flag has no usable value")
     index = np.searchsorted(times_ns, grid_ns, side="right") - 1
-    flagged = (index >= 0) & (flag.to_numpy()[np.clip(index, 0, None)] != 0)
-    # A sample averages the step before it: the first step of a stretch still holds
-    # readings from before, so operation counts from the second.
-    operating = flagged & np.concatenate(([False], flagged[:-1]))
+    return (index >= 0) & (flag.to_numpy()[np.clip(index, 0, None)] != 0)
+
+
+def _note_operating(operating: np.ndarray, dt_s: float, notes: list[str]) -> None:
     if not operating.any():
-        raise ValueError("the vehicle never operates in this log (its operating flag is never "
-                         "set, e.g. never armed): there is nothing to judge")
+        raise ValueError("the vehicle never operates in this log (never armed, or its commands "
+                         "never leave neutral): there is nothing to judge")
     if not operating.all():
         stretches = int(operating[0]) + int((~operating[:-1] & operating[1:]).sum())
-        notes.append(f"not operating (operating flag clear) for "
-                     f"{(~operating).sum() * dt_s:.1f} s of {operating.size * dt_s:.1f} s: "
-                     f"that time is neither judged nor trained on; {stretches} operating "
-                     "stretch(es), each replayed from its own start")
-    return operating
+        notes.append(f"not operating (disarmed or idle) for {(~operating).sum() * dt_s:.1f} s "
+                     f"of {operating.size * dt_s:.1f} s: that time is neither judged nor "
+                     f"trained on; {stretches} operating stretch(es), each replayed from its "
+                     "own start")
 
 
 def _gaps(times_ns: np.ndarray, max_gap_ns: int) -> list[tuple[int, int]]:
@@ -187,7 +196,8 @@ def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_
 
 
 def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tuple[str, ...],
-             dt_s: float, max_gap_s: float = 1.0) -> AlignedFrame:
+             dt_s: float, max_gap_s: float = 1.0, idle_after_s: float | None = None
+             ) -> AlignedFrame:
     """Align ``signals`` on a Δt grid as described in the module docstring."""
     notes: list[str] = []
     max_gap_ns = round(max_gap_s * NS_PER_S)
@@ -230,14 +240,21 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
                             (end_ns - signals.start_ns) / NS_PER_S))
     slow = slow_command_note(command_rates, dt_s)
     slow_commands = [] if slow is None else [slow]
-    operating = _operating(signals, grid_ns, notes, dt_s)
+    commands = np.column_stack([columns[n] for n in command_names])
+    operating = _operating(signals, grid_ns)
+    if idle_after_s is not None:
+        operating &= _commanded(commands, round(idle_after_s / dt_s))
+    # A sample averages the step before it: the first step of a stretch still holds
+    # readings from before it, so operation counts from the second.
+    operating &= np.concatenate(([operating[0]], operating[:-1]))
+    _note_operating(operating, dt_s, notes)
     blind |= ~operating
     restarts.update(int(i) + 1 for i in np.flatnonzero(~operating[:-1] & operating[1:]))
     sensors = np.column_stack([columns[n] for n in sensor_names])
     sensors[blind] = np.nan
     return AlignedFrame(
         time_s=(grid_ns - signals.start_ns) / NS_PER_S,
-        commands=np.column_stack([columns[n] for n in command_names]),
+        commands=commands,
         sensors=sensors,
         command_names=command_names,
         sensor_names=sensor_names,

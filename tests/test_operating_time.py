@@ -105,3 +105,47 @@ def test_the_operating_name_is_reserved(tmp_path):
     path.write_text(text.replace('name = "flow"', 'name = "operating"'))
     result = runner.invoke(app, ["inspect", "x", "--profile", str(path)])
     assert result.exit_code == 2 and "reserved for the operating flag" in result.output
+
+
+def _lifted_between_two_runs(first, second, idle_s):
+    """Two simulated ZA runs with ``idle_s`` between them: thrusters at neutral while the
+    vehicle is lifted out and swung about (its gyro reading nonsense)."""
+    import copy
+
+    from auvdiag_cli.simulator.run import Stream
+
+    pause_from = first.duration_s + 0.5
+    resume_at = pause_from + idle_s
+
+    def joined(a: Stream, b: Stream, idle_value, rate_hz: float) -> Stream:
+        gap = [pause_from + k / rate_hz for k in range(int(idle_s * rate_hz))]
+        return Stream([*a.times_s, *gap, *(t + resume_at for t in b.times_s)],
+                      [*a.values, *(idle_value(t) for t in gap), *b.values])
+
+    dive = copy.deepcopy(first)
+    dive.commands = joined(first.commands, second.commands, lambda t: (0.0, 0.0), 10.0)
+    dive.sensors = {
+        "flow": joined(first.sensors["flow"], second.sensors["flow"], lambda t: (0.0,), 10.0),
+        "yaw_rate": joined(first.sensors["yaw_rate"], second.sensors["yaw_rate"],
+                           lambda t: (2.0 * math.sin(t),), 50.0)}
+    dive.markers = [*first.markers, *((t + resume_at, label) for t, label in second.markers)]
+    return dive
+
+
+def test_idle_commands_end_operation_where_the_log_has_no_flag(tmp_path, dive_cache, profile):
+    """A ROS log without an armed flag: between two runs the thrusters idle for a minute
+    while the vehicle is lifted out; `[operating] idle_after_s` leaves that minute out."""
+    from auvdiag_cli.simulator.writers import write_log
+
+    dive = _lifted_between_two_runs(dive_cache("dms-za", 31), dive_cache("dms-za", 32), 60.0)
+    log = tmp_path / "lifted.mcap"
+    write_log(dive, profile, log, "mcap")
+    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    idle = tmp_path / "idle.toml"
+    idle.write_text(text + "\n[operating]\nidle_after_s = 3.0\n")
+    assert _report(log)["verdict"] == "fault"             # the lifted minute, judged
+    report = _report(log, idle)
+    assert report["verdict"] == "normal", report["notes"]
+    # idle from 3 s after each ZA's last 5 s at neutral: 28 s to the resume (62.6 s), and
+    # the last 2 s of the second run
+    assert report["not_operating_s"] == pytest.approx(64.6, abs=0.3)

@@ -9,7 +9,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "not_operating_s",
-                 "verdict", "completeness", "component", "candidates", "case", "onset_s", "detected_at_s",
+                 "verdict", "completeness", "component", "candidates", "case", "onset_s",
+                 "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "recommended_dms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
