@@ -456,6 +456,10 @@ def init_profile(
     ] = None,
     name: Annotated[str | None, typer.Option(
         help="The vehicle's name (default: the log's name).")] = None,
+    like: Annotated[Path | None, typer.Option(
+        "--like", help="Start from this profile (a file, or a built-in one such as "
+                       "bluerov2_standard) and fit its mapping to the log.", dir_okay=False)
+    ] = None,
 ) -> None:
     """Write a starting vehicle profile from what a log holds.
 
@@ -463,15 +467,16 @@ def init_profile(
     rates, climb or depth rates and velocities that are in the log and vary there, the
     log's armed flag as operating time, and for CSV the clock column. What a log cannot
     tell (units, full scales, components, thresholds, the pattern table) is marked CHECK.
-    The draft loads and resolves on the log it came from: `auvdiag inspect LOG --profile
-    FILE` shows it."""
+    With --like, the draft is that profile with each signal that does not read on the log
+    moved to the closest field that does (each move listed at the top). The draft loads and
+    resolves on the log it came from: `auvdiag inspect LOG --profile FILE` shows it."""
+    from adapters import detect_format
     from auvdiag_cli.profile_draft import draft_profile
+    from auvdiag_cli.profile_like import draft_like
 
     with _user_errors(log):
-        from adapters import detect_format
-
         detect_format(log)
-        text = draft_profile(log, name or log.stem)
+        text = draft_profile(log, name or log.stem) if like is None else draft_like(log, like)
         if output is None:
             typer.echo(text, nl=False)
             return

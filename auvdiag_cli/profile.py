@@ -315,19 +315,24 @@ def builtin_profiles() -> tuple[str, ...]:
                         if entry.name.endswith(".toml")))
 
 
-def load_profile(path: Path | None = None) -> Profile:
-    """Load a profile file, or a built-in profile by name (see `builtin_profiles`); None is
-    the Twin-Burger of the paper."""
+def profile_text(path: Path | None = None) -> tuple[str, str]:
+    """A profile's TOML text and where it came from: a file, or a built-in profile by name
+    (see `builtin_profiles`); None is the Twin-Burger of the paper."""
     name = "twin_burger" if path is None else str(path)
     if path is None or (name in builtin_profiles() and not path.exists()):
         resource = resources.files("auvdiag_cli") / "profiles" / f"{name}.toml"
-        text, where = resource.read_text(encoding="utf-8"), f"builtin:{name}"
-    else:
-        try:
-            text, where = path.read_text(encoding="utf-8"), str(path)
-        except OSError as error:
-            raise ProfileError(f"{path}: cannot read profile: {error.strerror} (built-in "
-                               f"profiles: {', '.join(builtin_profiles())})") from None
+        return resource.read_text(encoding="utf-8"), f"builtin:{name}"
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except OSError as error:
+        raise ProfileError(f"{path}: cannot read profile: {error.strerror} (built-in "
+                           f"profiles: {', '.join(builtin_profiles())})") from None
+
+
+def load_profile(path: Path | None = None) -> Profile:
+    """Load a profile file, or a built-in profile by name (see `builtin_profiles`); None is
+    the Twin-Burger of the paper."""
+    text, where = profile_text(path)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:

@@ -58,3 +58,38 @@ def test_drafts_from_real_logs_resolve(tmp_path, relative):
                '"12" }, bits = 128 }' in text
     if relative.endswith(".csv"):
         assert 'time = { column = "time", unit = "hhmmss" }' in text
+
+
+def test_like_a_profile_moves_what_does_not_read_to_the_closest_field(make_log, tmp_path):
+    from importlib import resources
+
+    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    like = tmp_path / "like.toml"
+    like.write_text(text.replace('field = "servo2_raw"', 'field = "servo_2_raw"')
+                    .replace('field = "yawspeed"', 'field = "yaw_speed"'))
+    log = make_log("paper-normal", 11, "tlog")
+    draft = _draft_and_inspect_like(log, like, tmp_path / "fitted.toml")
+    assert "# 2 of 4 signals read on the log as that profile maps them." in draft
+    assert "moved to the closest field: thruster_1: SERVO_OUTPUT_RAW servo_2_raw -> " \
+           "servo2_raw" in draft
+    assert "yaw_rate: ATTITUDE yaw_speed -> yawspeed" in draft
+
+
+def _draft_and_inspect_like(log, like, target):
+    drafted = runner.invoke(app, ["init-profile", str(log), "--like", str(like),
+                                  "--output", str(target)])
+    assert drafted.exit_code == 0, drafted.output
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", str(target)])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout, shown.stdout
+    return target.read_text()
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason=f"real logs not found at {SHARED}")
+def test_like_bluerov2_on_real_logs(tmp_path):
+    log = SHARED / "ardusub" / "small.BIN"
+    draft = _draft_and_inspect_like(log, Path("bluerov2_standard"), tmp_path / "rov.toml")
+    assert "# 11 of 11 signals read on the log as that profile maps them." in draft
+    result = runner.invoke(app, ["init-profile", str(SHARED / "ardusub" / "small.tlog"),
+                                 "--like", "bluerov2"])          # the DVL is not there
+    assert result.exit_code == 2 and "surge" in result.output and "draft without --like" \
+        in result.output
