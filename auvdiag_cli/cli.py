@@ -299,16 +299,19 @@ def train(
     Training runs in stages, short rollouts first and long free-running ones after; the
     free-run error on held-out logs is printed and stored in the model's metadata."""
     from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.training_job import PAPER_MODEL_ERROR, train_from_logs
+    from auvdiag_cli.training_job import paper_model_error, train_from_logs
 
     with _user_errors(output):
-        result = train_from_logs(logs, output, load_profile(profile), holdout or (), hidden,
+        vehicle = load_profile(profile)
+        result = train_from_logs(logs, output, vehicle, holdout or (), hidden,
                                  seed, iterations_scale, progress=_progress)
+    papers = paper_model_error(vehicle)
     typer.echo(f"model written to {result.output} ({result.training_logs} training logs, "
                f"{result.heldout_logs} held out)")
-    typer.echo("free-run error on held-out normal logs (rms / mean abs; paper's figure):")
+    typer.echo("free-run error on held-out normal logs (rms / mean abs"
+               + ("; paper's figure):" if papers else "):"))
     for name, rms in result.heldout_rms.items():
-        paper = PAPER_MODEL_ERROR.get(name)
+        paper = papers.get(name)
         typer.echo(f"  {name:<10} {rms:.4f} / {result.heldout_mean_abs[name]:.4f}"
                    + (f"   (paper {paper})" if paper is not None else ""))
 

@@ -1,6 +1,7 @@
 """The dynamics model really trains, saves without pickle, and loads back identically."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -128,3 +129,24 @@ def test_train_needs_two_logs(make_log, tmp_path):
     result = CliRunner().invoke(app, ["train", str(make_log("dms-za", 11)), "--output",
                                       str(tmp_path / "m")])
     assert result.exit_code == 2 and "at least two logs" in result.stderr
+
+
+def test_the_papers_figures_are_shown_for_the_papers_vehicle_only(tmp_path):
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli.simulator.scenarios import get_scenario
+    from auvdiag_cli.simulator.writers import write_log
+
+    vehicle = load_profile(Path("three_thruster"))      # it has a yaw-rate sensor too
+    logs = []
+    for seed in (1, 2):
+        log = tmp_path / f"za-{seed}.tlog"
+        write_log(simulate(get_scenario("dms-za", vehicle), vehicle, seed), vehicle, log, "tlog")
+        logs.append(str(log))
+    result = CliRunner().invoke(app, ["train", *logs, "--profile", "three_thruster", "--output",
+                                      str(tmp_path / "m"), "--iterations-scale", "0.01"])
+    assert result.exit_code == 0, result.output
+    assert "yaw_rate" in result.stdout and "(paper " not in result.stdout
+    assert "paper's figure" not in result.stdout
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    assert meta["heldout_error"]["paper_rms"] == {}
