@@ -122,7 +122,8 @@ def decode_mavlink(index: RecordIndex, message_class: Any) -> tuple[np.ndarray, 
 def dataflash_layout(types: str, columns: tuple[str, ...]
                      ) -> tuple[np.dtype, dict[str, float]]:
     """A DataFlash format as a dtype, and the divisors pymavlink applies per column."""
-    if len(types) != len(columns) or any(t not in _DATAFLASH_TYPES for t in types):
+    if len(types) != len(columns) or any(t not in _DATAFLASH_TYPES for t in types) or len(
+            set(columns)) != len(columns):
         raise UnknownFormat(f"format {types!r} for columns {','.join(columns)}")
     fields = [(name, _DATAFLASH_TYPES[t][0]) for name, t in zip(columns, types, strict=True)]
     divisors = {name: divisor for name, t in zip(columns, types, strict=True)

@@ -33,9 +33,12 @@ class FieldSource:
     def convert(self, raw: Any) -> Any:
         """Raw field values (an array, or a NumPy scalar) to the signal's units, or to 0/1
         for a flag."""
-        if self.bits:
-            return ((raw.astype(np.int64) & self.bits) != 0).astype(np.float64)
-        return raw.astype(np.float64) * self.scale + self.offset
+        # A damaged float can hold a signalling NaN: converting it sets the invalid flag.
+        # The NaN itself is dropped (and counted) when the signal is resampled.
+        with np.errstate(invalid="ignore"):
+            if self.bits:
+                return ((raw.astype(np.int64) & self.bits) != 0).astype(np.float64)
+            return raw.astype(np.float64) * self.scale + self.offset
 
 
 @dataclass(frozen=True)

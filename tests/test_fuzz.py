@@ -104,3 +104,32 @@ def test_an_error_must_be_one_line_naming_the_file(monkeypatch, tmp_path, profil
     monkeypatch.setattr(inspection, "inspect_log", refuse)
     outcome, detail = exercise(log, profile, load_model(None, profile.name))
     assert outcome == verdict, detail
+
+
+@pytest.mark.parametrize(("fmt", "case"), [
+    ("bin", 1213),    # a float turned into a signalling NaN: NumPy warned on stderr
+    ("bin", 1826),    # an FMT record naming one column twice: the dtype raised ValueError
+])
+def test_defects_the_campaign_found_stay_fixed(tmp_path, fmt, case):
+    report_path = tmp_path / "case.json"
+    result = subprocess.run(
+        [sys.executable, "-m", "auvdiag_cli.fuzz", "--formats", fmt, "--first-case",
+         str(case), "--cases", "1", "--jobs", "1", "--json", str(report_path)],
+        capture_output=True, text=True, timeout=300)
+    summary = json.loads(report_path.read_text())["seeds"][fmt]
+    assert result.returncode == 0 and summary["defects"] == 0, summary["defect_cases"]
+
+
+def test_a_signalling_nan_converts_quietly():
+    import warnings
+
+    import numpy as np
+
+    from adapters.signals import FieldSource
+
+    signalling = np.array([0x7FA00000], np.uint32).view(np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        converted = FieldSource("IMU", "GyrZ", scale=2.0).convert(signalling)
+        flag = FieldSource("HEARTBEAT", "base_mode", bits=128).convert(signalling)
+    assert np.isnan(converted[0]) and flag[0] in (0.0, 1.0)

@@ -70,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
             report["seeds"][seed.name] = summary   # type: ignore[index]
             print(f"{seed.name:<24} {summary['cases']:>6} cases  read {summary['read']:>6}  "
                   f"rejected {summary['rejected']:>6}  defects {summary['defects']:>4}  "
-                  f"slowest {summary['slowest_s']:.2f} s  peak {summary['peak_rss_mb']:.0f} MB",
+                  f"slowest {summary['slowest_s']:.2f} s (case {summary['slowest_case']})  "
+                  f"peak {summary['peak_rss_mb']:.0f} MB",
                   flush=True)
         report["seconds"] = round(time.perf_counter() - started, 1)
     if options.json is not None:
