@@ -155,7 +155,11 @@ class SignalCollector:
         self.count += rows
         segment = self.sources.segment
         if segment is not None and topic == segment.topic:
-            texts = column(segment.field).tolist()
+            try:
+                texts = column(segment.field).tolist()
+            except (IndexError, KeyError, TypeError, ValueError):
+                raise LogError(self.path, unresolved(topic, segment.field, "segment markers",
+                                                     fields)) from None
             for time_ns, raw in zip(times_ns.tolist(), texts, strict=True):
                 text = _text(raw)
                 if text.startswith(segment.prefix):

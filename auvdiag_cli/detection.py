@@ -64,7 +64,7 @@ def _onset(residual: np.ndarray, threshold: float, alarm: int, lookback_steps: i
     normal_level = float(np.median(history[: max(1, len(history) // 2)]))
     drift = normal_level + 0.25 * max(threshold - normal_level, 0.0)
     cusum = np.concatenate(([0.0], np.cumsum(history - drift)))
-    return lookback + int(np.argmin(cusum))
+    return min(lookback + int(np.argmin(cusum)), alarm)   # the change is never after it
 
 
 def look_up(pattern: tuple[PatternRow, ...], b: dict[str, int]) -> PatternRow | None:

@@ -109,6 +109,8 @@ def test_an_error_must_be_one_line_naming_the_file(monkeypatch, tmp_path, profil
 @pytest.mark.parametrize(("fmt", "case"), [
     ("bin", 1213),    # a float turned into a signalling NaN: NumPy warned on stderr
     ("bin", 1826),    # an FMT record naming one column twice: the dtype raised ValueError
+    ("bin", 4856),    # an alarm on the last sample put the onset one step after the log
+    ("bin", 4963),    # an MSG format without its Message column: the marker field raised
 ])
 def test_defects_the_campaign_found_stay_fixed(tmp_path, fmt, case):
     report_path = tmp_path / "case.json"
