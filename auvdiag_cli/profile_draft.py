@@ -39,6 +39,7 @@ class Proposal:
     source: FieldSource
     unit: str
     check: str            # what the user must check
+    full_scale: float = 1.0
 
 
 def _signal_name(topic: str, field: str) -> str:
@@ -139,7 +140,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                 check = "down positive (the log's climb rate negated" + (
                     ", CTUN CRt in cm/s)" if factor == -0.01 else ")")
             full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
-            sensors.append(Proposal(name, source, f"{unit}|{_nice(full_scale)}", check))
+            sensors.append(Proposal(name, source, unit, check, _nice(full_scale)))
     return _unique(commands), _unique(sensors)
 
 
@@ -228,11 +229,11 @@ def _render(path: Path, name: str, family: str, commands: list[Proposal],
                   f'component = "{proposal.name}"   # CHECK: the part that fails',
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
     for proposal in sensors:
-        unit, full_scale = proposal.unit.split("|")
         lines += ["[[sensors]]", f'name = "{proposal.name}"',
                   f'component = "{proposal.name}_sensor"   # CHECK: the part that fails',
-                  f'unit = "{unit}"   # CHECK: {proposal.check}',
-                  f"full_scale = {full_scale}   # CHECK: twice the log's 99th percentile",
+                  f'unit = "{proposal.unit}"   # CHECK: {proposal.check}',
+                  f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
+                  "percentile",
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
     names = [p.name for p in sensors]
     lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0", "",
