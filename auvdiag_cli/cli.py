@@ -279,6 +279,27 @@ def audit(
     raise typer.Exit(_audit_exit(result, fail_on))
 
 
+def _horizon_option(text: str | None, profile_default: float | None) -> float | None:
+    """--horizon as the trainer takes it: None chooses, inf is the paper's free run; no
+    option keeps the profile's ``[matching] horizon_s``."""
+    import math
+
+    if text is None:
+        return profile_default
+    if text == "auto":
+        return None
+    if text == "free":
+        return math.inf
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not 0 < value < math.inf:
+        raise UsageError(f"--horizon must be 'auto', 'free' or a positive number of seconds, "
+                         f"got {text!r}")
+    return value
+
+
 @app.command()
 def train(
     logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs to learn from.")],
@@ -286,8 +307,17 @@ def train(
                                          file_okay=False)],
     profile: ProfileOption = None,
     holdout: Annotated[list[Path] | None, typer.Option(
-        "--holdout", help="Held-out normal log for the error figures (repeatable; default: "
-                          "every fifth log).")] = None,
+        "--holdout", help="Held-out normal log for the skill figures (repeatable; default: "
+                          "every fifth log, or the last 20 % of a single log).")] = None,
+    horizon: Annotated[str | None, typer.Option(
+        "--horizon", help="How long the model predicts before the replay re-starts from the "
+                          "measured state: 'auto' (chosen on the held-out data), 'free' (the "
+                          "paper's free run) or seconds. Default: the profile's "
+                          "[matching] horizon_s, else auto.", metavar="auto|free|SECONDS")
+    ] = None,
+    keep_unskilled: Annotated[bool, typer.Option(
+        "--keep-unskilled", help="Write the model even when no signal has skill (its "
+                                 "diagnoses will judge nothing).")] = False,
     hidden: Annotated[int, typer.Option(help="Size of the recurrent context.", min=4)] = 32,
     seed: Annotated[int, typer.Option(help="Random seed of the training.")] = 0,
     iterations_scale: Annotated[float, typer.Option(
@@ -296,24 +326,27 @@ def train(
 ) -> None:
     """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
 
-    Training runs in stages, short rollouts first and long free-running ones after; the
-    free-run error on held-out logs is printed and stored in the model's metadata."""
+    Training runs in stages, short rollouts first and long free-running ones after. The
+    model is then scored on held-out normal data against naive predictors (the last value
+    holds, the mean, a linear model): a signal it cannot predict better is never judged.
+    Exit status 1 when no signal has skill (no model is written unless --keep-unskilled)."""
     from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_training import training_lines
     from auvdiag_cli.training_job import paper_model_error, train_from_logs
 
     with _user_errors(output):
         vehicle = load_profile(profile)
-        result = train_from_logs(logs, output, vehicle, holdout or (), hidden,
-                                 seed, iterations_scale, progress=_progress)
-    papers = paper_model_error(vehicle)
-    typer.echo(f"model written to {result.output} ({result.training_logs} training logs, "
-               f"{result.heldout_logs} held out)")
-    typer.echo("free-run error on held-out normal logs (rms / mean abs"
-               + ("; paper's figure):" if papers else "):"))
-    for name, rms in result.heldout_rms.items():
-        paper = papers.get(name)
-        typer.echo(f"  {name:<10} {rms:.4f} / {result.heldout_mean_abs[name]:.4f}"
-                   + (f"   (paper {paper})" if paper is not None else ""))
+        result = train_from_logs(logs, output, vehicle, holdout or (), hidden, seed,
+                                 iterations_scale, _horizon_option(horizon, vehicle.horizon_s),
+                                 keep_unskilled,
+                                 progress=_progress)
+    for line in training_lines(result, paper_model_error(vehicle)):
+        typer.echo(line)
+    if not result.chosen.judged:
+        typer.echo("auvdiag: no signal has skill: the model predicts nothing better than a "
+                   "naive predictor" + ("" if result.written else
+                                        " (--keep-unskilled writes it anyway)"), err=True)
+        raise typer.Exit(EXIT_FAULT)
 
 
 @app.command()

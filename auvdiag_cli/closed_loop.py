@@ -11,6 +11,7 @@ import numpy as np
 from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
 from auvdiag_cli.profile import ControllerSpec
 from models.fast import FastStepper
+from models.rollouts import robust_state
 from models.store import LoadedModel
 
 SETTLE_AFTER_LAST_WAYPOINT_S = 5.0
@@ -55,7 +56,8 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     for row in np.nan_to_num(measured[first:onset]):
         vehicle.step(row, dt_s)
     stepper = FastStepper(model.fast, model.normaliser)
-    state = stepper.warm_up(commands[first:onset], np.nan_to_num(measured[first]))
+    state = stepper.warm_up(commands[first:onset],
+                           np.nan_to_num(robust_state(measured, first, first, onset + 1)))
     path, issued = [(controller.x, controller.y)], []
     settle = round(SETTLE_AFTER_LAST_WAYPOINT_S / dt_s)
     finished_step = None

@@ -31,6 +31,7 @@ from auvdiag_cli.truth import mission_path, read_missions
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
+NOT_JUDGED = "not judged (the model cannot predict it)"
 EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
 PAPER_ASSUMPTIONS = (
     "The environment is steady: a change in how the vehicle moves comes only from its hardware.",
@@ -83,6 +84,7 @@ class Diagnosis:
     b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
+    not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
 
 
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
@@ -175,6 +177,10 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     matching = match(model, frame, full_scale, window, dms_starts)
     thresholds = threshold_matrix(segments, frame.time_s, frame.sensor_names)
     b_series = binary_vector(matching.g_percent, thresholds)
+    not_judged = not_judged_signals(model)
+    for i, name in enumerate(frame.sensor_names):
+        if name in not_judged:
+            b_series[:, i] = 0          # a signal the model cannot predict raises no alarm
     scales = np.asarray([full_scale[n] for n in frame.sensor_names])
     residual = np.abs(matching.measured - matching.modelled) / scales
     decision = round(profile.decision_window_s / profile.dt_s)
@@ -197,7 +203,15 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         sensor_names=frame.sensor_names, matching=matching, thresholds=thresholds,
         b_series=b_series, start_ns=signals.start_ns, mission_legs=list(mission_legs),
         completeness=completeness_of(signals),
-        not_operating_s=round(float((~frame.operating).sum()) * frame.dt_s, 3))
+        not_operating_s=round(float((~frame.operating).sum()) * frame.dt_s, 3),
+        not_judged=not_judged)
+    if model.skill is None:
+        diagnosis.notes.append("the model has no skill scores (trained before they were "
+                               "measured): every signal is judged; 'auvdiag score' measures them")
+    if len(not_judged) == len(frame.sensor_names):
+        diagnosis.verdict, diagnosis.case = "undetermined", None
+        diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
+        return diagnosis
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
@@ -279,6 +293,14 @@ def _narrow_by_predicted_signatures(diagnosis: Diagnosis, active: ActiveDiagnosi
     active.recommended_dms = [] if len(kept) == 1 else [
         name for name in profile.dms
         if len({tuple(dms_signature(model, profile, name, c).values()) for c in kept}) > 1]
+
+
+def not_judged_signals(model: LoadedModel) -> dict[str, str]:
+    """The signals the model has no skill for, with the reason reports print."""
+    skill = model.skill or {}
+    return {name: NOT_JUDGED + (f" (skill {skill[name]:.2f})" if skill.get(name) is not None
+                                else "")
+            for name in model.unskilled}
 
 
 def _with_model_thresholds(profile: Profile, model: LoadedModel) -> Profile:

@@ -4,6 +4,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import LogError, Signals, read_log
+from auvdiag_cli.outliers import remove_spikes
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.resample import AlignedFrame, resample
 
@@ -22,4 +23,6 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
                          max_gap_s, profile.idle_after_s)
     except ValueError as error:
         raise LogError(path, str(error)) from None
+    frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
+                                 profile.full_scales)
     return IngestedLog(signals, frame)

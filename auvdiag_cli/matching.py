@@ -5,19 +5,20 @@ mean of the last K absolute differences in percent of R_i (the paper sums K+1 te
 divides by K; we average exactly K so that g is an unbiased mean). Samples missing inside a
 reported gap are left out of the mean; g is NaN until half a window of samples exists.
 
-The replay runs free from the first measured state; it restarts from the measured state at
-each *restart* (after a stretch of unknown commands, and at the start of every Diagnosis
-Motion Sequence, which is a test of its own), and g's window never reaches across one.
+The replay runs free from a robust estimate of the first measured state; it restarts from
+the measured state at each *restart* (after a stretch of unknown commands, and at the start
+of every Diagnosis Motion Sequence, which is a test of its own), and g's window never reaches
+across one. A model with a finite prediction horizon also re-starts every horizon inside
+those stretches (`models.rollouts`).
 """
 
-import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.resample import AlignedFrame
-from models.fast import fast_replay_batch
+from models.rollouts import plan_rollouts, replay_plan
 from models.store import LoadedModel
 
 
@@ -49,22 +50,15 @@ def residual_index(measured: np.ndarray, modelled: np.ndarray, full_scale: np.nd
 def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
           window: int, restarts: Sequence[int] = ()) -> Matching:
     """Replay the log's commands and compute g, restarting at ``frame.restarts`` and
-    ``restarts`` (grid indices)."""
+    ``restarts`` (grid indices), and every horizon of the model inside them."""
     measured = frame.sensors
-    modelled = np.full_like(measured, np.nan)
-    g = np.full_like(measured, np.nan)
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
-    cuts = sorted({0, len(measured), *frame.restarts, *restarts})
-    stretches = []                      # (first cut, first finite row, end)
-    for begin, end in itertools.pairwise(cuts):
-        finite_rows = np.flatnonzero(np.isfinite(measured[begin:end]).all(axis=1))
-        if finite_rows.size:
-            stretches.append((begin, begin + int(finite_rows[0]), end))
-    # The stretches are independent free runs: replayed side by side in one batch.
-    replays = fast_replay_batch(model.fast, model.normaliser,
-                                [frame.commands[start:end] for _, start, end in stretches],
-                                [measured[start] for _, start, _ in stretches])
-    for (begin, start, end), replayed in zip(stretches, replays, strict=True):
-        modelled[start:end] = replayed
+    plan = plan_rollouts(measured, [*frame.restarts, *restarts], model.horizon_steps)
+    modelled = replay_plan(model.fast, frame.commands, measured, plan,
+                           np.asarray(model.normaliser.command_scale),
+                           np.asarray(model.normaliser.state_scale))
+    g = np.full_like(measured, np.nan)
+    # g's window runs on across the model's own re-starts, never across a stretch's edge.
+    for begin, end in sorted({(r.stretch_begin, r.stretch_end) for r in plan}):
         g[begin:end] = residual_index(measured[begin:end], modelled[begin:end], scales, window)
     return Matching(measured, modelled, g)

@@ -1,5 +1,6 @@
 """Vehicle profiles: TOML files validated once into a typed `Profile`."""
 
+import math
 import tomllib
 from dataclasses import dataclass
 from importlib import resources
@@ -104,6 +105,8 @@ class Profile:
     simulation: SimulationSpec | None = None
     # Not operating once every command has been neutral this long (None: no such rule).
     idle_after_s: float | None = None
+    # The replay's prediction horizon: None chosen by `train`, inf the paper's free run.
+    horizon_s: float | None = None
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -128,6 +131,20 @@ class Profile:
         if mode in self.dms and ROUTINE_THRESHOLDS in self.thresholds:
             return self.thresholds[ROUTINE_THRESHOLDS]
         return self.thresholds[MISSION_MODE]
+
+
+def _horizon(matching: TableReader) -> float | None:
+    """``[matching] horizon_s``: "auto" (train chooses; the default), "free" or inf (the
+    paper's free run), or seconds."""
+    value = matching.get("horizon_s", (str, float, int), "auto")
+    if value == "auto":
+        return None
+    if value == "free":
+        return math.inf
+    if isinstance(value, str) or value <= 0:
+        raise ProfileError("key 'matching.horizon_s' must be \"auto\", \"free\" or a positive "
+                           f"number of seconds, got {value!r}")
+    return float(value)
 
 
 def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
@@ -195,6 +212,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         sensors=sensors,
         window_samples=window,
         decision_window_s=matching.get("decision_window_s", float, 0.0),
+        horizon_s=_horizon(matching),
         thresholds=thresholds,
         pattern=pattern,
         dms=dms,

@@ -236,7 +236,8 @@ def _render(path: Path, name: str, family: str, commands: list[Proposal],
                   "percentile",
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
     names = [p.name for p in sensors]
-    lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0", "",
+    lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
+              'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",
               "# CHECK: the paper's mission threshold: calibrate on normal logs",
               "[thresholds.mission]", *(f"{n} = 15.0" for n in names), "",
               "# CHECK: only 'nothing' is known; name the components each b vector means",

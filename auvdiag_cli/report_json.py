@@ -38,6 +38,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "completeness": None if diagnosis.completeness is None
         else diagnosis.completeness.to_dict(),
         "not_operating_s": diagnosis.not_operating_s,
+        "not_judged": diagnosis.not_judged,
         "segments": [
             {
                 "name": r.segment.name,

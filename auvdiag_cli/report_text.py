@@ -22,6 +22,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
     if d.verdict == "normal":
         lines.append("verdict: NORMAL: no fault detected")
+    elif d.verdict == "undetermined":
+        lines.append("verdict: UNDETERMINED: no signal could be judged")
     else:
         what = (d.component.replace("_", " ") if d.component
                 else _components(d.candidates) if d.candidates else "unidentified component")
@@ -66,6 +68,7 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                 lines.append(f"    closed-loop replay (controller fed the model from "
                              f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
                              f"{loop.miss_m:.2f} m from it")
+    lines += [f"  {name}: {why}" for name, why in d.not_judged.items()]
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"

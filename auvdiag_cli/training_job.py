@@ -1,20 +1,40 @@
-"""`auvdiag train`: fit the dynamics model to normal-condition logs and write a model dir."""
+"""`auvdiag train`: fit the dynamics model to normal-condition logs, measure its skill on
+held-out normal data, choose the prediction horizon, and write a model directory."""
 
 import hashlib
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
+
+import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.ingest import ingest
 from auvdiag_cli.profile import Profile
+from models.skill import (
+    HORIZON_CANDIDATES_S,
+    MIN_SKILL,
+    HorizonScore,
+    ScoringLog,
+    assess,
+    choose_horizon,
+)
 
 # The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
 PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
 PAPER_VEHICLE = "twin-burger"
+HELD_OUT_FRACTION = 0.2      # of a single log's steps, its last part in time
+SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
+                "replays re-starting every horizon from a median start state; versus_linear "
+                "= 1 - rms_model / rms_linear")
+SKILL_THRESHOLD_REASON = (
+    "a stuck or dead sensor leaves a residual of about rms_hold; it clears a threshold of "
+    "1.5 x the normal g only if rms_hold / rms_model >= 1.5, i.e. skill >= 1/3")
 
 
 def paper_model_error(profile: Profile) -> dict[str, float]:
@@ -25,56 +45,120 @@ def paper_model_error(profile: Profile) -> dict[str, float]:
 @dataclass(frozen=True)
 class TrainingResult:
     output: Path
+    written: bool                 # False: no signal has skill and the model was not kept
     training_logs: int
     heldout_logs: int
-    heldout_rms: dict[str, float]
-    heldout_mean_abs: dict[str, float]
+    heldout_split: str            # how the held-out data were chosen
+    scores: list[HorizonScore]    # every horizon tried
+    chosen: HorizonScore
+    operating_hours: float
 
 
 def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[Path], list[Path]]:
-    """Explicit held-out logs, or every fifth log (at least one) when none are given."""
+    """Explicit held-out logs, or every fifth log (at least one) when there are several; a
+    single log is split in time instead (see `train_from_logs`)."""
     if holdout:
         return [p for p in logs if p not in holdout], list(holdout)
     if len(logs) < 2:
-        raise UsageError("training needs at least two logs (one is held out to measure error)")
+        return list(logs), []
     held = [p for i, p in enumerate(logs) if i % 5 == 4] or [logs[-1]]
     return [p for p in logs if p not in held], held
 
 
+def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
+    frame = ingest(path, profile).frame
+    for note in frame.slow_commands:
+        progress(f"warning: {path.name}: {note}")
+    return ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts))
+
+
+def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
+    cut = round(len(log.commands) * (1 - HELD_OUT_FRACTION))
+    head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
+                      tuple(c for c in log.cuts if c < cut))
+    tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
+                      log.sensors[cut:], tuple(c - cut for c in log.cuts if c > cut))
+    return head, tail
+
+
+def horizon_candidates(profile: Profile, horizon_s: float | None) -> list[float | None]:
+    """Horizons to score: the one asked for (``inf``: free run), or every candidate (None:
+    choose) not shorter than g's window."""
+    if horizon_s is not None:
+        return [None if math.isinf(horizon_s) else horizon_s]
+    shortest = profile.window_samples * profile.dt_s
+    return [h for h in HORIZON_CANDIDATES_S if h is None or h >= shortest]
+
+
 def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     holdout: Sequence[Path] = (), hidden: int = 32, seed: int = 0,
-                    iterations_scale: float = 1.0,
+                    iterations_scale: float = 1.0, horizon_s: float | None = None,
+                    keep_unskilled: bool = False,
                     progress: Callable[[str], None] = lambda _: None) -> TrainingResult:
+    """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run."""
+    from models.fast import FastDynamics
     from models.store import save_model
-    from models.training import DEFAULT_STAGES, Stage, TrainingLog, free_run_error, train
+    from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
     training_paths, heldout_paths = split_holdout(logs, holdout)
     if not training_paths:
         raise UsageError("no training logs left after holding out")
-
-    def load(path: Path) -> TrainingLog:
-        frame = ingest(path, profile).frame
-        for note in frame.slow_commands:
-            progress(f"warning: {path.name}: {note}")
-        return TrainingLog(path.name, frame.commands, frame.sensors)
-
     progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
-    training = [load(p) for p in training_paths]
-    heldout = [load(p) for p in heldout_paths]
+    training = [_scoring_log(p, profile, progress) for p in training_paths]
+    heldout = [_scoring_log(p, profile, progress) for p in heldout_paths]
+    split = f"{len(heldout)} held-out log(s)"
+    if not heldout:
+        training[0], tail = _split_in_time(training[0])
+        heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
     try:
-        network, normaliser = train(training, hidden=hidden, stages=stages, seed=seed,
-                                    progress=progress)
+        network, normaliser = train([TrainingLog(t.name, t.commands, t.sensors)
+                                     for t in training], hidden=hidden, stages=stages,
+                                    seed=seed, progress=progress)
     except ValueError as problem:   # the logs hold too little complete, operating data
         raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
                          f"{problem}") from None
-    error = free_run_error(network, normaliser, heldout)
-    names = profile.sensor_names
-    rms = {n: round(v, 6) for n, v in zip(names, error.rms, strict=True)}
-    mean_abs = {n: round(v, 6) for n, v in zip(names, error.mean_abs, strict=True)}
+    progress("scoring the model against the naive predictors on the held-out data")
+    dynamics = FastDynamics.from_state(
+        {k: v.detach().numpy() for k, v in network.state_dict().items()},
+        network.n_commands, normaliser.delta_ratio)
+    scores = assess(dynamics, np.asarray(normaliser.command_scale),
+                    np.asarray(normaliser.state_scale), training, heldout,
+                    profile.sensor_names, profile.dt_s,
+                    horizon_candidates(profile, horizon_s))
+    chosen = choose_horizon(scores)
+    hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
+    result = TrainingResult(output, bool(chosen.judged) or keep_unskilled, len(training),
+                            len(heldout), split, scores, chosen, hours)
+    if result.written:
+        metadata = _metadata(output, profile, training_paths, training, heldout, result,
+                             stages, seed)
+        save_model(output, network, normaliser, metadata)
+    return result
+
+
+def _complete_steps(log: ScoringLog) -> int:
+    return int(np.isfinite(log.sensors).all(axis=1).sum())
+
+
+def _skill_record(score: HorizonScore) -> dict[str, Any]:
+    def number(value: float) -> float | None:
+        return round(value, 6) if math.isfinite(value) else None
+
+    return {"horizon_s": score.horizon_s, "signals": {
+        name: {"skill": number(s.skill), "judged": s.judged,
+               "versus_linear": number(s.versus_linear), "model_rms": number(s.model_rms),
+               **{f"{k}_rms": number(v) for k, v in s.baseline_rms.items()}}
+        for name, s in score.signals.items()}}
+
+
+def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
+              training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
+              result: TrainingResult, stages: Sequence[Any], seed: int) -> dict[str, Any]:
     digests = [{"log": p.name, "sha256": log_digest(p)} for p in training_paths]
-    metadata = {
+    chosen = result.chosen
+    return {
         "name": output.name,
         "vehicle": profile.name,
         "profile": profile.source_path,
@@ -88,6 +172,27 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         "full_scale": profile.full_scales,
         "window_samples": profile.window_samples,
         "thresholds": profile.thresholds,
+        "horizon_s": chosen.horizon_s,        # null: the paper's free run
+        "trained_on": {
+            "vehicle": profile.name,
+            "logs": len(training_paths),
+            "operating_hours": round(result.operating_hours, 4),
+            "heldout_hours": round(sum(_complete_steps(h) for h in heldout)
+                                   * profile.dt_s / 3600, 4),
+            "heldout": result.heldout_split,
+            "model_rate_hz": round(1 / profile.dt_s, 6),
+        },
+        "skill": {
+            "method": SKILL_METHOD,
+            "judged_from": round(MIN_SKILL, 4),
+            "why": SKILL_THRESHOLD_REASON,
+            "signals": {name: {"skill": _skill_record(chosen)["signals"][name]["skill"],
+                               "judged": s.judged, "best_naive": s.best_naive,
+                               "versus_linear": _skill_record(chosen)["signals"][name][
+                                   "versus_linear"]}
+                        for name, s in chosen.signals.items()},
+            "horizons": [_skill_record(s) for s in result.scores],
+        },
         "training": {
             "data_sha256": hashlib.sha256(
                 "".join(d["sha256"] for d in digests).encode()).hexdigest(),
@@ -97,11 +202,9 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
             "seed": seed,
         },
         "heldout_error": {
-            "logs": [p.name for p in heldout_paths],
-            "rms": rms,
-            "mean_abs": mean_abs,
+            "logs": [h.name for h in heldout],
+            "horizon_s": chosen.horizon_s,
+            "rms": {name: round(s.model_rms, 6) for name, s in chosen.signals.items()},
             "paper_rms": paper_model_error(profile),
         },
     }
-    save_model(output, network, normaliser, metadata)
-    return TrainingResult(output, len(training), len(heldout), rms, mean_abs)

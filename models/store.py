@@ -65,7 +65,31 @@ class LoadedModel:
         return {"name": meta.get("name"), "vehicle": meta.get("vehicle"), "path": self.path,
                 "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
+                "horizon_s": meta.get("horizon_s"), "skill": self.skill,
                 "thresholds_calibrated": "calibration" in meta}
+
+    @property
+    def horizon_steps(self) -> int | None:
+        """How many steps the model predicts before the replay re-starts from the measured
+        state; None: the paper's free run (also every model from before horizons)."""
+        horizon = self.metadata.get("horizon_s")
+        if horizon is None:
+            return None
+        return max(1, round(float(horizon) / float(self.metadata["dt_s"])))
+
+    @property
+    def skill(self) -> dict[str, float | None] | None:
+        """Each signal's skill against the naive predictors; None for a model trained
+        before skill was measured."""
+        signals = self.metadata.get("skill", {}).get("signals")
+        return None if signals is None else {k: v.get("skill") for k, v in signals.items()}
+
+    @property
+    def unskilled(self) -> tuple[str, ...]:
+        """The signals the model cannot predict: never judged."""
+        signals = self.metadata.get("skill", {}).get("signals", {})
+        return tuple(name for name in self.sensor_names
+                     if name in signals and not signals[name].get("judged", False))
 
     @property
     def command_names(self) -> tuple[str, ...]:

@@ -5,13 +5,14 @@ teaches the one-step response, long rollouts teach the model to stay on track wh
 own output is fed back.
 """
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
-from models.dynamics import RecurrentDynamics, replay
+from models.dynamics import RecurrentDynamics
 from models.normaliser import Normaliser
 
 
@@ -33,12 +34,6 @@ class Stage:
 
 DEFAULT_STAGES = (Stage(10, 400, 3e-3), Stage(50, 400, 2e-3), Stage(200, 400, 1e-3),
                   Stage(600, 150, 3e-4))
-
-
-@dataclass(frozen=True)
-class FreeRunError:
-    rms: tuple[float, ...]
-    mean_abs: tuple[float, ...]
 
 
 def fit_normaliser(sequences: Sequence[TrainingLog]) -> Normaliser:
@@ -78,11 +73,55 @@ def _windows(sequences: Sequence[TrainingLog], horizon: int, normaliser: Normali
     return normaliser.commands(np.stack(commands)), normaliser.states(np.stack(states))
 
 
+class _Progress:
+    """Progress inside the stages, with the time left estimated from the time per
+    iteration-step so far (an iteration costs about its horizon in steps)."""
+
+    REPORT_EVERY_S = 2.0
+
+    def __init__(self, stages: Sequence[Stage], horizons: Sequence[int],
+                 report: Callable[[str], None] | None) -> None:
+        self.work = [s.iterations * h for s, h in zip(stages, horizons, strict=True)]
+        self.stages, self.horizons, self.report = stages, horizons, report
+        self.started = self.last = time.perf_counter()
+        self.done = 0
+
+    def step(self, stage: int, iteration: int, loss: float) -> None:
+        self.done += self.horizons[stage]
+        now = time.perf_counter()
+        finished = iteration + 1 == self.stages[stage].iterations
+        if self.report is None or not (finished or now - self.last >= self.REPORT_EVERY_S):
+            return
+        self.last = now
+        left = (now - self.started) / self.done * (sum(self.work) - self.done)
+        self.report(f"stage {stage + 1}/{len(self.stages)} (horizon {self.horizons[stage]} "
+                    f"steps): {iteration + 1}/{self.stages[stage].iterations} iterations, "
+                    f"loss {loss:.5f}, about {_duration(left)} left")
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 90 else f"{seconds / 60:.1f} min"
+
+
 def train(sequences: Sequence[TrainingLog], hidden: int = 32,
           stages: Sequence[Stage] = DEFAULT_STAGES, batch_size: int = 64, seed: int = 0,
           progress: Callable[[str], None] | None = None
           ) -> tuple[RecurrentDynamics, Normaliser]:
-    """Train a model on normal-condition logs; returns the network and its normaliser."""
+    """Train a model on normal-condition logs; returns the network and its normaliser.
+
+    Runs on one thread: the network's matrices are small, and a second thread only waits
+    on the first (on a busy two-core machine it made training tens of times slower)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        return _train(sequences, hidden, stages, batch_size, seed, progress)
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _train(sequences: Sequence[TrainingLog], hidden: int, stages: Sequence[Stage],
+           batch_size: int, seed: int, progress: Callable[[str], None] | None
+           ) -> tuple[RecurrentDynamics, Normaliser]:
     torch.manual_seed(seed)
     generator = np.random.default_rng(seed)
     normaliser = fit_normaliser(sequences)
@@ -91,9 +130,10 @@ def train(sequences: Sequence[TrainingLog], hidden: int = 32,
     longest = max(longest_complete_stretch(s.sensors) for s in sequences)
     if longest < 2:
         raise ValueError("no two consecutive samples with every sensor measured")
-    for number, stage in enumerate(stages, start=1):
-        # A window needs every sensor measured throughout: not longer than the data allow.
-        horizon = min(stage.horizon_steps, longest)
+    # A window needs every sensor measured throughout: not longer than the data allow.
+    horizons = [min(stage.horizon_steps, longest) for stage in stages]
+    tracker = _Progress(stages, horizons, progress)
+    for number, (stage, horizon) in enumerate(zip(stages, horizons, strict=True)):
         commands, states = _windows(sequences, horizon, normaliser)
         optimiser = torch.optim.Adam(network.parameters(), lr=stage.learning_rate)
         schedule = torch.optim.lr_scheduler.CosineAnnealingLR(optimiser, stage.iterations)
@@ -110,26 +150,6 @@ def train(sequences: Sequence[TrainingLog], hidden: int = 32,
             schedule.step()
             value = loss.item()
             running = 0.95 * running + 0.05 * value if iteration else value
-        if progress is not None:
-            progress(f"stage {number}/{len(stages)}: horizon {horizon} steps, "
-                     f"{stage.iterations} iterations, loss {running:.5f}")
+            tracker.step(number, iteration, running)
     network.eval()
     return network, normaliser
-
-
-def free_run_error(network: RecurrentDynamics, normaliser: Normaliser,
-                   sequences: Sequence[TrainingLog]) -> FreeRunError:
-    """Error of free-running replays against the sensors, per state signal: each stretch
-    with every sensor measured is replayed from its own first state (NaN: no such data)."""
-    residuals = [np.full((0, len(normaliser.state_scale)), np.nan)]
-    for seq in sequences:
-        for start, end in complete_stretches(seq.sensors):
-            predicted = replay(network, normaliser, seq.commands[start:end], seq.sensors[start])
-            residuals.append(seq.sensors[start:end] - predicted)
-    stacked = np.concatenate(residuals)
-    count = np.maximum(np.isfinite(stacked).sum(axis=0), 1)
-    filled = np.where(np.isfinite(stacked), stacked, 0.0)
-    empty = ~np.isfinite(stacked).any(axis=0)
-    rms = np.where(empty, np.nan, np.sqrt((filled**2).sum(axis=0) / count))
-    mean_abs = np.where(empty, np.nan, np.abs(filled).sum(axis=0) / count)
-    return FreeRunError(tuple(float(v) for v in rms), tuple(float(v) for v in mean_abs))

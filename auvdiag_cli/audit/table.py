@@ -9,18 +9,21 @@ if TYPE_CHECKING:
     import pandas as pd
 
 FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "not_operating_s",
-                 "verdict", "completeness", "component", "candidates", "case", "onset_s",
-                 "detected_at_s",
+                 "verdict", "completeness", "not_judged", "component", "candidates", "case",
+                 "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "recommended_dms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
 
 
-def _worst_g(segments: list[dict[str, Any]]) -> tuple[float | None, str | None]:
-    """The largest g relative to its threshold over all segments and signals."""
+def _worst_g(segments: list[dict[str, Any]], not_judged: Sequence[str]
+             ) -> tuple[float | None, str | None]:
+    """The largest g relative to its threshold over all segments and judged signals."""
     worst: tuple[float | None, str | None] = (None, None)
     for segment in segments:
         for signal, g in segment["max_g"].items():
+            if signal in not_judged:
+                continue
             threshold = segment["thresholds"].get(signal)
             if g is not None and threshold and (worst[0] is None or g / threshold > worst[0]):
                 worst = (round(g / threshold, 4), signal)
@@ -30,7 +33,7 @@ def _worst_g(segments: list[dict[str, Any]]) -> tuple[float | None, str | None]:
 def flatten(record: dict[str, Any]) -> dict[str, Any]:
     """One table row from a stored per-log record (a report, or an error)."""
     segments = record.get("segments") or []
-    worst, signal = _worst_g(segments)
+    worst, signal = _worst_g(segments, list(record.get("not_judged") or {}))
     substitution = record.get("substitution") or {}
     degradation = record.get("degradation") or {}
     active = record.get("active_diagnosis") or {}
@@ -41,6 +44,7 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
         "not_operating_s": record.get("not_operating_s"),
         "verdict": record.get("verdict", "error" if record.get("error") else None),
         "completeness": (record.get("completeness") or {}).get("status"),
+        "not_judged": ";".join(record.get("not_judged") or {}),
         "component": record.get("component"),
         "candidates": ";".join(record.get("candidates") or []),
         "case": record.get("case"), "onset_s": record.get("onset_s"),

@@ -31,6 +31,9 @@ def _model(document: dict[str, Any]) -> str:
     if errors:
         text += "; held-out error " + ", ".join(
             f"{k} {v:.4f} {units.get(k, '')}".rstrip() for k, v in errors.items())
+    horizon = model.get("horizon_s")
+    text += ("; free-running replay" if horizon is None
+             else f"; replay re-started every {horizon:g} s")
     calibrated = model.get("thresholds_calibrated")
     text += ("; thresholds calibrated on normal logs" if calibrated
              else "; thresholds: the profile's (the paper's for the Twin-Burger)")
@@ -74,6 +77,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     case = document.get("case")
     facts.append(("Pattern table", f"case {case}, b = {b}" if case is not None
                   else f"b = {b} fits no row"))
+    not_judged = document.get("not_judged") or {}
+    if not_judged:
+        facts.append(("Not judged", "; ".join(f"{k}: {v}" for k, v in not_judged.items())))
     weak = document.get("degradation")
     if weak:
         facts.append(("Partial failure", f"{weak['component'].replace('_', ' ')} gives about "

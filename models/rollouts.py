@@ -1,0 +1,102 @@
+"""Where a replay starts, from what state, and for how long.
+
+A log is cut into *stretches* (at gaps in the commands, time not operating, the start of
+each Diagnosis Motion Sequence). Inside a stretch the model runs free, re-starting from the
+measured state every ``horizon`` steps when the model has a finite prediction horizon
+(``None``: the paper's pure free run, one rollout per stretch).
+
+A rollout never starts from one raw sample: its state is the per-signal median of the
+samples within ``START_HALF_WIDTH`` steps either side of the start (inside the stretch), so
+one outlier cannot set it, and a straight ramp through the window is not biased. The first
+rollout of a stretch starts that many steps in, so its window is whole.
+"""
+
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+START_HALF_WIDTH = 2          # a start state is the median of 5 samples
+
+
+class Rollouts(Protocol):
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class Rollout:
+    stretch_begin: int        # the stretch this rollout lies in: [stretch_begin, stretch_end)
+    stretch_end: int
+    start: int                # predicted: [start, end)
+    end: int
+
+
+def plan_rollouts(sensors: np.ndarray, cuts: Sequence[int], horizon_steps: int | None
+                  ) -> list[Rollout]:
+    """The rollouts of a log of ``len(sensors)`` steps cut at ``cuts`` (grid indices). A
+    rollout starts only where every signal has a sample in its start window; a re-start due
+    where one has none waits for the next sample where all have."""
+    bounds = sorted({0, len(sensors), *(c for c in cuts if 0 < c < len(sensors))})
+    plan: list[Rollout] = []
+    for begin, end in itertools.pairwise(bounds):
+        startable = _startable(sensors[begin:end])
+        candidates = np.flatnonzero(startable[START_HALF_WIDTH:]) + START_HALF_WIDTH + begin
+        if not candidates.size:
+            continue
+        starts = [int(candidates[0])]
+        while horizon_steps is not None:
+            later = candidates[candidates >= starts[-1] + horizon_steps]
+            if not later.size:
+                break
+            starts.append(int(later[0]))
+        plan += [Rollout(begin, end, start, stop)
+                 for start, stop in zip(starts, [*starts[1:], end], strict=True)]
+    return plan
+
+
+def _startable(sensors: np.ndarray) -> np.ndarray:
+    """Where every signal has a measured sample within the start window."""
+    measured = np.isfinite(sensors).astype(np.int64)
+    width = 2 * START_HALF_WIDTH + 1
+    padded = np.pad(measured, ((START_HALF_WIDTH, START_HALF_WIDTH), (0, 0)))
+    counts = np.cumsum(np.vstack([np.zeros((1, sensors.shape[1]), np.int64), padded]), axis=0)
+    return np.asarray(((counts[width:] - counts[:-width]) > 0).all(axis=1))
+
+
+def robust_state(sensors: np.ndarray, index: int, begin: int = 0, end: int | None = None
+                 ) -> np.ndarray:
+    """The state at ``index``: per signal, the median of the measured samples within
+    START_HALF_WIDTH steps of it, inside [begin, end); NaN where a signal has none."""
+    stop = len(sensors) if end is None else end
+    window = sensors[max(begin, index - START_HALF_WIDTH):min(stop, index + START_HALF_WIDTH + 1)]
+    state = np.full(sensors.shape[1], np.nan)
+    measured = np.isfinite(window)
+    for column in np.flatnonzero(measured.any(axis=0)):
+        state[column] = np.median(window[measured[:, column], column])
+    return state
+
+
+def start_states(sensors: np.ndarray, plan: Sequence[Rollout]) -> np.ndarray:
+    """The robust state each rollout starts from (module docstring)."""
+    return np.asarray([robust_state(sensors, r.start, r.stretch_begin, r.stretch_end)
+                       for r in plan]).reshape(len(plan), sensors.shape[1])
+
+
+def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
+                plan: Sequence[Rollout], command_scale: np.ndarray,
+                state_scale: np.ndarray) -> np.ndarray:
+    """Every rollout of ``plan`` advanced together (in normalised units); the prediction in
+    physical units, NaN where nothing is predicted."""
+    modelled = np.full(sensors.shape, np.nan)
+    if not plan:
+        return modelled
+    longest = max(r.end - r.start for r in plan)
+    batch = np.stack([np.pad(commands[r.start:r.end], ((0, longest - (r.end - r.start)), (0, 0)),
+                             mode="edge") for r in plan])
+    starts = start_states(sensors, plan)
+    states = dynamics.rollout(batch / command_scale, starts / state_scale)
+    for row, r in enumerate(plan):
+        modelled[r.start:r.end] = states[row, :r.end - r.start].astype(np.float64) * state_scale
+    return modelled
