@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.diagnosis import Diagnosis, diagnose_ingested
+from auvdiag_cli.digest import log_digest
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.ingest import ingest
 from auvdiag_cli.numeric import peak
@@ -24,6 +25,28 @@ from auvdiag_cli.report_json import write_json
 from models.store import METADATA_FILE, LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
+# One log's peak g this many times the next log's: that log alone sets the threshold.
+DOMINANCE_WARNING = 2.0
+# Logs the model was trained on give a g that is too low (the model has seen them). When no
+# other log is given, their thresholds are widened by the ratio of the model's held-out error
+# to its error on these logs, per signal, and at least by this factor.
+IN_SAMPLE_MIN_WIDENING = 1.25
+
+
+@dataclass(frozen=True)
+class SignalEvidence:
+    """Which log set a signal's threshold in one mode, and the next log's peak beside it
+    (the threshold if that log were left out would be margin x next_peak)."""
+
+    set_by: str
+    peak: float
+    next_peak: float | None
+
+    @property
+    def dominance(self) -> float | None:
+        if self.next_peak is None or self.next_peak <= 0:
+            return None
+        return self.peak / self.next_peak
 
 
 @dataclass(frozen=True)
@@ -34,6 +57,7 @@ class ModeCalibration:
     max_g: dict[str, float]
     thresholds: dict[str, float]
     kept_default: bool
+    evidence: dict[str, SignalEvidence]
 
 
 @dataclass(frozen=True)
@@ -53,6 +77,10 @@ class CalibrationResult:
     normal_hours: float
     false_alarm_bound_per_hour: float
     faulty: list[FaultyCheck]
+    in_sample_logs: list[str]           # calibration logs the model was trained on
+    left_out_logs: list[str]            # of those, the ones not used (others were given)
+    widening: dict[str, float]          # per signal; 1 when no in-sample log was used
+    warnings: list[str]
 
 
 def _mode_key(segment_name: str) -> str:
@@ -70,6 +98,40 @@ def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
 
 
+def _split_in_sample(model: LoadedModel, logs: Sequence[Path]
+                     ) -> tuple[list[Path], list[Path]]:
+    """(logs to calibrate on, in-sample logs): logs the model trained on (by content
+    digest) are left out when any other log is given."""
+    trained = {entry.get("sha256") for entry in
+               model.metadata.get("training", {}).get("logs", [])}
+    in_sample = [p for p in logs if log_digest(p) in trained]
+    others = [p for p in logs if p not in in_sample]
+    return (others or list(logs)), in_sample
+
+
+def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
+              sensor_names: tuple[str, ...]) -> dict[str, float]:
+    """Held-out error / error on these (in-sample) logs, per signal, at least
+    IN_SAMPLE_MIN_WIDENING."""
+    residuals = np.concatenate([d.matching.measured - d.matching.modelled
+                                for d in diagnoses if d.matching is not None])
+    heldout = model.metadata.get("heldout_error", {}).get("rms", {})
+    widening = {}
+    for i, name in enumerate(sensor_names):
+        values = residuals[:, i][np.isfinite(residuals[:, i])]
+        in_sample = float(np.sqrt(np.mean(values ** 2))) if values.size else 0.0
+        ratio = (heldout[name] / in_sample if in_sample > 0 and heldout.get(name)
+                 else IN_SAMPLE_MIN_WIDENING)
+        widening[name] = round(max(IN_SAMPLE_MIN_WIDENING, ratio), 3)
+    return widening
+
+
+def _evidence(per_log: list[tuple[str, np.ndarray]], column: int) -> SignalEvidence:
+    peaks = sorted(((peak(g[:, column]), name) for name, g in per_log), reverse=True)
+    return SignalEvidence(peaks[0][1], round(peaks[0][0], 3),
+                          round(peaks[1][0], 3) if len(peaks) > 1 else None)
+
+
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5,
               floor_at_profile: bool = False) -> CalibrationResult:
@@ -79,29 +141,35 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     trip on the next dive's noise)."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
+    used, in_sample = _split_in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
-    samples: dict[str, list[np.ndarray]] = {}
-    for path in normal_logs:
-        diagnosis = diagnose_ingested(ingest(path, profile), profile, base)
+    diagnoses = [diagnose_ingested(ingest(path, profile), profile, base) for path in used]
+    all_in_sample = bool(in_sample) and used == list(in_sample)
+    widening = (_widening(model, diagnoses, profile.sensor_names) if all_in_sample
+                else {name: 1.0 for name in profile.sensor_names})
+    per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
+    for path, diagnosis in zip(used, diagnoses, strict=True):
         for mode, g in _g_by_mode(diagnosis).items():
-            samples.setdefault(mode, []).append(g)
+            per_mode.setdefault(mode, []).append((path.name, g))
     thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
     modes = []
     dt_h = profile.dt_s / 3600
-    for mode, parts in sorted(samples.items()):
-        g = np.concatenate(parts)
-        finite = np.isfinite(g).all(axis=1)
-        count = int(finite.sum())
+    for mode, per_log in sorted(per_mode.items()):
+        g = np.concatenate([part for _, part in per_log])
+        count = int(np.isfinite(g).all(axis=1).sum())
         peaks = {name: peak(g[:, i]) for i, name in enumerate(profile.sensor_names)}
         keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
         if not keep:
             floor = profile.thresholds_for(mode) if floor_at_profile else {}
-            thresholds[mode] = {name: round(max(margin * peak, floor.get(name, 0.0)), 2)
-                                for name, peak in peaks.items()}
+            thresholds[mode] = {
+                name: round(max(margin * widening[name] * value, floor.get(name, 0.0)), 2)
+                for name, value in peaks.items()}
+        evidence = {name: _evidence(per_log, i) for i, name in enumerate(profile.sensor_names)}
         modes.append(ModeCalibration(mode, count, count * dt_h,
                                      {k: round(v, 3) for k, v in peaks.items()},
-                                     thresholds.get(mode, profile.thresholds_for(mode)), keep))
+                                     thresholds.get(mode, profile.thresholds_for(mode)), keep,
+                                     evidence))
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
@@ -113,25 +181,61 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
         checks.append(FaultyCheck(str(path), d.verdict, d.component, d.candidates,
                                   round(ratio, 2)))
-    result = CalibrationResult(margin, modes, thresholds, hours, 3.0 / hours, checks)
-    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
+    result = CalibrationResult(
+        margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
+        [] if all_in_sample else [p.name for p in in_sample], widening,
+        _warnings(modes, in_sample, all_in_sample, widening))
+    model.metadata["calibration"] = _record(result, used, floor_at_profile)
     return result
 
 
-def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
+def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path], all_in_sample: bool,
+              widening: dict[str, float]) -> list[str]:
+    warnings = []
+    if all_in_sample:
+        warnings.append(
+            "every calibration log was used to train the model: its g there is in-sample "
+            "(too low), so the thresholds are widened by the held-out / in-sample error "
+            "ratio (" + ", ".join(f"{k} x{v:g}" for k, v in widening.items())
+            + "); calibrate on normal logs the model has not seen")
+    elif in_sample:
+        warnings.append(f"{len(in_sample)} calibration log(s) trained the model and were left "
+                        "out (their g is in-sample, too low): "
+                        + ", ".join(p.name for p in in_sample))
+    for mode in modes:
+        if mode.kept_default:
+            continue
+        for name, evidence in mode.evidence.items():
+            if evidence.dominance is not None and evidence.dominance >= DOMINANCE_WARNING:
+                warnings.append(
+                    f"{mode.mode} {name}: {evidence.set_by} alone sets the threshold (its peak "
+                    f"g {evidence.peak:g} % is {evidence.dominance:.1f}x the next log's "
+                    f"{evidence.next_peak:g} %): check that log for a spike, a fault or a "
+                    "disturbance")
+    return warnings
+
+
+def _record(result: CalibrationResult, used_logs: Sequence[Path], floor_at_profile: bool
             ) -> dict[str, Any]:
     return {
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
-        "method": "threshold = margin x largest g on the normal logs, per mode and signal",
+        "method": "threshold = margin x widening x largest g on the normal logs, per mode and "
+                  "signal; widening > 1 only when every log was a training log",
         "margin": result.margin,
         "floor_at_profile": floor_at_profile,
-        "normal_logs": [p.name for p in normal_logs],
+        "normal_logs": [p.name for p in used_logs],
+        "in_sample_logs": result.in_sample_logs,
+        "left_out_logs": result.left_out_logs,
+        "widening": result.widening,
         "normal_hours": round(result.normal_hours, 4),
         "false_alarms_on_normal_logs": 0,
         "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3),
         "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
-                   "thresholds": m.thresholds, "kept_profile_default": m.kept_default}
+                   "thresholds": m.thresholds, "kept_profile_default": m.kept_default,
+                   "set_by": {k: {"log": e.set_by, "peak_g": e.peak, "next_log_peak_g":
+                                  e.next_peak} for k, e in m.evidence.items()}}
                   for m in result.modes],
+        "warnings": result.warnings,
         "faulty_logs": [c.__dict__ for c in result.faulty],
     }
 

@@ -350,6 +350,43 @@ def train(
 
 
 @app.command()
+def score(
+    logs: Annotated[list[Path], typer.Argument(help="Normal logs the model was not trained on.")],
+    model: Annotated[Path, typer.Option("--model", help="Model directory to score.",
+                                        file_okay=False, exists=True)],
+    horizon: Annotated[str | None, typer.Option(
+        "--horizon", help="'auto', 'free' or seconds, as for train. Default: the profile's.",
+        metavar="auto|free|SECONDS")] = None,
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="Write a scored copy here instead of updating --model.",
+        file_okay=False)] = None,
+    profile: ProfileOption = None,
+) -> None:
+    """Measure an existing model's skill per signal on normal logs and record it.
+
+    For models trained before skill was measured, or to re-check a model on new dives: the
+    skill and prediction horizon found replace those in model.json, and signals without
+    skill are no longer judged. Exit status 1 when no signal has skill."""
+    from auvdiag_cli.calibration import write_metadata
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_training import skill_lines
+    from auvdiag_cli.training_job import score_model
+    from models.store import load_model
+
+    with _user_errors(model):
+        vehicle = load_profile(profile)
+        loaded = load_model(model)
+        scores, chosen = score_model(loaded, vehicle, logs,
+                                     _horizon_option(horizon, vehicle.horizon_s), _progress)
+        write_metadata(loaded, output or model)
+    for line in skill_lines(scores, chosen):
+        typer.echo(line)
+    typer.echo(f"skill written to {(output or model) / 'model.json'}")
+    if not chosen.judged:
+        raise typer.Exit(EXIT_FAULT)
+
+
+@app.command()
 def calibrate(
     logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs.")],
     model: Annotated[Path, typer.Option("--model", help="Model directory to calibrate.",
@@ -377,6 +414,7 @@ def calibrate(
     from auvdiag_cli.calibration import calibrate as run_calibration
     from auvdiag_cli.calibration import write_metadata
     from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_training import calibration_lines
     from models.store import load_model
 
     with _user_errors(model):
@@ -384,19 +422,8 @@ def calibrate(
         result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin,
                                  floor_at_profile)
         write_metadata(loaded, output or model)
-    typer.echo(f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
-               f"{result.margin:g}; false alarms on those logs: 0 (rate < "
-               f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)")
-    for mode in result.modes:
-        peaks = ", ".join(f"{k} {v:.1f} -> {mode.thresholds[k]:g} %" for k, v in
-                          mode.max_g.items())
-        kept = "  (too little data: profile default kept)" if mode.kept_default else ""
-        typer.echo(f"  {mode.mode:<8} {mode.samples:>7} samples  max g -> threshold: "
-                   f"{peaks}{kept}")
-    for check in result.faulty:
-        named = check.component or " or ".join(check.candidates) or "-"
-        typer.echo(f"  faulty {check.log}: {check.verdict} {named}, peak g "
-                   f"{check.peak_ratio:.1f} x threshold")
+    for line in calibration_lines(result):
+        typer.echo(line)
     typer.echo(f"thresholds written to {(output or model) / 'model.json'}")
 
 

@@ -1,8 +1,11 @@
-"""What `auvdiag train` prints: where the model went, its skill per signal against the naive
-predictors, the horizon chosen, and the paper's figures for the paper's vehicle only."""
+"""What `auvdiag train` and `auvdiag calibrate` print: where the model went, its skill per
+signal against the naive predictors and the horizon chosen (the paper's figures for the
+paper's vehicle only); the thresholds, which log set each, and what to be wary of."""
 
 import math
+from collections.abc import Sequence
 
+from auvdiag_cli.calibration import CalibrationResult
 from auvdiag_cli.training_job import TrainingResult
 from models.skill import MIN_SKILL, HorizonScore
 
@@ -27,22 +30,45 @@ def _skill_rows(score: HorizonScore) -> list[str]:
     return rows
 
 
+def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[str]:
+    tried = ", ".join(f"{horizon_text(s.horizon_s)} {len(s.judged)}/{len(s.signals)}"
+                      for s in scores)
+    lines = [f"prediction horizon: {horizon_text(chosen.horizon_s)}"
+             + (f" (signals judged per horizon tried: {tried})" if len(scores) > 1 else "")]
+    lines.append("skill on held-out normal data = 1 - rms_model / the better naive rms "
+                 f"(the last value holds, the training mean), judged from {MIN_SKILL:.2f}; "
+                 "vs linear: the same against a least-squares linear model. rms in the "
+                 "signals' units:")
+    return lines + _skill_rows(chosen)
+
+
 def training_lines(result: TrainingResult, paper_rms: dict[str, float]) -> list[str]:
     chosen = result.chosen
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
              f"operating time; held out: {result.heldout_split})"]
-    tried = ", ".join(f"{horizon_text(s.horizon_s)} {len(s.judged)}/{len(s.signals)}"
-                      for s in result.scores)
-    lines.append(f"prediction horizon: {horizon_text(chosen.horizon_s)}"
-                 + (f" (signals judged per horizon tried: {tried})" if len(result.scores) > 1
-                    else ""))
-    lines.append("skill on held-out normal data = 1 - rms_model / the better naive rms "
-                 f"(the last value holds, the training mean), judged from {MIN_SKILL:.2f}; "
-                 "vs linear: the same against a least-squares linear model. rms in the "
-                 "signals' units:")
-    lines += _skill_rows(chosen)
+    lines += skill_lines(result.scores, chosen)
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
+    return lines
+
+
+def calibration_lines(result: CalibrationResult) -> list[str]:
+    lines = [f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
+             f"{result.margin:g}; false alarms on those logs: 0 (rate < "
+             f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
+    for mode in result.modes:
+        kept = "  (too little data: profile default kept)" if mode.kept_default else ""
+        lines.append(f"  {mode.mode:<8} {mode.samples:>7} samples{kept}")
+        for name, evidence in mode.evidence.items():
+            beside = ("" if evidence.next_peak is None
+                      else f", next log {evidence.next_peak:g} %")
+            lines.append(f"    {name:<12} max g {mode.max_g[name]:g} % -> threshold "
+                         f"{mode.thresholds[name]:g} %  (set by {evidence.set_by}{beside})")
+    for check in result.faulty:
+        named = check.component or " or ".join(check.candidates) or "-"
+        lines.append(f"  faulty {check.log}: {check.verdict} {named}, peak g "
+                     f"{check.peak_ratio:.1f} x threshold")
+    lines += [f"warning: {warning}" for warning in result.warnings]
     return lines

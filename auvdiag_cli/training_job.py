@@ -7,7 +7,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -24,6 +24,9 @@ from models.skill import (
     assess,
     choose_horizon,
 )
+
+if TYPE_CHECKING:
+    from models.store import LoadedModel
 
 # The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
 PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
@@ -94,8 +97,10 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     holdout: Sequence[Path] = (), hidden: int = 32, seed: int = 0,
                     iterations_scale: float = 1.0, horizon_s: float | None = None,
                     keep_unskilled: bool = False,
-                    progress: Callable[[str], None] = lambda _: None) -> TrainingResult:
-    """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run."""
+                    progress: Callable[[str], None] = lambda _: None,
+                    trainer: Callable[..., Any] | None = None) -> TrainingResult:
+    """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run.
+    ``trainer``: `models.training.train` unless another is given (benchmarks compare)."""
     from models.fast import FastDynamics
     from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
@@ -113,7 +118,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
     try:
-        network, normaliser = train([TrainingLog(t.name, t.commands, t.sensors)
+        network, normaliser = (trainer or train)([TrainingLog(t.name, t.commands, t.sensors)
                                      for t in training], hidden=hidden, stages=stages,
                                     seed=seed, progress=progress)
     except ValueError as problem:   # the logs hold too little complete, operating data
@@ -153,11 +158,36 @@ def _skill_record(score: HorizonScore) -> dict[str, Any]:
         for name, s in score.signals.items()}}
 
 
+def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
+                   heldout_names: Sequence[str], profile: Profile) -> dict[str, Any]:
+    """The model.json keys that say how far the model can be trusted: its horizon, its skill
+    per signal at that horizon (and at every horizon tried), its held-out error."""
+    record = _skill_record(chosen)["signals"]
+    return {
+        "horizon_s": chosen.horizon_s,        # null: the paper's free run
+        "skill": {
+            "method": SKILL_METHOD,
+            "judged_from": round(MIN_SKILL, 4),
+            "why": SKILL_THRESHOLD_REASON,
+            "signals": {name: {"skill": record[name]["skill"], "judged": s.judged,
+                               "best_naive": s.best_naive,
+                               "versus_linear": record[name]["versus_linear"]}
+                        for name, s in chosen.signals.items()},
+            "horizons": [_skill_record(s) for s in scores],
+        },
+        "heldout_error": {
+            "logs": list(heldout_names),
+            "horizon_s": chosen.horizon_s,
+            "rms": {name: record[name]["model_rms"] for name in chosen.signals},
+            "paper_rms": paper_model_error(profile),
+        },
+    }
+
+
 def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
               training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
               result: TrainingResult, stages: Sequence[Any], seed: int) -> dict[str, Any]:
     digests = [{"log": p.name, "sha256": log_digest(p)} for p in training_paths]
-    chosen = result.chosen
     return {
         "name": output.name,
         "vehicle": profile.name,
@@ -172,7 +202,6 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
         "full_scale": profile.full_scales,
         "window_samples": profile.window_samples,
         "thresholds": profile.thresholds,
-        "horizon_s": chosen.horizon_s,        # null: the paper's free run
         "trained_on": {
             "vehicle": profile.name,
             "logs": len(training_paths),
@@ -182,17 +211,7 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
             "heldout": result.heldout_split,
             "model_rate_hz": round(1 / profile.dt_s, 6),
         },
-        "skill": {
-            "method": SKILL_METHOD,
-            "judged_from": round(MIN_SKILL, 4),
-            "why": SKILL_THRESHOLD_REASON,
-            "signals": {name: {"skill": _skill_record(chosen)["signals"][name]["skill"],
-                               "judged": s.judged, "best_naive": s.best_naive,
-                               "versus_linear": _skill_record(chosen)["signals"][name][
-                                   "versus_linear"]}
-                        for name, s in chosen.signals.items()},
-            "horizons": [_skill_record(s) for s in result.scores],
-        },
+        **skill_metadata(result.scores, result.chosen, [h.name for h in heldout], profile),
         "training": {
             "data_sha256": hashlib.sha256(
                 "".join(d["sha256"] for d in digests).encode()).hexdigest(),
@@ -201,10 +220,25 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
             "stages": [s.__dict__ for s in stages],
             "seed": seed,
         },
-        "heldout_error": {
-            "logs": [h.name for h in heldout],
-            "horizon_s": chosen.horizon_s,
-            "rms": {name: round(s.model_rms, 6) for name, s in chosen.signals.items()},
-            "paper_rms": paper_model_error(profile),
-        },
     }
+
+
+def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
+                horizon_s: float | None, progress: Callable[[str], None] = lambda _: None
+                ) -> tuple[list[HorizonScore], HorizonScore]:
+    """Measure an existing model's skill on normal ``logs`` it was not trained on and record
+    it (with the horizon chosen) in ``model.metadata`` (not yet written). Without the
+    training data, the mean and linear yardsticks are fitted on these logs themselves,
+    which favours them: the skill found is, if anything, too low."""
+    trained = {e.get("sha256") for e in model.metadata.get("training", {}).get("logs", [])}
+    seen = [p.name for p in logs if log_digest(p) in trained]
+    if seen:
+        raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
+                         "it has not seen")
+    scoring = [_scoring_log(p, profile, progress) for p in logs]
+    scores = assess(model.fast, np.asarray(model.normaliser.command_scale),
+                    np.asarray(model.normaliser.state_scale), scoring, scoring,
+                    profile.sensor_names, profile.dt_s, horizon_candidates(profile, horizon_s))
+    chosen = choose_horizon(scores)
+    model.metadata.update(skill_metadata(scores, chosen, [p.name for p in logs], profile))
+    return scores, chosen

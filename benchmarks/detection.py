@@ -29,6 +29,9 @@ from pathlib import Path
 
 import numpy as np
 
+from models.baselines import LinearDynamics
+from models.baselines import fit_linear as fit_linear_model
+
 FAULT_KINDS = [("flow_sensor", "covered", 0.0), ("flow_sensor", "bias", 0.1),
                ("yaw_rate_sensor", "dead", 0.0), ("yaw_rate_sensor", "drift", 0.005),
                ("thruster_0", "dead", 0.0), ("thruster_1", "dead", 0.0),
@@ -36,25 +39,6 @@ FAULT_KINDS = [("flow_sensor", "covered", 0.0), ("flow_sensor", "bias", 0.1),
 MISSIONS = {"4x2-cw": {}, "4x2-ccw": {"clockwise": False},
             "5x2_5-cw": {"length_m": 5.0, "width_m": 2.5},
             "5x2_5-ccw": {"length_m": 5.0, "width_m": 2.5, "clockwise": False}}
-
-
-@dataclass
-class LinearDynamics:
-    """x(k+1) = x(k) + [x(k), c(k), 1] @ W, in the model's normalised units; the same
-    `rollout` interface as the NumPy path of the learned model."""
-
-    weights: np.ndarray
-
-    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray:
-        batch, steps, _ = commands.shape
-        states = np.empty((batch, steps, initial_states.shape[1]))
-        state = initial_states.astype(float)
-        states[:, 0] = state
-        for k in range(steps - 1):
-            features = np.hstack([state, commands[:, k], np.ones((batch, 1))])
-            state = state + features @ self.weights
-            states[:, k + 1] = state
-        return states
 
 
 def baseline_model(learned, frames: list):
@@ -78,15 +62,9 @@ def baseline_model(learned, frames: list):
 
 
 def fit_linear(frames: list, normaliser) -> LinearDynamics:
-    rows, targets = [], []
-    for frame in frames:
-        x = frame.sensors / np.asarray(normaliser.state_scale)
-        c = frame.commands / np.asarray(normaliser.command_scale)
-        ok = np.isfinite(x[:-1]).all(axis=1) & np.isfinite(x[1:]).all(axis=1)
-        rows.append(np.hstack([x[:-1], c[:-1], np.ones((len(x) - 1, 1))])[ok])
-        targets.append((x[1:] - x[:-1])[ok])
-    weights, *_ = np.linalg.lstsq(np.vstack(rows), np.vstack(targets), rcond=None)
-    return LinearDynamics(weights)
+    scale_c, scale_x = np.asarray(normaliser.command_scale), np.asarray(normaliser.state_scale)
+    return fit_linear_model([f.commands / scale_c for f in frames],
+                            [f.sensors / scale_x for f in frames])
 
 
 def phase_times(truth_csv: Path) -> dict[str, float]:

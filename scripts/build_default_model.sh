@@ -3,7 +3,7 @@
 # each Diagnosis Motion Sequence alone and all of them before a mission, rectangle missions
 # of both sizes, both directions and speeds from 0.125 to 0.45 m/s, and open-loop excitation
 # over the whole command range; seeds 1-3 for training and seed 101 held out for the error
-# figures.
+# figures; the skill is then measured on dives of seed 301 (score_default_model.sh).
 # Usage: scripts/build_default_model.sh [PROFILE] [OUTPUT_DIR] [FORMAT]
 #   PROFILE: twin_burger (default), three_thruster or bluerov2; OUTPUT_DIR: models/PROFILE;
 #   FORMAT: the log format the dives are written in (default ros2-mcap; tlog for bluerov2,
@@ -56,6 +56,7 @@ if $calibrate; then
   done
   auvdiag calibrate "${normal[@]}" --model "$work/model" --profile "$profile" --floor-at-profile
 fi
+"$(dirname "$0")/score_default_model.sh" "$profile" "$work/model" "$format"
 rm -rf "$output"
 mkdir -p "$output"
 cp "$work/model"/* "$output"/

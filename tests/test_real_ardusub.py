@@ -54,8 +54,8 @@ def real_model(tmp_path_factory):
     result = runner.invoke(app, ["train", str(DATA / "small.tlog"), str(DATA / "small.BIN"),
                                  "--holdout", str(DATA / "small.BIN"), "--profile",
                                  "bluerov2_standard", "--output", str(output),
-                                 "--iterations-scale", "0.02"])
-    assert result.exit_code == 0, result.output
+                                 "--iterations-scale", "0.02", "--keep-unskilled"])
+    assert result.exit_code in (0, 1) and (output / "model.json").is_file(), result.output
     assert "are logged at 2.0 Hz" in result.output             # QGroundControl's rate
     return output
 

@@ -1,0 +1,150 @@
+"""Models that know what they know: skill against naive predictors decides which signals are
+judged; a finite prediction horizon still finds failed sensors; spikes and the replay's
+start-up raise no alarm."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.simulator.run import simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
+from models.skill import MIN_SKILL, SignalSkill
+
+runner = CliRunner()
+
+
+def _diagnose_json(log: Path, *options: str) -> tuple[int, dict]:
+    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
+    assert result.exit_code in (0, 1), result.output
+    return result.exit_code, json.loads(result.stdout)
+
+
+def test_skill_is_measured_against_the_better_naive_predictor():
+    s = SignalSkill(0.02, {"hold": 0.10, "mean": 0.05, "linear": 0.03})
+    assert s.best_naive == "mean" and s.skill == pytest.approx(0.6)
+    assert s.versus_linear == pytest.approx(1 / 3) and s.judged
+    assert not SignalSkill(0.04, {"hold": 0.10, "mean": 0.05, "linear": 0.01}).judged
+    flat = SignalSkill(0.01, {"hold": 0.0, "mean": 0.0, "linear": 0.0})
+    assert flat.skill == -math.inf and not flat.judged        # a signal that never moves
+    assert MIN_SKILL == pytest.approx(1 - 1 / 1.5)
+
+
+def _noise_log(path: Path, seed: int, seconds: float = 240.0) -> Path:
+    """A Twin-Burger CSV log whose sensors are noise unrelated to its commands."""
+    rng = np.random.default_rng(seed)
+    steps = int(seconds * 10)
+    time_s = np.arange(steps) * 0.1
+    commands = np.repeat(rng.uniform(-0.8, 0.8, (steps // 50 + 1, 2)), 50, axis=0)[:steps]
+    drift = np.cumsum(rng.normal(0, 0.01, (steps, 2)), axis=0)
+    sensors = 0.1 * np.tanh(drift) + rng.normal(0, 0.03, (steps, 2))
+    pd.DataFrame({"time_s": time_s, "thruster_0": commands[:, 0],
+                  "thruster_1": commands[:, 1], "flow_mps": sensors[:, 0],
+                  "yaw_rate_rps": sensors[:, 1], "sequence": ""}).to_csv(path, index=False)
+    return path
+
+
+def test_a_model_trained_on_noise_has_no_skill_and_judges_nothing(tmp_path):
+    logs = [str(_noise_log(tmp_path / f"noise{i}.csv", i)) for i in range(2)]
+    model = tmp_path / "noise-model"
+    options = ["--iterations-scale", "0.03", "--hidden", "8", "--horizon", "auto"]
+    refused = runner.invoke(app, ["train", logs[0], "--output", str(model), *options])
+    assert refused.exit_code == 1, refused.output
+    assert "NOT written" in refused.stdout and "no signal has skill" in refused.output
+    assert "NO: not judged (the model cannot predict it)" in refused.stdout
+    assert not model.exists()
+
+    kept = runner.invoke(app, ["train", logs[0], "--output", str(model), "--keep-unskilled",
+                               *options])
+    assert kept.exit_code == 1 and (model / "model.json").is_file(), kept.output
+    meta = json.loads((model / "model.json").read_text())
+    assert meta["heldout_error"]["logs"] == ["noise0.csv (last 20%)"]    # one log is enough
+    assert not any(s["judged"] for s in meta["skill"]["signals"].values())
+
+    code, report = _diagnose_json(Path(logs[1]), "--model", str(model))
+    assert code == 0 and report["verdict"] == "undetermined"
+    assert set(report["not_judged"]) == {"flow", "yaw_rate"}
+    assert report["detected_at_s"] is None and not any(report["b"].values())
+    text = runner.invoke(app, ["diagnose", logs[1], "--model", str(model)]).stdout
+    assert "UNDETERMINED" in text and "flow: not judged (the model cannot predict it)" in text
+
+
+def _unskilled_copy(source: Path, target: Path, signal: str) -> Path:
+    """The shipped model, with ``signal`` marked as one it cannot predict."""
+    target.mkdir()
+    for file in source.iterdir():
+        (target / file.name).write_bytes(file.read_bytes())
+    meta = json.loads((target / "model.json").read_text())
+    meta["skill"]["signals"][signal].update(skill=0.05, judged=False)
+    (target / "model.json").write_text(json.dumps(meta))
+    return target
+
+
+def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
+    from models.store import default_model_dir
+
+    log = make_log("paper-flow-sensor-covered", 12)
+    code, report = _diagnose_json(log)
+    assert code == 1 and report["component"] == "flow_sensor"
+    model = _unskilled_copy(default_model_dir(), tmp_path / "m", "flow")
+    code, report = _diagnose_json(log, "--model", str(model))
+    assert code == 0 and report["verdict"] == "normal" and report["b"]["flow"] == 0
+    assert report["not_judged"] == {"flow": "not judged (the model cannot predict it) "
+                                            "(skill 0.05)"}
+    assert report["model"]["skill"]["flow"] == 0.05
+
+
+def _with_horizon(source: Path, target: Path, horizon_s: float) -> Path:
+    target.mkdir()
+    for file in source.iterdir():
+        (target / file.name).write_bytes(file.read_bytes())
+    meta = json.loads((target / "model.json").read_text())
+    meta["horizon_s"] = horizon_s
+    (target / "model.json").write_text(json.dumps(meta))
+    return target
+
+
+@pytest.mark.parametrize(("scenario", "component"), [
+    ("paper-flow-sensor-covered", "flow_sensor"), ("mission-yaw-rate-sensor-dead",
+                                                   "yaw_rate_sensor"),
+    ("paper-normal", None)])
+def test_a_finite_horizon_still_finds_and_names_a_failed_sensor(make_log, tmp_path, scenario,
+                                                                component):
+    """Re-started from the stuck reading every 8 s, the model departs from it again inside
+    every stretch while the vehicle moves."""
+    from models.store import default_model_dir
+
+    model = _with_horizon(default_model_dir(), tmp_path / "h8", 8.0)
+    code, report = _diagnose_json(make_log(scenario, 13), "--model", str(model))
+    assert report["model"]["horizon_s"] == 8.0
+    assert report["component"] == component and code == (0 if component is None else 1)
+
+
+def _csv_dive(tmp_path: Path, scenario: str, seed: int, profile) -> Path:
+    path = tmp_path / f"{scenario}-{seed}.csv"
+    write_log(simulate(get_scenario(scenario, profile), profile, seed), profile, path, "csv")
+    return path
+
+
+def test_a_one_sample_spike_at_the_start_changes_no_verdict(tmp_path, profile):
+    for scenario, verdict in (("paper-normal", "normal"), ("paper-flow-sensor-covered",
+                                                           "fault")):
+        clean = _csv_dive(tmp_path, scenario, 21, profile)
+        _, before = _diagnose_json(clean)
+        table = pd.read_csv(clean)
+        first = table["yaw_rate_rps"].first_valid_index()
+        table.loc[first, "yaw_rate_rps"] = 3.84          # 220 deg/s for one sample
+        spiked = tmp_path / f"spiked-{clean.name}"
+        table.to_csv(spiked, index=False)
+        _, after = _diagnose_json(spiked)
+        assert before["verdict"] == after["verdict"] == verdict
+        assert after["component"] == before["component"]
+        assert any("isolated spike(s) in yaw_rate" in note for note in after["notes"])
+        peak = max(s["max_g"]["yaw_rate"] for s in after["segments"])
+        assert peak < 1.2 * max(s["max_g"]["yaw_rate"] for s in before["segments"])

@@ -1,0 +1,106 @@
+"""No alarm from the replay's start-up: logs that begin with the vehicle already moving, in a
+turn, or with a sensor offset, on the Twin-Burger and on another twin-thruster vehicle
+(heavier, less drag, stronger thrusters, a slower and noisier gyro) with a model trained by
+`auvdiag train` on that vehicle's own normal logs and calibrated on others."""
+
+import json
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.profile import profile_text
+
+runner = CliRunner()
+VARIANT_CHANGES = [("inertia = 80.0", "inertia = 130.0"), ("linear_drag = 20.0",
+                                                          "linear_drag = 14.0"),
+                   ("max_thrust_n = 15.0", "max_thrust_n = 21.0"),
+                   ("rate_hz = 50.0", "rate_hz = 20.0"), ("noise = 0.008", "noise = 0.015"),
+                   ('name = "twin-burger"', 'name = "heavy-twin"')]
+TRAINING_SCENARIOS = ["paper-normal", "mission-ccw", "mission-large-cw", "mission-large-ccw",
+                      "mission-sprint-cw", "dms-za", "dms-zb", "dms-zc", "excitation"]
+
+
+def _simulate(scenario: str, seed: int, target: Path, profile: str) -> Path:
+    result = runner.invoke(app, ["simulate", scenario, "--seed", str(seed), "--format", "csv",
+                                 "--profile", profile, "--output", str(target)])
+    assert result.exit_code == 0, result.output
+    return target
+
+
+@pytest.fixture(scope="module")
+def vehicles(tmp_path_factory) -> dict[str, tuple[str, list[str]]]:
+    """Profile and model options per vehicle: the Twin-Burger with its shipped model, and
+    the variant with a model trained here."""
+    work = tmp_path_factory.mktemp("variant")
+    text, _ = profile_text(None)
+    for old, new in VARIANT_CHANGES:
+        assert old in text, old
+        text = text.replace(old, new, 1)
+    profile = work / "heavy_twin.toml"
+    profile.write_text(re.sub(r"(?m)^horizon_s = .*$", 'horizon_s = "auto"', text))
+    logs = [str(_simulate(s, seed, work / f"{s}-{seed}.csv", str(profile)))
+            for s in TRAINING_SCENARIOS for seed in (1, 2)]
+    held = [str(_simulate(s, 9, work / f"held-{s}.csv", str(profile)))
+            for s in ("mission-ccw", "paper-normal")]
+    model = work / "model"
+    trained = runner.invoke(app, ["train", *logs, *[a for h in held for a in ("--holdout", h)],
+                                  "--profile", str(profile), "--output", str(model),
+                                  "--iterations-scale", "0.4", "--hidden", "24"])
+    assert trained.exit_code == 0, trained.output
+    # As for any new vehicle: thresholds from normal dives the model has not seen.
+    normal = [str(_simulate(s, seed, work / f"calibration-{s}-{seed}.csv", str(profile)))
+              for s in ("paper-normal", "mission-ccw", "mission-large-cw") for seed in (5, 6)]
+    calibrated = runner.invoke(app, ["calibrate", *normal, "--model", str(model),
+                                     "--profile", str(profile)])
+    assert calibrated.exit_code == 0 and "warning" not in calibrated.output, calibrated.output
+    return {"twin_burger": ("twin_burger", []),
+            "heavy_twin": (str(profile), ["--model", str(model)])}
+
+
+def _starting_late(log: Path, start_s: float, target: Path) -> Path:
+    table = pd.read_csv(log)
+    table = table[table["time_s"] >= table["time_s"].min() + start_s]
+    table.to_csv(target, index=False)
+    return target
+
+
+def _with_offset(log: Path, target: Path) -> Path:
+    table = pd.read_csv(log)
+    table["flow_mps"] += 0.02           # 4 % of full scale, a zero error within tolerance
+    table["yaw_rate_rps"] += 0.01
+    table.to_csv(target, index=False)
+    return target
+
+
+def _turning_time(truth: Path) -> float:
+    frame = pd.read_csv(truth)
+    turning = frame[(frame["t_s"] > 30) & (frame["yaw_rate_rps"].abs() > 0.15)]
+    return float(turning["t_s"].iloc[0]) + 1.0
+
+
+@pytest.mark.parametrize("vehicle", ["twin_burger", "heavy_twin"])
+@pytest.mark.parametrize("start", ["moving", "turning", "offset"])
+def test_no_alarm_from_the_start_of_a_log(vehicles, tmp_path, vehicle, start):
+    profile, model_options = vehicles[vehicle]
+    log = _simulate("paper-normal", 31, tmp_path / "dive.csv", profile)
+    if start == "moving":
+        log = _starting_late(log, 40.0, tmp_path / "moving.csv")
+    elif start == "turning":
+        when = _turning_time(tmp_path / "dive.truth.csv")
+        log = _starting_late(log, when, tmp_path / "turning.csv")
+    else:
+        log = _with_offset(log, tmp_path / "offset.csv")
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", profile, *model_options,
+                                 "--json", "-", "--quiet"])
+    assert result.exit_code == 0, result.output
+    report = json.loads(result.stdout)
+    assert report["verdict"] == "normal" and not report["not_judged"]
+    if start == "offset":       # a steady offset stays in the residual: no margin to spare
+        return
+    for segment in report["segments"]:
+        for name, g in segment["max_g"].items():
+            assert g < 0.8 * segment["thresholds"][name], (segment, name)
