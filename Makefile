@@ -4,9 +4,11 @@
 PYTHON ?= .venv/bin/python
 OUT := .bench
 
-.PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz test
+.PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
+	bench-train bench-real test
 
-bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz
+bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
+	bench-train bench-real
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -37,6 +39,16 @@ bench-fuzz:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/fuzz.py --cases 10000 --real-cases 2000 --json $(OUT)/fuzz.json > $(OUT)/fuzz.md
 	$(PYTHON) benchmarks/readme.py fuzz $(OUT)/fuzz.md
+
+bench-train:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/train.py > $(OUT)/train.md
+	$(PYTHON) benchmarks/readme.py train $(OUT)/train.md
+
+bench-real:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/real_data.py > $(OUT)/real_data.md
+	$(PYTHON) benchmarks/readme.py real_data $(OUT)/real_data.md
 
 test:
 	$(PYTHON) -m ruff check . && $(PYTHON) -m pytest -q

@@ -86,3 +86,21 @@ def test_floor_keeps_thresholds_at_or_above_the_profiles(make_log, tmp_path):
     assert plain.exit_code == 0
     lower = json.loads((tmp_path / "plain" / "model.json").read_text())["thresholds"]
     assert lower["mission"]["flow"] < 15.0
+
+
+def test_one_log_setting_a_threshold_alone_is_named(make_log, tmp_path):
+    """A faulty dive slipped in among normal ones sets the flow threshold by itself: the
+    calibration says which log, and how far above the next it stands."""
+    model = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model)
+    normal = [make_log(name, 61) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
+    odd = make_log("paper-flow-sensor-covered", 61)
+    result = runner.invoke(app, ["calibrate", *map(str, normal), str(odd), "--model",
+                                 str(model)])
+    assert result.exit_code == 0, result.output
+    assert f"warning: mission flow: {odd.name} alone sets the threshold" in result.stdout
+    assert f"(set by {odd.name}, next log" in result.stdout
+    mode = next(m for m in json.loads((model / "model.json").read_text())["calibration"]["modes"]
+                if m["mode"] == "mission")
+    flow = mode["set_by"]["flow"]
+    assert flow["log"] == odd.name and flow["peak_g"] >= 2 * flow["next_log_peak_g"]

@@ -150,3 +150,30 @@ def test_the_papers_figures_are_shown_for_the_papers_vehicle_only(tmp_path):
     assert "yaw_rate" in result.stdout and "paper's model error" not in result.stdout
     meta = json.loads((tmp_path / "m" / "model.json").read_text())
     assert meta["heldout_error"]["paper_rms"] == {}
+
+
+def test_calibrating_on_the_training_logs_is_caught(quick_model, make_log, tmp_path):
+    """The model's training digests reveal in-sample calibration logs: left out when others
+    are given, otherwise the thresholds are widened by the stated rule."""
+    import shutil
+
+    model = tmp_path / "m"
+    shutil.copytree(quick_model[0], model)
+    seen = [make_log("paper-normal", 11), make_log("mission-large-ccw", 11)]
+    result = CliRunner().invoke(app, ["calibrate", *map(str, seen), "--model", str(model)])
+    assert result.exit_code == 0, result.output
+    assert "every calibration log was used to train the model" in result.stdout
+    calibration = json.loads((model / "model.json").read_text())["calibration"]
+    assert calibration["in_sample_logs"] == [p.name for p in seen]
+    mission = next(m for m in calibration["modes"] if m["mode"] == "mission")
+    for name, widening in calibration["widening"].items():
+        assert widening >= 1.25
+        assert mission["thresholds"][name] == round(1.5 * widening * mission["max_g"][name], 2)
+
+    fresh = make_log("mission-large-cw", 14)
+    result = CliRunner().invoke(app, ["calibrate", *map(str, seen), str(fresh), "--model",
+                                      str(model)])
+    assert "2 calibration log(s) trained the model and were left out" in result.stdout
+    calibration = json.loads((model / "model.json").read_text())["calibration"]
+    assert calibration["normal_logs"] == [fresh.name] and calibration["left_out_logs"]
+    assert set(calibration["widening"].values()) == {1.0}

@@ -33,7 +33,7 @@ def test_skill_is_measured_against_the_better_naive_predictor():
     assert not SignalSkill(0.04, {"hold": 0.10, "mean": 0.05, "linear": 0.01}).judged
     flat = SignalSkill(0.01, {"hold": 0.0, "mean": 0.0, "linear": 0.0})
     assert flat.skill == -math.inf and not flat.judged        # a signal that never moves
-    assert MIN_SKILL == pytest.approx(1 - 1 / 1.5)
+    assert pytest.approx(1 - 1 / 1.5) == MIN_SKILL
 
 
 def _noise_log(path: Path, seed: int, seconds: float = 240.0) -> Path:
@@ -148,3 +148,19 @@ def test_a_one_sample_spike_at_the_start_changes_no_verdict(tmp_path, profile):
         assert any("isolated spike(s) in yaw_rate" in note for note in after["notes"])
         peak = max(s["max_g"]["yaw_rate"] for s in after["segments"])
         assert peak < 1.2 * max(s["max_g"]["yaw_rate"] for s in before["segments"])
+
+
+def test_the_audit_table_names_the_signals_not_judged(make_log, tmp_path):
+    from models.store import default_model_dir
+
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    (fleet / "dive.mcap").write_bytes(make_log("paper-flow-sensor-covered", 12, "mcap")
+                                      .read_bytes())
+    model = _unskilled_copy(default_model_dir(), tmp_path / "m", "flow")
+    result = runner.invoke(app, ["audit", str(fleet), "--model", str(model), "--output",
+                                 str(tmp_path / "audit"), "--jobs", "1"])
+    assert result.exit_code == 0, result.output
+    row = pd.read_csv(tmp_path / "audit" / "audit.csv").iloc[0]
+    assert row["not_judged"] == "flow" and row["verdict"] == "normal"
+    assert row["worst_g_signal"] == "yaw_rate"       # the worst g of a judged signal
