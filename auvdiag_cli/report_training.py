@@ -23,7 +23,8 @@ def _skill_rows(score: HorizonScore) -> list[str]:
     rows = [f"  {'signal':<14}{'skill':>7}{'vs linear':>10}{'model':>10}"
             + "".join(f"{name:>10}" for name in baselines) + "   judged"]
     for name, s in score.signals.items():
-        verdict = "yes" if s.judged else "NO: not judged (the model cannot predict it)"
+        verdict = ("yes" if s.judged else "NO: not judged (the model cannot predict it)"
+                   if not math.isnan(s.skill) else "NO: no held-out data to measure it on")
         rows.append(f"  {name:<14}{s.skill:7.2f}{s.versus_linear:10.2f} {_number(s.model_rms)}"
                     + "".join(f" {_number(s.baseline_rms[b])}" for b in baselines)
                     + f"   {verdict}")

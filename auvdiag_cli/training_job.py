@@ -76,7 +76,11 @@ def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) 
 
 
 def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
-    cut = round(len(log.commands) * (1 - HELD_OUT_FRACTION))
+    """The log up to where 1 - HELD_OUT_FRACTION of its usable (operating, complete) steps
+    lie, and the rest."""
+    usable = np.cumsum(np.isfinite(log.sensors).all(axis=1))
+    cut = int(np.searchsorted(usable, usable[-1] * (1 - HELD_OUT_FRACTION))) + 1 \
+        if usable.size and usable[-1] else len(log.commands)
     head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
                       tuple(c for c in log.cuts if c < cut))
     tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pypdf
 import pytest
 from typer.testing import CliRunner
 
@@ -98,6 +99,12 @@ def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     assert report["not_judged"] == {"flow": "not judged (the model cannot predict it) "
                                             "(skill 0.05)"}
     assert report["model"]["skill"]["flow"] == 0.05
+    pdf = tmp_path / "report.pdf"
+    rendered = runner.invoke(app, ["diagnose", str(log), "--model", str(model), "--pdf",
+                                   str(pdf), "--quiet"])
+    assert rendered.exit_code == 0, rendered.output
+    first = " ".join(pypdf.PdfReader(pdf).pages[0].extract_text().split())
+    assert "NORMAL" in first and "Not judged: flow: not judged (the model cannot" in first
 
 
 def _with_horizon(source: Path, target: Path, horizon_s: float) -> Path:
