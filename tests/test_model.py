@@ -177,3 +177,21 @@ def test_calibrating_on_the_training_logs_is_caught(quick_model, make_log, tmp_p
     calibration = json.loads((model / "model.json").read_text())["calibration"]
     assert calibration["normal_logs"] == [fresh.name] and calibration["left_out_logs"]
     assert set(calibration["widening"].values()) == {1.0}
+
+
+def test_score_measures_a_model_on_logs_it_has_not_seen(quick_model, make_log, tmp_path):
+    output = tmp_path / "scored"
+    seen = CliRunner().invoke(app, ["score", str(make_log("paper-normal", 11)), "--model",
+                                    str(quick_model[0]), "--output", str(output)])
+    assert seen.exit_code == 2 and "the model was trained on paper-normal" in seen.output
+    fresh = [str(make_log("mission-large-cw", 15)), str(make_log("paper-normal", 15))]
+    result = CliRunner().invoke(app, ["score", *fresh, "--model", str(quick_model[0]),
+                                      "--output", str(output), "--horizon", "30"])
+    assert result.exit_code == 0, result.output
+    meta = json.loads((output / "model.json").read_text())
+    assert meta["horizon_s"] == 30.0 and meta["heldout_error"]["horizon_s"] == 30.0
+    assert [h["horizon_s"] for h in meta["skill"]["horizons"]] == [30.0]
+    for name, signal in meta["skill"]["signals"].items():
+        assert signal["judged"] == (signal["skill"] >= 1 / 3)
+        assert f"{signal['skill']:.2f}" in result.stdout and name in result.stdout
+    assert load_model(output).horizon_steps == 300
