@@ -41,6 +41,17 @@ ProfileOption = Annotated[Path | None, typer.Option(
                       "bluerov2_heavy (no DVL), haizhe.",
     dir_okay=False)]
 
+ModelToUpdateOption = Annotated[Path, typer.Option(
+    "--model", help="Model directory to update.", file_okay=False, exists=True)]
+CopyOutputOption = Annotated[Path | None, typer.Option(
+    "--output", "-o", help="Write an updated copy of the model here instead of changing "
+                           "--model.", file_okay=False)]
+HorizonOption = Annotated[str | None, typer.Option(
+    "--horizon", help="How long the model predicts before the replay re-starts from the "
+                      "measured state: 'auto' (chosen on the held-out data), 'free' (the "
+                      "paper's free run) or seconds. Default: the profile's [matching] "
+                      "horizon_s, else auto.", metavar="auto|free|SECONDS")]
+
 
 def _fail(message: str) -> NoReturn:
     from auvdiag_errors import one_line
@@ -309,12 +320,7 @@ def train(
     holdout: Annotated[list[Path] | None, typer.Option(
         "--holdout", help="Held-out normal log for the skill figures (repeatable; default: "
                           "every fifth log, or the last 20 % of a single log).")] = None,
-    horizon: Annotated[str | None, typer.Option(
-        "--horizon", help="How long the model predicts before the replay re-starts from the "
-                          "measured state: 'auto' (chosen on the held-out data), 'free' (the "
-                          "paper's free run) or seconds. Default: the profile's "
-                          "[matching] horizon_s, else auto.", metavar="auto|free|SECONDS")
-    ] = None,
+    horizon: HorizonOption = None,
     keep_unskilled: Annotated[bool, typer.Option(
         "--keep-unskilled", help="Write the model even when no signal has skill (its "
                                  "diagnoses will judge nothing).")] = False,
@@ -352,14 +358,9 @@ def train(
 @app.command()
 def score(
     logs: Annotated[list[Path], typer.Argument(help="Normal logs the model was not trained on.")],
-    model: Annotated[Path, typer.Option("--model", help="Model directory to score.",
-                                        file_okay=False, exists=True)],
-    horizon: Annotated[str | None, typer.Option(
-        "--horizon", help="'auto', 'free' or seconds, as for train. Default: the profile's.",
-        metavar="auto|free|SECONDS")] = None,
-    output: Annotated[Path | None, typer.Option(
-        "--output", "-o", help="Write a scored copy here instead of updating --model.",
-        file_okay=False)] = None,
+    model: ModelToUpdateOption,
+    horizon: HorizonOption = None,
+    output: CopyOutputOption = None,
     profile: ProfileOption = None,
 ) -> None:
     """Measure an existing model's skill per signal on normal logs and record it.
@@ -389,16 +390,13 @@ def score(
 @app.command()
 def calibrate(
     logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs.")],
-    model: Annotated[Path, typer.Option("--model", help="Model directory to calibrate.",
-                                        file_okay=False, exists=True)],
+    model: ModelToUpdateOption,
     faulty: Annotated[list[Path] | None, typer.Option(
         "--faulty", help="A log with a known fault, to check detection (repeatable).")
     ] = None,
     margin: Annotated[float, typer.Option(help="Threshold = margin x largest normal g.")
                       ] = 1.5,
-    output: Annotated[Path | None, typer.Option(
-        "--output", "-o", help="Write a calibrated copy here instead of updating --model.",
-        file_okay=False)] = None,
+    output: CopyOutputOption = None,
     profile: ProfileOption = None,
     floor_at_profile: Annotated[bool, typer.Option(
         "--floor-at-profile", help="Never set a threshold below the profile's for its mode "

@@ -5,7 +5,8 @@
 - linear: x(k+1) = x(k) + [x(k), c(k), 1] @ W, fitted by least squares on one-step changes
   (the linear baseline of the detection benchmark).
 All work in the model's normalised units and share the learned model's ``rollout`` interface
-(commands (batch, steps, n_c), initial states (batch, n_s) → states (batch, steps, n_s)).
+(commands (batch, steps, n_c), initial states (batch, n_s) → states (batch, steps, n_s);
+``engine`` is accepted and ignored: there is nothing to compile).
 """
 
 from collections.abc import Sequence
@@ -16,7 +17,8 @@ import numpy as np
 
 @dataclass(frozen=True)
 class HoldLast:
-    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray:
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
+                engine: object = None) -> np.ndarray:
         steps = commands.shape[1]
         return np.repeat(initial_states[:, None, :].astype(np.float64), steps, axis=1)
 
@@ -25,7 +27,8 @@ class HoldLast:
 class TrainingMean:
     mean: np.ndarray              # (n_s,), normalised
 
-    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray:
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
+                engine: object = None) -> np.ndarray:
         batch, steps = commands.shape[:2]
         return np.broadcast_to(self.mean, (batch, steps, self.mean.size)).astype(np.float64)
 
@@ -34,7 +37,8 @@ class TrainingMean:
 class LinearDynamics:
     weights: np.ndarray           # (n_s + n_c + 1, n_s)
 
-    def rollout(self, commands: np.ndarray, initial_states: np.ndarray) -> np.ndarray:
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
+                engine: object = None) -> np.ndarray:
         batch, steps, _ = commands.shape
         states = np.empty((batch, steps, initial_states.shape[1]))
         state = initial_states.astype(np.float64)

@@ -17,6 +17,7 @@ from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
 from models.skill import MIN_SKILL, SignalSkill
+from models.store import default_model_dir
 
 runner = CliRunner()
 
@@ -76,24 +77,29 @@ def test_a_model_trained_on_noise_has_no_skill_and_judges_nothing(tmp_path):
     assert "UNDETERMINED" in text and "flow: not judged (the model cannot predict it)" in text
 
 
-def _unskilled_copy(source: Path, target: Path, signal: str) -> Path:
-    """The shipped model, with ``signal`` marked as one it cannot predict."""
+def _shipped_copy(target: Path, **changes: object) -> Path:
+    """The shipped Twin-Burger model with ``changes`` made to its model.json."""
     target.mkdir()
-    for file in source.iterdir():
+    for file in default_model_dir().iterdir():
         (target / file.name).write_bytes(file.read_bytes())
     meta = json.loads((target / "model.json").read_text())
-    meta["skill"]["signals"][signal].update(skill=0.05, judged=False)
+    meta.update(changes)
     (target / "model.json").write_text(json.dumps(meta))
     return target
 
 
-def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
-    from models.store import default_model_dir
+def _unskilled_copy(target: Path, signal: str) -> Path:
+    """The shipped model, with ``signal`` marked as one it cannot predict."""
+    skill = json.loads((default_model_dir() / "model.json").read_text())["skill"]
+    skill["signals"][signal].update(skill=0.05, judged=False)
+    return _shipped_copy(target, skill=skill)
 
+
+def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     log = make_log("paper-flow-sensor-covered", 12)
     code, report = _diagnose_json(log)
     assert code == 1 and report["component"] == "flow_sensor"
-    model = _unskilled_copy(default_model_dir(), tmp_path / "m", "flow")
+    model = _unskilled_copy(tmp_path / "m", "flow")
     code, report = _diagnose_json(log, "--model", str(model))
     assert code == 0 and report["verdict"] == "normal" and report["b"]["flow"] == 0
     assert report["not_judged"] == {"flow": "not judged (the model cannot predict it) "
@@ -107,16 +113,6 @@ def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     assert "NORMAL" in first and "Not judged: flow: not judged (the model cannot" in first
 
 
-def _with_horizon(source: Path, target: Path, horizon_s: float) -> Path:
-    target.mkdir()
-    for file in source.iterdir():
-        (target / file.name).write_bytes(file.read_bytes())
-    meta = json.loads((target / "model.json").read_text())
-    meta["horizon_s"] = horizon_s
-    (target / "model.json").write_text(json.dumps(meta))
-    return target
-
-
 @pytest.mark.parametrize(("scenario", "component"), [
     ("paper-flow-sensor-covered", "flow_sensor"), ("mission-yaw-rate-sensor-dead",
                                                    "yaw_rate_sensor"),
@@ -125,9 +121,7 @@ def test_a_finite_horizon_still_finds_and_names_a_failed_sensor(make_log, tmp_pa
                                                                 component):
     """Re-started from the stuck reading every 8 s, the model departs from it again inside
     every stretch while the vehicle moves."""
-    from models.store import default_model_dir
-
-    model = _with_horizon(default_model_dir(), tmp_path / "h8", 8.0)
+    model = _shipped_copy(tmp_path / "h8", horizon_s=8.0)
     code, report = _diagnose_json(make_log(scenario, 13), "--model", str(model))
     assert report["model"]["horizon_s"] == 8.0
     assert report["component"] == component and code == (0 if component is None else 1)
@@ -158,13 +152,11 @@ def test_a_one_sample_spike_at_the_start_changes_no_verdict(tmp_path, profile):
 
 
 def test_the_audit_table_names_the_signals_not_judged(make_log, tmp_path):
-    from models.store import default_model_dir
-
     fleet = tmp_path / "fleet"
     fleet.mkdir()
     (fleet / "dive.mcap").write_bytes(make_log("paper-flow-sensor-covered", 12, "mcap")
                                       .read_bytes())
-    model = _unskilled_copy(default_model_dir(), tmp_path / "m", "flow")
+    model = _unskilled_copy(tmp_path / "m", "flow")
     result = runner.invoke(app, ["audit", str(fleet), "--model", str(model), "--output",
                                  str(tmp_path / "audit"), "--jobs", "1"])
     assert result.exit_code == 0, result.output
