@@ -5,10 +5,10 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-real test
+	bench-train bench-train-busy bench-real test
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-real
+	bench-train bench-train-busy bench-real
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -44,6 +44,11 @@ bench-train:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/train.py > $(OUT)/train.md
 	$(PYTHON) benchmarks/readme.py train $(OUT)/train.md
+
+bench-train-busy:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/train.py --busy --iterations-scale 0.1 > $(OUT)/train_busy.md
+	$(PYTHON) benchmarks/readme.py train_busy $(OUT)/train_busy.md
 
 bench-real:
 	@mkdir -p $(OUT)

@@ -63,8 +63,9 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
         kept = "  (too little data: profile default kept)" if mode.kept_default else ""
         lines.append(f"  {mode.mode:<8} {mode.samples:>7} samples{kept}")
         for name, evidence in mode.evidence.items():
-            beside = ("" if evidence.next_peak is None
-                      else f", next log {evidence.next_peak:g} %")
+            ratio = evidence.dominance
+            beside = ("" if evidence.next_peak is None or ratio is None
+                      else f", {ratio:.2f}x the next log's {evidence.next_peak:g} %")
             lines.append(f"    {name:<12} max g {mode.max_g[name]:g} % -> threshold "
                          f"{mode.thresholds[name]:g} %  (set by {evidence.set_by}{beside})")
     for check in result.faulty:

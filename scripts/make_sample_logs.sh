@@ -8,7 +8,7 @@ out=sample_logs
 rm -rf "${out:?}"/*
 sample() {  # scenario format name
   auvdiag simulate "$1" --seed 1 --format "$2" --output "$out/$3"
-  auvdiag diagnose "$out/$3" --quiet --json "$out/${3%%.*}.expected.json" || [ $? -eq 1 ]
+  auvdiag diagnose "$out/$3" --quiet --json - > "$out/${3%%.*}.expected.json" || [ $? -eq 1 ]
 }
 sample paper-flow-sensor-covered ros2-mcap paper-flow-sensor-covered
 sample paper-normal              ros2-mcap paper-normal

@@ -1,6 +1,7 @@
 """`auvdiag calibrate`: thresholds from normal logs, written into the model's metadata."""
 
 import json
+import re
 import shutil
 
 from typer.testing import CliRunner
@@ -99,7 +100,8 @@ def test_one_log_setting_a_threshold_alone_is_named(make_log, tmp_path):
                                  str(model)])
     assert result.exit_code == 0, result.output
     assert f"warning: mission flow: {odd.name} alone sets the threshold" in result.stdout
-    assert f"(set by {odd.name}, next log" in result.stdout
+    assert re.search(rf"flow +max g [\d.]+ % -> threshold [\d.]+ %  \(set by {odd.name}, "
+                     r"[\d.]+x the next log's [\d.]+ %\)", result.stdout), result.stdout
     mode = next(m for m in json.loads((model / "model.json").read_text())["calibration"]["modes"]
                 if m["mode"] == "mission")
     flow = mode["set_by"]["flow"]

@@ -1,6 +1,7 @@
 """The dynamics model really trains, saves without pickle, and loads back identically."""
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -48,6 +49,9 @@ def test_train_writes_readable_metadata_and_error_figures(quick_model, profile):
         assert meta["skill"]["signals"][name]["judged"]
     assert "the paper's model error for this vehicle (rms): flow 0.0175" in result.stdout
     assert meta["horizon_s"] is None                 # the profile fixes the free run
+    # Progress inside every stage, with the time left.
+    assert re.search(r"stage 4/4 \(horizon 600 steps\): 45/45 iterations, loss [\d.]+, "
+                     r"about 0 s left", result.output), result.output
     assert meta["trained_on"]["logs"] == 5 and meta["trained_on"]["operating_hours"] > 0
 
 
