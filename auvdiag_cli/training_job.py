@@ -55,6 +55,7 @@ class TrainingResult:
     scores: list[HorizonScore]    # every horizon tried
     chosen: HorizonScore
     operating_hours: float
+    logged_rates_hz: dict[str, float]   # per signal, median over the training logs
 
 
 def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[Path], list[Path]]:
@@ -68,11 +69,29 @@ def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[P
     return [p for p in logs if p not in held], held
 
 
-def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
-    frame = ingest(path, profile).frame
+def _read(path: Path, profile: Profile, progress: Callable[[str], None]
+          ) -> tuple[ScoringLog, dict[str, float]]:
+    """The log on the model grid, and the rate each signal was logged at (Hz, median)."""
+    log = ingest(path, profile)
+    frame = log.frame
     for note in frame.slow_commands:
         progress(f"warning: {path.name}: {note}")
-    return ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts))
+    rates = {}
+    for name, series in log.signals.series.items():
+        steps = np.diff(series.index.to_numpy(dtype=np.int64))
+        if (steps > 0).any():
+            rates[name] = 1e9 / float(np.median(steps[steps > 0]))
+    return ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts)), rates
+
+
+def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
+    return _read(path, profile, progress)[0]
+
+
+def _median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
+                  ) -> dict[str, float]:
+    return {name: round(float(np.median(values)), 3) for name in names
+            if (values := [rates[name] for rates in per_log if name in rates])}
 
 
 def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
@@ -113,7 +132,10 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if not training_paths:
         raise UsageError("no training logs left after holding out")
     progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
-    training = [_scoring_log(p, profile, progress) for p in training_paths]
+    read = [_read(p, profile, progress) for p in training_paths]
+    training = [log for log, _ in read]
+    rates = _median_rates([r for _, r in read], [*profile.command_names,
+                                                  *profile.sensor_names])
     heldout = [_scoring_log(p, profile, progress) for p in heldout_paths]
     split = f"{len(heldout)} held-out log(s)"
     if not heldout:
@@ -139,7 +161,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
     result = TrainingResult(output, bool(chosen.judged) or keep_unskilled, len(training),
-                            len(heldout), split, scores, chosen, hours)
+                            len(heldout), split, scores, chosen, hours, rates)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, seed)
@@ -214,6 +236,7 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
                                    * profile.dt_s / 3600, 4),
             "heldout": result.heldout_split,
             "model_rate_hz": round(1 / profile.dt_s, 6),
+            "logged_rates_hz": result.logged_rates_hz,
         },
         **skill_metadata(result.scores, result.chosen, [h.name for h in heldout], profile),
         "training": {

@@ -53,6 +53,9 @@ def test_train_writes_readable_metadata_and_error_figures(quick_model, profile):
     assert re.search(r"stage 4/4 \(horizon 600 steps\): 45/45 iterations, loss [\d.]+, "
                      r"about 0 s left", result.output), result.output
     assert meta["trained_on"]["logs"] == 5 and meta["trained_on"]["operating_hours"] > 0
+    rates = meta["trained_on"]["logged_rates_hz"]          # the simulator's sensor rates
+    assert rates["yaw_rate"] == pytest.approx(50, rel=0.05)
+    assert rates["flow"] == pytest.approx(10, rel=0.05)
 
 
 def test_trained_model_beats_a_model_that_predicts_no_change(quick_model, make_log, profile):
