@@ -1,10 +1,11 @@
 """`auvdiag calibrate`: thresholds from the g the model reaches on normal logs.
 
 For each diagnosis mode (mission, and each DMS) and signal, the threshold is the largest g
-seen on the normal logs times a margin. On those logs that gives zero false alarms by
-construction; the false-alarm rate it implies elsewhere is stated as the rule-of-three
-upper bound (no event in T hours: fewer than 3/T per hour at 95 % confidence). Faulty logs,
-when given, are diagnosed with the new thresholds to show the detection margin.
+seen on the normal logs times a margin (a mode with too little data keeps the profile's
+threshold unless that margin over its largest g is higher). On those logs that gives zero
+false alarms by construction; the false-alarm rate it implies elsewhere is stated as the
+rule-of-three upper bound (no event in T hours: fewer than 3/T per hour at 95 % confidence).
+Faulty logs, when given, are diagnosed with the new thresholds to show the detection margin.
 """
 
 from collections.abc import Sequence
@@ -27,9 +28,9 @@ from models.store import METADATA_FILE, LoadedModel
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
 # One log's peak g this many times the next log's: that log alone sets the threshold.
 DOMINANCE_WARNING = 2.0
-# Logs the model was trained on give a g that is too low (the model has seen them). When no
-# other log is given, their thresholds are widened by the ratio of the model's held-out error
-# to its error on these logs, per signal, and at least by this factor.
+# Logs the model was trained on give a g that is too low (the model has seen them): their g
+# counts only widened by the ratio of the model's held-out error to its error on these logs,
+# per signal, and at least by this factor.
 IN_SAMPLE_MIN_WIDENING = 1.25
 
 
@@ -78,8 +79,7 @@ class CalibrationResult:
     false_alarm_bound_per_hour: float
     faulty: list[FaultyCheck]
     in_sample_logs: list[str]           # calibration logs the model was trained on
-    left_out_logs: list[str]            # of those, the ones not used (others were given)
-    widening: dict[str, float]          # per signal; 1 when no in-sample log was used
+    widening: dict[str, float]          # per signal, applied to the in-sample logs' g
     warnings: list[str]
 
 
@@ -98,15 +98,11 @@ def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
 
 
-def _split_in_sample(model: LoadedModel, logs: Sequence[Path]
-                     ) -> tuple[list[Path], list[Path]]:
-    """(logs to calibrate on, in-sample logs): logs the model trained on (by content
-    digest) are left out when any other log is given."""
+def _in_sample(model: LoadedModel, logs: Sequence[Path]) -> list[Path]:
+    """The logs the model was trained on, recognised by their content digests."""
     trained = {entry.get("sha256") for entry in
                model.metadata.get("training", {}).get("logs", [])}
-    in_sample = [p for p in logs if log_digest(p) in trained]
-    others = [p for p in logs if p not in in_sample]
-    return (others or list(logs)), in_sample
+    return [p for p in logs if log_digest(p) in trained]
 
 
 def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
@@ -141,17 +137,20 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     trip on the next dive's noise)."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
-    used, in_sample = _split_in_sample(model, normal_logs)
+    in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
-    diagnoses = [diagnose_ingested(ingest(path, profile), profile, base) for path in used]
-    all_in_sample = bool(in_sample) and used == list(in_sample)
-    widening = (_widening(model, diagnoses, profile.sensor_names) if all_in_sample
-                else {name: 1.0 for name in profile.sensor_names})
+    diagnoses = [diagnose_ingested(ingest(path, profile), profile, base)
+                 for path in normal_logs]
+    widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
+                                 if p in in_sample], profile.sensor_names) if in_sample else {}
+    factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
     per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
-    for path, diagnosis in zip(used, diagnoses, strict=True):
+    for path, diagnosis in zip(normal_logs, diagnoses, strict=True):
+        label = f"{path.name} (in-sample, widened)" if path in in_sample else path.name
         for mode, g in _g_by_mode(diagnosis).items():
-            per_mode.setdefault(mode, []).append((path.name, g))
+            per_mode.setdefault(mode, []).append(
+                (label, g * factor if path in in_sample else g))
     thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
     modes = []
     dt_h = profile.dt_s / 3600
@@ -160,11 +159,11 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         count = int(np.isfinite(g).all(axis=1).sum())
         peaks = {name: peak(g[:, i]) for i, name in enumerate(profile.sensor_names)}
         keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
-        if not keep:
-            floor = profile.thresholds_for(mode) if floor_at_profile else {}
-            thresholds[mode] = {
-                name: round(max(margin * widening[name] * value, floor.get(name, 0.0)), 2)
-                for name, value in peaks.items()}
+        # Too little data cannot lower the profile's thresholds, but what it shows still
+        # raises them: no calibration log may alarm.
+        floor = profile.thresholds_for(mode) if floor_at_profile or keep else {}
+        thresholds[mode] = {name: round(max(margin * value, floor.get(name, 0.0)), 2)
+                            for name, value in peaks.items()}
         evidence = {name: _evidence(per_log, i) for i, name in enumerate(profile.sensor_names)}
         modes.append(ModeCalibration(mode, count, count * dt_h,
                                      {k: round(v, 3) for k, v in peaks.items()},
@@ -183,25 +182,22 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                                   round(ratio, 2)))
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
-        [] if all_in_sample else [p.name for p in in_sample], widening,
-        _warnings(modes, in_sample, all_in_sample, widening))
-    model.metadata["calibration"] = _record(result, used, floor_at_profile)
+        widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening))
+    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
 
 
-def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path], all_in_sample: bool,
-              widening: dict[str, float]) -> list[str]:
+def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
+              all_in_sample: bool, widening: dict[str, float]) -> list[str]:
     warnings = []
-    if all_in_sample:
+    if in_sample:
+        which = ("every calibration log was" if all_in_sample
+                 else f"{len(in_sample)} of the calibration logs were")
         warnings.append(
-            "every calibration log was used to train the model: its g there is in-sample "
-            "(too low), so the thresholds are widened by the held-out / in-sample error "
-            "ratio (" + ", ".join(f"{k} x{v:g}" for k, v in widening.items())
+            f"{which} used to train the model: their g is in-sample (too low) and counts "
+            "only widened by the held-out / in-sample error ratio ("
+            + ", ".join(f"{k} x{v:g}" for k, v in widening.items())
             + "); calibrate on normal logs the model has not seen")
-    elif in_sample:
-        warnings.append(f"{len(in_sample)} calibration log(s) trained the model and were left "
-                        "out (their g is in-sample, too low): "
-                        + ", ".join(p.name for p in in_sample))
     for mode in modes:
         if mode.kept_default:
             continue
@@ -215,17 +211,16 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path], all_i
     return warnings
 
 
-def _record(result: CalibrationResult, used_logs: Sequence[Path], floor_at_profile: bool
+def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
             ) -> dict[str, Any]:
     return {
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
-        "method": "threshold = margin x widening x largest g on the normal logs, per mode and "
-                  "signal; widening > 1 only when every log was a training log",
+        "method": "threshold = margin x the largest g on the normal logs, per mode and "
+                  "signal; the g of logs the model was trained on multiplied by the widening",
         "margin": result.margin,
         "floor_at_profile": floor_at_profile,
-        "normal_logs": [p.name for p in used_logs],
+        "normal_logs": [p.name for p in normal_logs],
         "in_sample_logs": result.in_sample_logs,
-        "left_out_logs": result.left_out_logs,
         "widening": result.widening,
         "normal_hours": round(result.normal_hours, 4),
         "false_alarms_on_normal_logs": 0,

@@ -407,7 +407,8 @@ def calibrate(
 
     Per diagnosis mode (mission, ZA, ZB, ZC) and signal: threshold = margin x the largest g
     on the normal logs (zero false alarms there by construction; the implied rate is stated
-    as a 95 % upper bound). Modes with under 30 s of data keep the profile's thresholds.
+    as a 95 % upper bound). Modes with under 30 s of data keep the profile's
+    thresholds, raised where these logs need it.
     With --faulty, those logs are diagnosed with the new thresholds to show the margin."""
     from auvdiag_cli.calibration import calibrate as run_calibration
     from auvdiag_cli.calibration import write_metadata

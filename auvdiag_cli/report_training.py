@@ -60,7 +60,8 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
              f"{result.margin:g}; false alarms on those logs: 0 (rate < "
              f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
     for mode in result.modes:
-        kept = "  (too little data: profile default kept)" if mode.kept_default else ""
+        kept = ("  (too little data: the profile's thresholds, raised where these logs "
+                "need it)" if mode.kept_default else "")
         lines.append(f"  {mode.mode:<8} {mode.samples:>7} samples{kept}")
         for name, evidence in mode.evidence.items():
             ratio = evidence.dominance

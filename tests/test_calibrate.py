@@ -106,3 +106,23 @@ def test_one_log_setting_a_threshold_alone_is_named(make_log, tmp_path):
                 if m["mode"] == "mission")
     flow = mode["set_by"]["flow"]
     assert flow["log"] == odd.name and flow["peak_g"] >= 2 * flow["next_log_peak_g"]
+
+
+def test_too_little_data_keeps_the_profile_thresholds_unless_they_would_alarm(make_log,
+                                                                               tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model)
+    result = runner.invoke(app, ["calibrate", str(make_log("routine-and-mission", 61)),
+                                 "--model", str(model), "--margin", "3"])
+    assert result.exit_code == 0, result.output
+    meta = json.loads((model / "model.json").read_text())
+    for mode in meta["calibration"]["modes"]:
+        if mode["mode"] == "mission":
+            continue
+        assert mode["kept_profile_default"] and mode["samples"] < 300
+        for signal, threshold in mode["thresholds"].items():
+            profile_threshold = {"flow": 8.0, "yaw_rate": 7.0}[signal]
+            assert threshold == max(profile_threshold, round(3 * mode["max_g"][signal], 2))
+    raised = [m for m in meta["calibration"]["modes"] if m["mode"] != "mission"
+              and any(t > {"flow": 8.0, "yaw_rate": 7.0}[k] for k, t in m["thresholds"].items())]
+    assert raised            # margin 3 over a DMS's normal g exceeds some profile threshold
