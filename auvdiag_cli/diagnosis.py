@@ -326,7 +326,10 @@ def _apply_detection(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, on
     diagnosis.case = None if row is None else row.case
     candidates = (list(row.components) if row is not None
                   else _predicted_on_dms(diagnosis, b, alarm_s, profile, model))
-    if not candidates:
+    if not candidates and not profile.pattern:
+        diagnosis.notes.append(f"b = {b}: the profile has no pattern table, so no component "
+                               "is named")
+    elif not candidates:
         diagnosis.notes.append(f"b = {b} fits no row of the pattern table: more than one fault, "
                                "or one the table does not describe")
     diagnosis.candidates = candidates

@@ -184,10 +184,9 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     if MISSION_MODE not in thresholds:
         raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
 
-    pattern = tuple(_pattern_row(r, sensor_names) for r in top.items("pattern"))
-    seen = {tuple(row.b[n] for n in sensor_names) for row in pattern}
-    if len(seen) != len(pattern):
-        raise ProfileError("key 'pattern' has two rows with the same b vector")
+    components = {c.component for c in commands} | {s.component for s in sensors}
+    pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
+                       components)
 
     dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
@@ -303,16 +302,43 @@ def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
     return LogSources(signals, segment, time)
 
 
-def _pattern_row(reader: TableReader, sensor_names: list[str]) -> PatternRow:
+def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
+             ) -> tuple[PatternRow, ...]:
+    """The optional pattern table; a row that repeats another's case or b vector is an
+    error naming both rows."""
+    pattern: list[PatternRow] = []
+    for reader in rows:
+        row = _pattern_row(reader, sensor_names, components)
+        for earlier, other in zip(rows, pattern, strict=False):
+            if other.case == row.case:
+                raise ProfileError(f"key '{reader.key('case')}' repeats case {row.case} of "
+                                   f"{earlier.where}")
+            if other.b == row.b:
+                raise ProfileError(f"key '{reader.key('b')}' repeats the b vector of "
+                                   f"{earlier.where} (case {other.case})")
+        pattern.append(row)
+    return tuple(pattern)
+
+
+def _pattern_row(reader: TableReader, sensor_names: list[str], components: set[str]
+                 ) -> PatternRow:
     b_reader = reader.sub("b")
+    unknown = [name for name in b_reader.table if name not in sensor_names]
+    if unknown:
+        raise ProfileError(f"key '{b_reader.key(unknown[0])}' names no sensor (b has one bit "
+                           f"per sensor: {', '.join(sensor_names)})")
     b = {}
     for name in sensor_names:
         bit = b_reader.get(name, int)
         if bit not in (0, 1):
             raise ProfileError(f"key '{b_reader.key(name)}' must be 0 or 1")
         b[name] = bit
-    components = reader.get("components", list)
-    return PatternRow(reader.get("case", int), b, tuple(str(c) for c in components))
+    named = [str(c) for c in reader.get("components", list)]
+    strangers = [c for c in named if c not in components]
+    if strangers:
+        raise ProfileError(f"key '{reader.key('components')}' names unknown component "
+                           f"{strangers[0]!r} (the profile's: {', '.join(sorted(components))})")
+    return PatternRow(reader.get("case", int), b, tuple(named))
 
 
 def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:

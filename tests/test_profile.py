@@ -1,5 +1,7 @@
 """Profiles validate once, and a bad one names the offending key."""
 
+import re
+
 import pytest
 
 from auvdiag_cli.errors import ProfileError
@@ -32,6 +34,15 @@ BUILTIN = load_profile().source_path
     (('field = "data[0]"', "fieldx = 1"), "sources.ros.signals.thruster_0.field"),
     (("[5, 0.6, 0.3]", "[5, 0.6]"), "dms.ZA.steps[0]"),
     (("[vehicle]", "[vehicle"), "not valid TOML"),
+    (('components = ["flow_sensor"]', 'components = ["flow_sensr"]'),
+     "key 'pattern[2].components' names unknown component 'flow_sensr'"),
+    (("case = 3", "case = 1"), "key 'pattern[3].case' repeats case 1 of pattern[1]"),
+    (("b = { flow = 0, yaw_rate = 1 }", "b = { flow = 1, yaw_rate = 0 }"),
+     "key 'pattern[3].b' repeats the b vector of pattern[2] (case 2)"),
+    (("b = { flow = 0, yaw_rate = 1 }", "b = { flow = 0 }"),
+     "missing key 'pattern[3].b.yaw_rate'"),
+    (("b = { flow = 0, yaw_rate = 1 }", "b = { flow = 0, yaw_rate = 1, depth = 0 }"),
+     "key 'pattern[3].b.depth' names no sensor"),
 ])
 def test_invalid_profile_names_the_key(tmp_path, edit, message):
     from importlib import resources
@@ -40,10 +51,20 @@ def test_invalid_profile_names_the_key(tmp_path, edit, message):
     assert edit[0] in text
     path = tmp_path / "p.toml"
     path.write_text(text.replace(edit[0], edit[1], 1))
-    with pytest.raises(ProfileError, match=message.replace("[", r"\[").replace("]", r"\]")):
+    with pytest.raises(ProfileError, match=re.escape(message)):
         load_profile(path)
 
 
 def test_missing_profile_file(tmp_path):
     with pytest.raises(ProfileError, match="cannot read profile"):
         load_profile(tmp_path / "absent.toml")
+
+
+def test_the_pattern_table_is_optional(tmp_path):
+    from importlib import resources
+
+    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    without = text[:text.index("[[pattern]]")] + text[text.index("[dms."):]
+    path = tmp_path / "p.toml"
+    path.write_text(without)
+    assert load_profile(path).pattern == ()
