@@ -11,10 +11,10 @@ import numpy as np
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.closed_loop import replay_closed_loop
 from auvdiag_cli.completeness import Completeness, completeness_of
-from auvdiag_cli.degradation import WeakenedThruster, explain_by_weak_thruster
 from auvdiag_cli.derivation import dms_signature
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.errors import ModelError, UsageError
+from auvdiag_cli.hypotheses import Hypothesis, HypothesisTest, weigh_hypotheses
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.matching import Matching, match
 from auvdiag_cli.numeric import peak
@@ -73,7 +73,8 @@ class Diagnosis:
     active: ActiveDiagnosis | None = None
     start_ns: int = 0
     mission_legs: list[dict[str, Any]] = field(default_factory=list)
-    degradation: WeakenedThruster | None = None
+    degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
+    hypotheses: HypothesisTest | None = None
     # Time histories for reports.
     time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
     commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
@@ -215,18 +216,45 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
+        test = weigh_hypotheses(model, profile, frame, matching, thresholds,
+                                detection.onset_index, dms_starts, list(not_judged))
+        diagnosis.hypotheses = test
+        weak = next((h for h in test.ranked if h.is_actuator), None)
         if len(diagnosis.candidates) > 1:
             own = [(run, signals.start_ns) for run in dms_runs(diagnosis)]
             _apply_active_diagnosis(diagnosis, [*own, *companion_runs], profile, model)
         elif diagnosis.substitution is not None:
-            weak = explain_by_weak_thruster(model, profile, frame, thresholds,
-                                            detection.onset_index, dms_starts)
-            if weak is not None:
+            if weak is not None and weak.explains:
                 _apply_weakened_thruster(diagnosis, weak, profile)
+        elif not diagnosis.candidates:
+            _name_by_hypotheses(diagnosis, test, profile, model)
     return diagnosis
 
 
-def _apply_weakened_thruster(diagnosis: Diagnosis, weak: WeakenedThruster,
+def _name_by_hypotheses(diagnosis: Diagnosis, test: HypothesisTest, profile: Profile,
+                        model: LoadedModel) -> None:
+    """No row of the pattern table names the component (or there is no table): the
+    hypothesis that explains the log does, when one does."""
+    best, runner_up, margin = test.best, test.runner_up, test.margin
+    if not best.explains:
+        raised = ", ".join(k for k, v in diagnosis.b.items() if v)
+        diagnosis.notes.append(f"anomaly on {raised}: no single-component fault explains it "
+                               f"(the closest, {best.describe()}, leaves g at "
+                               f"{best.peak_g_ratio:.0%} of its threshold)")
+        return
+    beside = ("" if runner_up is None or margin is None else
+              f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
+              f"{margin:.1f}x the best)")
+    diagnosis.notes.append(f"named by the hypothesis test: {best.describe()} explains the log "
+                           f"(g then stays at {best.peak_g_ratio:.0%} of its threshold at "
+                           f"most){beside}")
+    diagnosis.candidates = [best.component]
+    if best.kind == "weakened":
+        diagnosis.degradation = best
+    _name_component(diagnosis, best.component, profile, model)
+
+
+def _apply_weakened_thruster(diagnosis: Diagnosis, weak: Hypothesis,
                              profile: Profile) -> None:
     table_says = diagnosis.component
     diagnosis.component, diagnosis.candidates = weak.component, [weak.component]
@@ -327,8 +355,7 @@ def _apply_detection(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, on
     candidates = (list(row.components) if row is not None
                   else _predicted_on_dms(diagnosis, b, alarm_s, profile, model))
     if not candidates and not profile.pattern:
-        diagnosis.notes.append(f"b = {b}: the profile has no pattern table, so no component "
-                               "is named")
+        diagnosis.notes.append(f"the profile has no pattern table to read b = {b} in")
     elif not candidates:
         diagnosis.notes.append(f"b = {b} fits no row of the pattern table: more than one fault, "
                                "or one the table does not describe")

@@ -9,11 +9,12 @@ from typing import Any
 from auvdiag_cli import __version__
 from auvdiag_cli.closed_loop import ClosedLoopReplay
 from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
+from auvdiag_cli.hypotheses import Hypothesis
 
 SCHEMA_VERSION = 1
 
 
-def _finite(value: float) -> float | None:
+def _finite(value: float | None) -> float | None:
     return None if value is None or not math.isfinite(value) else value
 
 
@@ -58,6 +59,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "component": diagnosis.degradation.component, "kind": "weakened",
             "thrust_fraction": diagnosis.degradation.thrust_fraction,
             "peak_g_over_threshold": diagnosis.degradation.peak_g_ratio},
+        "hypotheses": _hypotheses(diagnosis),
         "active_diagnosis": _active(diagnosis),
         "substitution": None if substitution is None else {
             "signal": substitution.signal,
@@ -106,6 +108,26 @@ def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:
 
 def _rounded(value: float | None) -> float | None:
     return None if value is None else round(value, 5)
+
+
+def _hypothesis(h: Hypothesis | None) -> dict[str, Any] | None:
+    return None if h is None else {"component": h.component, "kind": h.kind,
+                                   "thrust_fraction": h.thrust_fraction,
+                                   "peak_g_over_threshold": _finite(h.peak_g_ratio),
+                                   "explains": h.explains}
+
+
+def _hypotheses(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    """The hypothesis test's verdict: the best, the runner-up (another component), the
+    margin between them, and whether the pattern table's candidates include the best."""
+    test = diagnosis.hypotheses
+    if test is None:
+        return None
+    return {"best": _hypothesis(test.best), "runner_up": _hypothesis(test.runner_up),
+            "margin": _finite(_rounded(test.margin)),
+            "table_agrees": (test.best.component in diagnosis.candidates
+                             if diagnosis.case is not None else None),
+            "ranked": [_hypothesis(h) for h in test.ranked]}
 
 
 def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:

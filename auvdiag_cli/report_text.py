@@ -1,9 +1,11 @@
 """The short human summary printed on the terminal."""
 
+import math
 import textwrap
 
 from adapters import TopicInfo
 from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, Diagnosis
+from auvdiag_cli.hypotheses import HypothesisTest
 from auvdiag_cli.inspection import Inspection
 from auvdiag_cli.report_json import utc_text
 
@@ -35,6 +37,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                      f"(delay {d.detected_at_s - d.onset_s:.1f} s)"
                      if d.onset_s is not None and d.detected_at_s is not None else "")
         lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in d.b.items()))
+        if d.hypotheses is not None:
+            lines.append("  " + _hypotheses_line(d.hypotheses))
         if d.active is not None:
             for e in d.active.evidence:
                 verdict = "fault among" if e.faulty else "clears"
@@ -79,6 +83,17 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines += [f"  note: {note}" for note in d.notes]
     lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
     return [line for line in lines if line]
+
+
+def _hypotheses_line(test: HypothesisTest) -> str:
+    best, other, margin = test.best, test.runner_up, test.margin
+    text = (f"best explained by {best.describe()} (g at most {best.peak_g_ratio:.0%} of its "
+            "threshold)" if best.explains else
+            f"no single-component fault explains it (closest: {best.describe()}, "
+            f"{best.peak_g_ratio:.0%})")
+    if other is not None and margin is not None and math.isfinite(margin):
+        text += f"; runner-up {other.describe()} ({margin:.1f}x)"
+    return "hypotheses: " + text
 
 
 def _utc(time_ns: int | None) -> str:
