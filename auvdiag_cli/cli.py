@@ -556,21 +556,32 @@ def derive_table(
     json_path: Annotated[Path | None, typer.Option(
         "--json", help="Also write the signatures and the table as JSON.", dir_okay=False)
     ] = None,
+    log: Annotated[Path | None, typer.Option(
+        "--log", help="A normal log of the vehicle: the faults are replayed open loop on its "
+                      "commands instead of on a mission flown by the profile's controller.")
+    ] = None,
 ) -> None:
     """Derive the pattern table by simulating every single-component fault on the model.
 
     Each thruster producing nothing and each sensor reading zero is simulated with the
-    dynamics model as the vehicle, on every DMS and on a mission flown by the profile's
-    controller; the b signatures are printed, and the table they imply is compared with
-    the profile's. Exit status 0 when they agree, 1 when they differ."""
+    dynamics model as the vehicle, on every DMS and on a mission: flown by the profile's
+    controller, or open loop on the commands of --log, or (a profile without a controller
+    and no --log) on the DMSs played one after another. The b signatures are printed, and
+    the table they imply is compared with the profile's. Exit status 0 when they agree, 1
+    when they differ."""
     from auvdiag_cli.derivation import derive_table as run_derivation
+    from auvdiag_cli.derivation import log_mission
+    from auvdiag_cli.ingest import ingest
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.report_json import write_json
     from models.store import load_model
 
-    with _user_errors(model or "builtin model"):
+    with _user_errors(log or model or "builtin model"):
         loaded_profile = load_profile(profile)
-        result = run_derivation(load_model(model, loaded_profile.name), loaded_profile)
+        open_loop = (None if log is None
+                     else log_mission(ingest(log, loaded_profile).frame, loaded_profile))
+        result = run_derivation(load_model(model, loaded_profile.name), loaded_profile,
+                                open_loop=open_loop)
     names = loaded_profile.sensor_names
     modes = list(result.signatures[0].b)
     typer.echo("b signatures (" + ", ".join(names) + ") of each single fault:")

@@ -1,8 +1,13 @@
 """Derive the pattern table from the model: simulate each single-component fault (a sensor
 reading zero, a thruster producing nothing) with the dynamics model as the vehicle, on each
-DMS and on a mission flown by the profile's controller, and read the b signatures the
-diagnosis would see. The signatures on the mission give the table; those on the DMSs show
-which sequence separates which candidates (what active diagnosis relies on)."""
+DMS and on a mission, and read the b signatures the diagnosis would see. The signatures on
+the mission give the table; those on the DMSs show which sequence separates which
+candidates (what active diagnosis relies on).
+
+The mission is flown by the profile's controller when it describes one (closed loop: the
+controller answers the fault). Without one, any vehicle's table comes open loop: the
+commands of a normal log of the vehicle are replayed as they were, the fault acting from
+FAULT_AT_S into them, or, without a log, the profile's DMSs one after another."""
 
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -14,6 +19,7 @@ from auvdiag_cli.detection import binary_vector, decided_b, first_alarm
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.matching import residual_index
 from auvdiag_cli.profile import MISSION_MODE, PatternRow, Profile
+from auvdiag_cli.resample import AlignedFrame
 from auvdiag_cli.segments import dms_template
 from models.fast import FastStepper, fast_replay
 from models.store import LoadedModel
@@ -66,18 +72,64 @@ def dms_signature(model: LoadedModel, profile: Profile, dms_name: str, component
     return _on_dms(model, profile, dms_name, fault[1], fault[2])
 
 
+@dataclass(frozen=True)
+class OpenLoop:
+    """A command history the fault is replayed on as it is (no controller answers)."""
+
+    commands: np.ndarray
+    start: np.ndarray          # the state it starts from
+    fault_step: int = 0
+
+
 def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | None,
             sensor: int | None) -> dict[str, int]:
-    commands = dms_template(profile.dms[name], profile.dt_s)
-    start = np.zeros(len(profile.sensor_names))
-    modelled = fast_replay(model.fast, model.normaliser, commands, start)
-    executed = commands.copy()
+    history = OpenLoop(dms_template(profile.dms[name], profile.dt_s),
+                       np.zeros(len(profile.sensors)))
+    return _open_loop(model, profile, name, history, actuator, sensor)
+
+
+def _open_loop(model: LoadedModel, profile: Profile, mode: str, history: OpenLoop,
+               actuator: int | None, sensor: int | None) -> dict[str, int]:
+    modelled = fast_replay(model.fast, model.normaliser, history.commands, history.start)
+    executed = history.commands.copy()
     if actuator is not None:
-        executed[:, actuator] = 0.0
-    measured = fast_replay(model.fast, model.normaliser, executed, start)
+        executed[history.fault_step:, actuator] = 0.0
+    measured = fast_replay(model.fast, model.normaliser, executed, history.start)
     if sensor is not None:
-        measured[:, sensor] = 0.0
-    return _bits(measured, modelled, profile, name, model)
+        measured[history.fault_step:, sensor] = 0.0
+    return _bits(measured, modelled, profile, mode, model)
+
+
+def log_mission(frame: AlignedFrame, profile: Profile) -> OpenLoop:
+    """The open-loop mission of a normal log: its longest stretch with every signal
+    measured, from the robust state at its start."""
+    from models.rollouts import robust_state
+    from models.training import complete_stretches
+
+    usable = np.where(np.isfinite(frame.commands).all(axis=1, keepdims=True), frame.sensors,
+                      np.nan)
+    stretches = complete_stretches(usable)
+    if not stretches:
+        raise UsageError("the log has no stretch with every signal measured to replay")
+    begin, end = max(stretches, key=lambda s: s[1] - s[0])
+    return open_loop_mission(profile, frame.commands[begin:end],
+                             robust_state(frame.sensors, begin, begin, end))
+
+
+def open_loop_mission(profile: Profile, commands: np.ndarray | None = None,
+                      start: np.ndarray | None = None) -> OpenLoop:
+    """The open-loop mission: a log's commands (from its state ``start``), or the DMSs one
+    after another from rest."""
+    if commands is None:
+        if not profile.dms:
+            raise UsageError(f"profile {profile.name!r} describes neither a [controller] nor "
+                             "DMSs: give a normal log of the vehicle (--log) whose commands "
+                             "the faults are replayed on")
+        commands = np.vstack([dms_template(d, profile.dt_s) for d in profile.dms.values()])
+    if start is None:
+        start = np.zeros(len(profile.sensors))
+    fault_step = min(round(FAULT_AT_S / profile.dt_s), len(commands) // 4)
+    return OpenLoop(commands, start, fault_step)
 
 
 def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[float, float]],
@@ -111,16 +163,21 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
 
 def derive_table(model: LoadedModel, profile: Profile,
                  waypoints: list[tuple[float, float]] | None = None,
+                 open_loop: OpenLoop | None = None,
                  progress: Callable[[str], None] = lambda _: None) -> DerivedTable:
-    if profile.controller is None:
-        raise UsageError(f"profile {profile.name!r} describes no [controller]: the mission "
-                         "signatures need one")
+    """``open_loop``: the mission to replay the faults on without a controller; by default
+    the profile's controller flies the paper's rectangle, or, without one, the DMSs are
+    played one after another."""
+    if open_loop is None and profile.controller is None:
+        open_loop = open_loop_mission(profile)
     signatures = []
     for component, actuator, sensor in _faults(profile):
         progress(f"simulating {component} failed")
         bits = {name: _on_dms(model, profile, name, actuator, sensor) for name in profile.dms}
-        bits[MISSION_MODE] = _on_mission(model, profile, waypoints or PAPER_RECTANGLE,
-                                         actuator, sensor)
+        bits[MISSION_MODE] = (
+            _open_loop(model, profile, MISSION_MODE, open_loop, actuator, sensor)
+            if open_loop is not None else
+            _on_mission(model, profile, waypoints or PAPER_RECTANGLE, actuator, sensor))
         signatures.append(Signature(component, bits))
     groups: dict[tuple[int, ...], list[str]] = {}
     for signature in signatures:

@@ -32,6 +32,9 @@ from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
 NOT_JUDGED = "not judged (the model cannot predict it)"
+# The candidate the hypotheses name must leave this many times less of its threshold than
+# any other candidate.
+DECISIVE_MARGIN = 2.0
 EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
 PAPER_ASSUMPTIONS = (
     "The environment is steady: a change in how the vehicle moves comes only from its hardware.",
@@ -288,9 +291,34 @@ def _apply_active_diagnosis(diagnosis: Diagnosis, runs: list[tuple[DmsRun, int]]
                                "all candidates kept")
     if len(active.candidates) > 1:
         _narrow_by_predicted_signatures(diagnosis, active, onset_ns, runs, profile, model)
+    if len(active.candidates) > 1 and diagnosis.hypotheses is not None:
+        _narrow_by_hypotheses(diagnosis, active, diagnosis.hypotheses)
     diagnosis.candidates = active.candidates
     if len(active.candidates) == 1:
         _name_component(diagnosis, active.candidates[0], profile, model)
+
+
+def _narrow_by_hypotheses(diagnosis: Diagnosis, active: ActiveDiagnosis,
+                          test: HypothesisTest) -> None:
+    """Among the candidates the DMS runs leave, the one whose failure explains the log when
+    no other candidate's does, by DECISIVE_MARGIN at least (e.g. which thruster died on a
+    plain mission: the table reads both the same)."""
+    best = {c: min((h for h in test.ranked if h.component == c),
+                   key=lambda h: h.peak_g_ratio, default=None) for c in active.candidates}
+    scored = sorted((h for h in best.values() if h is not None), key=lambda h: h.peak_g_ratio)
+    if len(scored) < 2 or not scored[0].explains or scored[1].explains:
+        return
+    margin = scored[1].peak_g_ratio / max(scored[0].peak_g_ratio, 1e-9)
+    if margin < DECISIVE_MARGIN:
+        return
+    winner = scored[0]
+    diagnosis.notes.append(
+        f"the pattern table reads b as {' or '.join(active.candidates)}; replayed from the "
+        f"onset, {winner.describe()} explains the log (g at most {winner.peak_g_ratio:.0%} of "
+        f"its threshold) and {scored[1].describe()} does not ({scored[1].peak_g_ratio:.0%})")
+    active.candidates, active.recommended_dms = [winner.component], []
+    if winner.kind == "weakened":
+        diagnosis.degradation = winner
 
 
 def _narrow_by_predicted_signatures(diagnosis: Diagnosis, active: ActiveDiagnosis,

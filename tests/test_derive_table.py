@@ -1,6 +1,7 @@
 """The pattern table derived from the model equals the paper's."""
 
 import json
+from pathlib import Path
 
 from typer.testing import CliRunner
 
@@ -38,3 +39,41 @@ def test_a_profile_with_a_wrong_table_is_flagged(tmp_path):
     result = runner.invoke(app, ["derive-table", "--profile", str(wrong)])
     assert result.exit_code == 1
     assert "DIFFERS from the profile's table" in result.stdout
+
+
+def _without_controller(tmp_path: Path) -> Path:
+    from auvdiag_cli.profile import profile_text
+
+    text, _ = profile_text(None)
+    path = tmp_path / "no_controller.toml"
+    path.write_text(text[:text.index("[controller]")] + text[text.index("[matching]"):])
+    return path
+
+
+def test_without_a_controller_the_mission_is_flown_open_loop(tmp_path, make_log):
+    """No [controller]: the DMSs one after another stand in for the mission, or a normal
+    log's own commands (--log); the thrusters then show in yaw first, as nothing steers
+    against the loss."""
+    profile = _without_controller(tmp_path)
+    for extra in ([], ["--log", str(make_log("paper-normal", 11))]):
+        result = runner.invoke(app, ["derive-table", "--profile", str(profile), *extra,
+                                     "--json", str(tmp_path / "t.json")])
+        assert result.exit_code in (0, 1), result.output
+        table = json.loads((tmp_path / "t.json").read_text())
+        mission = {s["component"]: s["b"]["mission"] for s in table["signatures"]}
+        assert mission["flow_sensor"] == {"flow": 1, "yaw_rate": 0}
+        assert mission["yaw_rate_sensor"] == {"flow": 0, "yaw_rate": 1}
+        assert mission["thruster_0"]["yaw_rate"] == mission["thruster_1"]["yaw_rate"] == 1
+        assert "pattern table derived from the mission signatures" in result.stdout
+
+
+def test_without_a_controller_or_dms_a_log_is_needed(tmp_path):
+    text = _without_controller(tmp_path).read_text()
+    dms_free = text[:text.index("[dms.ZA]")] + text[text.index("[sources.ros]"):]
+    path = tmp_path / "bare.toml"
+    path.write_text(dms_free.replace("[thresholds.ZA]", "[thresholds.XA]")
+                    .replace("[thresholds.ZB]", "[thresholds.XB]")
+                    .replace("[thresholds.ZC]", "[thresholds.XC]"))
+    result = runner.invoke(app, ["derive-table", "--profile", str(path)])
+    assert result.exit_code == 2
+    assert "describes neither a [controller] nor DMSs: give a normal log" in result.output
