@@ -23,7 +23,7 @@ FLEET = [
     ("paper-flow-sensor-covered", "bag", "fault", "flow_sensor"),
     ("paper-normal", "db3", "normal", None),
     ("mission-yaw-rate-sensor-dead", "ros2-mcap", "fault", "yaw_rate_sensor"),
-    ("mission-thruster-0-dead", "mcap", "fault", "thruster_0;thruster_1"),
+    ("mission-thruster-0-dead", "mcap", "fault", "thruster_0"),
     ("mission-fast-ccw", "tlog", "normal", None),
     ("mission-large-cw", "bin", "normal", None),
 ]

@@ -84,15 +84,18 @@ def test_heave_sensor_is_told_from_the_vertical_thruster_by_the_dms(tmp_path):
     assert report["case"] == 4
 
 
-def test_vertical_thruster_seen_only_on_zd_keeps_both_and_names_the_deciding_dms(tmp_path):
-    # Dead from 10 s but idle until ZD: ZA-ZC look healthy, so the onset is at ZD and a
-    # heave sensor failing there would look the same. ZA would tell them apart.
+def test_vertical_thruster_seen_only_on_zd_is_named_by_the_hypotheses(tmp_path):
+    # Dead from 10 s but idle until ZD: ZA-ZC look healthy, so the onset is at ZD, and the
+    # DMS runs cannot part the thruster from a heave sensor failing there. Replayed from the
+    # onset, only the dead thruster explains what follows.
     log = write(tmp_path, "three_thruster", "routine-thruster-2-dead", "mcap")
     code, output = run("diagnose", str(log), "--profile", "three_thruster", "--json", "-", "-q")
     assert code == 1
     report = json.loads(output)
-    assert report["candidates"] == ["thruster_2", "heave_sensor"]
-    assert report["active_diagnosis"]["recommended_dms"] == ["ZA", "ZB", "ZC"]
+    assert report["component"] == "thruster_2"
+    assert report["hypotheses"]["runner_up"]["component"] == "heave_sensor"
+    assert not report["hypotheses"]["runner_up"]["explains"]
+    assert report["active_diagnosis"]["recommended_dms"] == []
 
 
 def test_derived_twin_burger_table_is_unchanged():
