@@ -48,3 +48,19 @@ def make_log(log_dir: Path, dive_cache: Callable[[str, int], SimulatedDive],
         return path
 
     return make
+
+
+@pytest.fixture
+def profile_without(tmp_path: Path) -> Callable[[str, str], Path]:
+    """The Twin-Burger profile with the text from one marker up to another cut out (a
+    section it can do without), written to a file."""
+
+    def cut(first: str, up_to: str) -> Path:
+        from auvdiag_cli.profile import profile_text
+
+        text, _ = profile_text(None)
+        path = tmp_path / f"without-{first.strip('[]').replace('.', '_')}.toml"
+        path.write_text(text[:text.index(first)] + text[text.index(up_to):])
+        return path
+
+    return cut

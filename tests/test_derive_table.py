@@ -1,7 +1,6 @@
 """The pattern table derived from the model equals the paper's."""
 
 import json
-from pathlib import Path
 
 from typer.testing import CliRunner
 
@@ -41,20 +40,12 @@ def test_a_profile_with_a_wrong_table_is_flagged(tmp_path):
     assert "DIFFERS from the profile's table" in result.stdout
 
 
-def _without_controller(tmp_path: Path) -> Path:
-    from auvdiag_cli.profile import profile_text
-
-    text, _ = profile_text(None)
-    path = tmp_path / "no_controller.toml"
-    path.write_text(text[:text.index("[controller]")] + text[text.index("[matching]"):])
-    return path
-
-
-def test_without_a_controller_the_mission_is_flown_open_loop(tmp_path, make_log):
+def test_without_a_controller_the_mission_is_flown_open_loop(tmp_path, make_log,
+                                                             profile_without):
     """No [controller]: the DMSs one after another stand in for the mission, or a normal
     log's own commands (--log); the thrusters then show in yaw first, as nothing steers
     against the loss."""
-    profile = _without_controller(tmp_path)
+    profile = profile_without("[controller]", "[matching]")
     for extra in ([], ["--log", str(make_log("paper-normal", 11))]):
         result = runner.invoke(app, ["derive-table", "--profile", str(profile), *extra,
                                      "--json", str(tmp_path / "t.json")])
@@ -67,8 +58,8 @@ def test_without_a_controller_the_mission_is_flown_open_loop(tmp_path, make_log)
         assert "pattern table derived from the mission signatures" in result.stdout
 
 
-def test_without_a_controller_or_dms_a_log_is_needed(tmp_path):
-    text = _without_controller(tmp_path).read_text()
+def test_without_a_controller_or_dms_a_log_is_needed(tmp_path, profile_without):
+    text = profile_without("[controller]", "[matching]").read_text()
     dms_free = text[:text.index("[dms.ZA]")] + text[text.index("[sources.ros]"):]
     path = tmp_path / "bare.toml"
     path.write_text(dms_free.replace("[thresholds.ZA]", "[thresholds.XA]")

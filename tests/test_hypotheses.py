@@ -2,14 +2,13 @@
 explains the log named, with its runner-up and the margin between them."""
 
 import json
-from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 from auvdiag_cli.diagnosis import diagnose
-from auvdiag_cli.profile import load_profile, profile_text
+from auvdiag_cli.profile import load_profile
 from models.store import load_model
 
 runner = CliRunner()
@@ -35,15 +34,8 @@ def test_the_best_hypothesis_names_the_failed_part(make_log, scenario, component
     assert ranked == sorted(ranked) and len(ranked) == 2 * 4 + 2 * 4   # every hypothesis
 
 
-def _without_pattern_table(tmp_path: Path) -> Path:
-    text, _ = profile_text(None)
-    path = tmp_path / "no_table.toml"
-    path.write_text(text[:text.index("[[pattern]]")] + text[text.index("[dms."):])
-    return path
-
-
-def test_without_a_pattern_table_the_hypotheses_name_the_part(make_log, tmp_path):
-    profile = load_profile(_without_pattern_table(tmp_path))
+def test_without_a_pattern_table_the_hypotheses_name_the_part(make_log, profile_without):
+    profile = load_profile(profile_without("[[pattern]]", "[dms."))
     result = diagnose(make_log("mission-thruster-1-dead", 17), profile, load_model())
     assert result.verdict == "fault" and result.component == "thruster_1"
     assert any(n.startswith("named by the hypothesis test: thruster 1 dead explains the log")
@@ -52,7 +44,7 @@ def test_without_a_pattern_table_the_hypotheses_name_the_part(make_log, tmp_path
     assert sensor.component == "flow_sensor" and sensor.substitution is not None
 
 
-def test_an_anomaly_no_single_fault_explains_is_said_so(tmp_path):
+def test_an_anomaly_no_single_fault_explains_is_said_so(tmp_path, profile_without):
     """Two sensors dead at once (the flow sensor covered, and the gyro zeroed from the same
     moment on): neither single-sensor hypothesis explains both residuals."""
     import pandas as pd
@@ -65,7 +57,7 @@ def test_an_anomaly_no_single_fault_explains_is_said_so(tmp_path):
     after = table["time_s"] >= table["time_s"].min() + 115.0
     table.loc[after & table["yaw_rate_rps"].notna(), "yaw_rate_rps"] = 0.0
     table.to_csv(log, index=False)
-    profile = load_profile(_without_pattern_table(tmp_path))
+    profile = load_profile(profile_without("[[pattern]]", "[dms."))
     result = diagnose(log, profile, load_model())
     assert result.verdict == "fault" and result.component is None
     assert result.hypotheses is not None and not result.hypotheses.best.explains

@@ -60,17 +60,11 @@ def test_missing_profile_file(tmp_path):
         load_profile(tmp_path / "absent.toml")
 
 
-def test_the_pattern_table_is_optional(tmp_path, make_log):
-    from importlib import resources
-
+def test_the_pattern_table_is_optional(make_log, profile_without):
     from auvdiag_cli.diagnosis import diagnose
     from models.store import load_model
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
-    without = text[:text.index("[[pattern]]")] + text[text.index("[dms."):]
-    path = tmp_path / "p.toml"
-    path.write_text(without)
-    profile = load_profile(path)
+    profile = load_profile(profile_without("[[pattern]]", "[dms."))
     assert profile.pattern == ()
     result = diagnose(make_log("paper-flow-sensor-covered", 11), profile, load_model())
     assert result.verdict == "fault" and result.b == {"flow": 1, "yaw_rate": 0}
