@@ -349,9 +349,10 @@ def train(
     for line in training_lines(result, paper_model_error(vehicle)):
         typer.echo(line)
     if not result.chosen.judged:
-        typer.echo("auvdiag: no signal has skill: the model predicts nothing better than a "
-                   "naive predictor" + ("" if result.written else
-                                        " (--keep-unskilled writes it anyway)"), err=True)
+        typer.echo("auvdiag: no signal has skill, or enough held-out data to show it (see the "
+                   "table above)" + ("" if result.written else
+                                     "; the model is not written (--keep-unskilled writes "
+                                     "it anyway)"), err=True)
         raise typer.Exit(EXIT_FAULT)
 
 

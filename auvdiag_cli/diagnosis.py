@@ -353,10 +353,18 @@ def _narrow_by_predicted_signatures(diagnosis: Diagnosis, active: ActiveDiagnosi
 
 def not_judged_signals(model: LoadedModel) -> dict[str, str]:
     """The signals the model has no skill for, with the reason reports print."""
-    skill = model.skill or {}
-    return {name: NOT_JUDGED + (f" (skill {skill[name]:.2f})" if skill.get(name) is not None
-                                else "")
-            for name in model.unskilled}
+    signals = model.metadata.get("skill", {}).get("signals", {})
+    needed = model.metadata.get("skill", {}).get("judged_from_samples", 0)
+    reasons = {}
+    for name in model.unskilled:
+        record = signals[name]
+        if record.get("samples", needed) < needed:
+            reasons[name] = (f"not judged (too little held-out data to measure the model's "
+                             f"skill: {record['samples']} samples)")
+        else:
+            skill = record.get("skill")
+            reasons[name] = NOT_JUDGED + ("" if skill is None else f" (skill {skill:.2f})")
+    return reasons
 
 
 def _with_model_thresholds(profile: Profile, model: LoadedModel) -> Profile:

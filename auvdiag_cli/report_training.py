@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from auvdiag_cli.calibration import CalibrationResult
 from auvdiag_cli.training_job import TrainingResult
-from models.skill import MIN_SKILL, HorizonScore
+from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, HorizonScore, SignalSkill
 
 
 def horizon_text(horizon_s: float | None) -> str:
@@ -18,16 +18,27 @@ def _number(value: float) -> str:
     return f"{value:9.4f}" if math.isfinite(value) else f"{value!s:>9}"
 
 
+def _ratio(value: float) -> str:
+    """A skill-like ratio in 7 characters: far below zero is only 'worse'."""
+    return f"{value:7.2f}" if not value < -99 else f"{'< -99':>7}"
+
+
+def _verdict(s: SignalSkill) -> str:
+    if not s.enough_data:
+        return (f"NO: too little held-out data to measure it ({s.samples} samples, needs "
+                f"{MIN_SCORED_SAMPLES})")
+    return "yes" if s.judged else "NO: not judged (the model cannot predict it)"
+
+
 def _skill_rows(score: HorizonScore) -> list[str]:
     baselines = list(next(iter(score.signals.values())).baseline_rms)
     rows = [f"  {'signal':<14}{'skill':>7}{'vs linear':>10}{'model':>10}"
             + "".join(f"{name:>10}" for name in baselines) + "   judged"]
     for name, s in score.signals.items():
-        verdict = ("yes" if s.judged else "NO: not judged (the model cannot predict it)"
-                   if not math.isnan(s.skill) else "NO: no held-out data to measure it on")
-        rows.append(f"  {name:<14}{s.skill:7.2f}{s.versus_linear:10.2f} {_number(s.model_rms)}"
+        rows.append(f"  {name:<14}{_ratio(s.skill)}   {_ratio(s.versus_linear)} "
+                    f"{_number(s.model_rms)}"
                     + "".join(f" {_number(s.baseline_rms[b])}" for b in baselines)
-                    + f"   {verdict}")
+                    + f"   {_verdict(s)}")
     return rows
 
 

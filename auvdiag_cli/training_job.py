@@ -18,6 +18,7 @@ from auvdiag_cli.ingest import ingest
 from auvdiag_cli.profile import Profile
 from models.skill import (
     HORIZON_CANDIDATES_S,
+    MIN_SCORED_SAMPLES,
     MIN_SKILL,
     HorizonScore,
     ScoringLog,
@@ -178,7 +179,7 @@ def _skill_record(score: HorizonScore) -> dict[str, Any]:
         return round(value, 6) if math.isfinite(value) else None
 
     return {"horizon_s": score.horizon_s, "signals": {
-        name: {"skill": number(s.skill), "judged": s.judged,
+        name: {"skill": number(s.skill), "judged": s.judged, "samples": s.samples,
                "versus_linear": number(s.versus_linear), "model_rms": number(s.model_rms),
                **{f"{k}_rms": number(v) for k, v in s.baseline_rms.items()}}
         for name, s in score.signals.items()}}
@@ -196,9 +197,10 @@ def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
             "judged_from": round(MIN_SKILL, 4),
             "why": SKILL_THRESHOLD_REASON,
             "signals": {name: {"skill": record[name]["skill"], "judged": s.judged,
-                               "best_naive": s.best_naive,
+                               "samples": s.samples, "best_naive": s.best_naive,
                                "versus_linear": record[name]["versus_linear"]}
                         for name, s in chosen.signals.items()},
+            "judged_from_samples": MIN_SCORED_SAMPLES,
             "horizons": [_skill_record(s) for s in scores],
         },
         "heldout_error": {
@@ -257,6 +259,10 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
     it (with the horizon chosen) in ``model.metadata`` (not yet written). Without the
     training data, the mean and linear yardsticks are fitted on these logs themselves,
     which favours them: the skill found is, if anything, too low."""
+    from auvdiag_cli.diagnosis import check_model_fits
+
+    for log in logs:
+        check_model_fits(model, profile, log)
     trained = {e.get("sha256") for e in model.metadata.get("training", {}).get("logs", [])}
     seen = [p.name for p in logs if log_digest(p) in trained]
     if seen:

@@ -29,6 +29,8 @@ from models.baselines import HoldLast, TrainingMean, fit_linear
 from models.rollouts import Rollouts, plan_rollouts, replay_plan
 
 MIN_SKILL = 1.0 / 3.0
+# Fewer held-out samples of a signal than this and its skill is not trusted (20 s at 10 Hz).
+MIN_SCORED_SAMPLES = 200
 # Candidate horizons, longest first; None is the paper's free run.
 HORIZON_CANDIDATES_S: tuple[float | None, ...] = (None, 120.0, 60.0, 30.0, 15.0, 8.0, 4.0, 2.0)
 
@@ -58,6 +60,7 @@ def _skill_against(model_rms: float, reference_rms: float) -> float:
 class SignalSkill:
     model_rms: float
     baseline_rms: dict[str, float]        # hold, mean, linear
+    samples: int = MIN_SCORED_SAMPLES     # held-out samples the figures come from
 
     @property
     def best_naive(self) -> str:
@@ -72,8 +75,12 @@ class SignalSkill:
         return _skill_against(self.model_rms, self.baseline_rms["linear"])
 
     @property
+    def enough_data(self) -> bool:
+        return self.samples >= MIN_SCORED_SAMPLES
+
+    @property
     def judged(self) -> bool:
-        return bool(self.skill >= MIN_SKILL)
+        return self.enough_data and bool(self.skill >= MIN_SKILL)
 
 
 @dataclass(frozen=True)
@@ -113,9 +120,11 @@ def score_horizon(predictors: dict[str, Rollouts], logs: Sequence[ScoringLog],
                                     command_scale, state_scale)
             residuals[name].append(log.sensors - predicted)
     rms = {name: _rms(parts) for name, parts in residuals.items()}
+    samples = np.isfinite(np.concatenate(residuals["model"])).sum(axis=0)
     return HorizonScore(horizon_s, {
         signal: SignalSkill(float(rms["model"][i]),
-                            {k: float(v[i]) for k, v in rms.items() if k != "model"})
+                            {k: float(v[i]) for k, v in rms.items() if k != "model"},
+                            int(samples[i]))
         for i, signal in enumerate(sensor_names)})
 
 

@@ -4,6 +4,7 @@ start-up raise no alarm."""
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -163,3 +164,20 @@ def test_the_audit_table_names_the_signals_not_judged(make_log, tmp_path):
     row = pd.read_csv(tmp_path / "audit" / "audit.csv").iloc[0]
     assert row["not_judged"] == "flow" and row["verdict"] == "normal"
     assert row["worst_g_signal"] == "yaw_rate"       # the worst g of a judged signal
+
+
+def test_too_little_held_out_data_judges_nothing(tmp_path):
+    """A 30 s log leaves 6 s held out: about 60 samples cannot show skill, whatever the
+    figure."""
+    log = _noise_log(tmp_path / "short.csv", 5, seconds=30.0)
+    model = tmp_path / "short-model"
+    result = runner.invoke(app, ["train", str(log), "--output", str(model), "--keep-unskilled",
+                                 "--iterations-scale", "0.01", "--hidden", "8"])
+    assert result.exit_code == 1, result.output
+    found = re.findall(r"NO: too little held-out data to measure it \((\d+) samples, needs "
+                       r"200\)", result.stdout)
+    assert len(found) == 2 and 50 <= int(found[0]) < 200, result.stdout
+    code, report = _diagnose_json(log, "--model", str(model))
+    assert code == 0 and report["verdict"] == "undetermined"
+    assert report["not_judged"]["flow"] == ("not judged (too little held-out data to measure "
+                                            f"the model's skill: {found[0]} samples)")
