@@ -47,10 +47,10 @@ def plan_rollouts(sensors: np.ndarray, cuts: Sequence[int], horizon_steps: int |
             continue
         starts = [int(candidates[0])]
         while horizon_steps is not None:
-            later = candidates[candidates >= starts[-1] + horizon_steps]
-            if not later.size:
+            later = int(np.searchsorted(candidates, starts[-1] + horizon_steps))
+            if later == candidates.size:
                 break
-            starts.append(int(later[0]))
+            starts.append(int(candidates[later]))
         plan += [Rollout(begin, end, start, stop)
                  for start, stop in zip(starts, [*starts[1:], end], strict=True)]
     return plan

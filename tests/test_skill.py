@@ -181,3 +181,21 @@ def test_too_little_held_out_data_judges_nothing(tmp_path):
     assert code == 0 and report["verdict"] == "undetermined"
     assert report["not_judged"]["flow"] == ("not judged (too little held-out data to measure "
                                             f"the model's skill: {found[0]} samples)")
+
+
+def test_rollouts_restart_every_horizon_from_a_median_start():
+    from models.rollouts import plan_rollouts, start_states
+
+    sensors = np.tile(np.arange(100.0)[:, None], (1, 2))
+    sensors[40:45, 1] = np.nan                        # no gyro around the second re-start
+    sensors[0, 0] = 1e3                               # an outlier in the first sample
+    plan = plan_rollouts(sensors, [60], 20)
+    # the re-start due at 42 waits until the gyro has a sample in its window (45 is in 43's)
+    assert [(r.start, r.end) for r in plan] == [(2, 22), (22, 43), (43, 60), (62, 82),
+                                                (82, 100)]
+    assert {(r.stretch_begin, r.stretch_end) for r in plan} == {(0, 60), (60, 100)}
+    states = start_states(sensors, plan)
+    assert states[0].tolist() == [2.0, 2.0]           # the median of samples 0-4
+    assert states[2].tolist() == [43.0, 45.0]         # the gyro's one sample in 41-45
+    assert states[3].tolist() == [63.0, 63.0]         # never reaching across the cut at 60
+    assert plan_rollouts(sensors, [], None)[0].end == 100
