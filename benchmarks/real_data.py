@@ -22,8 +22,12 @@ import time
 from collections import Counter
 from datetime import date
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from auvdiag_cli.training_job import TrainingResult
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 FAULT_CLASSES = ["AddWeight", "PressureGain_constant", "PropellerDamage_slight",
@@ -35,7 +39,7 @@ def _number(path: Path) -> int:
     return int(found[-1]) if found else 0
 
 
-def _skill_table(result) -> list[str]:      # a TrainingResult
+def _skill_table(result: "TrainingResult") -> list[str]:
     rows = ["| signal | skill | vs linear | model rms | hold rms | mean rms | judged |",
             "|---|---|---|---|---|---|---|"]
     for name, s in result.chosen.signals.items():
@@ -45,7 +49,7 @@ def _skill_table(result) -> list[str]:      # a TrainingResult
     return rows
 
 
-def _horizon(result) -> str:
+def _horizon(result: "TrainingResult") -> str:
     h = result.chosen.horizon_s
     return "free run" if h is None else f"{h:g} s"
 

@@ -16,7 +16,7 @@ import os
 import platform
 import tempfile
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from datetime import date
 from pathlib import Path
 
@@ -84,8 +84,11 @@ def main() -> None:
 
     from models import training
 
-    def before(*a: object, **k: object) -> object:     # no thread setting: torch's default
-        return training._train(*a[:1], k["hidden"], k["stages"], 64, k["seed"], k["progress"])
+    def before(sequences: Sequence[training.TrainingLog], hidden: int,
+               stages: Sequence[training.Stage], seed: int,
+               progress: Callable[[str], None] | None) -> object:
+        """The trainer as it was: torch's default thread count."""
+        return training._train(sequences, hidden, stages, 64, seed, progress)
 
     with tempfile.TemporaryDirectory() as work:
         logs, heldout = simulated_logs(Path(work), args.minutes)
