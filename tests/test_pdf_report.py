@@ -58,6 +58,7 @@ def test_paper_scenario_report_reads_right(paper_report):
     assert "Component:  flow sensor" in first
     assert "onset about 115" in first and "detected at 11" in first
     assert "case 2, b = flow=1 yaw_rate=0" in first
+    assert "Hypotheses:  best explained by flow sensor dead (" in first
     assert "the controller reaches the last waypoint" in first
     assert "At most one sensor or actuator is defective at a time." in first
     assert "Residual index g" in reader.pages[3].extract_text()

@@ -61,6 +61,23 @@ def _substitution(s: dict[str, Any]) -> list[tuple[str, str]]:
     return facts
 
 
+def _hypothesis(h: dict[str, Any]) -> str:
+    what = h["component"].replace("_", " ")
+    kind = (f"weakened to {h['thrust_fraction']:.0%} thrust" if h["kind"] == "weakened"
+            else h["kind"])
+    ratio = h.get("peak_g_over_threshold")
+    return f"{what} {kind}" + ("" if ratio is None else f" ({ratio:.0%} of threshold)")
+
+
+def _hypotheses(test: dict[str, Any]) -> str:
+    best, other = test["best"], test.get("runner_up")
+    text = ("best explained by " if best["explains"] else
+            "no single-component fault explains it; closest: ") + _hypothesis(best)
+    if other is not None:
+        text += "; runner-up " + _hypothesis(other)
+    return text
+
+
 def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     """(label, value) pairs, most important first."""
     duration = document.get("duration_s")
@@ -77,6 +94,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     case = document.get("case")
     facts.append(("Pattern table", f"case {case}, b = {b}" if case is not None
                   else f"b = {b} fits no row"))
+    hypotheses = document.get("hypotheses")
+    if hypotheses:
+        facts.append(("Hypotheses", _hypotheses(hypotheses)))
     not_judged = document.get("not_judged") or {}
     if not_judged:
         facts.append(("Not judged", "; ".join(f"{k}: {v}" for k, v in not_judged.items())))
