@@ -2,15 +2,16 @@
 
 Data (read from ../shared/data, or --data; skipped with a message when absent):
 - Haizhe AUV fault data set (Ji D., Mendeley Data, doi 10.17632/7rp2pmr6mx.1; Data in Brief
-  39:107477, 2021; CC BY 4.0), train/ split. The Normal runs, in numeric order, are dealt
-  out 3:1:1 to training, calibration (also the held-out set for the skill figures) and
-  judgement; the model is trained with `auvdiag train`'s defaults, calibrated, and every
-  judged Normal run and every run of each fault class is diagnosed.
+  39:107477, 2021; CC BY 4.0), train/ split, cross-validated (--folds, default 5): in each
+  fold the Normal runs, in numeric order, are dealt out to training, calibration (also the
+  held-out set for the skill figures) and judgement; the model is trained with `auvdiag
+  train`'s defaults, calibrated, and the judged Normal runs and every run of each fault
+  class are diagnosed.
 - Real ArduSub logs (clydemcqueen/ardusub_log_tools, MIT): a model is trained on the
   operating (armed) time of small.BIN alone (its last 20 % held out), kept even without
   skill, and all three logs are diagnosed with it.
 
-Usage: python benchmarks/real_data.py [--data DIR] [--iterations-scale 1.0]
+Usage: python benchmarks/real_data.py [--data DIR] [--iterations-scale 1.0] [--folds 5]
 """
 
 import argparse
@@ -27,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
+    from auvdiag_cli.diagnosis import Diagnosis
     from auvdiag_cli.training_job import TrainingResult
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -54,7 +56,26 @@ def _horizon(result: "TrainingResult") -> str:
     return "free run" if h is None else f"{h:g} s"
 
 
-def haizhe(folder: Path, work: Path, scale: float) -> list[str]:
+def _score(diagnosis: "Diagnosis") -> float:
+    """The run's largest g / threshold over the judged signals (the alarm's margin)."""
+    if diagnosis.matching is None:
+        return 0.0
+    judged = [i for i, n in enumerate(diagnosis.sensor_names) if n not in diagnosis.not_judged]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = diagnosis.matching.g_percent[:, judged] / diagnosis.thresholds[:, judged]
+    return float(np.nanmax(ratio)) if np.isfinite(ratio).any() else 0.0
+
+
+def _auc(positives: list[float], negatives: list[float]) -> float:
+    """P(a faulty run scores above a normal one), ties counting half (Mann-Whitney)."""
+    pos, neg = np.asarray(positives)[:, None], np.asarray(negatives)[None, :]
+    return float(((pos > neg) + 0.5 * (pos == neg)).mean())
+
+
+def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
+    """Cross-validated within train/: in fold f the Normal runs numbered i with i % folds == f
+    are judged, those with i % folds == f + 1 calibrate (and score the skill), the rest
+    train; every faulty run is diagnosed in every fold."""
     from auvdiag_cli.calibration import calibrate
     from auvdiag_cli.diagnosis import diagnose
     from auvdiag_cli.profile import load_profile
@@ -63,35 +84,48 @@ def haizhe(folder: Path, work: Path, scale: float) -> list[str]:
 
     profile = load_profile(Path("haizhe"))
     normal = sorted((folder / "Normal").glob("*.csv"), key=_number)
-    training = [p for i, p in enumerate(normal) if i % 5 < 3]
-    calibration = [p for i, p in enumerate(normal) if i % 5 == 3]
-    judged = [p for i, p in enumerate(normal) if i % 5 == 4]
-    started = time.perf_counter()
-    result = train_from_logs(training, work / "haizhe", profile, calibration,
-                             iterations_scale=scale, keep_unskilled=True)
-    trained_s = time.perf_counter() - started
-    model = load_model(work / "haizhe")
-    calibrate(model, profile, calibration)
-    lines = [f"**Haizhe AUV** ({len(training)} Normal runs to train, {len(calibration)} to "
-             f"calibrate and score, {len(judged)} judged; {result.operating_hours * 60:.1f} min "
-             f"of operating time, trained in {trained_s:.0f} s). Horizon chosen: "
-             f"{_horizon(result)}.", "", *_skill_table(result), ""]
-    lines += ["| runs | diagnosed | alarms | rate | component named (count) |",
-              "|---|---|---|---|---|"]
-    for label, runs in [("Normal (held out)", judged),
-                        *[(c, sorted((folder / c).glob("*.csv"), key=_number))
-                          for c in FAULT_CLASSES]]:
-        verdicts: Counter[str] = Counter()
-        named: Counter[str] = Counter()
-        for run in runs:
-            d = diagnose(run, profile, model)
-            verdicts[d.verdict] += 1
-            if d.verdict == "fault":
-                named[d.component or "/".join(d.candidates) or "unidentified"] += 1
-        alarms = verdicts["fault"]
-        lines.append(f"| {label} | {len(runs)} | {alarms} | {alarms / max(1, len(runs)):.0%} | "
-                     + (", ".join(f"{k} ({v})" for k, v in named.most_common(3)) or "-")
+    faulty = {c: sorted((folder / c).glob("*.csv"), key=_number) for c in FAULT_CLASSES}
+    scores: dict[str, list[float]] = {"Normal (held out)": [], **{c: [] for c in faulty}}
+    alarms: Counter[str] = Counter()
+    named: dict[str, Counter[str]] = {label: Counter() for label in scores}
+    horizons, first, seconds = [], None, 0.0
+    for fold in range(folds):
+        judged = [p for i, p in enumerate(normal) if i % folds == fold]
+        calibration = [p for i, p in enumerate(normal) if i % folds == (fold + 1) % folds]
+        training = [p for p in normal if p not in judged and p not in calibration]
+        started = time.perf_counter()
+        result = train_from_logs(training, work / f"haizhe{fold}", profile, calibration,
+                                 iterations_scale=scale, keep_unskilled=True)
+        seconds += time.perf_counter() - started
+        first = first or result
+        horizons.append(_horizon(result))
+        model = load_model(work / f"haizhe{fold}")
+        calibrate(model, profile, calibration)
+        for label, runs in [("Normal (held out)", judged), *faulty.items()]:
+            for run in runs:
+                d = diagnose(run, profile, model)
+                scores[label].append(_score(d))
+                if d.verdict == "fault":
+                    alarms[label] += 1
+                    named[label][d.component or "/".join(d.candidates) or "unidentified"] += 1
+    assert first is not None
+    lines = [f"**Haizhe AUV**, {folds}-fold cross-validation within train/ ({len(normal)} Normal "
+             f"runs; per fold about {len(normal) * (folds - 2) // folds} to train, "
+             f"{len(normal) // folds} to calibrate and score, {len(normal) // folds} judged; "
+             f"{first.operating_hours * 60:.1f} min of operating time in fold 1; training "
+             f"{seconds / folds:.0f} s a fold). Horizon chosen per fold: "
+             f"{', '.join(horizons)}. Skill in fold 1:", "", *_skill_table(first), "",
+             "| runs | diagnosed (all folds) | alarms | rate | AUC of the score against "
+             "held-out Normal | component named (count) |", "|---|---|---|---|---|---|"]
+    normal_scores = scores["Normal (held out)"]
+    for label, values in scores.items():
+        auc = "-" if label.startswith("Normal") else f"{_auc(values, normal_scores):.2f}"
+        lines.append(f"| {label} | {len(values)} | {alarms[label]} | "
+                     f"{alarms[label] / max(1, len(values)):.0%} | {auc} | "
+                     + (", ".join(f"{k} ({v})" for k, v in named[label].most_common(3)) or "-")
                      + " |")
+    lines += ["", "The score of a run is its largest g / threshold over the judged signals; "
+              "the AUC is the chance that a faulty run scores above a held-out Normal one."]
     return lines
 
 
@@ -133,20 +167,25 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DEFAULT_DATA)
     parser.add_argument("--iterations-scale", type=float, default=1.0)
+    parser.add_argument("--folds", type=int, default=5, help="Haizhe cross-validation folds")
     args = parser.parse_args()
+    if args.folds < 3:
+        parser.error("--folds must be at least 3 (one to judge, one to calibrate, the rest "
+                     "to train)")
     if not args.data.is_dir():
         print(f"Real data not found at {args.data}: skipped (see the README for the data sets).")
         return
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), "
           f"Python {platform.python_version()}; data from {args.data}.\n")
     with tempfile.TemporaryDirectory() as work:
-        for name, runner, sub in (("Haizhe", haizhe, "haizhe/train"),
-                                  ("ArduSub", ardusub, "ardusub")):
+        for name, sub in (("Haizhe", "haizhe/train"), ("ArduSub", "ardusub")):
             folder = args.data / sub
             if not folder.is_dir():
                 print(f"{name}: not found at {folder}: skipped.\n")
                 continue
-            print("\n".join(runner(folder, Path(work), args.iterations_scale)) + "\n")
+            lines = (haizhe(folder, Path(work), args.iterations_scale, args.folds)
+                     if name == "Haizhe" else ardusub(folder, Path(work), args.iterations_scale))
+            print("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":
