@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 # The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
 PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
 PAPER_VEHICLE = "twin-burger"
-HELD_OUT_FRACTION = 0.2      # of a single log's steps, its last part in time
+HELD_OUT_FRACTION = 0.2      # of a single log's operating steps, its last part in time
 SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
                 "replays re-starting every horizon from a median start state; versus_linear "
                 "= 1 - rms_model / rms_linear")
