@@ -335,7 +335,8 @@ def train(
     Training runs in stages, short rollouts first and long free-running ones after. The
     model is then scored on held-out normal data against naive predictors (the last value
     holds, the mean, a linear model): a signal it cannot predict better is never judged.
-    Exit status 1 when no signal has skill (no model is written unless --keep-unskilled)."""
+    It also learns how the commands follow the motion (see 'auvdiag relate'). Exit status 1
+    when nothing can be judged (no model is written unless --keep-unskilled)."""
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.report_training import training_lines
     from auvdiag_cli.training_job import paper_model_error, train_from_logs
@@ -346,13 +347,13 @@ def train(
                                  iterations_scale, _horizon_option(horizon, vehicle.horizon_s),
                                  keep_unskilled,
                                  progress=_progress)
-    for line in training_lines(result, paper_model_error(vehicle)):
+    for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names):
         typer.echo(line)
-    if not result.chosen.judged:
-        typer.echo("auvdiag: no signal has skill, or enough held-out data to show it (see the "
-                   "table above)" + ("" if result.written else
-                                     "; the model is not written (--keep-unskilled writes "
-                                     "it anyway)"), err=True)
+    if not result.judges_anything:
+        typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "
+                   "actuator's commands can be judged (see above)"
+                   + ("" if result.written else "; the model is not written (--keep-unskilled "
+                                                "writes it anyway)"), err=True)
         raise typer.Exit(EXIT_FAULT)
 
 
@@ -385,6 +386,42 @@ def score(
         typer.echo(line)
     typer.echo(f"skill written to {(output or model) / 'model.json'}")
     if not chosen.judged:
+        raise typer.Exit(EXIT_FAULT)
+
+
+@app.command()
+def relate(
+    logs: Annotated[list[Path], typer.Argument(help="Normal logs to learn from.")],
+    model: ModelToUpdateOption,
+    holdout: Annotated[list[Path] | None, typer.Option(
+        "--holdout", help="Held-out normal log that sets the thresholds (repeatable; "
+                          "default: every fifth log, or the last 20 % of a single log).")
+    ] = None,
+    output: CopyOutputOption = None,
+    profile: ProfileOption = None,
+) -> None:
+    """Learn how the vehicle's commands follow its motion, and record it in the model.
+
+    A controller holding heading, depth or attitude hides a weakened thruster from the
+    motion by driving it harder; the commands then depart from what the motion needs. This
+    learns that relation from normal logs (DMS runs and open-loop logs are left out) and
+    sets, per actuator, how much extra effort normal logs reach. 'auvdiag train' does this
+    itself; use this command for a model trained before, or to learn from other dives."""
+    from auvdiag_cli.calibration import write_metadata
+    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.relations_job import relate_model
+    from auvdiag_cli.report_training import relation_lines
+    from models.store import load_model
+
+    with _user_errors(model):
+        vehicle = load_profile(profile)
+        loaded = load_model(model)
+        entry = relate_model(loaded, vehicle, logs, holdout or (), _progress)
+        write_metadata(loaded, output or model)
+    for line in relation_lines(entry, vehicle.command_names):
+        typer.echo(line)
+    typer.echo(f"command relations written to {(output or model) / 'model.json'}")
+    if "refused" in entry:
         raise typer.Exit(EXIT_FAULT)
 
 

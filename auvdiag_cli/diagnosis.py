@@ -10,6 +10,7 @@ import numpy as np
 
 from auvdiag_cli.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.closed_loop import replay_closed_loop
+from auvdiag_cli.command_check import CommandCheck, check_commands
 from auvdiag_cli.completeness import Completeness, completeness_of
 from auvdiag_cli.derivation import dms_signature
 from auvdiag_cli.detection import binary_vector, decided_b, detect, first_alarm, look_up
@@ -22,8 +23,8 @@ from auvdiag_cli.profile import Profile
 from auvdiag_cli.segments import (
     ROUTINE_MODE,
     Segment,
-    segments_from_commands,
-    segments_from_markers,
+    mission_steps,
+    segments_of,
     threshold_matrix,
 )
 from auvdiag_cli.substitution import Substitution, substitute
@@ -89,6 +90,7 @@ class Diagnosis:
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
     not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
+    command_check: CommandCheck | None = None   # the commands judged against the motion
 
 
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
@@ -170,11 +172,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     full_scale = model.metadata.get("full_scale", profile.full_scales)
     window = int(model.metadata.get("window_samples", profile.window_samples))
     judged = _with_model_thresholds(profile, model)
-    if signals.markers:
-        segments = segments_from_markers(signals.markers, signals.start_ns,
-                                         float(frame.time_s[-1]), judged)
-    else:
-        segments = segments_from_commands(frame.commands, frame.time_s, judged)
+    segments = segments_of(log, judged)
     # Every DMS is a test of its own: the replay starts afresh from the measured state.
     dms_starts = [int(np.searchsorted(frame.time_s, s.start_s)) for s in segments
                   if s.mode == ROUTINE_MODE]
@@ -212,10 +210,20 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     if model.skill is None:
         diagnosis.notes.append("the model has no skill scores (trained before they were "
                                "measured): every signal is judged; 'auvdiag score' measures them")
+    diagnosis.command_check = _check_commands(log, segments, profile, model, diagnosis.notes)
+    check = diagnosis.command_check
     if len(not_judged) == len(frame.sensor_names):
-        diagnosis.verdict, diagnosis.case = "undetermined", None
         diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
+        if check is not None and check.judged:
+            if check.alarm_s is not None:
+                _apply_command_alarm(diagnosis, check, profile, model)
+            return diagnosis
+        diagnosis.verdict, diagnosis.case = "undetermined", None
         return diagnosis
+    if detection is None and check is not None and check.alarm_s is not None:
+        _apply_command_alarm(diagnosis, check, profile, model)
+    elif detection is not None and check is not None and check.alarm_s is not None:
+        diagnosis.notes.append(f"the commands also depart from the motion: {check.describe()}")
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
@@ -232,6 +240,36 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         elif not diagnosis.candidates:
             _name_by_hypotheses(diagnosis, test, profile, model)
     return diagnosis
+
+
+def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
+                    model: LoadedModel, notes: list[str]) -> CommandCheck | None:
+    """The commands against the motion, over the steps driven in closed loop or by a pilot
+    (not the DMS runs, whose commands are fixed)."""
+    relations = model.relations
+    if relations is None:
+        why = model.metadata.get("command_relations", {}).get("refused")
+        notes.append("commands not judged against the motion: " + (
+            why or "the model has no command relations ('auvdiag relate' learns them)"))
+        return None
+    frame = log.frame
+    return check_commands(relations, profile, frame.commands, frame.sensors,
+                          mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
+
+
+def _apply_command_alarm(diagnosis: Diagnosis, check: CommandCheck, profile: Profile,
+                         model: LoadedModel) -> None:
+    """The motion looks normal (or cannot be judged) but an actuator works harder than the
+    motion needs: a weakened actuator whose loss the controller makes up for."""
+    diagnosis.verdict, diagnosis.case = "fault", None
+    diagnosis.detected_at_s, diagnosis.onset_s = check.alarm_s, check.onset_s
+    diagnosis.candidates = list(check.named)
+    diagnosis.notes.append(f"found in the commands, not the motion: {check.describe()}"
+                           + ("" if len(check.named) == 1 else
+                              "; these actuators act alike on the vehicle and cannot be told "
+                              "apart from its commands"))
+    if len(check.named) == 1:
+        _name_component(diagnosis, check.named[0], profile, model)
 
 
 def _name_by_hypotheses(diagnosis: Diagnosis, test: HypothesisTest, profile: Profile,

@@ -8,6 +8,7 @@ from typing import Any
 
 from auvdiag_cli import __version__
 from auvdiag_cli.closed_loop import ClosedLoopReplay
+from auvdiag_cli.command_check import CommandCheck
 from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
 from auvdiag_cli.hypotheses import Hypothesis
 
@@ -60,6 +61,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "thrust_fraction": diagnosis.degradation.thrust_fraction,
             "peak_g_over_threshold": diagnosis.degradation.peak_g_ratio},
         "hypotheses": _hypotheses(diagnosis),
+        "commands_check": _command_check(diagnosis.command_check),
         "active_diagnosis": _active(diagnosis),
         "substitution": None if substitution is None else {
             "signal": substitution.signal,
@@ -128,6 +130,16 @@ def _hypotheses(diagnosis: Diagnosis) -> dict[str, Any] | None:
             "table_agrees": (test.best.component in diagnosis.candidates
                              if diagnosis.case is not None else None),
             "ranked": [_hypothesis(h) for h in test.ranked]}
+
+
+def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
+    if check is None:
+        return None
+    return {"summary": check.describe() if check.judged else "no actuator could be judged",
+            "window_s": check.window_s, "extra_effort_allowed": check.thresholds,
+            "peak_over_threshold": check.peak_ratio, "not_judged": check.not_judged,
+            "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
+            "extra_effort": check.extra_effort}
 
 
 def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:

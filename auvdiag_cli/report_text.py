@@ -73,6 +73,11 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
                              f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
                              f"{loop.miss_m:.2f} m from it")
     lines += [f"  {name}: {why}" for name, why in d.not_judged.items()]
+    check = d.command_check
+    if check is not None:
+        lines.append("  commands vs motion: " + (check.describe() if check.judged
+                                                 else "no actuator could be judged"))
+        lines += [f"    {name}: {why}" for name, why in check.not_judged.items()]
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"

@@ -4,6 +4,7 @@ paper's vehicle only); the thresholds, which log set each, and what to be wary o
 
 import math
 from collections.abc import Sequence
+from typing import Any
 
 from auvdiag_cli.calibration import CalibrationResult
 from auvdiag_cli.training_job import TrainingResult
@@ -54,7 +55,8 @@ def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[st
     return lines + _skill_rows(chosen)
 
 
-def training_lines(result: TrainingResult, paper_rms: dict[str, float]) -> list[str]:
+def training_lines(result: TrainingResult, paper_rms: dict[str, float],
+                   command_names: Sequence[str]) -> list[str]:
     chosen = result.chosen
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
@@ -63,6 +65,27 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float]) -> list[
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
+    return lines + relation_lines(result.command_relations, command_names)
+
+
+def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[str]:
+    """How the commands follow the motion: learned from which logs, and the extra effort
+    each actuator may show before it is called weakened."""
+    if "refused" in entry:
+        return [f"commands not judged against the motion: {entry['refused']}"]
+    fitted = entry.get("fitted_on", {})
+    left_out = fitted.get("open_loop_left_out") or []
+    lines = [f"command relations learned from {len(fitted.get('logs', []))} log(s), "
+             f"{fitted.get('steps', 0)} steps"
+             + (f" (left out as open loop: {', '.join(left_out)})" if left_out else "")
+             + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
+    groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
+    for name, threshold in zip(command_names, entry["thresholds"], strict=True):
+        allowed = ("not judged (too little held-out data drove it)" if threshold is None
+                   else f"{threshold:.0%}")
+        lines.append(f"  {name:<14}{allowed}")
+    lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
+              for g in groups]
     return lines
 
 

@@ -3,11 +3,15 @@ when a log has none, from the command history itself (each DMS is a fixed comman
 so it is found by matching the profile's template)."""
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from adapters.signals import SegmentMarker
 from auvdiag_cli.profile import MISSION_MODE, DiagnosisSequence, Profile
+
+if TYPE_CHECKING:
+    from auvdiag_cli.ingest import IngestedLog
 
 ROUTINE_MODE = "routine"
 
@@ -107,3 +111,23 @@ def segments_from_commands(commands: np.ndarray, time_s: np.ndarray, profile: Pr
         segments.append(Segment("MISSION", MISSION_MODE, cursor, end_s,
                                 profile.thresholds_for("MISSION")))
     return segments
+
+
+def segments_of(log: "IngestedLog", profile: Profile) -> list[Segment]:
+    """The log's segments: from its markers when it has some, else from its commands."""
+    signals, frame = log.signals, log.frame
+    if signals.markers:
+        return segments_from_markers(signals.markers, signals.start_ns,
+                                     float(frame.time_s[-1]), profile)
+    return segments_from_commands(frame.commands, frame.time_s, profile)
+
+
+def mission_steps(segments: list[Segment], time_s: np.ndarray, operating: np.ndarray
+                  ) -> np.ndarray:
+    """True at the operating steps outside every DMS run (where the vehicle is driven in
+    closed loop or by its pilot rather than by a fixed command history)."""
+    steps = operating.copy() if len(operating) == len(time_s) else np.ones(len(time_s), bool)
+    for segment in segments:
+        if segment.mode == ROUTINE_MODE:
+            steps &= ~((time_s >= segment.start_s) & (time_s <= segment.end_s))
+    return steps

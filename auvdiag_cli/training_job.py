@@ -4,7 +4,7 @@ held-out normal data, choose the prediction horizon, and write a model directory
 import hashlib
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -16,6 +16,13 @@ from auvdiag_cli.digest import log_digest
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.ingest import ingest
 from auvdiag_cli.profile import Profile
+from auvdiag_cli.relations_job import (
+    HELD_OUT_FRACTION,
+    learn_relations,
+    relation_log,
+    split_point,
+)
+from models.command_relations import RelationLog
 from models.skill import (
     HORIZON_CANDIDATES_S,
     MIN_SCORED_SAMPLES,
@@ -32,7 +39,6 @@ if TYPE_CHECKING:
 # The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
 PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
 PAPER_VEHICLE = "twin-burger"
-HELD_OUT_FRACTION = 0.2      # of a single log's operating steps, its last part in time
 SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
                 "replays re-starting every horizon from a median start state; versus_linear "
                 "= 1 - rms_model / rms_linear")
@@ -57,6 +63,13 @@ class TrainingResult:
     chosen: HorizonScore
     operating_hours: float
     logged_rates_hz: dict[str, float]   # per signal, median over the training logs
+    command_relations: dict[str, Any]   # model.json's entry: the relation or why none
+
+    @property
+    def judges_anything(self) -> bool:
+        """A signal has skill, or some actuator's commands can be judged against the motion."""
+        thresholds = self.command_relations.get("thresholds") or []
+        return bool(self.chosen.judged) or any(t is not None for t in thresholds)
 
 
 def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[Path], list[Path]]:
@@ -70,9 +83,15 @@ def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[P
     return [p for p in logs if p not in held], held
 
 
-def _read(path: Path, profile: Profile, progress: Callable[[str], None]
-          ) -> tuple[ScoringLog, dict[str, float]]:
-    """The log on the model grid, and the rate each signal was logged at (Hz, median)."""
+@dataclass(frozen=True)
+class _ReadLog:
+    scoring: ScoringLog
+    relation: RelationLog
+    rates_hz: dict[str, float]          # the rate each signal was logged at (median)
+
+
+def _read(path: Path, profile: Profile, progress: Callable[[str], None]) -> _ReadLog:
+    """The log on the model grid, for the network and for the command relations."""
     log = ingest(path, profile)
     frame = log.frame
     for note in frame.slow_commands:
@@ -82,11 +101,12 @@ def _read(path: Path, profile: Profile, progress: Callable[[str], None]
         steps = np.diff(series.index.to_numpy(dtype=np.int64))
         if (steps > 0).any():
             rates[name] = 1e9 / float(np.median(steps[steps > 0]))
-    return ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts)), rates
+    return _ReadLog(ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts)),
+                    relation_log(log, profile), rates)
 
 
 def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
-    return _read(path, profile, progress)[0]
+    return _read(path, profile, progress).scoring
 
 
 def _median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
@@ -98,9 +118,7 @@ def _median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
 def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
     """The log up to where 1 - HELD_OUT_FRACTION of its usable (operating, complete) steps
     lie, and the rest."""
-    usable = np.cumsum(np.isfinite(log.sensors).all(axis=1))
-    cut = int(np.searchsorted(usable, usable[-1] * (1 - HELD_OUT_FRACTION))) + 1 \
-        if usable.size and usable[-1] else len(log.commands)
+    cut = split_point(np.isfinite(log.sensors).all(axis=1), HELD_OUT_FRACTION)
     head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
                       tuple(c for c in log.cuts if c < cut))
     tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
@@ -134,10 +152,11 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         raise UsageError("no training logs left after holding out")
     progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
     read = [_read(p, profile, progress) for p in training_paths]
-    training = [log for log, _ in read]
-    rates = _median_rates([r for _, r in read], [*profile.command_names,
-                                                  *profile.sensor_names])
-    heldout = [_scoring_log(p, profile, progress) for p in heldout_paths]
+    training = [r.scoring for r in read]
+    rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,
+                                                        *profile.sensor_names])
+    read_heldout = [_read(p, profile, progress) for p in heldout_paths]
+    heldout = [r.scoring for r in read_heldout]
     split = f"{len(heldout)} held-out log(s)"
     if not heldout:
         training[0], tail = _split_in_time(training[0])
@@ -161,11 +180,16 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     horizon_candidates(profile, horizon_s))
     chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
-    result = TrainingResult(output, bool(chosen.judged) or keep_unskilled, len(training),
-                            len(heldout), split, scores, chosen, hours, rates)
+    progress("learning how the commands follow the motion")
+    relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
+                                profile)
+    result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
+                            hours, rates, relations)
+    result = replace(result, written=result.judges_anything or keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, seed)
+        metadata["command_relations"] = relations
         save_model(output, network, normaliser, metadata)
     return result
 

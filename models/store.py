@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auvdiag_errors import ModelError
+from models.command_relations import CommandRelations
 from models.fast import FastDynamics
 from models.normaliser import Normaliser
 
@@ -90,6 +91,13 @@ class LoadedModel:
         signals = self.metadata.get("skill", {}).get("signals", {})
         return tuple(name for name in self.sensor_names
                      if name in signals and not signals[name].get("judged", False))
+
+    @cached_property
+    def relations(self) -> CommandRelations | None:
+        """How the commands follow the motion on normal logs; None where the model has none
+        (trained before they were learned, or the logs could not teach them)."""
+        entry = self.metadata.get("command_relations")
+        return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
 
     @property
     def command_names(self) -> tuple[str, ...]:

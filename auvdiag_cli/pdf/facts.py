@@ -100,6 +100,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     not_judged = document.get("not_judged") or {}
     if not_judged:
         facts.append(("Not judged", "; ".join(f"{k}: {v}" for k, v in not_judged.items())))
+    commands = document.get("commands_check")
+    if commands:
+        facts.append(("Commands vs motion", commands["summary"]))
     weak = document.get("degradation")
     if weak:
         facts.append(("Partial failure", f"{weak['component'].replace('_', ' ')} gives about "

@@ -1,0 +1,81 @@
+"""Learning how a vehicle's commands follow its motion (`models.command_relations`) from
+normal logs: part of `auvdiag train`, and `auvdiag relate` for an existing model."""
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.ingest import IngestedLog, ingest
+from auvdiag_cli.profile import Profile
+from auvdiag_cli.segments import mission_steps, segments_of
+from models.command_relations import RelationLog, RelationsRefused, fit_relations
+
+if TYPE_CHECKING:
+    from models.store import LoadedModel
+
+HELD_OUT_FRACTION = 0.2      # of a single log's usable steps, its last part in time
+
+
+def relation_log(log: IngestedLog, profile: Profile) -> RelationLog:
+    """The log's steps a relation may speak for: operating, outside the DMS runs (a DMS is
+    a fixed command history, not commands that follow the motion)."""
+    frame = log.frame
+    return RelationLog(log.signals.path.name, frame.commands, frame.sensors,
+                       mission_steps(segments_of(log, profile), frame.time_s, frame.operating))
+
+
+def split_point(usable: np.ndarray, held_out_fraction: float = HELD_OUT_FRACTION) -> int:
+    """The index before which 1 - held_out_fraction of the usable steps lie."""
+    count = np.cumsum(usable)
+    if not count.size or not count[-1]:
+        return len(usable)
+    return int(np.searchsorted(count, count[-1] * (1 - held_out_fraction))) + 1
+
+
+def _split_in_time(log: RelationLog) -> tuple[RelationLog, RelationLog]:
+    usable = log.usable & np.isfinite(log.sensors).all(axis=1)
+    cut = split_point(usable)
+    return (RelationLog(log.name, log.commands[:cut], log.sensors[:cut], log.usable[:cut]),
+            RelationLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
+                        log.sensors[cut:], log.usable[cut:]))
+
+
+def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
+                    profile: Profile) -> dict[str, Any]:
+    """The model.json entry: the relation, or why the logs could not teach one. One
+    training log and no held-out one: its last 20 % (in time) sets the thresholds."""
+    if not heldout and len(training) == 1:
+        head, tail = _split_in_time(training[0])
+        training, heldout = [head], [tail]
+    scales = [profile.full_scales[name] for name in profile.sensor_names]
+    try:
+        relations = fit_relations(training, heldout, scales, profile.dt_s)
+    except RelationsRefused as why:
+        return {"refused": str(why)}
+    return relations.to_json()
+
+
+def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
+                 holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
+                 ) -> dict[str, Any]:
+    """Learn the relation for an existing model from normal logs and record it in
+    ``model.metadata`` (not yet written)."""
+    from auvdiag_cli.diagnosis import check_model_fits
+    from auvdiag_cli.training_job import split_holdout
+
+    for log in [*logs, *holdout]:
+        check_model_fits(model, profile, log)
+    training_paths, heldout_paths = split_holdout(logs, holdout)
+    if not training_paths:
+        raise UsageError("no logs left to learn from after holding out")
+    progress(f"reading {len(training_paths)} logs to learn from and {len(heldout_paths)} "
+             "held-out logs")
+    entry = learn_relations([relation_log(ingest(p, profile), profile) for p in training_paths],
+                            [relation_log(ingest(p, profile), profile) for p in heldout_paths],
+                            profile)
+    model.metadata["command_relations"] = entry
+    model.__dict__.pop("relations", None)        # the cached parse is stale
+    return entry

@@ -1,0 +1,230 @@
+"""How a healthy vehicle's commands relate to its motion, learned from normal logs.
+
+Whatever drives the vehicle (a controller holding heading, depth or attitude, or a pilot)
+spends, for a given motion, a given effort on each actuator. A thruster that gives less
+thrust than it should is driven harder for the same motion: the controller hides the
+fault from the motion, the commands carry it. This module learns
+
+- the relation: each command as a least-squares function of the motion the sensors
+  measure (values, signed squares, products and smoothed rates: drag and inertia), and
+- the mixer's reach: the subspace the commands of normal logs span (a mixer that makes
+  three efforts out of six thrusters spans three dimensions).
+
+If actuator k gives (1 - f) of its thrust, the effort lost is about f·c_k along the
+direction e_k; the controller puts it back through its mixer, so the commands depart
+from the relation by about α·c_k·P·e_k, where P projects on the mixer's subspace and α is
+the extra effort asked of k. Over a window, α_k is the least-squares fit of that
+signature to the departure. Two actuators whose signatures are the same over normal logs
+(e.g. a vectored ROV's diagonally opposite thrusters) cannot be told apart: they form a
+group, named together."""
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
+SMOOTHING_S = 1.0         # of the rates that stand for inertia
+MIN_DRIVE = 0.1           # an actuator must work at this rms command in a window to be judged
+MARGIN = 1.5              # thresholds: this many times the held-out normal peak of |α|
+SUBSPACE_ENERGY = 1e-3    # a direction holding less of the commands' energy is not used
+SAME_SIGNATURE = 0.98     # cosine above which two actuators' signatures are the same
+OPEN_LOOP_RATIO = 2.0     # a log departing this many times the median is not closed loop
+MIN_SAMPLES_PER_FEATURE = 20
+
+
+@dataclass(frozen=True)
+class RelationLog:
+    """One log on the model grid; ``usable`` marks the steps the relation may speak for
+    (operating, outside open-loop test sequences)."""
+
+    name: str
+    commands: np.ndarray
+    sensors: np.ndarray
+    usable: np.ndarray
+
+
+def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:
+    rate = np.gradient(x, dt_s, axis=0) if len(x) > 1 else np.zeros_like(x)
+    kernel = np.ones(smoothing_steps) / smoothing_steps
+    return np.column_stack([np.convolve(rate[:, i], kernel, "same")
+                            for i in range(x.shape[1])])
+
+
+def motion_features(sensors: np.ndarray, scale: np.ndarray, dt_s: float,
+                    smoothing_steps: int) -> np.ndarray:
+    """Values, signed squares, pairwise products, smoothed rates and a constant, of the
+    sensors in units of their full scale; NaN rows where a sensor is missing."""
+    x = sensors / scale
+    n = x.shape[1]
+    pairs = [x[:, i] * x[:, j] for i in range(n) for j in range(i + 1, n)]
+    return np.column_stack([x, x * np.abs(x), *pairs, _rates(x, dt_s, smoothing_steps),
+                            np.ones(len(x))])
+
+
+def _trailing_sum(values: np.ndarray, steps: int) -> np.ndarray:
+    total = np.cumsum(values, axis=0)
+    total[steps:] = total[steps:] - total[:-steps]
+    return total
+
+
+@dataclass(frozen=True)
+class CommandRelations:
+    sensor_scale: np.ndarray         # (n_sensors,)
+    weights: np.ndarray              # (n_features, n_commands)
+    basis: np.ndarray                # (n_commands, rank): the mixer's subspace
+    thresholds: np.ndarray           # (n_commands,) |α| allowed; NaN: not judged
+    groups: tuple[tuple[int, ...], ...]
+    dt_s: float
+    window_steps: int
+    smoothing_steps: int
+    fitted_on: dict[str, Any]
+
+    @property
+    def projector(self) -> np.ndarray:
+        return self.basis @ self.basis.T
+
+    def group_of(self, k: int) -> tuple[int, ...]:
+        return next(g for g in self.groups if k in g)
+
+    def departure(self, commands: np.ndarray, sensors: np.ndarray) -> np.ndarray:
+        """Commands minus what the relation expects for the measured motion (NaN rows where
+        a signal is missing)."""
+        features = motion_features(sensors, self.sensor_scale, self.dt_s, self.smoothing_steps)
+        return commands - features @ self.weights
+
+    def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
+                     usable: np.ndarray) -> np.ndarray:
+        """α per actuator over the window ending at each step, shape (steps, n_commands);
+        NaN where the window holds too few usable steps or the actuator barely worked."""
+        departure = self.departure(commands, sensors)
+        ok = usable & np.isfinite(departure).all(axis=1) & np.isfinite(commands).all(axis=1)
+        departure = np.where(ok[:, None], departure, 0.0)
+        drive = np.where(ok[:, None], commands, 0.0)
+        directions = self.projector                 # column k: P e_k
+        # s_k(t) = c_k(t) P e_k, so s_k·d = c_k (P e_k · d) and |s_k|^2 = c_k^2 |P e_k|^2.
+        along = departure @ directions
+        numerator = _trailing_sum(drive * along, self.window_steps)
+        weight = _trailing_sum(drive**2, self.window_steps)
+        count = _trailing_sum(ok.astype(float), self.window_steps)
+        norms = np.maximum((directions**2).sum(axis=0), 1e-12)
+        enough = (count >= self.window_steps / 2)[:, None] & (
+            weight >= MIN_DRIVE**2 * np.maximum(count, 1.0)[:, None])
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(enough, numerator / (weight * norms), np.nan)
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
+            "basis": self.basis.tolist(),
+            "thresholds": [None if math.isnan(t) else t for t in self.thresholds.tolist()],
+            "groups": [list(g) for g in self.groups], "dt_s": self.dt_s,
+            "window_steps": self.window_steps, "smoothing_steps": self.smoothing_steps,
+            "fitted_on": self.fitted_on,
+        }
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
+        thresholds = [math.nan if t is None else float(t) for t in data["thresholds"]]
+        return cls(np.asarray(data["sensor_scale"], float),
+                   np.asarray(data["weights"], float), np.asarray(data["basis"], float),
+                   np.asarray(thresholds, float),
+                   tuple(tuple(int(i) for i in g) for g in data["groups"]),
+                   float(data["dt_s"]), int(data["window_steps"]),
+                   int(data["smoothing_steps"]), dict(data.get("fitted_on", {})))
+
+    def with_thresholds(self, thresholds: np.ndarray) -> "CommandRelations":
+        return CommandRelations(self.sensor_scale, self.weights, self.basis, thresholds,
+                                self.groups, self.dt_s, self.window_steps,
+                                self.smoothing_steps, self.fitted_on)
+
+
+class RelationsRefused(ValueError):
+    """The logs cannot teach the relation; the message says why."""
+
+
+def _rows(logs: Sequence[RelationLog], scale: np.ndarray, dt_s: float, smoothing: int
+          ) -> list[tuple[np.ndarray, np.ndarray]]:
+    rows = []
+    for log in logs:
+        features = motion_features(log.sensors, scale, dt_s, smoothing)
+        ok = log.usable & np.isfinite(features).all(axis=1) & np.isfinite(
+            log.commands).all(axis=1)
+        rows.append((features[ok], log.commands[ok]))
+    return rows
+
+
+def _least_squares(rows: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    features = np.vstack([f for f, _ in rows])
+    commands = np.vstack([c for _, c in rows])
+    weights, *_ = np.linalg.lstsq(features, commands, rcond=None)
+    return np.asarray(weights)
+
+
+def _closed_loop(rows: list[tuple[np.ndarray, np.ndarray]], names: list[str]
+                 ) -> tuple[list[int], list[str]]:
+    """The logs whose commands follow the motion: open-loop runs (test sequences, command
+    steps) depart from a relation fitted on all logs far more than the median log."""
+    if len(rows) < 3:
+        return list(range(len(rows))), []
+    weights = _least_squares(rows)
+    rms = np.array([float(np.sqrt(np.mean((c - f @ weights) ** 2))) if len(c) else np.inf
+                    for f, c in rows])
+    limit = OPEN_LOOP_RATIO * float(np.median(rms))
+    kept = [i for i in range(len(rows)) if rms[i] <= limit]
+    return kept, [names[i] for i in range(len(rows)) if i not in kept]
+
+
+def _subspace(commands: np.ndarray) -> np.ndarray:
+    _, singular, vt = np.linalg.svd(commands, full_matrices=False)
+    energy = singular**2 / max(float(np.sum(singular**2)), 1e-300)
+    rank = max(1, int((energy > SUBSPACE_ENERGY).sum()))
+    return np.asarray(vt[:rank].T)
+
+
+def _groups(commands: np.ndarray, basis: np.ndarray) -> tuple[tuple[int, ...], ...]:
+    """Actuators whose signatures c_k·P·e_k coincide over the data (up to scale)."""
+    projector = basis @ basis.T
+    m = commands.shape[1]
+    signatures = [np.outer(commands[:, k], projector[:, k]).ravel() for k in range(m)]
+    norms = [float(np.linalg.norm(s)) for s in signatures]
+    parent = list(range(m))
+    for i in range(m):
+        for j in range(i + 1, m):
+            if norms[i] > 0 and norms[j] > 0 and float(
+                    signatures[i] @ signatures[j]) / (norms[i] * norms[j]) > SAME_SIGNATURE:
+                parent[j] = parent[i]
+    return tuple(tuple(k for k in range(m) if parent[k] == root)
+                 for root in sorted(set(parent)))
+
+
+def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
+                  sensor_scale: Sequence[float], dt_s: float,
+                  window_s: float = WINDOW_S) -> CommandRelations:
+    """Fit on ``training``; thresholds from ``heldout`` (normal logs not fitted on)."""
+    scale = np.asarray(sensor_scale, float)
+    smoothing = max(1, round(SMOOTHING_S / dt_s))
+    rows = _rows(training, scale, dt_s, smoothing)
+    kept, open_loop = _closed_loop(rows, [t.name for t in training])
+    rows = [rows[i] for i in kept]
+    features = np.vstack([f for f, _ in rows]) if rows else np.empty((0, 0))
+    if len(features) < MIN_SAMPLES_PER_FEATURE * max(1, features.shape[1]):
+        raise RelationsRefused(f"too little usable data ({len(features)} steps) to learn how "
+                               "the commands follow the motion")
+    commands = np.vstack([c for _, c in rows])
+    basis = _subspace(commands)
+    relations = CommandRelations(
+        scale, _least_squares(rows), basis, np.full(commands.shape[1], np.nan),
+        _groups(commands, basis), dt_s, max(2, round(window_s / dt_s)), smoothing,
+        {"logs": [training[i].name for i in kept], "open_loop_left_out": open_loop,
+         "steps": len(features), "heldout": [h.name for h in heldout]})
+    peaks = [relations.extra_effort(h.commands, h.sensors, h.usable) for h in heldout]
+    stacked = np.vstack(peaks) if peaks else np.full((0, commands.shape[1]), np.nan)
+    judged = np.isfinite(stacked).sum(axis=0) >= relations.window_steps
+    with np.errstate(invalid="ignore"):
+        peak = np.where(judged, np.nanmax(np.abs(np.where(np.isfinite(stacked), stacked,
+                                                          0.0)), axis=0,
+                                          initial=0.0), np.nan)
+    return relations.with_thresholds(MARGIN * peak)
