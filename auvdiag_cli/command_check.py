@@ -7,9 +7,16 @@ import numpy as np
 
 from auvdiag_cli.profile import Profile
 from models.command_relations import CommandRelations
+from models.skill import MIN_SKILL
 
 NO_THRESHOLD = "not judged (too little held-out data drove it to set a threshold)"
 NEVER_DRIVEN = "not judged (never driven enough in a window of this log)"
+# An actuator (or a group that acts alike) is named when its signature explains at least
+# this share of the departure and DOMINANCE times the share any other explains: a weak
+# thruster's explains most of it, while a sensor misreading the motion makes the controller
+# push on several thrusters, each explaining part of it.
+MIN_EXPLAINED = 0.2
+DOMINANCE = 3.0
 
 
 @dataclass(frozen=True)
@@ -21,6 +28,7 @@ class CommandCheck:
     peak_ratio: dict[str, float | None]
     alarm_s: float | None                   # end of the first window over a threshold
     named: tuple[str, ...]                  # components; several when they look the same
+    explained: dict[str, float] | None      # share of the departure each actuator explains
     extra_effort: float | None              # the named actuator's mean extra effort after it
     window_s: float
 
@@ -37,6 +45,11 @@ class CommandCheck:
     def describe(self) -> str:
         if self.alarm_s is None:
             return "every judged actuator's command stayed within its relation to the motion"
+        if not self.named:
+            best = max((self.explained or {}).values(), default=0.0)
+            return (f"the commands depart from what the motion needs from {self.alarm_s:.1f} s, "
+                    f"but no single actuator explains it (at most {best:.0%}): a sensor "
+                    "misreading the motion, or more than one fault")
         effort = "" if self.extra_effort is None else f" by {self.extra_effort:.0%} on average"
         return (f"{' or '.join(self.named)} driven harder than the motion needs{effort} "
                 f"from {self.alarm_s:.1f} s ({self.window_s:.0f} s windows)")
@@ -60,23 +73,34 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
     for k, name in enumerate(names):
         finite = ratio[:, k][np.isfinite(ratio[:, k])]
         peaks[name] = round(float(finite.max()), 3) if finite.size else None
-        if np.isnan(thresholds[k]):
+        skill = relations.skill[k]
+        if not skill >= MIN_SKILL:
+            not_judged[name] = ("not judged (the relation does not predict its commands better "
+                                "than their mean" + ("" if np.isnan(skill) else
+                                                     f": skill {skill:.2f}") + ")")
+        elif np.isnan(thresholds[k]):
             not_judged[name] = NO_THRESHOLD
         elif not finite.size:
             not_judged[name] = NEVER_DRIVEN
     first = _first_over(ratio)
     named: tuple[str, ...] = ()
-    extra = None
+    extra = shares = None
     if first is not None:
-        with np.errstate(invalid="ignore"):
-            after = np.nanmean(np.where(np.isfinite(ratio[first:]), ratio[first:], np.nan),
-                               axis=0)
-        best = int(np.nanargmax(after))
-        components = [profile.commands[k].component for k in relations.group_of(best)]
-        named = tuple(dict.fromkeys(components))
-        extra = round(float(np.nanmean(effort[first:, best])), 3)
+        since = usable.copy()
+        since[:max(0, first - relations.window_steps)] = False
+        shares = relations.explained(commands, sensors, since)
+        best = int(np.argmax(shares))
+        group = relations.group_of(best)
+        others = max((shares[k] for k in range(len(names)) if k not in group), default=0.0)
+        if shares[best] >= max(MIN_EXPLAINED, DOMINANCE * others):
+            components = [profile.commands[k].component for k in group]
+            named = tuple(dict.fromkeys(components))
+            over = effort[first:, best][np.isfinite(effort[first:, best])]
+            extra = round(float(over.mean()), 3) if over.size else None
     return CommandCheck(
         names, {n: None if np.isnan(t) else round(float(t), 4) for n, t in zip(
             names, thresholds, strict=True)}, not_judged, ratio, peaks,
-        None if first is None else round(float(time_s[first]), 3), named, extra,
+        None if first is None else round(float(time_s[first]), 3), named,
+        None if shares is None else {n: round(float(v), 3) for n, v in zip(
+            names, shares, strict=True)}, extra,
         relations.window_steps * relations.dt_s)

@@ -263,13 +263,19 @@ def _apply_command_alarm(diagnosis: Diagnosis, check: CommandCheck, profile: Pro
     motion needs: a weakened actuator whose loss the controller makes up for."""
     diagnosis.verdict, diagnosis.case = "fault", None
     diagnosis.detected_at_s, diagnosis.onset_s = check.alarm_s, check.onset_s
-    diagnosis.candidates = list(check.named)
-    diagnosis.notes.append(f"found in the commands, not the motion: {check.describe()}"
-                           + ("" if len(check.named) == 1 else
-                              "; these actuators act alike on the vehicle and cannot be told "
-                              "apart from its commands"))
-    if len(check.named) == 1:
-        _name_component(diagnosis, check.named[0], profile, model)
+    # A sensor reading the motion wrongly also makes the controller push harder; the motion
+    # model rules that out only for the sensors it judges.
+    unjudged = [s.component for s in profile.sensors if s.name in diagnosis.not_judged]
+    diagnosis.candidates = list(dict.fromkeys([*check.named, *unjudged])) if check.named else []
+    note = f"found in the commands, not the motion: {check.describe()}"
+    if len(check.named) > 1:
+        note += "; these actuators act alike on the vehicle and cannot be told apart from it"
+    if check.named and unjudged:
+        note += ("; a misreading " + " or ".join(dict.fromkeys(unjudged)) + " (not judged by "
+                 "the motion model) would look the same")
+    diagnosis.notes.append(note)
+    if len(diagnosis.candidates) == 1:
+        _name_component(diagnosis, diagnosis.candidates[0], profile, model)
 
 
 def _name_by_hypotheses(diagnosis: Diagnosis, test: HypothesisTest, profile: Profile,

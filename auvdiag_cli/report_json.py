@@ -139,6 +139,7 @@ def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
             "window_s": check.window_s, "extra_effort_allowed": check.thresholds,
             "peak_over_threshold": check.peak_ratio, "not_judged": check.not_judged,
             "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
+            "explained": check.explained,
             "extra_effort": check.extra_effort}
 
 

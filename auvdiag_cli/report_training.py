@@ -80,10 +80,15 @@ def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[
              + (f" (left out as open loop: {', '.join(left_out)})" if left_out else "")
              + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
     groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
-    for name, threshold in zip(command_names, entry["thresholds"], strict=True):
-        allowed = ("not judged (too little held-out data drove it)" if threshold is None
-                   else f"{threshold:.0%}")
-        lines.append(f"  {name:<14}{allowed}")
+    for name, threshold, skill in zip(command_names, entry["thresholds"], entry["skill"],
+                                      strict=True):
+        if skill is None or skill < MIN_SKILL:
+            allowed = "not judged (the relation does not predict its commands)"
+        else:
+            allowed = ("not judged (too little held-out data drove it)" if threshold is None
+                       else f"{threshold:.0%}")
+        lines.append(f"  {name:<14}{allowed}" + ("" if skill is None else
+                                                 f"   (skill {skill:.2f})"))
     lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
               for g in groups]
     return lines

@@ -20,10 +20,12 @@ group, named together."""
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
+
+from models.skill import MIN_SKILL
 
 WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
 SMOOTHING_S = 1.0         # of the rates that stand for inertia
@@ -47,10 +49,13 @@ class RelationLog:
 
 
 def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:
+    """Centred moving average of the rates, as long as ``x`` even when shorter than the
+    average (np.convolve's "same" is not)."""
     rate = np.gradient(x, dt_s, axis=0) if len(x) > 1 else np.zeros_like(x)
     kernel = np.ones(smoothing_steps) / smoothing_steps
-    return np.column_stack([np.convolve(rate[:, i], kernel, "same")
-                            for i in range(x.shape[1])])
+    first = smoothing_steps // 2
+    return np.column_stack([np.convolve(rate[:, i], kernel, "full")[first:first + len(x)]
+                            for i in range(x.shape[1])]).reshape(x.shape)
 
 
 def motion_features(sensors: np.ndarray, scale: np.ndarray, dt_s: float,
@@ -76,6 +81,7 @@ class CommandRelations:
     weights: np.ndarray              # (n_features, n_commands)
     basis: np.ndarray                # (n_commands, rank): the mixer's subspace
     thresholds: np.ndarray           # (n_commands,) |α| allowed; NaN: not judged
+    skill: np.ndarray                # (n_commands,) 1 - rms departure / rms about the mean
     groups: tuple[tuple[int, ...], ...]
     dt_s: float
     window_steps: int
@@ -95,50 +101,67 @@ class CommandRelations:
         features = motion_features(sensors, self.sensor_scale, self.dt_s, self.smoothing_steps)
         return commands - features @ self.weights
 
-    def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
-                     usable: np.ndarray) -> np.ndarray:
-        """α per actuator over the window ending at each step, shape (steps, n_commands);
-        NaN where the window holds too few usable steps or the actuator barely worked."""
+    def _terms(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per step: c_k (P e_k · d), c_k^2, |P d|^2 (zero where not usable), and which
+        steps are usable. The signature s_k = c_k P e_k gives s_k·d = c_k (P e_k · d) and
+        |s_k|^2 = c_k^2 P_kk."""
         departure = self.departure(commands, sensors)
         ok = usable & np.isfinite(departure).all(axis=1) & np.isfinite(commands).all(axis=1)
         departure = np.where(ok[:, None], departure, 0.0)
         drive = np.where(ok[:, None], commands, 0.0)
-        directions = self.projector                 # column k: P e_k
-        # s_k(t) = c_k(t) P e_k, so s_k·d = c_k (P e_k · d) and |s_k|^2 = c_k^2 |P e_k|^2.
-        along = departure @ directions
-        numerator = _trailing_sum(drive * along, self.window_steps)
-        weight = _trailing_sum(drive**2, self.window_steps)
+        along = departure @ self.projector
+        return drive * along, drive**2, (along * departure).sum(axis=1), ok
+
+    def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
+                     usable: np.ndarray) -> np.ndarray:
+        """α per actuator over the window ending at each step, shape (steps, n_commands);
+        NaN where the window holds too few usable steps or the actuator barely worked."""
+        product, drive2, _, ok = self._terms(commands, sensors, usable)
+        numerator = _trailing_sum(product, self.window_steps)
+        weight = _trailing_sum(drive2, self.window_steps)
         count = _trailing_sum(ok.astype(float), self.window_steps)
-        norms = np.maximum((directions**2).sum(axis=0), 1e-12)
+        norms = np.maximum(np.diag(self.projector), 1e-12)
         enough = (count >= self.window_steps / 2)[:, None] & (
             weight >= MIN_DRIVE**2 * np.maximum(count, 1.0)[:, None])
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(enough, numerator / (weight * norms), np.nan)
 
+    def explained(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray
+                  ) -> np.ndarray:
+        """Per actuator, the share of the departure (within the mixer's reach) that its
+        signature explains over the usable steps given: near 1 when that actuator alone
+        lost effort, about 1/m when all commands rose together (a sensor reading the
+        motion low makes the controller push on every thruster)."""
+        product, drive2, energy, _ = self._terms(commands, sensors, usable)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = product.sum(axis=0) ** 2 / (
+                drive2.sum(axis=0) * np.diag(self.projector) * energy.sum())
+        return np.nan_to_num(share, nan=0.0)
+
     def to_json(self) -> dict[str, Any]:
+        def numbers(values: np.ndarray) -> list[float | None]:
+            return [None if math.isnan(v) else round(v, 6) for v in values.tolist()]
+
         return {
             "sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
-            "basis": self.basis.tolist(),
-            "thresholds": [None if math.isnan(t) else t for t in self.thresholds.tolist()],
-            "groups": [list(g) for g in self.groups], "dt_s": self.dt_s,
-            "window_steps": self.window_steps, "smoothing_steps": self.smoothing_steps,
-            "fitted_on": self.fitted_on,
+            "basis": self.basis.tolist(), "thresholds": numbers(self.thresholds),
+            "skill": numbers(self.skill), "groups": [list(g) for g in self.groups],
+            "dt_s": self.dt_s, "window_steps": self.window_steps,
+            "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on,
         }
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
-        thresholds = [math.nan if t is None else float(t) for t in data["thresholds"]]
+        def numbers(values: list[float | None]) -> np.ndarray:
+            return np.asarray([math.nan if v is None else float(v) for v in values], float)
+
         return cls(np.asarray(data["sensor_scale"], float),
                    np.asarray(data["weights"], float), np.asarray(data["basis"], float),
-                   np.asarray(thresholds, float),
+                   numbers(data["thresholds"]), numbers(data["skill"]),
                    tuple(tuple(int(i) for i in g) for g in data["groups"]),
                    float(data["dt_s"]), int(data["window_steps"]),
                    int(data["smoothing_steps"]), dict(data.get("fitted_on", {})))
-
-    def with_thresholds(self, thresholds: np.ndarray) -> "CommandRelations":
-        return CommandRelations(self.sensor_scale, self.weights, self.basis, thresholds,
-                                self.groups, self.dt_s, self.window_steps,
-                                self.smoothing_steps, self.fitted_on)
 
 
 class RelationsRefused(ValueError):
@@ -215,16 +238,34 @@ def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog
                                "the commands follow the motion")
     commands = np.vstack([c for _, c in rows])
     basis = _subspace(commands)
+    m = commands.shape[1]
     relations = CommandRelations(
-        scale, _least_squares(rows), basis, np.full(commands.shape[1], np.nan),
+        scale, _least_squares(rows), basis, np.full(m, np.nan), np.full(m, np.nan),
         _groups(commands, basis), dt_s, max(2, round(window_s / dt_s)), smoothing,
         {"logs": [training[i].name for i in kept], "open_loop_left_out": open_loop,
          "steps": len(features), "heldout": [h.name for h in heldout]})
-    peaks = [relations.extra_effort(h.commands, h.sensors, h.usable) for h in heldout]
-    stacked = np.vstack(peaks) if peaks else np.full((0, commands.shape[1]), np.nan)
-    judged = np.isfinite(stacked).sum(axis=0) >= relations.window_steps
-    with np.errstate(invalid="ignore"):
-        peak = np.where(judged, np.nanmax(np.abs(np.where(np.isfinite(stacked), stacked,
-                                                          0.0)), axis=0,
-                                          initial=0.0), np.nan)
-    return relations.with_thresholds(MARGIN * peak)
+    skill = _skill(relations, heldout, commands.mean(axis=0))
+    efforts = [relations.extra_effort(h.commands, h.sensors, h.usable) for h in heldout]
+    stacked = np.vstack(efforts) if efforts else np.full((0, m), np.nan)
+    finite = np.isfinite(stacked)
+    peak = np.where(finite, np.abs(stacked), 0.0).max(axis=0, initial=0.0)
+    judged = (finite.sum(axis=0) >= relations.window_steps) & (skill >= MIN_SKILL)
+    return replace(relations, thresholds=np.where(judged, MARGIN * peak, np.nan), skill=skill)
+
+
+def _skill(relations: CommandRelations, heldout: Sequence[RelationLog], mean: np.ndarray
+           ) -> np.ndarray:
+    """Per command, 1 - rms(departure) / rms(command - training mean) on held-out data: a
+    relation that does not explain the commands better than their mean judges nothing."""
+    departures, deviations = [], []
+    for log in heldout:
+        departure = relations.departure(log.commands, log.sensors)
+        ok = log.usable & np.isfinite(departure).all(axis=1)
+        departures.append(departure[ok])
+        deviations.append(log.commands[ok] - mean)
+    if not departures or not sum(len(d) for d in departures):
+        return np.full(len(mean), np.nan)
+    model_rms = np.sqrt(np.mean(np.vstack(departures) ** 2, axis=0))
+    mean_rms = np.sqrt(np.mean(np.vstack(deviations) ** 2, axis=0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(1.0 - model_rms / mean_rms)
