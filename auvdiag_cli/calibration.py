@@ -22,6 +22,7 @@ from auvdiag_cli.errors import UsageError
 from auvdiag_cli.ingest import ingest
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.profile import MISSION_MODE, Profile
+from auvdiag_cli.relations_job import widen_thresholds
 from auvdiag_cli.report_json import write_json
 from models.store import METADATA_FILE, LoadedModel
 
@@ -81,6 +82,7 @@ class CalibrationResult:
     in_sample_logs: list[str]           # calibration logs the model was trained on
     widening: dict[str, float]          # per signal, applied to the in-sample logs' g
     warnings: list[str]
+    relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
 
 
 def _mode_key(segment_name: str) -> str:
@@ -173,6 +175,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
     model.metadata["thresholds"] = thresholds
+    raised = widen_thresholds(model, [d.command_check for d in diagnoses], margin)
     calibrated = replace(model, metadata=model.metadata)
     checks = []
     for path in faulty_logs:
@@ -182,7 +185,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                                   round(ratio, 2)))
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
-        widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening))
+        widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
+        raised)
     model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
 
@@ -231,6 +235,7 @@ def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_pro
                                   e.next_peak} for k, e in m.evidence.items()}}
                   for m in result.modes],
         "warnings": result.warnings,
+        "relation_thresholds_raised": result.relation_thresholds_raised,
         "faulty_logs": [c.__dict__ for c in result.faulty],
     }
 

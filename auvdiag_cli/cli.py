@@ -417,12 +417,14 @@ def relate(
         vehicle = load_profile(profile)
         loaded = load_model(model)
         entry = relate_model(loaded, vehicle, logs, holdout or (), _progress)
-        write_metadata(loaded, output or model)
+        if "refused" not in entry:
+            write_metadata(loaded, output or model)
     for line in relation_lines(entry, vehicle.command_names):
         typer.echo(line)
-    typer.echo(f"command relations written to {(output or model) / 'model.json'}")
     if "refused" in entry:
+        typer.echo("auvdiag: the model is left as it was", err=True)
         raise typer.Exit(EXIT_FAULT)
+    typer.echo(f"command relations written to {(output or model) / 'model.json'}")
 
 
 @app.command()

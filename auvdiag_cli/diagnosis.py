@@ -248,7 +248,7 @@ def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
     (not the DMS runs, whose commands are fixed)."""
     relations = model.relations
     if relations is None:
-        why = model.metadata.get("command_relations", {}).get("refused")
+        why = (model.metadata.get("command_relations") or {}).get("refused")
         notes.append("commands not judged against the motion: " + (
             why or "the model has no command relations ('auvdiag relate' learns them)"))
         return None

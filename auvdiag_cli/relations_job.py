@@ -14,6 +14,7 @@ from auvdiag_cli.segments import mission_steps, segments_of
 from models.command_relations import RelationLog, RelationsRefused, fit_relations
 
 if TYPE_CHECKING:
+    from auvdiag_cli.command_check import CommandCheck
     from models.store import LoadedModel
 
 HELD_OUT_FRACTION = 0.2      # of a single log's usable steps, its last part in time
@@ -62,7 +63,7 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                  holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
                  ) -> dict[str, Any]:
     """Learn the relation for an existing model from normal logs and record it in
-    ``model.metadata`` (not yet written)."""
+    ``model.metadata`` (not yet written); a refusal (the entry says why) changes nothing."""
     from auvdiag_cli.diagnosis import check_model_fits
     from auvdiag_cli.training_job import split_holdout
 
@@ -76,6 +77,29 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
     entry = learn_relations([relation_log(ingest(p, profile), profile) for p in training_paths],
                             [relation_log(ingest(p, profile), profile) for p in heldout_paths],
                             profile)
-    model.metadata["command_relations"] = entry
-    model.__dict__.pop("relations", None)        # the cached parse is stale
+    if "refused" not in entry:          # a refusal keeps whatever the model had
+        model.metadata["command_relations"] = entry
+        model.__dict__.pop("relations", None)        # the cached parse is stale
     return entry
+
+
+def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None"],
+                     margin: float) -> dict[str, float]:
+    """Raise, in ``model.metadata``, each actuator's allowed extra effort to ``margin``
+    times the most these normal logs reached where that is more (never lower: the held-out
+    logs set it): no calibration log may alarm. Returns the raised thresholds by command."""
+    entry = model.metadata.get("command_relations") or {}
+    if "thresholds" not in entry:
+        return {}
+    raised = {}
+    names = model.command_names
+    for check in checks:
+        if check is None:
+            continue
+        for k, name in enumerate(names):
+            threshold, ratio = entry["thresholds"][k], check.peak_ratio.get(name)
+            if threshold is not None and ratio is not None and margin * ratio > 1.0:
+                entry["thresholds"][k] = round(margin * ratio * threshold, 6)
+                raised[name] = entry["thresholds"][k]
+    model.__dict__.pop("relations", None)
+    return raised

@@ -112,5 +112,9 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
         named = check.component or " or ".join(check.candidates) or "-"
         lines.append(f"  faulty {check.log}: {check.verdict} {named}, peak g "
                      f"{check.peak_ratio:.1f} x threshold")
+    if result.relation_thresholds_raised:
+        lines.append("  commands vs motion: extra effort allowed raised so that no calibration "
+                     "log alarms: " + ", ".join(f"{k} {v:.0%}" for k, v in
+                                                result.relation_thresholds_raised.items()))
     lines += [f"warning: {warning}" for warning in result.warnings]
     return lines

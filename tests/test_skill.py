@@ -89,11 +89,15 @@ def _shipped_copy(target: Path, **changes: object) -> Path:
     return target
 
 
-def _unskilled_copy(target: Path, signal: str) -> Path:
-    """The shipped model, with ``signal`` marked as one it cannot predict."""
+def _unskilled_copy(target: Path, signal: str, relations: bool = False) -> Path:
+    """The shipped model, with ``signal`` marked as one it cannot predict; without its
+    command relations unless asked (they judge the commands, not the signal)."""
     skill = json.loads((default_model_dir() / "model.json").read_text())["skill"]
     skill["signals"][signal].update(skill=0.05, judged=False)
-    return _shipped_copy(target, skill=skill)
+    if relations:
+        return _shipped_copy(target, skill=skill)
+    return _shipped_copy(target, skill=skill,
+                         command_relations={"refused": "left out of this copy"})
 
 
 def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
@@ -112,6 +116,22 @@ def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     assert rendered.exit_code == 0, rendered.output
     first = " ".join(pypdf.PdfReader(pdf).pages[0].extract_text().split())
     assert "NORMAL" in first and "Not judged: flow: not judged (the model cannot" in first
+
+
+def test_commands_reveal_what_an_unjudged_sensor_hides_without_blaming_a_thruster(
+        make_log, tmp_path):
+    """The covered flow sensor reads zero: the speed controller drives both thrusters
+    harder than the measured motion needs. With the flow not judged, the commands still
+    show the fault, and since both thrusters share the departure, neither is named."""
+    log = make_log("paper-flow-sensor-covered", 12)
+    model = _unskilled_copy(tmp_path / "m", "flow", relations=True)
+    code, report = _diagnose_json(log, "--model", str(model))
+    check = report["commands_check"]
+    assert code == 1 and report["verdict"] == "fault" and not any(report["b"].values())
+    assert report["component"] is None and report["candidates"] == [] and check["named"] == []
+    assert 115.0 < check["alarm_s"] < 150.0            # covered at 115 s
+    assert max(check["explained"].values()) < 2.5 * min(check["explained"].values())
+    assert any("no single actuator explains it" in note for note in report["notes"])
 
 
 @pytest.mark.parametrize(("scenario", "component"), [

@@ -61,6 +61,13 @@ def vehicle(request, tmp_path_factory) -> tuple[str, list[str]]:
                                   "--profile", str(profile), "--output", str(model),
                                   "--iterations-scale", "0.4", "--hidden", "24"])
     assert trained.exit_code == 0, trained.output
+    relations = json.loads((model / "model.json").read_text())["command_relations"]
+    assert all(t is not None for t in relations["thresholds"]), trained.output
+    # The open-loop logs teach nothing about how the commands follow the motion: the DMS
+    # runs are marked as such, the excitation runs are found by how far they depart.
+    assert {"excitation-1.csv", "excitation-2.csv"} <= set(
+        relations["fitted_on"]["open_loop_left_out"])
+    assert not any(name.startswith("dms-") for name in relations["fitted_on"]["logs"])
     # As for any new vehicle: thresholds from normal dives the model has not seen.
     normal = [str(_simulate(s, seed, work / f"calibration-{s}-{seed}.csv", str(profile)))
               for s in ("paper-normal", "mission-ccw", "mission-large-cw") for seed in (5, 6)]

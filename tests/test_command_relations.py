@@ -1,0 +1,133 @@
+"""Faults a controller hides: a weakened thruster the controller makes up for leaves the
+motion normal, and shows in how hard the thrusters are driven for that motion."""
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.profile import load_profile
+from auvdiag_cli.simulator.run import simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
+from models.command_relations import CommandRelations
+from models.store import default_model_dir, load_model
+
+runner = CliRunner()
+
+
+def _dive(target: Path, profile_name: str, scenario: str, seed: int, fmt: str,
+          thrust_fraction: float | None = None) -> Path:
+    profile = load_profile(Path(profile_name))
+    chosen = get_scenario(scenario, profile)
+    if thrust_fraction is not None:
+        assert chosen.fault is not None
+        chosen = dataclasses.replace(chosen, fault=dataclasses.replace(
+            chosen.fault, severity=thrust_fraction))
+    write_log(simulate(chosen, profile, seed), profile, target, fmt)
+    return target
+
+
+def _report(log: Path, *options: str) -> tuple[int, dict]:
+    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
+    assert result.exit_code in (0, 1), result.output
+    return result.exit_code, json.loads(result.stdout)
+
+
+def test_a_thruster_at_70_percent_is_found_in_the_commands_and_named(tmp_path):
+    """Thruster 0 gives 70 % of its thrust from 60 s: the heading controller drives it
+    harder and the motion stays within its thresholds; the commands name it."""
+    log = _dive(tmp_path / "weak", "twin_burger", "mission-thruster-0-weak", 7, "ros2-mcap",
+                0.7)
+    code, report = _report(log)
+    check = report["commands_check"]
+    assert code == 1 and report["verdict"] == "fault" and report["component"] == "thruster_0"
+    assert not any(report["b"].values())                   # the motion alone says normal
+    assert check["named"] == ["thruster_0"] and 60.0 < check["alarm_s"] < 120.0
+    assert check["explained"]["thruster_0"] > 3 * check["explained"]["thruster_1"]
+    assert 0.15 < check["extra_effort"] < 0.45     # 1/sqrt(0.7) - 1 = 0.20 for thrust ~ c|c|
+    assert any(note.startswith("found in the commands, not the motion") for note in
+               report["notes"])
+    text = runner.invoke(app, ["diagnose", str(log)]).stdout
+    assert "commands vs motion: thruster_0 driven harder than the motion needs" in text
+
+
+@pytest.mark.parametrize("scenario", ["paper-normal", "mission-large-ccw", "mission-sprint-cw"])
+def test_normal_missions_keep_every_command_within_its_relation(tmp_path, scenario):
+    code, report = _report(_dive(tmp_path / scenario, "twin_burger", scenario, 23,
+                                 "ros2-mcap"))
+    check = report["commands_check"]
+    assert code == 0 and check["alarm_s"] is None and not check["not_judged"]
+    assert all(0.0 < peak < 1.0 for peak in check["peak_over_threshold"].values())
+
+
+def test_thrusters_that_act_alike_are_named_together(tmp_path):
+    """On the BlueROV2 the diagonally opposite horizontal thrusters always push the same
+    way (the mixer drives them with opposite commands): a weak motor 1 cannot be told from
+    a weak motor 3 by the commands, and both are named."""
+    relations = load_model(default_model_dir("bluerov2")).relations
+    assert relations is not None and relations.groups == ((0, 2), (1, 3), (4, 5))
+    log = _dive(tmp_path / "weak.tlog", "bluerov2", "mission-thruster-1-weak", 7, "tlog")
+    code, report = _report(log, "--profile", "bluerov2")
+    assert code == 1 and report["verdict"] == "fault" and report["component"] is None
+    assert report["candidates"] == ["thruster_1", "thruster_3"]
+    assert any("act alike on the vehicle" in note for note in report["notes"])
+
+
+def test_the_relation_reads_back_from_json_and_takes_logs_of_any_length():
+    relations = load_model().relations
+    assert relations is not None
+    again = CommandRelations.from_json(json.loads(json.dumps(relations.to_json())))
+    assert np.array_equal(again.weights, relations.weights)
+    assert np.array_equal(again.thresholds, relations.thresholds, equal_nan=True)
+    assert again.groups == relations.groups == ((0,), (1,))
+    for steps in (1, 3, relations.smoothing_steps + 1):
+        effort = relations.extra_effort(np.full((steps, 2), 0.5), np.zeros((steps, 2)),
+                                        np.ones(steps, bool))
+        assert effort.shape == (steps, 2) and np.isnan(effort).all()   # shorter than a window
+
+
+def test_relate_learns_the_relation_for_an_existing_model(make_log, tmp_path):
+    model = tmp_path / "model"
+    model.mkdir()
+    for file in default_model_dir().iterdir():
+        (model / file.name).write_bytes(file.read_bytes())
+    meta = json.loads((model / "model.json").read_text())
+    del meta["command_relations"]
+    (model / "model.json").write_text(json.dumps(meta))
+    logs = [str(make_log(s, seed)) for s in ("paper-normal", "mission-ccw") for seed in (31, 32)]
+    held = str(make_log("mission-large-cw", 33))
+    result = runner.invoke(app, ["relate", *logs, "--holdout", held, "--model", str(model)])
+    assert result.exit_code == 0, result.output
+    assert "command relations learned from 4 log(s)" in result.stdout
+    learned = load_model(model).relations
+    assert learned is not None and np.isfinite(learned.thresholds).all()
+    assert learned.fitted_on["heldout"] == [Path(held).name]
+
+    short = str(make_log("dms-zb", 31))         # a DMS only: nothing follows the motion
+    refused = runner.invoke(app, ["relate", short, "--model", str(model)])
+    assert refused.exit_code == 1 and "too little usable data" in refused.stdout
+    assert load_model(model).relations is not None          # what it had is kept
+
+
+def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(tmp_path):
+    from auvdiag_cli.command_check import CommandCheck
+    from auvdiag_cli.relations_job import widen_thresholds
+
+    model = load_model()
+    before = list(model.metadata["command_relations"]["thresholds"])
+
+    def check(peaks: dict[str, float | None]) -> CommandCheck:
+        return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), peaks, None, (),
+                            None, None, 30.0)
+
+    raised = widen_thresholds(model, [check({"thruster_0": 0.9, "thruster_1": 0.5}), None,
+                                      check({"thruster_0": 0.2, "thruster_1": None})], 1.5)
+    after = model.metadata["command_relations"]["thresholds"]
+    assert raised == {"thruster_0": after[0]} and after[1] == before[1]
+    assert after[0] == pytest.approx(1.35 * before[0], rel=1e-4)
+    assert model.relations is not None and model.relations.thresholds[0] == after[0]
