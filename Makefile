@@ -5,10 +5,10 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real test
+	bench-train bench-train-busy bench-real bench-hidden test
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real
+	bench-train bench-train-busy bench-real bench-hidden
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -57,3 +57,8 @@ bench-real:
 
 test:
 	$(PYTHON) -m ruff check . && $(PYTHON) -m pytest -q
+
+bench-hidden:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/hidden_faults.py --seeds 3 --jobs 2 > $(OUT)/hidden_faults.md
+	$(PYTHON) benchmarks/readme.py hidden_faults $(OUT)/hidden_faults.md

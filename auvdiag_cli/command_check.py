@@ -15,7 +15,7 @@ NEVER_DRIVEN = "not judged (never driven enough in a window of this log)"
 # this share of the departure and DOMINANCE times the share any other explains: a weak
 # thruster's explains most of it, while a sensor misreading the motion makes the controller
 # push on several thrusters, each explaining part of it.
-MIN_EXPLAINED = 0.2
+MIN_EXPLAINED = 0.1
 DOMINANCE = 3.0
 
 

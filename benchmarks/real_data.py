@@ -79,6 +79,7 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
     from auvdiag_cli.calibration import calibrate
     from auvdiag_cli.diagnosis import diagnose
     from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.report_training import relation_lines
     from auvdiag_cli.training_job import train_from_logs
     from models.store import load_model
 
@@ -125,7 +126,75 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
                      + (", ".join(f"{k} ({v})" for k, v in named[label].most_common(3)) or "-")
                      + " |")
     lines += ["", "The score of a run is its largest g / threshold over the judged signals; "
-              "the AUC is the chance that a faulty run scores above a held-out Normal one."]
+              "the AUC is the chance that a faulty run scores above a held-out Normal one.",
+              "", "Commands against the motion, fold 1: "
+              + "; ".join(line.strip() for line in relation_lines(
+                  first.command_relations, profile.command_names)), ""]
+    return lines + separability(folder, folds)
+
+
+# Per-run statistics of the Haizhe columns, for the separability ceiling.
+CEILING_COLUMNS = ["depth", "roll", "pitch", "a_x", "a_y", "a_z", "w_row", "w_pitch", "w_yaw",
+                   "voltage"]
+
+
+def _run_statistics(path: Path) -> dict[str, float]:
+    import pandas as pd
+
+    table = pd.read_csv(path)
+    stats = {}
+    for column in CEILING_COLUMNS:
+        values = table[column].to_numpy(dtype=float)
+        stats.update({f"mean {column}": values.mean(), f"std {column}": values.std(),
+                      f"step std {column}": np.diff(values).std()})
+    stats["depth over the first second"] = float(np.median(table["depth"].to_numpy()[:18]))
+    return stats
+
+
+def _calibrated_detection(normal: np.ndarray, faulty: np.ndarray, folds: int) -> list[float]:
+    """Per fold (the folds of `haizhe`): the class's share beyond 1.5 x the largest deviation
+    of the calibration runs from the training runs' median (calibrate's rule)."""
+    index = np.arange(len(normal))
+    shares = []
+    for fold in range(folds):
+        calibration = normal[index % folds == (fold + 1) % folds]
+        training = normal[(index % folds != fold) & (index % folds != (fold + 1) % folds)]
+        centre = np.median(training)
+        shares.append(float((np.abs(faulty - centre) > 1.5 * np.abs(calibration - centre).max())
+                            .mean()))
+    return shares
+
+
+def separability(folder: Path, folds: int) -> list[str]:
+    """How far any one per-run statistic tells a class from Normal: each statistic scored
+    as its distance from the Normal runs' mean in Normal standard deviations; the best per
+    class is chosen with the fault labels, so this is an optimistic ceiling for any single
+    statistic, not a method."""
+    stats = {label: [_run_statistics(p) for p in sorted((folder / label).glob("*.csv"),
+                                                         key=_number)]
+             for label in ["Normal", *FAULT_CLASSES]}
+    normal = stats["Normal"]
+    lines = ["Separability ceiling: the best single per-run statistic per class (its distance "
+             "from the Normal mean in Normal standard deviations; chosen with the labels, so "
+             "optimistic), the share of the class beyond the 95th percentile of the Normal "
+             "runs (detection at 5 % false alarms), and beyond a threshold set by calibrate's "
+             "rule (no calibration run over it) in each fold:", "",
+             "| class | best statistic | AUC | detection at 5 % false alarms | with calibrate's "
+             "rule, per fold |", "|---|---|---|---|---|"]
+    for label in FAULT_CLASSES:
+        best = (0.0, "", 0.0)
+        for key in normal[0]:
+            reference = np.array([r[key] for r in normal])
+            mean, spread = reference.mean(), reference.std() + 1e-12
+            negatives = np.abs(reference - mean) / spread
+            positives = np.abs(np.array([r[key] for r in stats[label]]) - mean) / spread
+            auc = _auc(list(positives), list(negatives))
+            if auc > best[0]:
+                best = (auc, key, float((positives > np.quantile(negatives, 0.95)).mean()))
+        per_fold = _calibrated_detection(np.array([r[best[1]] for r in normal]),
+                                         np.array([r[best[1]] for r in stats[label]]), folds)
+        lines.append(f"| {label} | {best[1]} | {best[0]:.2f} | {best[2]:.0%} | "
+                     + ", ".join(f"{share:.0%}" for share in per_fold) + " |")
     return lines
 
 
