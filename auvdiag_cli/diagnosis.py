@@ -222,8 +222,6 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         return diagnosis
     if detection is None and check is not None and check.alarm_s is not None:
         _apply_command_alarm(diagnosis, check, profile, model)
-    elif detection is not None and check is not None and check.alarm_s is not None:
-        diagnosis.notes.append(f"the commands also depart from the motion: {check.describe()}")
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)

@@ -68,6 +68,11 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     return lines + relation_lines(result.command_relations, command_names)
 
 
+def _listed(names: Sequence[str], most: int = 5) -> str:
+    shown = ", ".join(names[:most])
+    return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
+
+
 def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[str]:
     """How the commands follow the motion: learned from which logs, and the extra effort
     each actuator may show before it is called weakened."""
@@ -77,7 +82,7 @@ def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[
     left_out = fitted.get("open_loop_left_out") or []
     lines = [f"command relations learned from {len(fitted.get('logs', []))} log(s), "
              f"{fitted.get('steps', 0)} steps"
-             + (f" (left out as open loop: {', '.join(left_out)})" if left_out else "")
+             + (f" (left out as open loop: {_listed(left_out)})" if left_out else "")
              + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
     groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
     for name, threshold, skill in zip(command_names, entry["thresholds"], entry["skill"],

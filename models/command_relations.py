@@ -34,6 +34,7 @@ MARGIN = 1.5              # thresholds: this many times the held-out normal peak
 SUBSPACE_ENERGY = 1e-3    # a direction holding less of the commands' energy is not used
 SAME_SIGNATURE = 0.98     # cosine above which two actuators' signatures are the same
 OPEN_LOOP_RATIO = 2.0     # a log departing this many times the median is not closed loop
+OPEN_LOOP_ROUNDS = 3
 MIN_SAMPLES_PER_FEATURE = 20
 
 
@@ -189,14 +190,21 @@ def _least_squares(rows: Sequence[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
 def _closed_loop(rows: list[tuple[np.ndarray, np.ndarray]], names: list[str]
                  ) -> tuple[list[int], list[str]]:
     """The logs whose commands follow the motion: open-loop runs (test sequences, command
-    steps) depart from a relation fitted on all logs far more than the median log."""
-    if len(rows) < 3:
-        return list(range(len(rows))), []
-    weights = _least_squares(rows)
-    rms = np.array([float(np.sqrt(np.mean((c - f @ weights) ** 2))) if len(c) else np.inf
-                    for f, c in rows])
-    limit = OPEN_LOOP_RATIO * float(np.median(rms))
-    kept = [i for i in range(len(rows)) if rms[i] <= limit]
+    steps) depart from a relation fitted on the others far more than the median log. Each
+    round refits without the logs left out so far (one open-loop log pulls the fit towards
+    itself and can hide another)."""
+    kept = [i for i, (_, c) in enumerate(rows) if len(c)]
+    for _ in range(OPEN_LOOP_ROUNDS):
+        if len(kept) < 3:
+            break
+        weights = _least_squares([rows[i] for i in kept])
+        rms = {i: float(np.sqrt(np.mean((rows[i][1] - rows[i][0] @ weights) ** 2)))
+               for i in range(len(rows)) if len(rows[i][1])}
+        limit = OPEN_LOOP_RATIO * float(np.median([rms[i] for i in kept]))
+        now = [i for i in rms if rms[i] <= limit]
+        if now == kept:
+            break
+        kept = now
     return kept, [names[i] for i in range(len(rows)) if i not in kept]
 
 

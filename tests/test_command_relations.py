@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pypdf
 import pytest
 from typer.testing import CliRunner
 
@@ -54,6 +55,10 @@ def test_a_thruster_at_70_percent_is_found_in_the_commands_and_named(tmp_path):
                report["notes"])
     text = runner.invoke(app, ["diagnose", str(log)]).stdout
     assert "commands vs motion: thruster_0 driven harder than the motion needs" in text
+    pdf = tmp_path / "report.pdf"
+    assert runner.invoke(app, ["diagnose", str(log), "--pdf", str(pdf), "--quiet"]).exit_code == 1
+    first = " ".join(pypdf.PdfReader(pdf).pages[0].extract_text().split())
+    assert "Commands vs motion: thruster_0 driven harder than the motion needs" in first
 
 
 @pytest.mark.parametrize("scenario", ["paper-normal", "mission-large-ccw", "mission-sprint-cw"])
