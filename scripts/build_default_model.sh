@@ -10,13 +10,8 @@
 #   which is described for MAVLink logs only).
 #   About 4-5 minutes on 2 cores for the Twin-Burger, 6 for three_thruster, 10 for bluerov2.
 set -euo pipefail
-profile=${1:-twin_burger}
-output=${2:-models/$profile}
-default_format=ros2-mcap
-[[ $profile == bluerov2 ]] && default_format=tlog
-format=${3:-$default_format}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/model_arguments.sh"
+output=$model
 mapfile -t dms < <(auvdiag scenarios --profile "$profile" | awk '$1 ~ /^dms-[^-]+$/ {print $1}')
 # Full-range excitation of six motors spins the BlueROV2 far beyond anything its missions
 # do; its model learns from its DMSs (one per motor, more runs of each: they are short) and

@@ -5,13 +5,7 @@
 # learns the relation when a model is rebuilt).
 # Usage: scripts/relate_default_model.sh [PROFILE] [MODEL_DIR] [FORMAT]   (as build_default_model.sh)
 set -euo pipefail
-profile=${1:-twin_burger}
-model=${2:-models/$profile}
-default_format=ros2-mcap
-[[ $profile == bluerov2 ]] && default_format=tlog
-format=${3:-$default_format}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/model_arguments.sh"
 learn=() holdout=()
 for scenario in paper-normal mission-ccw mission-large-cw mission-large-ccw mission-fast-cw \
                 mission-fast-ccw mission-sprint-cw mission-sprint-ccw; do

@@ -3,13 +3,7 @@
 # held out or calibrated on (seed 301): the mission scenarios and every DMS before a mission.
 # Usage: scripts/score_default_model.sh [PROFILE] [MODEL_DIR] [FORMAT]   (as build_default_model.sh)
 set -euo pipefail
-profile=${1:-twin_burger}
-model=${2:-models/$profile}
-default_format=ros2-mcap
-[[ $profile == bluerov2 ]] && default_format=tlog
-format=${3:-$default_format}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/model_arguments.sh"
 logs=()
 for scenario in paper-normal mission-ccw mission-large-cw mission-sprint-ccw all-dms-and-mission; do
   auvdiag simulate "$scenario" --profile "$profile" --format "$format" --seed 301 \
