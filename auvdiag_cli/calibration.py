@@ -24,6 +24,7 @@ from auvdiag_cli.numeric import peak
 from auvdiag_cli.profile import MISSION_MODE, Profile
 from auvdiag_cli.relations_job import widen_thresholds
 from auvdiag_cli.report_json import write_json
+from auvdiag_cli.start_check import raise_thresholds, start_reading
 from models.store import METADATA_FILE, LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
@@ -83,6 +84,7 @@ class CalibrationResult:
     widening: dict[str, float]          # per signal, applied to the in-sample logs' g
     warnings: list[str]
     relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
+    start_thresholds_raised: list[str]             # sensors whose start allowance was raised
 
 
 def _mode_key(segment_name: str) -> str:
@@ -176,6 +178,10 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         raise UsageError("no usable normal data in the calibration logs")
     model.metadata["thresholds"] = thresholds
     raised = widen_thresholds(model, [d.command_check for d in diagnoses], margin)
+    starts_raised = raise_thresholds(
+        model.metadata.get("start_state") or {},
+        [None if d.matching is None else start_reading(d.commands, d.matching.measured,
+                                                       profile.dt_s) for d in diagnoses], margin)
     calibrated = replace(model, metadata=model.metadata)
     checks = []
     for path in faulty_logs:
@@ -186,7 +192,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
         widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
-        raised)
+        raised, [profile.sensor_names[i] for i in starts_raised])
     model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
 
@@ -236,6 +242,7 @@ def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_pro
                   for m in result.modes],
         "warnings": result.warnings,
         "relation_thresholds_raised": result.relation_thresholds_raised,
+        "start_thresholds_raised": result.start_thresholds_raised,
         "faulty_logs": [c.__dict__ for c in result.faulty],
     }
 

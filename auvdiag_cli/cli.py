@@ -347,7 +347,8 @@ def train(
                                  iterations_scale, _horizon_option(horizon, vehicle.horizon_s),
                                  keep_unskilled,
                                  progress=_progress)
-    for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names):
+    for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
+                               vehicle.sensor_names):
         typer.echo(line)
     if not result.judges_anything:
         typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "

@@ -27,6 +27,7 @@ from auvdiag_cli.segments import (
     segments_of,
     threshold_matrix,
 )
+from auvdiag_cli.start_check import StartCheck, check_start
 from auvdiag_cli.substitution import Substitution, substitute
 from auvdiag_cli.truth import mission_path, read_missions
 from models.store import LoadedModel
@@ -91,6 +92,7 @@ class Diagnosis:
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
     not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
     command_check: CommandCheck | None = None   # the commands judged against the motion
+    start_check: StartCheck | None = None       # the log's start against normal starts
 
 
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
@@ -211,17 +213,19 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         diagnosis.notes.append("the model has no skill scores (trained before they were "
                                "measured): every signal is judged; 'auvdiag score' measures them")
     diagnosis.command_check = _check_commands(log, segments, profile, model, diagnosis.notes)
-    check = diagnosis.command_check
+    diagnosis.start_check = check_start(model.metadata.get("start_state"), frame.commands,
+                                        frame.sensors, frame.time_s, frame.sensor_names,
+                                        frame.dt_s)
+    check, start = diagnosis.command_check, diagnosis.start_check
     if len(not_judged) == len(frame.sensor_names):
         diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
-        if check is not None and check.judged:
-            if check.alarm_s is not None:
-                _apply_command_alarm(diagnosis, check, profile, model)
+        if (check is not None and check.judged) or start.judged:
+            _apply_other_evidence(diagnosis, check, start, profile, model)
             return diagnosis
         diagnosis.verdict, diagnosis.case = "undetermined", None
         return diagnosis
-    if detection is None and check is not None and check.alarm_s is not None:
-        _apply_command_alarm(diagnosis, check, profile, model)
+    if detection is None:
+        _apply_other_evidence(diagnosis, check, start, profile, model)
     if detection is not None:
         _apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
                          frame.time_s[detection.onset_index], profile, model)
@@ -253,6 +257,30 @@ def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
     frame = log.frame
     return check_commands(relations, profile, frame.commands, frame.sensors,
                           mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
+
+
+def _apply_other_evidence(diagnosis: Diagnosis, check: CommandCheck | None,
+                          start: StartCheck, profile: Profile, model: LoadedModel) -> None:
+    """The replay raised no alarm: a sensor that read wrong from the start, or an actuator
+    driven harder than the motion needs, still makes the verdict."""
+    if start.off:
+        _apply_start_alarm(diagnosis, start, profile, model)
+    elif check is not None and check.alarm_s is not None:
+        _apply_command_alarm(diagnosis, check, profile, model)
+
+
+def _apply_start_alarm(diagnosis: Diagnosis, start: StartCheck, profile: Profile,
+                       model: LoadedModel) -> None:
+    """The replay starts from the measured state and takes a wrong start reading as the
+    truth; the sensors that started away from where normal logs start are the candidates."""
+    diagnosis.verdict, diagnosis.case = "fault", None
+    diagnosis.onset_s, diagnosis.detected_at_s = 0.0, start.at_s
+    diagnosis.candidates = list(dict.fromkeys(
+        s.component for s in profile.sensors if s.name in start.off))
+    diagnosis.notes.append("found at the start of the log: "
+                           + start.describe(diagnosis.sensor_units))
+    if len(diagnosis.candidates) == 1:
+        _name_component(diagnosis, diagnosis.candidates[0], profile, model)
 
 
 def _apply_command_alarm(diagnosis: Diagnosis, check: CommandCheck, profile: Profile,

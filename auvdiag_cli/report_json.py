@@ -62,6 +62,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "peak_g_over_threshold": diagnosis.degradation.peak_g_ratio},
         "hypotheses": _hypotheses(diagnosis),
         "commands_check": _command_check(diagnosis.command_check),
+        "start_check": _start_check(diagnosis),
         "active_diagnosis": _active(diagnosis),
         "substitution": None if substitution is None else {
             "signal": substitution.signal,
@@ -141,6 +142,15 @@ def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
             "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
             "explained": check.explained,
             "extra_effort": check.extra_effort}
+
+
+def _start_check(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    start = diagnosis.start_check
+    if start is None:
+        return None
+    return {"summary": start.describe(diagnosis.sensor_units), "judged": start.judged,
+            "deviation": start.deviation, "allowed": start.thresholds, "off": list(start.off),
+            "at_s": start.at_s}
 
 
 def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:

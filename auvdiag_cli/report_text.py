@@ -78,6 +78,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines.append("  commands vs motion: " + (check.describe() if check.judged
                                                  else "no actuator could be judged"))
         lines += [f"    {name}: {why}" for name, why in check.not_judged.items()]
+    if d.start_check is not None:
+        lines.append("  start: " + d.start_check.describe(d.sensor_units))
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"

@@ -56,7 +56,7 @@ def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[st
 
 
 def training_lines(result: TrainingResult, paper_rms: dict[str, float],
-                   command_names: Sequence[str]) -> list[str]:
+                   command_names: Sequence[str], sensor_names: Sequence[str]) -> list[str]:
     chosen = result.chosen
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
@@ -65,7 +65,8 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
-    return lines + relation_lines(result.command_relations, command_names)
+    return lines + relation_lines(result.command_relations, command_names) + start_lines(
+        result.start_state, sensor_names)
 
 
 def _listed(names: Sequence[str], most: int = 5) -> str:
@@ -99,6 +100,16 @@ def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[
     return lines
 
 
+def start_lines(entry: dict[str, Any], sensor_names: Sequence[str]) -> list[str]:
+    """Where normal logs start, and how far a log's start may lie from it."""
+    if "refused" in entry:
+        return [f"start not judged: {entry['refused']}"]
+    return [f"start learned from {entry['logs']} log starts (first {entry['span_s']:g} s); "
+            "allowed from the normal start: " + ", ".join(
+                f"{name} {reference:.3g} ± {allowed:.3g}" for name, reference, allowed in zip(
+                    sensor_names, entry["reference"], entry["thresholds"], strict=True))]
+
+
 def calibration_lines(result: CalibrationResult) -> list[str]:
     lines = [f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
              f"{result.margin:g}; false alarms on those logs: 0 (rate < "
@@ -121,5 +132,8 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
         lines.append("  commands vs motion: extra effort allowed raised so that no calibration "
                      "log alarms: " + ", ".join(f"{k} {v:.0%}" for k, v in
                                                 result.relation_thresholds_raised.items()))
+    if result.start_thresholds_raised:
+        lines.append("  start: how far a start may lie from the normal start raised so that no "
+                     "calibration log alarms: " + ", ".join(result.start_thresholds_raised))
     lines += [f"warning: {warning}" for warning in result.warnings]
     return lines

@@ -22,6 +22,7 @@ from auvdiag_cli.relations_job import (
     relation_log,
     split_point,
 )
+from auvdiag_cli.start_check import learn_start_state, start_reading
 from models.command_relations import RelationLog
 from models.skill import (
     HORIZON_CANDIDATES_S,
@@ -64,6 +65,7 @@ class TrainingResult:
     operating_hours: float
     logged_rates_hz: dict[str, float]   # per signal, median over the training logs
     command_relations: dict[str, Any]   # model.json's entry: the relation or why none
+    start_state: dict[str, Any]         # model.json's entry: where normal logs start
 
     @property
     def judges_anything(self) -> bool:
@@ -183,13 +185,18 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     progress("learning how the commands follow the motion")
     relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
                                 profile)
+    start_state = learn_start_state(
+        [start_reading(t.commands, t.sensors, profile.dt_s) for t in training],
+        [start_reading(r.scoring.commands, r.scoring.sensors, profile.dt_s)
+         for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
-                            hours, rates, relations)
+                            hours, rates, relations, start_state)
     result = replace(result, written=result.judges_anything or keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, seed)
         metadata["command_relations"] = relations
+        metadata["start_state"] = start_state
         save_model(output, network, normaliser, metadata)
     return result
 

@@ -103,6 +103,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     commands = document.get("commands_check")
     if commands:
         facts.append(("Commands vs motion", commands["summary"]))
+    start = document.get("start_check")
+    if start and start.get("judged"):
+        facts.append(("Start", start["summary"]))
     weak = document.get("degradation")
     if weak:
         facts.append(("Partial failure", f"{weak['component'].replace('_', ' ')} gives about "

@@ -1,0 +1,119 @@
+"""The start of a log against the starts of normal logs. The replay starts from the
+measured state, so a sensor that reads wrong from the first sample (a depth sensor's zero
+shifted, a gyro's bias) is taken as the truth and never shows in g. A log recorded from
+rest (every command at zero on its first step) is compared with the normal logs recorded
+from rest: at the surface, still, their sensors read alike. A log that begins mid-dive
+(its commands already working) is not judged: its start says nothing."""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+SPAN_S = 1.0                 # the start reading: median over this much of the log's start
+MARGIN = 1.5                 # thresholds: this many times the largest held-out deviation
+FLOOR = 0.05                 # of the full scale: a zero error below it is tolerated
+MIN_HELDOUT = 3              # held-out starts from rest needed to set a threshold
+REST = 0.02                  # a command this close to zero is at rest
+
+
+@dataclass(frozen=True)
+class StartReading:
+    sensors: np.ndarray      # (n_sensors,) median over the span; NaN where not logged
+
+
+def start_reading(commands: np.ndarray, sensors: np.ndarray, dt_s: float
+                  ) -> StartReading | None:
+    """The first SPAN_S from the first step where every sensor is logged, if every command
+    is at rest on that step; None otherwise, or when the span is mostly missing."""
+    complete = np.flatnonzero(np.isfinite(sensors).all(axis=1))
+    if not complete.size:
+        return None
+    first = int(complete[0])
+    if not (np.abs(commands[first]) <= REST).all():
+        return None
+    window = sensors[first:first + max(1, round(SPAN_S / dt_s))]
+    if np.isfinite(window).all(axis=1).sum() < len(window) / 2:
+        return None
+    with np.errstate(all="ignore"):
+        return StartReading(np.nanmedian(window, axis=0))
+
+
+def learn_start_state(training: Sequence[StartReading | None],
+                      heldout: Sequence[StartReading | None], full_scale: Sequence[float]
+                      ) -> dict[str, Any]:
+    """The model.json entry: where normal logs recorded from rest start (median of the
+    training starts), and per sensor how far a start may lie from it (MARGIN x the largest
+    held-out deviation, at least FLOOR of the full scale), or why there is none."""
+    train = [r for r in training if r is not None]
+    held = [r for r in heldout if r is not None]
+    if not train or len(held) < MIN_HELDOUT:
+        return {"refused": f"needs normal logs recorded from rest, held out, to set how far a "
+                           f"start may lie ({len(held)} held out, needs {MIN_HELDOUT})"}
+    reference = np.median([r.sensors for r in train], axis=0)
+    deviation = np.abs(np.array([r.sensors for r in held]) - reference).max(axis=0)
+    allowed = np.maximum(MARGIN * deviation, FLOOR * np.asarray(full_scale, float))
+    return {"span_s": SPAN_S, "reference": reference.round(6).tolist(),
+            "thresholds": allowed.round(6).tolist(),
+            "logs": len(train), "heldout_logs": len(held)}
+
+
+def raise_thresholds(entry: dict[str, Any], readings: Sequence[StartReading | None],
+                     margin: float) -> list[int]:
+    """Raise, in ``entry``, each sensor's threshold to ``margin`` times the deviation of
+    these normal logs' starts where that is more; returns the sensors raised."""
+    if "thresholds" not in entry:
+        return []
+    reference = np.asarray(entry["reference"])
+    raised = []
+    for reading in readings:
+        if reading is None:
+            continue
+        for i, deviation in enumerate(np.abs(reading.sensors - reference)):
+            if margin * deviation > entry["thresholds"][i]:
+                entry["thresholds"][i] = round(float(margin * deviation), 6)
+                raised.append(i)
+    return sorted(set(raised))
+
+
+@dataclass(frozen=True)
+class StartCheck:
+    judged: bool
+    why_not: str | None
+    deviation: dict[str, float]          # start reading minus the normal start, per sensor
+    thresholds: dict[str, float]
+    off: tuple[str, ...]                 # sensors whose start lies beyond their threshold
+    at_s: float | None                   # end of the start span
+
+    def describe(self, units: dict[str, str]) -> str:
+        if not self.judged:
+            return f"not judged ({self.why_not})"
+        if not self.off:
+            return "every sensor started where normal logs start"
+        return "; ".join(f"{name} started {self.deviation[name]:+.3g} {units.get(name, '')} "
+                         f"from where normal logs start (allowed {self.thresholds[name]:.3g})"
+                         for name in self.off)
+
+
+def check_start(entry: dict[str, Any] | None, commands: np.ndarray, sensors: np.ndarray,
+                time_s: np.ndarray, sensor_names: Sequence[str], dt_s: float) -> StartCheck:
+    def not_judged(why: str) -> StartCheck:
+        return StartCheck(False, why, {}, {}, (), None)
+
+    if not entry or "reference" not in entry:
+        return not_judged((entry or {}).get("refused",
+                                            "the model has no start state: train learns it"))
+    reading = start_reading(commands, sensors, dt_s)
+    if reading is None:
+        return not_judged("the log is not recorded from rest (its commands already work on "
+                          "its first complete step: it may begin mid-dive)")
+    deviation = reading.sensors - np.asarray(entry["reference"])
+    thresholds = np.asarray(entry["thresholds"], float)
+    off = tuple(name for i, name in enumerate(sensor_names)
+                if np.isfinite(deviation[i]) and abs(deviation[i]) > thresholds[i])
+    first = int(np.flatnonzero(np.isfinite(sensors).all(axis=1))[0])
+    end = min(len(time_s) - 1, first + max(1, round(SPAN_S / dt_s)) - 1)
+    return StartCheck(True, None, {n: round(float(d), 6) for n, d in zip(
+        sensor_names, deviation, strict=True)}, {n: float(t) for n, t in zip(
+            sensor_names, thresholds, strict=True)}, off, round(float(time_s[end]), 3))
