@@ -106,7 +106,8 @@ def start_lines(entry: dict[str, Any], sensor_names: Sequence[str]) -> list[str]
         return [f"start not judged: {entry['refused']}"]
     return [f"start learned from {entry['logs']} log starts (first {entry['span_s']:g} s); "
             "allowed from the normal start: " + ", ".join(
-                f"{name} {reference:.3g} ± {allowed:.3g}" for name, reference, allowed in zip(
+                f"{name} {reference:.3g} ± {allowed:.3g}" if allowed is not None else
+                f"{name} not judged (normal starts spread)" for name, reference, allowed in zip(
                     sensor_names, entry["reference"], entry["thresholds"], strict=True))]
 
 

@@ -14,6 +14,8 @@ import numpy as np
 SPAN_S = 1.0                 # the start reading: median over this much of the log's start
 MARGIN = 1.5                 # thresholds: this many times the largest held-out deviation
 FLOOR = 0.05                 # of the full scale: a zero error below it is tolerated
+ALIKE = 0.05                 # of the full scale: the most the normal starts may spread (robust
+                             # sigma) for a sensor's start to be judged
 MIN_HELDOUT = 3              # held-out starts from rest needed to set a threshold
 REST = 0.02                  # a command this close to zero is at rest
 
@@ -45,17 +47,24 @@ def learn_start_state(training: Sequence[StartReading | None],
                       ) -> dict[str, Any]:
     """The model.json entry: where normal logs recorded from rest start (median of the
     training starts), and per sensor how far a start may lie from it (MARGIN x the largest
-    held-out deviation, at least FLOOR of the full scale), or why there is none."""
+    held-out deviation, at least FLOOR of the full scale; null where the training starts
+    spread more than ALIKE of the full scale), or why there is none."""
     train = [r for r in training if r is not None]
     held = [r for r in heldout if r is not None]
     if not train or len(held) < MIN_HELDOUT:
         return {"refused": f"needs normal logs recorded from rest, held out, to set how far a "
                            f"start may lie ({len(held)} held out, needs {MIN_HELDOUT})"}
-    reference = np.median([r.sensors for r in train], axis=0)
+    starts = np.array([r.sensors for r in train])
+    reference = np.median(starts, axis=0)
+    scale = np.asarray(full_scale, float)
+    # A sensor whose normal starts scatter (body rates in a swell) says nothing at the start.
+    spread = 1.4826 * np.median(np.abs(starts - reference), axis=0)
     deviation = np.abs(np.array([r.sensors for r in held]) - reference).max(axis=0)
-    allowed = np.maximum(MARGIN * deviation, FLOOR * np.asarray(full_scale, float))
+    allowed = np.where(spread <= ALIKE * scale, np.maximum(MARGIN * deviation, FLOOR * scale),
+                       np.nan)
     return {"span_s": SPAN_S, "reference": reference.round(6).tolist(),
-            "thresholds": allowed.round(6).tolist(),
+            "thresholds": [None if np.isnan(a) else round(float(a), 6) for a in allowed],
+            "spread": spread.round(6).tolist(),
             "logs": len(train), "heldout_logs": len(held)}
 
 
@@ -71,7 +80,7 @@ def raise_thresholds(entry: dict[str, Any], readings: Sequence[StartReading | No
         if reading is None:
             continue
         for i, deviation in enumerate(np.abs(reading.sensors - reference)):
-            if margin * deviation > entry["thresholds"][i]:
+            if entry["thresholds"][i] is not None and margin * deviation > entry["thresholds"][i]:
                 entry["thresholds"][i] = round(float(margin * deviation), 6)
                 raised.append(i)
     return sorted(set(raised))
@@ -109,11 +118,14 @@ def check_start(entry: dict[str, Any] | None, commands: np.ndarray, sensors: np.
         return not_judged("the log is not recorded from rest (its commands already work on "
                           "its first complete step: it may begin mid-dive)")
     deviation = reading.sensors - np.asarray(entry["reference"])
-    thresholds = np.asarray(entry["thresholds"], float)
+    thresholds = np.asarray([np.nan if t is None else t for t in entry["thresholds"]], float)
+    if np.isnan(thresholds).all():
+        return not_judged("the normal logs' starts spread too much for any sensor")
     off = tuple(name for i, name in enumerate(sensor_names)
                 if np.isfinite(deviation[i]) and abs(deviation[i]) > thresholds[i])
     first = int(np.flatnonzero(np.isfinite(sensors).all(axis=1))[0])
     end = min(len(time_s) - 1, first + max(1, round(SPAN_S / dt_s)) - 1)
     return StartCheck(True, None, {n: round(float(d), 6) for n, d in zip(
         sensor_names, deviation, strict=True)}, {n: float(t) for n, t in zip(
-            sensor_names, thresholds, strict=True)}, off, round(float(time_s[end]), 3))
+            sensor_names, thresholds, strict=True) if np.isfinite(t)}, off,
+        round(float(time_s[end]), 3))
