@@ -401,31 +401,36 @@ def relate(
     output: CopyOutputOption = None,
     profile: ProfileOption = None,
 ) -> None:
-    """Learn how the vehicle's commands follow its motion, and record it in the model.
+    """Learn how the vehicle's commands follow its motion, and where its logs start.
 
     A controller holding heading, depth or attitude hides a weakened thruster from the
     motion by driving it harder; the commands then depart from what the motion needs. This
     learns that relation from normal logs (DMS runs and open-loop logs are left out) and
-    sets, per actuator, how much extra effort normal logs reach. 'auvdiag train' does this
-    itself; use this command for a model trained before, or to learn from other dives."""
+    sets, per actuator, how much extra effort normal logs reach. It also records where the
+    normal logs recorded from rest start, so that a sensor wrong from the first sample is
+    found. 'auvdiag train' does both itself; use this command for a model trained before,
+    or to learn from other dives. What cannot be learned keeps what the model had."""
     from auvdiag_cli.calibration import write_metadata
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.relations_job import relate_model
-    from auvdiag_cli.report_training import relation_lines
+    from auvdiag_cli.report_training import relation_lines, start_lines
     from models.store import load_model
 
     with _user_errors(model):
         vehicle = load_profile(profile)
         loaded = load_model(model)
-        entry = relate_model(loaded, vehicle, logs, holdout or (), _progress)
-        if "refused" not in entry:
+        relations, start = relate_model(loaded, vehicle, logs, holdout or (), _progress)
+        if "refused" not in relations or "refused" not in start:
             write_metadata(loaded, output or model)
-    for line in relation_lines(entry, vehicle.command_names):
+    for line in [*relation_lines(relations, vehicle.command_names),
+                 *start_lines(start, vehicle.sensor_names)]:
         typer.echo(line)
-    if "refused" in entry:
-        typer.echo("auvdiag: the model is left as it was", err=True)
+    if "refused" in relations and "refused" in start:
+        typer.echo("auvdiag: nothing learned; the model is left as it was", err=True)
         raise typer.Exit(EXIT_FAULT)
-    typer.echo(f"command relations written to {(output or model) / 'model.json'}")
+    typer.echo(f"written to {(output or model) / 'model.json'}")
+    if "refused" in relations:
+        raise typer.Exit(EXIT_FAULT)
 
 
 @app.command()

@@ -8,16 +8,17 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.ingest import IngestedLog, ingest
 from auvdiag_cli.profile import Profile
 from auvdiag_cli.segments import mission_steps, segments_of
+from auvdiag_cli.start_check import StartReading, learn_start_state, start_reading
 from models.command_relations import RelationLog, RelationsRefused, fit_relations
 
 if TYPE_CHECKING:
     from auvdiag_cli.command_check import CommandCheck
     from models.store import LoadedModel
 
-HELD_OUT_FRACTION = 0.2      # of a single log's usable steps, its last part in time
 
 
 def relation_log(log: IngestedLog, profile: Profile) -> RelationLog:
@@ -26,14 +27,6 @@ def relation_log(log: IngestedLog, profile: Profile) -> RelationLog:
     frame = log.frame
     return RelationLog(log.signals.path.name, frame.commands, frame.sensors,
                        mission_steps(segments_of(log, profile), frame.time_s, frame.operating))
-
-
-def split_point(usable: np.ndarray, held_out_fraction: float = HELD_OUT_FRACTION) -> int:
-    """The index before which 1 - held_out_fraction of the usable steps lie."""
-    count = np.cumsum(usable)
-    if not count.size or not count[-1]:
-        return len(usable)
-    return int(np.searchsorted(count, count[-1] * (1 - held_out_fraction))) + 1
 
 
 def _split_in_time(log: RelationLog) -> tuple[RelationLog, RelationLog]:
@@ -61,11 +54,11 @@ def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationL
 
 def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                  holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
-                 ) -> dict[str, Any]:
-    """Learn the relation for an existing model from normal logs and record it in
-    ``model.metadata`` (not yet written); a refusal (the entry says why) changes nothing."""
+                 ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Learn, for an existing model, how the commands follow the motion and where normal
+    logs recorded from rest start, and record both in ``model.metadata`` (not yet
+    written); a refusal (the entry says why) keeps what the model had."""
     from auvdiag_cli.diagnosis import check_model_fits
-    from auvdiag_cli.training_job import split_holdout
 
     for log in [*logs, *holdout]:
         check_model_fits(model, profile, log)
@@ -74,13 +67,21 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
         raise UsageError("no logs left to learn from after holding out")
     progress(f"reading {len(training_paths)} logs to learn from and {len(heldout_paths)} "
              "held-out logs")
-    entry = learn_relations([relation_log(ingest(p, profile), profile) for p in training_paths],
-                            [relation_log(ingest(p, profile), profile) for p in heldout_paths],
-                            profile)
-    if "refused" not in entry:          # a refusal keeps whatever the model had
-        model.metadata["command_relations"] = entry
-        model.__dict__.pop("relations", None)        # the cached parse is stale
-    return entry
+    training = [ingest(p, profile) for p in training_paths]
+    heldout = [ingest(p, profile) for p in heldout_paths]
+    relations = learn_relations([relation_log(log, profile) for log in training],
+                                [relation_log(log, profile) for log in heldout], profile)
+    def readings(logs: list[IngestedLog]) -> list[StartReading | None]:
+        return [start_reading(log.frame.commands, log.frame.sensors, profile.dt_s)
+                for log in logs]
+
+    start = learn_start_state(readings(training), readings(heldout),
+                              [profile.full_scales[n] for n in profile.sensor_names])
+    for key, entry in (("command_relations", relations), ("start_state", start)):
+        if "refused" not in entry:
+            model.metadata[key] = entry
+    model.__dict__.pop("relations", None)        # the cached parse is stale
+    return relations, start
 
 
 def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None"],

@@ -14,14 +14,10 @@ import numpy as np
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.ingest import ingest
 from auvdiag_cli.profile import Profile
-from auvdiag_cli.relations_job import (
-    HELD_OUT_FRACTION,
-    learn_relations,
-    relation_log,
-    split_point,
-)
+from auvdiag_cli.relations_job import learn_relations, relation_log
 from auvdiag_cli.start_check import learn_start_state, start_reading
 from models.command_relations import RelationLog
 from models.skill import (
@@ -72,17 +68,6 @@ class TrainingResult:
         """A signal has skill, or some actuator's commands can be judged against the motion."""
         thresholds = self.command_relations.get("thresholds") or []
         return bool(self.chosen.judged) or any(t is not None for t in thresholds)
-
-
-def split_holdout(logs: Sequence[Path], holdout: Sequence[Path]) -> tuple[list[Path], list[Path]]:
-    """Explicit held-out logs, or every fifth log (at least one) when there are several; a
-    single log is split in time instead (see `train_from_logs`)."""
-    if holdout:
-        return [p for p in logs if p not in holdout], list(holdout)
-    if len(logs) < 2:
-        return list(logs), []
-    held = [p for i, p in enumerate(logs) if i % 5 == 4] or [logs[-1]]
-    return [p for p in logs if p not in held], held
 
 
 @dataclass(frozen=True)

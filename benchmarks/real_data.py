@@ -57,13 +57,22 @@ def _horizon(result: "TrainingResult") -> str:
 
 
 def _score(diagnosis: "Diagnosis") -> float:
-    """The run's largest g / threshold over the judged signals (the alarm's margin)."""
-    if diagnosis.matching is None:
-        return 0.0
-    judged = [i for i, n in enumerate(diagnosis.sensor_names) if n not in diagnosis.not_judged]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = diagnosis.matching.g_percent[:, judged] / diagnosis.thresholds[:, judged]
-    return float(np.nanmax(ratio)) if np.isfinite(ratio).any() else 0.0
+    """The run's largest ratio to a threshold (the alarm's margin): g over the judged
+    signals, a start's deviation over its allowance, an actuator's extra effort."""
+    ratios = [0.0]
+    if diagnosis.matching is not None:
+        judged = [i for i, n in enumerate(diagnosis.sensor_names)
+                  if n not in diagnosis.not_judged]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            g = diagnosis.matching.g_percent[:, judged] / diagnosis.thresholds[:, judged]
+        ratios += [float(np.nanmax(g))] if np.isfinite(g).any() else []
+    start = diagnosis.start_check
+    if start is not None and start.judged:
+        ratios += [abs(start.deviation[n]) / t for n, t in start.thresholds.items()]
+    check = diagnosis.command_check
+    if check is not None:
+        ratios += [r for r in check.peak_ratio.values() if r is not None]
+    return max(ratios)
 
 
 def _auc(positives: list[float], negatives: list[float]) -> float:
@@ -125,8 +134,10 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
                      f"{alarms[label] / max(1, len(values)):.0%} | {auc} | "
                      + (", ".join(f"{k} ({v})" for k, v in named[label].most_common(3)) or "-")
                      + " |")
-    lines += ["", "The score of a run is its largest g / threshold over the judged signals; "
-              "the AUC is the chance that a faulty run scores above a held-out Normal one.",
+    lines += ["", "The score of a run is its largest ratio to a threshold: g over the judged "
+              "signals, the start's deviation from the normal start, an actuator's extra "
+              "effort; the AUC is the chance that a faulty run scores above a held-out Normal "
+              "one.",
               "", "Commands against the motion, fold 1: "
               + "; ".join(line.strip() for line in relation_lines(
                   first.command_relations, profile.command_names)), ""]
