@@ -56,7 +56,7 @@ bench-real:
 	$(PYTHON) benchmarks/readme.py real_data $(OUT)/real_data.md
 
 test:
-	$(PYTHON) -m ruff check . && $(PYTHON) -m pytest -q
+	$(PYTHON) -m ruff check . && $(PYTHON) -m mypy && $(PYTHON) -m pytest -q
 
 bench-hidden:
 	@mkdir -p $(OUT)

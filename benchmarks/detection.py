@@ -26,11 +26,19 @@ import time
 from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from models.baselines import LinearDynamics
 from models.baselines import fit_linear as fit_linear_model
+
+if TYPE_CHECKING:
+    from auvdiag_cli.profile import Profile
+    from auvdiag_cli.resample import AlignedFrame
+    from auvdiag_cli.simulator.scenarios import Scenario
+    from models.normaliser import Normaliser
+    from models.store import LoadedModel
 
 FAULT_KINDS = [("flow_sensor", "covered", 0.0), ("flow_sensor", "bias", 0.1),
                ("yaw_rate_sensor", "dead", 0.0), ("yaw_rate_sensor", "drift", 0.005),
@@ -41,7 +49,7 @@ MISSIONS = {"4x2-cw": {}, "4x2-ccw": {"clockwise": False},
             "5x2_5-ccw": {"length_m": 5.0, "width_m": 2.5, "clockwise": False}}
 
 
-def baseline_model(learned, frames: list):
+def baseline_model(learned: "LoadedModel", frames: list["AlignedFrame"]) -> "LoadedModel":
     """A model directory's worth of baseline: the learned model's signals and metadata (deep
     copied: calibration writes into it) with the linear free run as its replay path."""
     import copy
@@ -54,14 +62,14 @@ def baseline_model(learned, frames: list):
         linear: LinearDynamics | None = None
 
         @property
-        def fast(self):  # the replay path every diagnosis step uses
+        def fast(self) -> Any:  # the replay path every diagnosis step uses
             return self.linear
 
     return LinearBaseline(learned.state, learned.normaliser, copy.deepcopy(learned.metadata),
                           "linear baseline", fit_linear(frames, learned.normaliser))
 
 
-def fit_linear(frames: list, normaliser) -> LinearDynamics:
+def fit_linear(frames: list["AlignedFrame"], normaliser: "Normaliser") -> LinearDynamics:
     scale_c, scale_x = np.asarray(normaliser.command_scale), np.asarray(normaliser.state_scale)
     return fit_linear_model([f.commands / scale_c for f in frames],
                             [f.sensors / scale_x for f in frames])
@@ -85,14 +93,15 @@ def phase_times(truth_csv: Path) -> dict[str, float]:
 @dataclass
 class Case:
     name: str
-    scenario: object
+    scenario: "Scenario"
     seed: int
     truth: str | None          # the failed component; None for a normal dive
     onset_s: float | None
     has_zb_zc: bool
 
 
-def build_cases(profile, seeds: int, normal_seeds: int, workdir: Path) -> list[Case]:
+def build_cases(profile: "Profile", seeds: int, normal_seeds: int, workdir: Path
+                ) -> list[Case]:
     from auvdiag_cli.simulator.faults import Fault
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario, _mission
@@ -100,7 +109,7 @@ def build_cases(profile, seeds: int, normal_seeds: int, workdir: Path) -> list[C
 
     cases = []
     for mission, spec in MISSIONS.items():
-        phases = _mission(**spec)
+        phases = _mission(**spec)  # type: ignore[arg-type]
         healthy = Scenario(f"{mission}", "normal", phases)
         probe = workdir / f"probe-{mission}.mcap"
         write_log(simulate(healthy, profile, 0), profile, probe, "mcap")
@@ -124,7 +133,8 @@ def build_cases(profile, seeds: int, normal_seeds: int, workdir: Path) -> list[C
     return cases
 
 
-def diagnose_case(case: Case, profile, models: dict, workdir: Path) -> dict:
+def diagnose_case(case: Case, profile: "Profile", models: dict[str, "LoadedModel"],
+                  workdir: Path) -> dict[str, Any]:
     from auvdiag_cli.diagnosis import diagnose_ingested
     from auvdiag_cli.ingest import ingest
     from auvdiag_cli.simulator.run import simulate
@@ -135,7 +145,8 @@ def diagnose_case(case: Case, profile, models: dict, workdir: Path) -> dict:
     dive = simulate(case.scenario, profile, case.seed)
     write_log(dive, profile, path, "mcap")
     log = ingest(path, profile)
-    result = {"case": case.name, "truth": case.truth, "hours": dive.duration_s / 3600}
+    result: dict[str, Any] = {"case": case.name, "truth": case.truth,
+                              "hours": dive.duration_s / 3600}
     for name, model in models.items():
         d = diagnose_ingested(log, profile, model)
         named = d.component or (d.degradation.component if d.degradation else None)

@@ -99,16 +99,16 @@ def read_raw(path: Path, fmt: str) -> int:
         from mcap_ros2.decoder import DecoderFactory
 
         with path.open("rb") as stream:
-            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
-            for _ in reader.iter_decoded_messages(topics=ROS_TOPICS):
+            mcap_reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            for _ in mcap_reader.iter_decoded_messages(topics=ROS_TOPICS):
                 count += 1
     else:
         from pymavlink import DFReader, mavutil
 
-        reader = (mavutil.mavmmaplog(str(path)) if fmt == "tlog"
-                  else DFReader.DFReader_binary(str(path), zero_time_base=True))
-        wanted = MAVLINK_TYPES if fmt == "tlog" else DATAFLASH_TYPES
-        while reader.recv_match(type=wanted, blocking=False) is not None:
+        mav_reader = (mavutil.mavmmaplog(str(path)) if fmt == "tlog"
+                      else DFReader.DFReader_binary(str(path), zero_time_base=True))
+        types = MAVLINK_TYPES if fmt == "tlog" else DATAFLASH_TYPES
+        while mav_reader.recv_match(type=types, blocking=False) is not None:
             count += 1
     return count
 
