@@ -8,8 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
-from auvdiag_cli.profile import ControllerSpec
+from auvdiag_cli.controller import ControllerSpec, PathFollower, VehicleController
 from models.fast import FastStepper
 from models.rollouts import robust_state
 from models.store import LoadedModel
@@ -45,9 +44,8 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     if leg is None:
         return None
     waypoints = [(float(x), float(y)) for x, y in leg["waypoints"]]
-    gains = ControllerGains(**{**spec.gains, **(
-        {"cruise_speed_mps": float(leg["cruise_speed_mps"])} if "cruise_speed_mps" in leg
-        else {})})
+    gains = spec.gains_for(float(leg["cruise_speed_mps"]) if "cruise_speed_mps" in leg
+                           else None)
     controller = PathFollower(waypoints, gains, [float(d) for d in leg.get("depths_m", [])])
     vehicle = VehicleController(spec, sensor_names, command_names, controller)
     first = int(np.searchsorted(time_s, float(leg["start_s"])))

@@ -7,13 +7,9 @@ actuator commands."""
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, replace
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from auvdiag_cli.profile import ControllerSpec
 
 EFFORTS = ("surge", "yaw", "heave")
 
@@ -40,6 +36,28 @@ class ControllerGains:
     heave_kp: float = 2.0
     heave_ki: float = 1.0
     heave_feedforward: float = 1.0       # heave command per sqrt(m/s)
+
+
+@dataclass(frozen=True)
+class ControllerSpec:
+    """The vehicle's own mission controller, for closed-loop replays: its kind (the only one
+    implemented is "turn-then-go", see auvdiag_cli.controller), the sensors it is fed (a
+    heave-rate sensor when it also keeps depth), how its surge/yaw/heave efforts are mixed
+    onto the commands, and gains that differ from the defaults."""
+
+    kind: str
+    speed: str
+    yaw_rate: str
+    mix: dict[str, dict[str, float]]     # command -> effort (surge, yaw, heave) -> factor
+    gains: ControllerGains                 # the profile's, over the defaults
+    heave: str | None = None
+
+    def gains_for(self, cruise_speed_mps: float | None = None) -> ControllerGains:
+        """The gains, with a mission's own cruise speed where it sets one."""
+        if cruise_speed_mps is None:
+            return self.gains
+        return replace(self.gains, cruise_speed_mps=cruise_speed_mps)
+
 
 
 def wrap_angle(angle: float) -> float:
@@ -136,7 +154,7 @@ class VehicleController:
     """The profile's controller on a vehicle: sensor readings in (profile order), actuator
     commands out (profile order)."""
 
-    def __init__(self, spec: "ControllerSpec", sensor_names: Sequence[str],
+    def __init__(self, spec: ControllerSpec, sensor_names: Sequence[str],
                  command_names: Sequence[str], follower: PathFollower) -> None:
         self.spec, self.follower, self.command_names = spec, follower, command_names
         self.speed = sensor_names.index(spec.speed)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.controller import ControllerGains, PathFollower, VehicleController
+from auvdiag_cli.controller import PathFollower, VehicleController
 from auvdiag_cli.detection import binary_vector, decided_b, first_alarm
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.matching import residual_index
@@ -137,7 +137,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
     spec = profile.controller
     assert spec is not None
     depths = profile.simulation.mission_depths_m if profile.simulation else ()
-    controller = PathFollower(waypoints, ControllerGains(**spec.gains),
+    controller = PathFollower(waypoints, spec.gains,
                               [depths[i % len(depths)] for i in range(len(waypoints))]
                               if depths else [])
     plant = FastStepper(model.fast, model.normaliser)

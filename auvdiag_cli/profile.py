@@ -2,7 +2,7 @@
 
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -15,6 +15,7 @@ from adapters.signals import (
     SegmentSource,
     TimeColumn,
 )
+from auvdiag_cli.controller import EFFORTS, ControllerGains, ControllerSpec
 from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.toml_reader import TableReader, positive
@@ -46,21 +47,6 @@ class Navigation:
 
     speed: str
     yaw_rate: str
-
-
-@dataclass(frozen=True)
-class ControllerSpec:
-    """The vehicle's own mission controller, for closed-loop replays: its kind (the only one
-    implemented is "turn-then-go", see auvdiag_cli.controller), the sensors it is fed (a
-    heave-rate sensor when it also keeps depth), how its surge/yaw/heave efforts are mixed
-    onto the commands, and gains that differ from the defaults."""
-
-    kind: str
-    speed: str
-    yaw_rate: str
-    mix: dict[str, dict[str, float]]     # command -> effort (surge, yaw, heave) -> factor
-    gains: dict[str, float]
-    heave: str | None = None
 
 
 CONTROLLER_KINDS = ("turn-then-go",)
@@ -228,10 +214,6 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
 
 def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
                 ) -> ControllerSpec:
-    from dataclasses import fields
-
-    from auvdiag_cli.controller import EFFORTS, ControllerGains
-
     kind = reader.get("kind", str)
     if kind not in CONTROLLER_KINDS:
         raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
@@ -257,7 +239,7 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
                                f"{kind} (known: {', '.join(sorted(known))})")
         gains[name] = gains_reader.get(name, float)
     return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str), mix,
-                          gains, reader.get("heave", str, None))
+                          ControllerGains(**gains), reader.get("heave", str, None))
 
 
 def _topic(reader: TableReader) -> str:

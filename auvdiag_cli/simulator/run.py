@@ -8,7 +8,6 @@ import numpy as np
 import pandas as pd
 
 from auvdiag_cli.controller import (
-    ControllerGains,
     PathFollower,
     VehicleController,
     rectangle_waypoints,
@@ -187,8 +186,7 @@ class _Dive:
         if profile.controller is None:
             raise ValueError(f"profile {profile.name!r} describes no [controller] to fly "
                              "missions with")
-        gains = ControllerGains(**{**profile.controller.gains,
-                                   "cruise_speed_mps": spec.cruise_speed_mps})
+        gains = profile.controller.gains_for(spec.cruise_speed_mps)
         depths = self.spec.mission_depths_m
         depths_m = [depths[i % len(depths)] for i in range(len(waypoints))] if depths else []
         follower = PathFollower(waypoints, gains, depths_m)
