@@ -125,6 +125,7 @@ def diagnose(
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from adapters import detect_format
+    from auvdiag_cli.diagnosis import Verdict
     from auvdiag_cli.diagnosis import diagnose as run_diagnosis
     from auvdiag_cli.profile import load_profile
     from auvdiag_cli.report_json import diagnosis_to_dict
@@ -147,7 +148,7 @@ def diagnose(
         if not quiet:
             for line in summary_lines(result):
                 typer.echo(line, err=json_path == "-")
-    raise typer.Exit(EXIT_FAULT if result.verdict == "fault" else EXIT_NORMAL)
+    raise typer.Exit(EXIT_FAULT if result.verdict == Verdict.FAULT else EXIT_NORMAL)
 
 
 def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:

@@ -3,6 +3,7 @@
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
+from enum import StrEnum
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +47,14 @@ PAPER_ASSUMPTIONS = (
 )
 
 
+class Verdict(StrEnum):
+    """What a diagnosis concludes; the value is what the reports write."""
+
+    NORMAL = "normal"                  # something was judged and nothing failed
+    FAULT = "fault"
+    UNDETERMINED = "undetermined"      # nothing could be judged
+
+
 @dataclass
 class SegmentResult:
     segment: Segment
@@ -60,7 +69,7 @@ class Diagnosis:
     log: Path
     format: str
     vehicle: str
-    verdict: str                      # normal | fault | undetermined
+    verdict: Verdict
     component: str | None
     candidates: list[str]
     case: int | None
@@ -194,7 +203,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     notes += [f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s "
               "(not interpolated)" for gap in frame.gaps]
     diagnosis = Diagnosis(
-        log=signals.path, format=signals.format, vehicle=profile.name, verdict="normal",
+        log=signals.path, format=signals.format, vehicle=profile.name, verdict=Verdict.NORMAL,
         component=None, candidates=[], case=_normal_case(profile),
         b={name: 0 for name in frame.sensor_names}, detected_at_s=None, onset_s=None,
         segments=_segment_results(segments, frame.time_s, matching, b_series,
@@ -222,7 +231,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         if (check is not None and check.judged) or start.judged:
             _apply_other_evidence(diagnosis, check, start, profile, model)
             return diagnosis
-        diagnosis.verdict, diagnosis.case = "undetermined", None
+        diagnosis.verdict, diagnosis.case = Verdict.UNDETERMINED, None
         return diagnosis
     if detection is None:
         _apply_other_evidence(diagnosis, check, start, profile, model)
@@ -273,7 +282,7 @@ def _apply_start_alarm(diagnosis: Diagnosis, start: StartCheck, profile: Profile
                        model: LoadedModel) -> None:
     """The replay starts from the measured state and takes a wrong start reading as the
     truth; the sensors that started away from where normal logs start are the candidates."""
-    diagnosis.verdict, diagnosis.case = "fault", None
+    diagnosis.verdict, diagnosis.case = Verdict.FAULT, None
     diagnosis.onset_s, diagnosis.detected_at_s = 0.0, start.at_s
     diagnosis.candidates = list(dict.fromkeys(
         s.component for s in profile.sensors if s.name in start.off))
@@ -287,7 +296,7 @@ def _apply_command_alarm(diagnosis: Diagnosis, check: CommandCheck, profile: Pro
                          model: LoadedModel) -> None:
     """The motion looks normal (or cannot be judged) but an actuator works harder than the
     motion needs: a weakened actuator whose loss the controller makes up for."""
-    diagnosis.verdict, diagnosis.case = "fault", None
+    diagnosis.verdict, diagnosis.case = Verdict.FAULT, None
     diagnosis.detected_at_s, diagnosis.onset_s = check.alarm_s, check.onset_s
     # A sensor reading the motion wrongly also makes the controller push harder; the motion
     # model rules that out only for the sensors it judges.
@@ -452,7 +461,7 @@ def _normal_case(profile: Profile) -> int | None:
 
 def _apply_detection(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, onset_s: float,
                      profile: Profile, model: LoadedModel) -> None:
-    diagnosis.verdict = "fault"
+    diagnosis.verdict = Verdict.FAULT
     diagnosis.b = b
     diagnosis.detected_at_s = round(float(alarm_s), 3)
     diagnosis.onset_s = round(float(onset_s), 3)

@@ -27,7 +27,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "log": str(diagnosis.log),
         "format": diagnosis.format,
         "vehicle": diagnosis.vehicle,
-        "verdict": diagnosis.verdict,
+        "verdict": diagnosis.verdict.value,
         "component": diagnosis.component,
         "candidates": diagnosis.candidates,
         "case": diagnosis.case,

@@ -4,7 +4,7 @@ import math
 import textwrap
 
 from adapters import TopicInfo
-from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, Diagnosis
+from auvdiag_cli.diagnosis import EPOCH_CLOCK_NS, Diagnosis, Verdict
 from auvdiag_cli.hypotheses import HypothesisTest
 from auvdiag_cli.inspection import Inspection
 from auvdiag_cli.report_json import utc_text
@@ -22,9 +22,9 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
     if d.completeness is not None and not d.completeness.complete:
         lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
-    if d.verdict == "normal":
+    if d.verdict == Verdict.NORMAL:
         lines.append("verdict: NORMAL: no fault detected")
-    elif d.verdict == "undetermined":
+    elif d.verdict == Verdict.UNDETERMINED:
         lines.append("verdict: UNDETERMINED: no signal could be judged")
     else:
         what = (d.component.replace("_", " ") if d.component
