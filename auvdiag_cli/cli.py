@@ -16,7 +16,7 @@ from auvdiag_cli.errors import UsageError
 
 if TYPE_CHECKING:
     from auvdiag_cli.audit.job import AuditResult
-    from auvdiag_cli.report_series import Series
+    from auvdiag_cli.reports.series import Series
 
 EXIT_NORMAL, EXIT_FAULT, EXIT_UNUSABLE = 0, 1, 2
 
@@ -125,12 +125,12 @@ def diagnose(
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from adapters import detect_format
-    from auvdiag_cli.diagnosis import Verdict
-    from auvdiag_cli.diagnosis import diagnose as run_diagnosis
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_json import diagnosis_to_dict
-    from auvdiag_cli.report_series import series_from_diagnosis
-    from auvdiag_cli.report_text import summary_lines
+    from auvdiag_cli.engine.diagnosis import Verdict
+    from auvdiag_cli.engine.diagnosis import diagnose as run_diagnosis
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.reports.series import series_from_diagnosis
+    from auvdiag_cli.reports.text import summary_lines
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     with _user_errors(log):
@@ -153,8 +153,8 @@ def diagnose(
 
 def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:
     """The JSON report and, beside it, the time histories it refers to."""
-    from auvdiag_cli.report_json import write_json
-    from auvdiag_cli.report_series import save_series, series_path
+    from auvdiag_cli.files import write_json
+    from auvdiag_cli.reports.series import save_series, series_path
 
     sidecar = series_path(target)
     save_series(series, sidecar)
@@ -162,7 +162,7 @@ def _save_report(document: dict[str, Any], series: "Series", target: Path) -> No
 
 
 def _render_pdf(document: dict[str, Any], series: "Series | None", target: Path) -> None:
-    from auvdiag_cli.pdf.dive import render_dive_report
+    from auvdiag_cli.reports.pdf.dive import render_dive_report
 
     try:
         render_dive_report(document, series, target)
@@ -183,7 +183,7 @@ def report(
 
     The time histories come from the NAME.series.npz file written beside the JSON; without
     it the report has its summary pages only."""
-    from auvdiag_cli.report_series import load_series
+    from auvdiag_cli.reports.series import load_series
 
     with _user_errors(json_report):
         document = _read_report(json_report)
@@ -271,9 +271,9 @@ def audit(
     changed. Exit status: 0 all normal, 1 a fault found, 2 a log not analysable."""
     import signal
 
+    from auvdiag_cli.audit.fleet_pdf import render_fleet_report
     from auvdiag_cli.audit.job import AuditOptions, run_audit
     from auvdiag_cli.audit.progress import reporter_for_stderr
-    from auvdiag_cli.pdf.fleet import render_fleet_report
 
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     options = AuditOptions(paths, output, profile, model, jobs, scheduler)
@@ -338,9 +338,9 @@ def train(
     holds, the mean, a linear model): a signal it cannot predict better is never judged.
     It also learns how the commands follow the motion (see 'auvdiag relate'). Exit status 1
     when nothing can be judged (no model is written unless --keep-unskilled)."""
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_training import training_lines
-    from auvdiag_cli.training_job import paper_model_error, train_from_logs
+    from auvdiag_cli.jobs.train import paper_model_error, train_from_logs
+    from auvdiag_cli.reports.training import training_lines
+    from auvdiag_cli.vehicle.profile import load_profile
 
     with _user_errors(output):
         vehicle = load_profile(profile)
@@ -372,10 +372,10 @@ def score(
     For models trained before skill was measured, or to re-check a model on new dives: the
     skill and prediction horizon found replace those in model.json, and signals without
     skill are no longer judged. Exit status 1 when no signal has skill."""
-    from auvdiag_cli.calibration import write_metadata
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_training import skill_lines
-    from auvdiag_cli.training_job import score_model
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.jobs.train import score_model
+    from auvdiag_cli.reports.training import skill_lines
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     with _user_errors(model):
@@ -411,10 +411,10 @@ def relate(
     normal logs recorded from rest start, so that a sensor wrong from the first sample is
     found. 'auvdiag train' does both itself; use this command for a model trained before,
     or to learn from other dives. What cannot be learned keeps what the model had."""
-    from auvdiag_cli.calibration import write_metadata
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.relations_job import relate_model
-    from auvdiag_cli.report_training import relation_lines, start_lines
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.jobs.relate import relate_model
+    from auvdiag_cli.reports.training import relation_lines, start_lines
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     with _user_errors(model):
@@ -457,10 +457,10 @@ def calibrate(
     as a 95 % upper bound). Modes with under 30 s of data keep the profile's
     thresholds, raised where these logs need it.
     With --faulty, those logs are diagnosed with the new thresholds to show the margin."""
-    from auvdiag_cli.calibration import calibrate as run_calibration
-    from auvdiag_cli.calibration import write_metadata
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_training import calibration_lines
+    from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.reports.training import calibration_lines
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     with _user_errors(model):
@@ -500,10 +500,10 @@ def simulate(
     way its [sources] tables describe. The truth goes to NAME.truth.json (scenario, fault,
     onset) and NAME.truth.csv (true velocities, heading, position and depth at 10 Hz); a
     mission's plan to NAME.mission.json."""
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.run import simulate as run_simulation
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths, write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     if log_format not in LOG_FORMATS:
         _fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
@@ -533,9 +533,9 @@ def inspect(
     Exit status 0 when every signal resolves, 2 otherwise (also when the log holds none of
     them, or the profile has no mapping for its format: the listing still shows what the
     log holds)."""
-    from auvdiag_cli.inspection import inspect_log
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_text import inspection_lines
+    from auvdiag_cli.jobs.inspect import inspect_log
+    from auvdiag_cli.reports.text import inspection_lines
+    from auvdiag_cli.vehicle.profile import load_profile
 
     with _user_errors(log):
         result = inspect_log(log, load_profile(profile))
@@ -580,8 +580,8 @@ def init_profile(
     moved to the closest field that does (each move listed at the top). The draft loads and
     resolves on the log it came from: `auvdiag inspect LOG --profile FILE` shows it."""
     from adapters import detect_format
-    from auvdiag_cli.profile_draft import draft_profile
-    from auvdiag_cli.profile_like import draft_like
+    from auvdiag_cli.jobs.profile_draft import draft_profile
+    from auvdiag_cli.jobs.profile_like import draft_like
 
     with _user_errors(log):
         detect_format(log)
@@ -616,11 +616,11 @@ def derive_table(
     and no --log) on the DMSs played one after another. The b signatures are printed, and
     the table they imply is compared with the profile's. Exit status 0 when they agree, 1
     when they differ."""
-    from auvdiag_cli.derivation import derive_table as run_derivation
-    from auvdiag_cli.derivation import log_mission
-    from auvdiag_cli.ingest import ingest
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_json import write_json
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.engine.signatures import derive_table as run_derivation
+    from auvdiag_cli.engine.signatures import log_mission
+    from auvdiag_cli.files import write_json
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     with _user_errors(log or model or "builtin model"):
@@ -656,8 +656,8 @@ def derive_table(
 @app.command()
 def scenarios(profile: ProfileOption = None) -> None:
     """List the simulator's named scenarios for the profile's vehicle."""
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.scenarios import scenarios_for
+    from auvdiag_cli.vehicle.profile import load_profile
 
     with _user_errors(profile or "builtin profile"):
         known = scenarios_for(load_profile(profile))

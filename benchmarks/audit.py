@@ -29,11 +29,11 @@ FAULTS = [("thruster_0", "dead"), ("flow_sensor", "covered"), ("thruster_1", "de
 
 
 def make_fleet(folder: Path, logs: int, distinct: int) -> None:
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.faults import Fault
     from auvdiag_cli.simulator.run import LOG_EPOCH_NS, simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile = load_profile()
     steps = (DMS_ALL + PAPER_MISSION) * HOUR_REPEATS

@@ -34,9 +34,9 @@ from models.baselines import LinearDynamics
 from models.baselines import fit_linear as fit_linear_model
 
 if TYPE_CHECKING:
-    from auvdiag_cli.profile import Profile
-    from auvdiag_cli.resample import AlignedFrame
+    from auvdiag_cli.engine.resample import AlignedFrame
     from auvdiag_cli.simulator.scenarios import Scenario
+    from auvdiag_cli.vehicle.profile import Profile
     from models.normaliser import Normaliser
     from models.store import LoadedModel
 
@@ -135,8 +135,8 @@ def build_cases(profile: "Profile", seeds: int, normal_seeds: int, workdir: Path
 
 def diagnose_case(case: Case, profile: "Profile", models: dict[str, "LoadedModel"],
                   workdir: Path) -> dict[str, Any]:
-    from auvdiag_cli.diagnosis import diagnose_ingested
-    from auvdiag_cli.ingest import ingest
+    from auvdiag_cli.engine.diagnosis import diagnose_ingested
+    from auvdiag_cli.engine.ingest import ingest
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.writers import write_log
 
@@ -204,12 +204,12 @@ def main() -> None:
         print(render(saved["scores"], saved["seconds"]))
         return
 
-    from auvdiag_cli.calibration import calibrate
-    from auvdiag_cli.ingest import ingest
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.calibrate import calibrate
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     started = time.perf_counter()

@@ -32,11 +32,11 @@ FIRST_SEED = 401
 
 
 def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
-    from auvdiag_cli.diagnosis import diagnose
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import default_model_dir, load_model
 
     vehicle, scenario_name, truth, seed, fraction = job
@@ -58,7 +58,7 @@ def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
 
 
 def _jobs(seeds: int) -> list[tuple[str, str, str, int, float | None]]:
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.vehicle.profile import load_profile
 
     jobs: list[tuple[str, str, str, int, float | None]] = []
     for vehicle in VEHICLES:

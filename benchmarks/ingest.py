@@ -32,11 +32,11 @@ IMAGE_BYTES = 300_000
 def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
     import numpy as np
 
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
     from auvdiag_cli.simulator.writers import write_log
     from auvdiag_cli.simulator.writers.ros import ExtraTopic
+    from auvdiag_cli.vehicle.profile import load_profile
 
     hour = Scenario("one-hour", "16 x (ZA, ZB, ZC, mission)", (DMS_ALL + PAPER_MISSION) * 16)
     profile = load_profile()
@@ -75,7 +75,7 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
 
 def read_adapter(path: Path) -> int:
     from adapters import read_log
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.vehicle.profile import load_profile
 
     signals = read_log(path, load_profile().sources)
     series = signals.series

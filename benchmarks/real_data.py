@@ -28,8 +28,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from auvdiag_cli.diagnosis import Diagnosis
-    from auvdiag_cli.training_job import TrainingResult
+    from auvdiag_cli.engine.diagnosis import Diagnosis
+    from auvdiag_cli.jobs.train import TrainingResult
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 FAULT_CLASSES = ["AddWeight", "PressureGain_constant", "PropellerDamage_slight",
@@ -85,11 +85,11 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
     """Cross-validated within train/: in fold f the Normal runs numbered i with i % folds == f
     are judged, those with i % folds == f + 1 calibrate (and score the skill), the rest
     train; every faulty run is diagnosed in every fold."""
-    from auvdiag_cli.calibration import calibrate
-    from auvdiag_cli.diagnosis import diagnose
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_training import relation_lines
-    from auvdiag_cli.training_job import train_from_logs
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.jobs.calibrate import calibrate
+    from auvdiag_cli.jobs.train import train_from_logs
+    from auvdiag_cli.reports.training import relation_lines
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     profile = load_profile(Path("haizhe"))
@@ -210,10 +210,10 @@ def separability(folder: Path, folds: int) -> list[str]:
 
 
 def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
-    from auvdiag_cli.diagnosis import diagnose
+    from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.errors import AuvdiagError
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.training_job import train_from_logs
+    from auvdiag_cli.jobs.train import train_from_logs
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     profile = load_profile(Path("bluerov2_standard"))

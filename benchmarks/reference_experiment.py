@@ -14,12 +14,12 @@ import time
 from datetime import date
 from pathlib import Path
 
-from auvdiag_cli.diagnosis import diagnose
-from auvdiag_cli.profile import load_profile
+from auvdiag_cli.engine.diagnosis import diagnose
+from auvdiag_cli.engine.truth import truth_paths
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
-from auvdiag_cli.truth import truth_paths
+from auvdiag_cli.vehicle.profile import load_profile
 from models.store import load_model
 
 SCENARIOS = ["paper-flow-sensor-covered", "paper-normal", "mission-ccw", "mission-large-cw",

@@ -42,11 +42,11 @@ def peak_rss_mb() -> float:
 def make_logs(workdir: Path, formats: list[str]) -> dict[str, Path]:
     """The one-hour dive in every format, and (key ``mcap, faulty``) the same hour with
     thruster 0 dead from minute 30, whose diagnosis also runs the isolation steps."""
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.faults import Fault
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile = load_profile()
     steps = (DMS_ALL + PAPER_MISSION) * 16
@@ -78,11 +78,11 @@ def child_startup(what: str) -> dict:
 def child_diagnose(path: Path) -> dict:
     """The diagnose command's work, timed by stage (same calls as `auvdiag diagnose`)."""
     started = time.perf_counter()
-    from auvdiag_cli import ingest as ingest_module
-    from auvdiag_cli import matching as matching_module
-    from auvdiag_cli.diagnosis import diagnose
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.report_json import diagnosis_to_dict
+    from auvdiag_cli.engine import ingest as ingest_module
+    from auvdiag_cli.engine import residuals as matching_module
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     stages = {"read": 0.0, "replay": 0.0}
@@ -96,7 +96,7 @@ def child_diagnose(path: Path) -> dict:
                 stages[stage] += time.perf_counter() - begun
         return wrapper
 
-    import auvdiag_cli.diagnosis as diagnosis_module
+    import auvdiag_cli.engine.diagnosis as diagnosis_module
 
     diagnosis_module.ingest = timed(ingest_module.ingest, "read")  # type: ignore[assignment]
     diagnosis_module.match = timed(matching_module.match, "replay")  # type: ignore[assignment]

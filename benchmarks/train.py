@@ -31,10 +31,10 @@ def _spin() -> None:
 
 
 def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile = load_profile()
     training: list[Path] = []
@@ -59,8 +59,8 @@ def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
 
 def run(label: str, train_function: Callable[..., object], logs: list[Path],
         heldout: list[Path], output: Path, scale: float) -> dict:
-    from auvdiag_cli.profile import load_profile
-    from auvdiag_cli.training_job import train_from_logs
+    from auvdiag_cli.jobs.train import train_from_logs
+    from auvdiag_cli.vehicle.profile import load_profile
 
     started = time.perf_counter()
     result = train_from_logs(logs, output, load_profile(), heldout, iterations_scale=scale,

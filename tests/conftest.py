@@ -5,10 +5,10 @@ from pathlib import Path
 
 import pytest
 
-from auvdiag_cli.profile import Profile, load_profile
 from auvdiag_cli.simulator.run import SimulatedDive, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.vehicle.profile import Profile, load_profile
 
 MakeLog = Callable[..., Path]
 
@@ -56,7 +56,7 @@ def profile_without(tmp_path: Path) -> Callable[[str, str], Path]:
     section it can do without), written to a file."""
 
     def cut(first: str, up_to: str) -> Path:
-        from auvdiag_cli.profile import profile_text
+        from auvdiag_cli.vehicle.profile import profile_text
 
         text, _ = profile_text(None)
         path = tmp_path / f"without-{first.strip('[]').replace('.', '_')}.toml"

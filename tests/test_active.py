@@ -6,8 +6,8 @@ import json
 import pytest
 from typer.testing import CliRunner
 
-from auvdiag_cli.active import DmsRun, decide, moved_components
 from auvdiag_cli.cli import app
+from auvdiag_cli.engine.active import DmsRun, decide, moved_components
 from auvdiag_cli.simulator.writers import write_log
 
 runner = CliRunner()

@@ -1,5 +1,7 @@
 """The import graph of the project's packages: no cycles (type-only and function-local
-imports count too), and no layer importing from one above it."""
+imports count too), and no layer importing from one above it: between the packages, and
+inside auvdiag_cli from the vehicle up to the command line (see the README's
+architecture section)."""
 
 import ast
 from pathlib import Path
@@ -10,6 +12,19 @@ PACKAGES = ("auvdiag_errors", "adapters", "models", "auvdiag_cli")
 ALLOWED = {"auvdiag_errors": set(), "adapters": {"auvdiag_errors"},
            "models": {"auvdiag_errors"},
            "auvdiag_cli": {"auvdiag_errors", "adapters", "models"}}
+
+
+# Inside auvdiag_cli, bottom to top; a module may import from its own folder and from lower
+# ranks. Modules at the package's top (errors, numeric, digest, files) are rank 0.
+APPLICATION_RANKS = {"vehicle": 1, "engine": 2, "simulator": 3, "jobs": 4, "reports": 5,
+                     "audit": 6, "fuzz": 6, "cli": 7, "__main__": 7}
+
+
+def _application_layer(module: str) -> tuple[str, int]:
+    parts = module.split(".")
+    folder = parts[1] if len(parts) > 1 and parts[1] in APPLICATION_RANKS else "top"
+    folder = "cli" if folder == "__main__" else folder
+    return folder, APPLICATION_RANKS.get(folder, 0)
 
 
 def _module_name(path: Path) -> str:
@@ -103,4 +118,19 @@ def test_no_layer_imports_from_a_layer_above_it():
              for module, targets in _graph().items() for target in targets
              if (layer := module.split(".")[0]) != (other := target.split(".")[0])
              and other not in ALLOWED[layer]]
+    assert wrong == []
+
+
+def test_inside_the_application_no_folder_imports_from_one_above_it():
+    wrong = []
+    for module, targets in _graph().items():
+        if not module.startswith("auvdiag_cli"):
+            continue
+        folder, rank = _application_layer(module)
+        for target in targets:
+            if not target.startswith("auvdiag_cli"):
+                continue
+            other, other_rank = _application_layer(target)
+            if other != folder and other_rank >= rank:
+                wrong.append(f"{module} ({folder}) imports {target} ({other})")
     assert wrong == []

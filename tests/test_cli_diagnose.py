@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.truth import truth_paths
+from auvdiag_cli.engine.truth import truth_paths
 
 runner = CliRunner()
 
@@ -174,7 +174,8 @@ def test_truncated_to_nothing_useful_is_exit_2(make_log, tmp_path):
 
 
 def test_wrong_model_for_profile_is_exit_2(make_log, tmp_path):
-    profile_text = (Path(__file__).parents[1] / "auvdiag_cli/profiles/twin_burger.toml").read_text()
+    profile_text = (Path(__file__).parents[1] / "auvdiag_cli" / "vehicle" / "profiles"
+                    / "twin_burger.toml").read_text()
     other = tmp_path / "renamed.toml"
     other.write_text(profile_text.replace('name = "yaw_rate"', 'name = "heave"').replace(
         "yaw_rate = ", "heave = ").replace('heave = "yaw_rate"', 'yaw_rate = "heave"'))

@@ -11,10 +11,10 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.profile import load_profile
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.vehicle.profile import load_profile
 from models.command_relations import CommandRelations
 from models.store import default_model_dir, load_model
 
@@ -120,8 +120,8 @@ def test_relate_learns_the_relation_for_an_existing_model(make_log, tmp_path):
 
 
 def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(tmp_path):
-    from auvdiag_cli.command_check import CommandCheck
-    from auvdiag_cli.relations_job import widen_thresholds
+    from auvdiag_cli.engine.command_check import CommandCheck
+    from auvdiag_cli.jobs.relate import widen_thresholds
 
     model = load_model()
     before = list(model.metadata["command_relations"]["thresholds"])

@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 
 runner = CliRunner()
-PROFILE = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+PROFILE = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
 HAIZHE = Path(__file__).resolve().parents[2] / "shared" / "data" / "haizhe" / "train"
 
 
@@ -32,8 +32,8 @@ def reference(make_log):
 
 @pytest.mark.parametrize("unit", ["s", "ms", "us", "ns", "iso", "hhmmss"])
 def test_csv_round_trip_in_every_time_unit(tmp_path, dive_cache, reference, unit):
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile_path = tmp_path / "p.toml"
     profile_path.write_text(PROFILE.replace('unit = "s" }', f'unit = "{unit}" }}'))
@@ -120,7 +120,7 @@ def test_hhmmss_rows_are_spread_evenly_over_each_second():
 @pytest.mark.skipif(not HAIZHE.is_dir(), reason=f"real Haizhe data not found at {HAIZHE}")
 def test_real_haizhe_runs_are_read_directly():
     from adapters import read_log
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile = load_profile(Path("haizhe"))
     log = HAIZHE / "Normal" / "Normal_0.csv"

@@ -145,7 +145,7 @@ def test_unknown_message_types_on_unrelated_topics_are_ignored(tmp_path, dive_ca
 def test_log_missing_one_needed_source_is_one_line(make_log, tmp_path, fmt, missing):
     from importlib import resources
 
-    original = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    original = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     renamed = {"ATTITUDE": "ATTITUDE_QUATERNION", "IMU": "IMU2", "/imu/data": "/imu/other"}
     profile_path = tmp_path / "p.toml"
     profile_path.write_text(original.replace(f'"{missing}"', f'"{renamed[missing]}"'))

@@ -35,11 +35,11 @@ def test_dead_sensors_are_not_explained_away(make_log, scenario, component):
 def test_thruster_dying_in_a_turn_is_not_read_as_the_yaw_sensor(tmp_path, onset_s):
     # The 5 m x 2.5 m clockwise rectangle, seed 2002: the yaw bit rises alone first, which
     # the table reads as the yaw-rate sensor; replaying with the thruster dead explains all.
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.faults import Fault
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import Scenario, _mission
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     profile = load_profile()
     scenario = Scenario("turn", "thruster 0 dies in a turn", _mission(length_m=5.0, width_m=2.5),
@@ -57,7 +57,7 @@ def test_thruster_dying_in_a_turn_is_not_read_as_the_yaw_sensor(tmp_path, onset_
 def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     from importlib import resources
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     row = ('[[pattern]]\ncase = 3\nb = { flow = 0, yaw_rate = 1 }\n'
            'components = ["yaw_rate_sensor"]\n')
     assert row in text

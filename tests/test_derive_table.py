@@ -29,7 +29,7 @@ def test_derived_twin_burger_table_is_the_papers(tmp_path):
 def test_a_profile_with_a_wrong_table_is_flagged(tmp_path):
     from importlib import resources
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     wrong = tmp_path / "wrong.toml"
     wrong.write_text(text.replace('components = ["flow_sensor"]',
                                   'components = ["yaw_rate_sensor"]').replace(

@@ -49,7 +49,7 @@ def test_audit_worker_records_a_model_it_cannot_load_as_final(make_log, tmp_path
 @pytest.fixture(scope="module")
 def elsewhere_profile(tmp_path_factory):
     """The built-in profile with every topic and message renamed to one no log has."""
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     text = re.sub(r'(topic|message) = "([^"]+)"', r'\1 = "ELSEWHERE_\2"', text)
     path = tmp_path_factory.mktemp("profile") / "elsewhere.toml"
     path.write_text(text)
@@ -101,7 +101,7 @@ def test_one_corrupted_dataflash_timestamp_costs_one_record(make_log, tmp_path, 
 
 def test_a_clock_that_jumps_beyond_any_log_is_rejected_not_overflowed():
     from adapters.signals import Signals
-    from auvdiag_cli.resample import resample
+    from auvdiag_cli.engine.resample import resample
 
     times = np.arange(100, dtype=np.int64) * 100_000_000
     times[50:52] = [2**62, 2**62 + 100_000_000]        # two corrupt records in a row

@@ -4,7 +4,7 @@ and real logged command histories."""
 import numpy as np
 import pytest
 
-from auvdiag_cli.ingest import ingest
+from auvdiag_cli.engine.ingest import ingest
 from models.dynamics import replay
 from models.fast import fast_replay, fast_replay_batch
 from models.store import load_model

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 
 runner = CliRunner()
-PROFILE = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+PROFILE = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
 
 
 def _profile(tmp_path, old, new):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from adapters import LogError, detect_format, read_log
-from auvdiag_cli.diagnosis import diagnose
+from auvdiag_cli.engine.diagnosis import diagnose
 from models.store import load_model
 
 ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]

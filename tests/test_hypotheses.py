@@ -7,8 +7,8 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.diagnosis import diagnose
-from auvdiag_cli.profile import load_profile
+from auvdiag_cli.engine.diagnosis import diagnose
+from auvdiag_cli.vehicle.profile import load_profile
 from models.store import load_model
 
 runner = CliRunner()

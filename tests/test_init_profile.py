@@ -63,7 +63,7 @@ def test_drafts_from_real_logs_resolve(tmp_path, relative):
 def test_like_a_profile_moves_what_does_not_read_to_the_closest_field(make_log, tmp_path):
     from importlib import resources
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     like = tmp_path / "like.toml"
     like.write_text(text.replace('field = "servo2_raw"', 'field = "servo_2_raw"')
                     .replace('field = "yawspeed"', 'field = "yaw_speed"'))

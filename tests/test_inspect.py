@@ -33,7 +33,7 @@ def test_inspect_lists_topics_counts_rates_and_signals(make_log, fmt):
 def test_inspect_names_the_missing_signal_and_the_closest_topic(make_log, tmp_path):
     from importlib import resources
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     profile = tmp_path / "typo.toml"
     profile.write_text(text.replace('"/flow/velocity"', '"/flow/velocty"'))
     result = runner.invoke(app, ["inspect", str(make_log("paper-normal", 41, "db3")),

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from auvdiag_cli.detection import binary_vector, detect, look_up
-from auvdiag_cli.matching import residual_index
+from auvdiag_cli.engine.detection import binary_vector, detect, look_up
+from auvdiag_cli.engine.residuals import residual_index
 
 
 def test_g_is_the_mean_of_the_last_k_differences_in_percent_of_r():
@@ -54,7 +54,7 @@ def test_detection_collects_b_over_the_decision_window_and_finds_the_onset():
 
 def test_segments_from_markers(profile):
     from adapters import SegmentMarker
-    from auvdiag_cli.segments import segments_from_markers
+    from auvdiag_cli.engine.segments import segments_from_markers
 
     start = 1_000_000_000
     markers = [SegmentMarker(start + 2_000_000, "ZA"), SegmentMarker(start + 30 * 10**9, "zb"),

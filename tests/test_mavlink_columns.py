@@ -96,7 +96,7 @@ def test_a_frame_with_a_bad_checksum_is_left_out_like_pymavlink_does(tmp_path):
 
 
 def test_a_damaged_tlog_frame_becomes_a_note_in_the_analysis(tmp_path, make_log, profile):
-    from auvdiag_cli.ingest import ingest
+    from auvdiag_cli.engine.ingest import ingest
 
     path = make_log("paper-normal", 21, "tlog")
     index = index_file(path, "tlog", _message_names())

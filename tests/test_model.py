@@ -10,7 +10,7 @@ import torch
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.ingest import ingest
+from auvdiag_cli.engine.ingest import ingest
 from models.dynamics import replay
 from models.store import ModelFileError, load_model
 
@@ -70,7 +70,7 @@ def test_trained_model_beats_a_model_that_predicts_no_change(quick_model, make_l
 def test_replay_is_free_running(quick_model, make_log, profile):
     """After the initial state no sensor value enters: zeroing the sensors after the start
     state's window leaves SM unchanged (the paper's RC_1 feedback) while g grows."""
-    from auvdiag_cli.matching import match
+    from auvdiag_cli.engine.residuals import match
     from models.rollouts import START_HALF_WIDTH
 
     model = load_model(quick_model[0])
@@ -138,10 +138,10 @@ def test_shipped_model_matches_the_papers_model_error():
 
 
 def test_the_papers_figures_are_shown_for_the_papers_vehicle_only(tmp_path):
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli.vehicle.profile import load_profile
 
     vehicle = load_profile(Path("three_thruster"))      # it has a yaw-rate sensor too
     logs = []

@@ -22,7 +22,7 @@ OPERATING = ('operating = { message = "HEARTBEAT", field = "base_mode", bits = 1
 
 @pytest.fixture(scope="module")
 def armed_profile(tmp_path_factory):
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     header = '[sources.mavlink]\n'
     path = tmp_path_factory.mktemp("profile") / "armed.toml"
     path.write_text(text.replace(header, header + OPERATING + "\n", 1))
@@ -100,7 +100,7 @@ def test_a_log_never_armed_is_one_line(make_log, tmp_path, armed_profile):
 
 
 def test_the_operating_name_is_reserved(tmp_path):
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     path = tmp_path / "clash.toml"
     path.write_text(text.replace('name = "flow"', 'name = "operating"'))
     result = runner.invoke(app, ["inspect", "x", "--profile", str(path)])
@@ -140,7 +140,7 @@ def test_idle_commands_end_operation_where_the_log_has_no_flag(tmp_path, dive_ca
     dive = _lifted_between_two_runs(dive_cache("dms-za", 31), dive_cache("dms-za", 32), 60.0)
     log = tmp_path / "lifted.mcap"
     write_log(dive, profile, log, "mcap")
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     idle = tmp_path / "idle.toml"
     idle.write_text(text + "\n[operating]\nidle_after_s = 3.0\n")
     assert _report(log)["verdict"] == "fault"             # the lifted minute, judged

@@ -5,7 +5,7 @@ import re
 import pytest
 
 from auvdiag_cli.errors import ProfileError
-from auvdiag_cli.profile import load_profile
+from auvdiag_cli.vehicle.profile import load_profile
 
 
 def test_builtin_profile_has_the_papers_figures(profile):
@@ -47,7 +47,7 @@ BUILTIN = load_profile().source_path
 def test_invalid_profile_names_the_key(tmp_path, edit, message):
     from importlib import resources
 
-    text = (resources.files("auvdiag_cli") / "profiles/twin_burger.toml").read_text()
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
     assert edit[0] in text
     path = tmp_path / "p.toml"
     path.write_text(text.replace(edit[0], edit[1], 1))
@@ -61,7 +61,7 @@ def test_missing_profile_file(tmp_path):
 
 
 def test_the_pattern_table_is_optional(make_log, profile_without):
-    from auvdiag_cli.diagnosis import diagnose
+    from auvdiag_cli.engine.diagnosis import diagnose
     from models.store import load_model
 
     profile = load_profile(profile_without("[[pattern]]", "[dms."))

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from adapters import Signals
-from auvdiag_cli.resample import resample
+from auvdiag_cli.engine.resample import resample
 
 S = 1_000_000_000
 

@@ -8,10 +8,10 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.profile import load_profile
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.vehicle import Vehicle
+from auvdiag_cli.vehicle.profile import load_profile
 
 
 def settle(commands, seconds=20.0, gains=(1.0, 1.0)):

@@ -10,17 +10,17 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.ingest import ingest
-from auvdiag_cli.simulator.run import simulate
-from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import write_log
-from auvdiag_cli.start_check import (
+from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.start_check import (
     FLOOR,
     MARGIN,
     check_start,
     learn_start_state,
     start_reading,
 )
+from auvdiag_cli.simulator.run import simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
 from models.store import default_model_dir
 
 runner = CliRunner()

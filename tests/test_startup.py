@@ -14,7 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.profile import profile_text
+from auvdiag_cli.vehicle.profile import profile_text
 
 runner = CliRunner()
 VARIANTS = {

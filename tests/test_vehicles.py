@@ -12,12 +12,12 @@ from typer.testing import CliRunner
 
 from adapters import read_log
 from auvdiag_cli.cli import app
+from auvdiag_cli.engine.truth import mission_path, truth_paths
 from auvdiag_cli.errors import ProfileError
-from auvdiag_cli.profile import load_profile
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
-from auvdiag_cli.truth import mission_path, truth_paths
+from auvdiag_cli.vehicle.profile import load_profile
 
 runner = CliRunner()
 
@@ -120,7 +120,7 @@ def test_bluerov2_signals_round_trip_through_a_tlog(tmp_path):
 
 
 def test_vehicle_without_a_shipped_model_says_how_to_get_one(tmp_path):
-    source = Path(__file__).parents[1] / "auvdiag_cli" / "profiles" / "bluerov2.toml"
+    source = Path(__file__).parents[1] / "auvdiag_cli" / "vehicle" / "profiles" / "bluerov2.toml"
     custom = tmp_path / "myrov.toml"
     custom.write_text(source.read_text().replace('name = "bluerov2"', 'name = "myrov"'))
     log = write(tmp_path, "bluerov2", "dms-m1", "tlog")
@@ -199,7 +199,7 @@ def test_twin_burger_model_is_refused_for_another_vehicle(tmp_path):
      'noise = 0.0\nquantum = 0.001\n', "simulation.sensors' must describe the sensors"),
 ])
 def test_simulation_table_errors_name_the_key(tmp_path, edit, message):
-    source = (Path(__file__).parents[1] / "auvdiag_cli" / "profiles" / "twin_burger.toml")
+    source = Path(__file__).parents[1] / "auvdiag_cli" / "vehicle" / "profiles" / "twin_burger.toml"
     path = tmp_path / "edited.toml"
     path.write_text(source.read_text() + "\n" + edit)
     with pytest.raises(ProfileError, match=message):

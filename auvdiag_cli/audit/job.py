@@ -14,7 +14,7 @@ from auvdiag_cli.audit.store import Inputs, ResultStore, folder_digest, text_dig
 from auvdiag_cli.audit.table import build_table, write_tables
 from auvdiag_cli.audit.worker import AuditTask
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.profile import load_profile
+from auvdiag_cli.vehicle.profile import load_profile
 from models.store import default_model_dir, load_model
 
 TABLE_EVERY_S = 5.0      # rewrite the table at most this often while logs finish

@@ -11,8 +11,8 @@ from typing import Any
 from auvdiag_cli import __version__
 from auvdiag_cli.audit.worker import AuditOutcome
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.report_json import write_json
-from auvdiag_cli.report_series import save_series, series_path
+from auvdiag_cli.files import write_json
+from auvdiag_cli.reports.series import save_series, series_path
 
 RESULTS_FOLDER = "logs"
 

@@ -35,7 +35,7 @@ class AuditOutcome:
 
 @cache
 def _profile_and_model(profile: str | None, model: str | None) -> tuple[Any, Any]:
-    from auvdiag_cli.profile import load_profile
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     vehicle = load_profile(None if profile is None else Path(profile))
@@ -49,9 +49,9 @@ def _peak_rss_mb() -> float:
 
 def analyse(task: AuditTask) -> AuditOutcome:
     """Diagnose one log; never raises (a failure is the outcome's ``error``)."""
-    from auvdiag_cli.diagnosis import diagnose
-    from auvdiag_cli.report_json import diagnosis_to_dict
-    from auvdiag_cli.report_series import series_from_diagnosis
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.reports.series import series_from_diagnosis
 
     started = time.perf_counter()
     outcome = AuditOutcome(task.log, None)

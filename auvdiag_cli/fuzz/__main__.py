@@ -39,8 +39,8 @@ def main(argv: list[str] | None = None) -> int:
     from auvdiag_cli.errors import AuvdiagError
     from auvdiag_cli.fuzz.harness import Case, Limits, exercise, run_cases, summarise
     from auvdiag_cli.fuzz.seeds import real_seed, simulated_seeds
-    from auvdiag_cli.profile import load_profile
     from auvdiag_cli.simulator.writers import LOG_FORMATS
+    from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     options = _arguments(argv)

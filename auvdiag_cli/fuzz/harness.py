@@ -23,7 +23,7 @@ from typing import Any
 
 from auvdiag_cli.fuzz.mutations import mutate
 from auvdiag_cli.fuzz.seeds import SeedLog
-from auvdiag_cli.profile import Profile
+from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
 DEFECTS = ("crash", "hang", "memory", "output")
@@ -67,12 +67,12 @@ class Limits:
 def exercise(path: Path, profile: Profile, model: LoadedModel) -> tuple[str, str]:
     """What `auvdiag inspect` and `auvdiag diagnose --json -` do with ``path``, without the
     terminal: (outcome, detail). Raises nothing the CLI would not turn into one line."""
-    from auvdiag_cli.diagnosis import diagnose
+    from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.errors import AuvdiagError
-    from auvdiag_cli.inspection import inspect_log
-    from auvdiag_cli.report_json import diagnosis_to_dict
-    from auvdiag_cli.report_series import series_from_diagnosis
-    from auvdiag_cli.report_text import inspection_lines, summary_lines
+    from auvdiag_cli.jobs.inspect import inspect_log
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.reports.series import series_from_diagnosis
+    from auvdiag_cli.reports.text import inspection_lines, summary_lines
 
     outcomes, details = [], []
     for command in ("inspect", "diagnose"):

@@ -8,10 +8,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import detect_format
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive, Stream, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import LOG_FORMATS, write_log
+from auvdiag_cli.vehicle.profile import Profile
 
 SEED_SCENARIO = "routine-flow-sensor-dead"   # markers, DMS segments and a fault: many paths
 SEED_SECONDS = 40.0

@@ -2,7 +2,7 @@
 
 from dataclasses import dataclass
 
-from auvdiag_cli.profile import Profile
+from auvdiag_cli.vehicle.profile import Profile
 
 ACTUATOR_FAULTS = ("dead", "weak")
 SENSOR_FAULTS = ("dead", "covered", "bias", "drift")

@@ -7,16 +7,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from auvdiag_cli.controller import (
+from auvdiag_cli.simulator.faults import Fault
+from auvdiag_cli.simulator.scenarios import Phase, Scenario
+from auvdiag_cli.simulator.vehicle import Vehicle
+from auvdiag_cli.vehicle.controller import (
     PathFollower,
     VehicleController,
     rectangle_waypoints,
 )
-from auvdiag_cli.profile import Profile
-from auvdiag_cli.simulation_spec import TRUTH_COLUMNS, SimulationSpec
-from auvdiag_cli.simulator.faults import Fault
-from auvdiag_cli.simulator.scenarios import Phase, Scenario
-from auvdiag_cli.simulator.vehicle import Vehicle
+from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_cli.vehicle.simulation_spec import TRUTH_COLUMNS, SimulationSpec
 
 PHYSICS_DT_S = 0.01
 CONTROL_EVERY = 10      # physics ticks per command (10 Hz)

@@ -2,8 +2,8 @@
 
 from dataclasses import dataclass, field, replace
 
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.faults import Fault, fault_kinds
+from auvdiag_cli.vehicle.profile import Profile
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 
 import math
 
-from auvdiag_cli.simulation_spec import SimulationSpec
+from auvdiag_cli.vehicle.simulation_spec import SimulationSpec
 
 
 class Vehicle:

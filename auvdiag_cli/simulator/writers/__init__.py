@@ -4,14 +4,14 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from auvdiag_cli.profile import Profile
+from auvdiag_cli.engine.truth import mission_path, truth_paths
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
 from auvdiag_cli.simulator.writers.csv_log import write_csv
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
 from auvdiag_cli.simulator.writers.records import first_message_s
 from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
-from auvdiag_cli.truth import mission_path, truth_paths
+from auvdiag_cli.vehicle.profile import Profile
 
 __all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
 

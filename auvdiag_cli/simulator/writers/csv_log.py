@@ -6,9 +6,9 @@ import csv
 from datetime import UTC, datetime
 from pathlib import Path
 
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import dive_records, family_sources
+from auvdiag_cli.vehicle.profile import Profile
 
 _PER_SECOND = {"s": 1e9, "ms": 1e6, "us": 1e3, "ns": 1.0}
 

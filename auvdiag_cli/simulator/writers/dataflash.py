@@ -5,9 +5,9 @@ FMT record (type 128) earlier in the file."""
 import struct
 from pathlib import Path
 
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
+from auvdiag_cli.vehicle.profile import Profile
 
 HEADER = b"\xa3\x95"
 FMT_TYPE = 128

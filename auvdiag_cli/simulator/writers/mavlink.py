@@ -6,9 +6,9 @@ import struct
 from pathlib import Path
 from typing import Any
 
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import Record, dive_records
+from auvdiag_cli.vehicle.profile import Profile
 
 HEARTBEAT_PERIOD_NS = 1_000_000_000
 MAV_TYPE_SUBMARINE, MAV_AUTOPILOT_ARDUPILOTMEGA, MAV_SEVERITY_INFO = 12, 3, 6

@@ -5,8 +5,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 from adapters.signals import FieldSource, LogSources
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive, Stream
+from auvdiag_cli.vehicle.profile import Profile
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from adapters.fieldpath import parse_field_path
-from auvdiag_cli.profile import Profile
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
+from auvdiag_cli.vehicle.profile import Profile
 
 # The message type a topic carries, from the first step of the field paths read on it.
 TYPES_BY_FIELD = {

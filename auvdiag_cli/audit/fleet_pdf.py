@@ -1,0 +1,165 @@
+"""The fleet summary of an audit: totals and problem logs in words, then verdicts by vehicle
+and date, faults by component, a timeline, and the worst g of each log."""
+
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from auvdiag_cli.audit.table import flatten
+from auvdiag_cli.reports.pdf.style import COLOURS, new_page, pdf_document
+from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+VERDICTS = ("normal", "fault", "undetermined", "error")
+WORST_SHOWN = 30
+
+
+def _verdict(row: dict[str, Any]) -> str:
+    return "error" if row["error"] else str(row["verdict"])
+
+
+def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, str]],
+                  companions: int, interrupted: bool) -> list[Line]:
+    counts = Counter(_verdict(r) for r in rows)
+    lines = [Line(f"{len(rows)} logs: {counts['normal']} normal, {counts['fault']} with a "
+                  f"fault, {counts['undetermined']} undetermined, {counts['error']} not "
+                  "analysable", size=14, bold=True)]
+    if companions:
+        lines += paragraph(f"{companions} files named after a log beside it (truth, mission "
+                           "plans, reports) were left alone.", colour=COLOURS["muted"])
+    if interrupted:
+        lines += paragraph("The audit was interrupted: this summary covers the logs finished "
+                           "so far; run the same command again to finish.",
+                           colour=COLOURS["fault"], bold=True)
+    faults = [r for r in rows if _verdict(r) == "fault"]
+    if faults:
+        lines += heading("Faults")
+        for r in faults:
+            what = r["component"] or (r["candidates"] or "unidentified").replace(";", " or ")
+            when = "" if r["onset_s"] is None else f", onset {r['onset_s']:.1f} s"
+            lines += paragraph(f"{Path(r['log']).name}: {what}{when}", family="monospace",
+                               size=8.5)
+    errors = [r for r in rows if r["error"]]
+    if errors:
+        lines += heading("Logs that could not be analysed")
+        for r in errors:
+            lines += paragraph(f"{Path(r['log']).name}: {r['error']}", family="monospace",
+                               size=8.5)
+    if skipped:
+        lines += heading(f"Skipped: {len(skipped)} files that are not logs")
+        for path, reason in skipped:
+            lines += paragraph(f"{path}: {reason}", family="monospace", size=8.5,
+                               colour=COLOURS["muted"])
+    return lines
+
+
+def _vehicle_and_date(row: dict[str, Any]) -> tuple[str, str]:
+    vehicle = row["vehicle"] or ("not analysable" if row["error"] else "?")
+    return vehicle, (row["start_time_utc"] or "no clock")[:10]
+
+
+def _by_vehicle_and_date(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+    from matplotlib.ticker import MaxNLocator
+
+    groups = sorted({_vehicle_and_date(r) for r in rows})
+    labels = [f"{vehicle}\n{date}" for vehicle, date in groups]
+    bottom = [0] * len(groups)
+    for verdict in VERDICTS:
+        heights = [sum(1 for r in rows if _verdict(r) == verdict and _vehicle_and_date(r) == g)
+                   for g in groups]
+        ax.bar(labels, heights, bottom=bottom, color=COLOURS[verdict], label=verdict)
+        bottom = [b + h for b, h in zip(bottom, heights, strict=True)]
+    ax.set_title("Verdicts by vehicle and date", loc="left", fontweight="bold")
+    ax.set_ylabel("logs")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.tick_params(axis="x", labelsize=7, labelrotation=30)
+    ax.legend(loc="upper right", fontsize=7)
+
+
+def _faults_by_component(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+    from matplotlib.ticker import MaxNLocator
+
+    named = Counter(r["component"] or "not isolated" for r in rows if _verdict(r) == "fault")
+    ax.set_title("Faults by component", loc="left", fontweight="bold")
+    if not named:
+        ax.text(0.5, 0.5, "no fault found", ha="center", va="center", transform=ax.transAxes,
+                color=COLOURS["muted"])
+        ax.set_axis_off()
+        return
+    names = sorted(named, key=lambda n: (-named[n], n))
+    ax.barh(names, [named[n] for n in names], color=COLOURS["fault"])
+    ax.invert_yaxis()
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel("logs")
+
+
+def _timeline(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+    """Each log at its start time (or its place in the list, for logs without a clock)."""
+    import matplotlib.dates as mdates
+    import pandas as pd
+
+    dated = all(r["start_time_utc"] for r in rows)
+    vehicles = sorted({_vehicle_and_date(r)[0] for r in rows})
+    for verdict in VERDICTS:
+        chosen = [(i, r) for i, r in enumerate(rows) if _verdict(r) == verdict]
+        if not chosen:
+            continue
+        x = ([pd.Timestamp(r["start_time_utc"]).to_pydatetime() for _, r in chosen] if dated
+             else [i for i, _ in chosen])
+        y = [vehicles.index(_vehicle_and_date(r)[0]) for _, r in chosen]
+        ax.scatter(x, y, color=COLOURS[verdict], s=18, label=verdict, zorder=3)
+    ax.set_yticks(range(len(vehicles)), vehicles)
+    ax.set_ylim(-0.5, len(vehicles) - 0.5)
+    ax.set_title("Timeline", loc="left", fontweight="bold")
+    if dated:
+        ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(ax.xaxis.get_major_locator()))
+        ax.set_xlabel("log start (UTC)")
+    else:
+        ax.set_xlabel("log (in table order; not every log has a clock)")
+
+
+def _worst_g(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+    ranked = sorted((r for r in rows if r["worst_g_ratio"] is not None),
+                    key=lambda r: -r["worst_g_ratio"])[:WORST_SHOWN]
+    shown = f" (the {WORST_SHOWN} highest)" if len(ranked) == WORST_SHOWN else ""
+    ax.set_title(f"Worst g per log, over its threshold{shown}", loc="left", fontweight="bold")
+    if not ranked:
+        ax.set_axis_off()
+        return
+    names = [Path(r["log"]).name for r in ranked]
+    ax.barh(names, [r["worst_g_ratio"] for r in ranked],
+            color=[COLOURS[_verdict(r)] for r in ranked])
+    ax.axvline(1.0, color=COLOURS["threshold"], ls=":", lw=1.0)
+    ax.invert_yaxis()
+    ax.set_xscale("log")
+    ax.set_xlabel("largest g / threshold (1 = alarm level)")
+    ax.tick_params(axis="y", labelsize=max(4, 8 - len(ranked) // 10))
+
+
+def charts_page(rows: Sequence[dict[str, Any]]) -> "Figure":
+    figure = new_page()
+    grid = figure.subplots(2, 2)
+    _by_vehicle_and_date(grid[0][0], rows)
+    _faults_by_component(grid[0][1], rows)
+    _timeline(grid[1][0], rows)
+    _worst_g(grid[1][1], rows)
+    return figure
+
+
+def render_fleet_report(records: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, str]],
+                        target: Path, companions: int = 0, interrupted: bool = False) -> int:
+    rows = sorted((flatten(r) for r in records), key=lambda r: str(r["log"]))
+    title = "auvdiag fleet audit"
+    with pdf_document(target, title, f"Audit of {len(rows)} logs") as pdf:
+        pages = write_text_pages(pdf, summary_lines(rows, skipped, companions, interrupted), title,
+                                 "Fleet audit")
+        if rows:
+            figure = charts_page(rows)
+            figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])
+            pdf.savefig(figure)
+            pages += 1
+    return pages

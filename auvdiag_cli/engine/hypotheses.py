@@ -1,0 +1,171 @@
+"""Which single-component fault explains the log: the paper's pattern table, generalised.
+
+From the estimated onset on, the log is replayed under every single-component fault the
+profile's components admit, and each hypothesis is scored by the largest g / threshold it
+leaves after the onset (on the judged signals, from one window after the onset, when g
+covers only faulty time). Below 1 the hypothesis *explains* the log: with that fault
+assumed, no signal would have alarmed.
+
+- an actuator (the commands of one component) dead, or giving a fraction of its thrust:
+  the commands are replayed scaled from the onset (thrust grows as command·|command|, so a
+  fraction f of thrust is sqrt(f) of the command);
+- a sensor (the signals of one component) dead (reads 0), stuck (at its value just before
+  the onset), biased (a constant offset from the model, fitted) or drifting (an offset
+  growing linearly from the onset, fitted).
+
+This is also what goes beyond the paper's assumption 3 (a component is normal or totally
+defective): a thruster that lost part of its power can look like a sensor fault to the
+pattern table (at 50 % the yaw residual grows first), and a thruster that dies in a turn can
+raise the yaw bit alone at first; the weakened or dead thruster's replay explains such a
+log where the table's sensor cannot.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from auvdiag_cli.engine.resample import AlignedFrame
+from auvdiag_cli.engine.residuals import Matching, match, residual_index
+from auvdiag_cli.numeric import peak
+from auvdiag_cli.vehicle.profile import Profile
+from models.store import LoadedModel
+
+THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
+SENSOR_FAULTS = ("dead", "stuck", "biased", "drifting")
+STUCK_FROM_SAMPLES = 5       # a stuck sensor's value: the median of the samples before onset
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    component: str
+    kind: str                            # dead, weakened, stuck, biased, drifting
+    peak_g_ratio: float                  # largest g / threshold after the onset, assumed
+    thrust_fraction: float | None = None  # actuators: 0 dead, else weakened to this
+
+    @property
+    def explains(self) -> bool:
+        return self.peak_g_ratio < 1.0
+
+    @property
+    def is_actuator(self) -> bool:
+        return self.thrust_fraction is not None
+
+    def describe(self) -> str:
+        name = self.component.replace("_", " ")
+        if self.kind == "weakened":
+            return f"{name} weakened to {self.thrust_fraction:.0%} thrust"
+        return f"{name} {self.kind}"
+
+
+@dataclass(frozen=True)
+class HypothesisTest:
+    ranked: tuple[Hypothesis, ...]       # best first
+
+    @property
+    def best(self) -> Hypothesis:
+        return self.ranked[0]
+
+    @property
+    def runner_up(self) -> Hypothesis | None:
+        """The best hypothesis about another component."""
+        return next((h for h in self.ranked if h.component != self.best.component), None)
+
+    @property
+    def margin(self) -> float | None:
+        """How many times more of its threshold the runner-up leaves than the best."""
+        other = self.runner_up
+        if other is None or self.best.peak_g_ratio <= 0:
+            return None
+        return other.peak_g_ratio / self.best.peak_g_ratio
+
+
+@dataclass(frozen=True)
+class _Judge:
+    """What scoring a hypothesis needs: where g counts, against what."""
+
+    measured: np.ndarray
+    thresholds: np.ndarray
+    scales: np.ndarray
+    window: int
+    onset: int
+    judged: np.ndarray                   # columns of the signals that are judged
+
+    def ratio(self, g_after_onset: np.ndarray) -> float:
+        """Infinite where g never covers faulty time (the log ends too soon after the
+        onset): nothing is explained then."""
+        start = min(self.window, max(0, len(g_after_onset) - 1))
+        g = g_after_onset[start:, self.judged]
+        ratio = peak(g / self.thresholds[self.onset + start:, self.judged])
+        return round(ratio, 3) if np.isfinite(ratio) else float("inf")
+
+    def ratio_of(self, predicted: np.ndarray) -> float:
+        after = slice(self.onset, None)
+        return self.ratio(residual_index(self.measured[after], predicted[after], self.scales,
+                                         self.window))
+
+
+def weigh_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
+                    matching: Matching, thresholds: np.ndarray, onset: int,
+                    restarts: Sequence[int], not_judged: Sequence[str] = ()) -> HypothesisTest:
+    full_scale = model.metadata.get("full_scale", profile.full_scales)
+    window = int(model.metadata.get("window_samples", profile.window_samples))
+    judge = _Judge(matching.measured, thresholds,
+                   np.asarray([full_scale[n] for n in frame.sensor_names]), window, onset,
+                   np.asarray([n not in not_judged for n in frame.sensor_names]))
+    hypotheses = [*_actuator_hypotheses(model, profile, frame, judge, full_scale, restarts),
+                  *_sensor_hypotheses(profile, frame, matching, judge)]
+    return HypothesisTest(tuple(sorted(hypotheses, key=lambda h: h.peak_g_ratio)))
+
+
+def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
+                         judge: _Judge, full_scale: dict[str, float],
+                         restarts: Sequence[int]) -> list[Hypothesis]:
+    found = []
+    for component in dict.fromkeys(c.component for c in profile.commands):
+        columns = [i for i, c in enumerate(profile.commands) if c.component == component]
+        for fraction in THRUST_FRACTIONS:
+            commands = frame.commands.copy()
+            commands[judge.onset:, columns] *= np.sqrt(fraction)
+            trial = match(model, replace(frame, commands=commands), full_scale, judge.window,
+                          restarts)
+            found.append(Hypothesis(component, "dead" if fraction == 0 else "weakened",
+                                    judge.ratio(trial.g_percent[judge.onset:]), fraction))
+    return found
+
+
+def _sensor_hypotheses(profile: Profile, frame: AlignedFrame, matching: Matching,
+                       judge: _Judge) -> list[Hypothesis]:
+    found = []
+    onset = judge.onset
+    elapsed = frame.time_s[onset:] - frame.time_s[onset]
+    for component in dict.fromkeys(s.component for s in profile.sensors):
+        columns = [i for i, s in enumerate(profile.sensors) if s.component == component]
+        for kind in SENSOR_FAULTS:
+            predicted = matching.modelled.copy()
+            for i in columns:
+                predicted[onset:, i] = _faulty_reading(kind, matching.measured[:, i],
+                                                       matching.modelled[:, i], onset, elapsed)
+            found.append(Hypothesis(component, kind, judge.ratio_of(predicted)))
+    return found
+
+
+def _faulty_reading(kind: str, measured: np.ndarray, modelled: np.ndarray, onset: int,
+                    elapsed: np.ndarray) -> np.ndarray:
+    """What the sensor would read from the onset on under ``kind``."""
+    after = measured[onset:] - modelled[onset:]
+    usable = np.isfinite(after)
+    if kind == "dead":
+        return np.zeros_like(elapsed)
+    if kind == "stuck":
+        before = measured[max(0, onset - STUCK_FROM_SAMPLES):onset + 1]
+        before = before[np.isfinite(before)]
+        return np.full_like(elapsed, float(np.median(before)) if before.size else 0.0)
+    if not usable.any():
+        return modelled[onset:]
+    if kind == "biased":
+        return modelled[onset:] + float(np.median(after[usable]))
+    # drifting: the offset grows at the least-squares rate through zero at the onset
+    weight = float((elapsed[usable] ** 2).sum())
+    rate = float((after[usable] * elapsed[usable]).sum()) / weight if weight > 0 else 0.0
+    return modelled[onset:] + rate * elapsed

@@ -1,0 +1,64 @@
+"""Model Matching Part: replay the commands through the model and form the index g.
+
+Window convention: g_i(k) = 100 / (K · R_i) · Σ_{j=k−K+1..k} |SS_i(j) − SM_i(j)|, i.e. the
+mean of the last K absolute differences in percent of R_i (the paper sums K+1 terms and
+divides by K; we average exactly K so that g is an unbiased mean). Samples missing inside a
+reported gap are left out of the mean; g is NaN until half a window of samples exists.
+
+The replay runs free from a robust estimate of the first measured state; it restarts from
+the measured state at each *restart* (after a stretch of unknown commands, and at the start
+of every Diagnosis Motion Sequence, which is a test of its own), and g's window never reaches
+across one. A model with a finite prediction horizon also re-starts every horizon inside
+those stretches (`models.rollouts`).
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from auvdiag_cli.engine.resample import AlignedFrame
+from models.rollouts import plan_rollouts, replay_plan
+from models.store import LoadedModel
+
+
+@dataclass
+class Matching:
+    """SS, SM and g on the model grid, one column per sensed quantity."""
+
+    measured: np.ndarray      # SS (steps, n_sensors)
+    modelled: np.ndarray      # SM (steps, n_sensors)
+    g_percent: np.ndarray     # g (steps, n_sensors)
+
+
+def residual_index(measured: np.ndarray, modelled: np.ndarray, full_scale: np.ndarray,
+                   window: int) -> np.ndarray:
+    """g for every sample and signal, as in the module docstring."""
+    difference = np.abs(measured - modelled) / full_scale
+    valid = np.isfinite(difference)
+    filled = np.where(valid, difference, 0.0)
+    sums = np.cumsum(filled, axis=0)
+    counts = np.cumsum(valid, axis=0)
+    sums[window:] -= sums[:-window].copy()
+    counts[window:] -= counts[:-window].copy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = 100.0 * sums / counts
+    g[counts < max(1, window // 2)] = np.nan
+    return g
+
+
+def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
+          window: int, restarts: Sequence[int] = ()) -> Matching:
+    """Replay the log's commands and compute g, restarting at ``frame.restarts`` and
+    ``restarts`` (grid indices), and every horizon of the model inside them."""
+    measured = frame.sensors
+    scales = np.asarray([full_scale[name] for name in frame.sensor_names])
+    plan = plan_rollouts(measured, [*frame.restarts, *restarts], model.horizon_steps)
+    modelled = replay_plan(model.fast, frame.commands, measured, plan,
+                           np.asarray(model.normaliser.command_scale),
+                           np.asarray(model.normaliser.state_scale))
+    g = np.full_like(measured, np.nan)
+    # g's window runs on across the model's own re-starts, never across a stretch's edge.
+    for begin, end in sorted({(r.stretch_begin, r.stretch_end) for r in plan}):
+        g[begin:end] = residual_index(measured[begin:end], modelled[begin:end], scales, window)
+    return Matching(measured, modelled, g)

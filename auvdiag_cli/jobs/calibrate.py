@@ -1,0 +1,258 @@
+"""`auvdiag calibrate`: thresholds from the g the model reaches on normal logs.
+
+For each diagnosis mode (mission, and each DMS) and signal, the threshold is the largest g
+seen on the normal logs times a margin (a mode with too little data keeps the profile's
+threshold unless that margin over its largest g is higher). On those logs that gives zero
+false alarms by construction; the false-alarm rate it implies elsewhere is stated as the
+rule-of-three upper bound (no event in T hours: fewer than 3/T per hour at 95 % confidence).
+Faulty logs, when given, are diagnosed with the new thresholds to show the detection margin.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.diagnosis import Diagnosis, diagnose_ingested
+from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.start_check import raise_thresholds, start_reading
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.files import write_json
+from auvdiag_cli.jobs.relate import widen_thresholds
+from auvdiag_cli.numeric import peak
+from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
+from models.store import METADATA_FILE, LoadedModel
+
+MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
+# One log's peak g this many times the next log's: that log alone sets the threshold.
+DOMINANCE_WARNING = 2.0
+# Logs the model was trained on give a g that is too low (the model has seen them): their g
+# counts only widened by the ratio of the model's held-out error to its error on these logs,
+# per signal, and at least by this factor.
+IN_SAMPLE_MIN_WIDENING = 1.25
+
+
+@dataclass(frozen=True)
+class SignalEvidence:
+    """Which log set a signal's threshold in one mode, and the next log's peak beside it
+    (the threshold if that log were left out would be margin x next_peak)."""
+
+    set_by: str
+    peak: float
+    next_peak: float | None
+
+    @property
+    def dominance(self) -> float | None:
+        if self.next_peak is None or self.next_peak <= 0:
+            return None
+        return self.peak / self.next_peak
+
+
+@dataclass(frozen=True)
+class ModeCalibration:
+    mode: str
+    samples: int
+    hours: float
+    max_g: dict[str, float]
+    thresholds: dict[str, float]
+    kept_default: bool
+    evidence: dict[str, SignalEvidence]
+
+
+@dataclass(frozen=True)
+class FaultyCheck:
+    log: str
+    verdict: str
+    component: str | None
+    candidates: list[str]
+    peak_ratio: float     # the largest g / threshold anywhere in the log
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    margin: float
+    modes: list[ModeCalibration]
+    thresholds: dict[str, dict[str, float]]
+    normal_hours: float
+    false_alarm_bound_per_hour: float
+    faulty: list[FaultyCheck]
+    in_sample_logs: list[str]           # calibration logs the model was trained on
+    widening: dict[str, float]          # per signal, applied to the in-sample logs' g
+    warnings: list[str]
+    relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
+    start_thresholds_raised: list[str]             # sensors whose start allowance was raised
+
+
+def _mode_key(segment_name: str) -> str:
+    return MISSION_MODE if segment_name == "MISSION" else segment_name
+
+
+def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
+    assert diagnosis.matching is not None
+    result: dict[str, list[np.ndarray]] = {}
+    for segment in diagnosis.segments:
+        inside = ((diagnosis.time_s >= segment.segment.start_s)
+                  & (diagnosis.time_s <= segment.segment.end_s))
+        result.setdefault(_mode_key(segment.segment.name), []).append(
+            diagnosis.matching.g_percent[inside])
+    return {mode: np.concatenate(parts) for mode, parts in result.items()}
+
+
+def _in_sample(model: LoadedModel, logs: Sequence[Path]) -> list[Path]:
+    """The logs the model was trained on, recognised by their content digests."""
+    trained = {entry.get("sha256") for entry in
+               model.metadata.get("training", {}).get("logs", [])}
+    return [p for p in logs if log_digest(p) in trained]
+
+
+def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
+              sensor_names: tuple[str, ...]) -> dict[str, float]:
+    """Held-out error / error on these (in-sample) logs, per signal, at least
+    IN_SAMPLE_MIN_WIDENING."""
+    residuals = np.concatenate([d.matching.measured - d.matching.modelled
+                                for d in diagnoses if d.matching is not None])
+    heldout = model.metadata.get("heldout_error", {}).get("rms", {})
+    widening = {}
+    for i, name in enumerate(sensor_names):
+        values = residuals[:, i][np.isfinite(residuals[:, i])]
+        in_sample = float(np.sqrt(np.mean(values ** 2))) if values.size else 0.0
+        ratio = (heldout[name] / in_sample if in_sample > 0 and heldout.get(name)
+                 else IN_SAMPLE_MIN_WIDENING)
+        widening[name] = round(max(IN_SAMPLE_MIN_WIDENING, ratio), 3)
+    return widening
+
+
+def _evidence(per_log: list[tuple[str, np.ndarray]], column: int) -> SignalEvidence:
+    peaks = sorted(((peak(g[:, column]), name) for name, g in per_log), reverse=True)
+    return SignalEvidence(peaks[0][1], round(peaks[0][0], 3),
+                          round(peaks[1][0], 3) if len(peaks) > 1 else None)
+
+
+def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
+              faulty_logs: Sequence[Path] = (), margin: float = 1.5,
+              floor_at_profile: bool = False) -> CalibrationResult:
+    """Derive thresholds; the model object's metadata is updated (not yet written).
+    ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
+    sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
+    trip on the next dive's noise)."""
+    if margin < 1.0:
+        raise UsageError("--margin below 1 would raise alarms on the calibration logs")
+    in_sample = _in_sample(model, normal_logs)
+    # Judge the calibration logs without any earlier calibration: raw g is what counts.
+    base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
+    diagnoses = [diagnose_ingested(ingest(path, profile), profile, base)
+                 for path in normal_logs]
+    widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
+                                 if p in in_sample], profile.sensor_names) if in_sample else {}
+    factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
+    per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
+    for path, diagnosis in zip(normal_logs, diagnoses, strict=True):
+        label = f"{path.name} (in-sample, widened)" if path in in_sample else path.name
+        for mode, g in _g_by_mode(diagnosis).items():
+            per_mode.setdefault(mode, []).append(
+                (label, g * factor if path in in_sample else g))
+    thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
+    modes = []
+    dt_h = profile.dt_s / 3600
+    for mode, per_log in sorted(per_mode.items()):
+        g = np.concatenate([part for _, part in per_log])
+        count = int(np.isfinite(g).all(axis=1).sum())
+        peaks = {name: peak(g[:, i]) for i, name in enumerate(profile.sensor_names)}
+        keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
+        # Too little data cannot lower the profile's thresholds, but what it shows still
+        # raises them: no calibration log may alarm.
+        floor = profile.thresholds_for(mode) if floor_at_profile or keep else {}
+        thresholds[mode] = {name: round(max(margin * value, floor.get(name, 0.0)), 2)
+                            for name, value in peaks.items()}
+        evidence = {name: _evidence(per_log, i) for i, name in enumerate(profile.sensor_names)}
+        modes.append(ModeCalibration(mode, count, count * dt_h,
+                                     {k: round(v, 3) for k, v in peaks.items()},
+                                     thresholds.get(mode, profile.thresholds_for(mode)), keep,
+                                     evidence))
+    hours = sum(m.hours for m in modes)
+    if hours == 0:
+        raise UsageError("no usable normal data in the calibration logs")
+    model.metadata["thresholds"] = thresholds
+    raised = widen_thresholds(model, [d.command_check for d in diagnoses], margin)
+    starts_raised = raise_thresholds(
+        model.metadata.get("start_state") or {},
+        [None if d.matching is None else start_reading(d.commands, d.matching.measured,
+                                                       profile.dt_s) for d in diagnoses], margin)
+    calibrated = replace(model, metadata=model.metadata)
+    checks = []
+    for path in faulty_logs:
+        d = diagnose_ingested(ingest(path, profile), profile, calibrated)
+        ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
+        checks.append(FaultyCheck(str(path), d.verdict, d.component, d.candidates,
+                                  round(ratio, 2)))
+    result = CalibrationResult(
+        margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
+        widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
+        raised, [profile.sensor_names[i] for i in starts_raised])
+    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
+    return result
+
+
+def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
+              all_in_sample: bool, widening: dict[str, float]) -> list[str]:
+    warnings = []
+    if in_sample:
+        which = ("every calibration log was" if all_in_sample
+                 else f"{len(in_sample)} of the calibration logs were")
+        warnings.append(
+            f"{which} used to train the model: their g is in-sample (too low) and counts "
+            "only widened by the held-out / in-sample error ratio ("
+            + ", ".join(f"{k} x{v:g}" for k, v in widening.items())
+            + "); calibrate on normal logs the model has not seen")
+    for mode in modes:
+        if mode.kept_default:
+            continue
+        for name, evidence in mode.evidence.items():
+            if evidence.dominance is not None and evidence.dominance >= DOMINANCE_WARNING:
+                warnings.append(
+                    f"{mode.mode} {name}: {evidence.set_by} alone sets the threshold (its peak "
+                    f"g {evidence.peak:g} % is {evidence.dominance:.1f}x the next log's "
+                    f"{evidence.next_peak:g} %): check that log for a spike, a fault or a "
+                    "disturbance")
+    return warnings
+
+
+def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
+            ) -> dict[str, Any]:
+    return {
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "method": "threshold = margin x the largest g on the normal logs, per mode and "
+                  "signal; the g of logs the model was trained on multiplied by the widening",
+        "margin": result.margin,
+        "floor_at_profile": floor_at_profile,
+        "normal_logs": [p.name for p in normal_logs],
+        "in_sample_logs": result.in_sample_logs,
+        "widening": result.widening,
+        "normal_hours": round(result.normal_hours, 4),
+        "false_alarms_on_normal_logs": 0,
+        "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3),
+        "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
+                   "thresholds": m.thresholds, "kept_profile_default": m.kept_default,
+                   "set_by": {k: {"log": e.set_by, "peak_g": e.peak, "next_log_peak_g":
+                                  e.next_peak} for k, e in m.evidence.items()}}
+                  for m in result.modes],
+        "warnings": result.warnings,
+        "relation_thresholds_raised": result.relation_thresholds_raised,
+        "start_thresholds_raised": result.start_thresholds_raised,
+        "faulty_logs": [c.__dict__ for c in result.faulty],
+    }
+
+
+def write_metadata(model: LoadedModel, directory: Path) -> None:
+    """Write the (re)calibrated metadata; a copy target gets the weights too."""
+    source = Path(model.path)
+    if directory.resolve() != source.resolve():
+        directory.mkdir(parents=True, exist_ok=True)
+        for file in source.iterdir():
+            if file.name != METADATA_FILE:
+                (directory / file.name).write_bytes(file.read_bytes())
+    write_json(model.metadata, directory / METADATA_FILE)

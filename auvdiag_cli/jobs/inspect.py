@@ -1,0 +1,88 @@
+"""`auvdiag inspect`: what a log holds and which of the profile's signals it provides."""
+
+import difflib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+from adapters import LogError, LogInventory, Signals, inventory, read_log
+from auvdiag_cli.engine.resample import slow_command_note
+from auvdiag_cli.vehicle.profile import Profile
+
+
+@dataclass(frozen=True)
+class SignalResolution:
+    name: str
+    topic: str
+    field: str
+    count: int
+    rate_hz: float | None
+    problem: str | None
+    candidates: tuple[str, ...] = ()
+
+    @property
+    def resolved(self) -> bool:
+        return self.problem is None
+
+
+@dataclass
+class Inspection:
+    path: Path
+    family: str
+    inventory: LogInventory
+    signals: list[SignalResolution]
+    markers: list[str]
+    mapped: bool = True          # False: the profile says nothing about this format family
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def usable(self) -> bool:
+        """Every signal the diagnosis needs resolves in this log."""
+        return self.mapped and all(s.resolved for s in self.signals)
+
+
+def _closest(name: str, choices: list[str]) -> tuple[str, ...]:
+    return tuple(difflib.get_close_matches(name, choices, n=3, cutoff=0.3))
+
+
+def inspect_log(path: Path, profile: Profile) -> Inspection:
+    """Inventory the log, then read each of the profile's signals that its topics offer."""
+    contents, family = inventory(path)
+    sources = profile.sources.get(family)
+    if sources is None:
+        return Inspection(path, family, contents, [], [], mapped=False)
+    available = {topic.name for topic in contents.topics}
+    present = {n: s for n, s in sources.signals.items() if s.topic in available}
+    read: dict[str, Signals] = {}
+    problems: dict[str, str] = {}
+    try:  # one pass for all signals; per signal only to pin down a failure
+        if present:
+            everything = read_log(path, {family: replace(sources, signals=present)})
+            read = {name: everything for name in present}
+    except LogError:
+        for name, source in present.items():
+            try:
+                read[name] = read_log(path, {family: replace(sources, signals={name: source},
+                                                             segment=None)})
+            except LogError as error:
+                problems[name] = error.problem
+    results = []
+    for name, source in sources.signals.items():
+        if name in read:
+            series = read[name].series[name]
+            span_s = (int(series.index.max()) - int(series.index.min())) / 1e9
+            results.append(SignalResolution(name, source.topic, source.field, len(series),
+                                            (len(series) - 1) / span_s if span_s > 0 else None,
+                                            None))
+        elif name in problems:
+            results.append(SignalResolution(name, source.topic, source.field, 0, None,
+                                            problems[name]))
+        else:
+            results.append(SignalResolution(name, source.topic, source.field, 0, None,
+                                            f"no {source.topic} in the log",
+                                            _closest(source.topic, sorted(available))))
+    first = next(iter(read.values()), None)
+    markers = [m.label for m in first.markers] if first is not None else []
+    slow = slow_command_note({s.name: s.rate_hz for s in results
+                              if s.name in profile.command_names}, profile.dt_s)
+    warnings = [] if slow is None else [slow]
+    return Inspection(path, family, contents, results, markers, warnings=warnings)

@@ -1,0 +1,293 @@
+"""`auvdiag train`: fit the dynamics model to normal-condition logs, measure its skill on
+held-out normal data, choose the prediction horizon, and write a model directory."""
+
+import hashlib
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from auvdiag_cli import __version__
+from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.start_check import learn_start_state, start_reading
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
+from auvdiag_cli.jobs.relate import learn_relations, relation_log
+from auvdiag_cli.vehicle.profile import Profile
+from models.command_relations import RelationLog
+from models.skill import (
+    HORIZON_CANDIDATES_S,
+    MIN_SCORED_SAMPLES,
+    MIN_SKILL,
+    HorizonScore,
+    ScoringLog,
+    assess,
+    choose_horizon,
+)
+
+if TYPE_CHECKING:
+    from models.store import LoadedModel
+
+# The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
+PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
+PAPER_VEHICLE = "twin-burger"
+SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
+                "replays re-starting every horizon from a median start state; versus_linear "
+                "= 1 - rms_model / rms_linear")
+SKILL_THRESHOLD_REASON = (
+    "a stuck or dead sensor leaves a residual of about rms_hold; it clears a threshold of "
+    "1.5 x the normal g only if rms_hold / rms_model >= 1.5, i.e. skill >= 1/3")
+
+
+def paper_model_error(profile: Profile) -> dict[str, float]:
+    """The paper's figures, for the paper's vehicle only: no other vehicle is comparable."""
+    return dict(PAPER_MODEL_ERROR) if profile.name == PAPER_VEHICLE else {}
+
+
+@dataclass(frozen=True)
+class TrainingResult:
+    output: Path
+    written: bool                 # False: no signal has skill and the model was not kept
+    training_logs: int
+    heldout_logs: int
+    heldout_split: str            # how the held-out data were chosen
+    scores: list[HorizonScore]    # every horizon tried
+    chosen: HorizonScore
+    operating_hours: float
+    logged_rates_hz: dict[str, float]   # per signal, median over the training logs
+    command_relations: dict[str, Any]   # model.json's entry: the relation or why none
+    start_state: dict[str, Any]         # model.json's entry: where normal logs start
+
+    @property
+    def judges_anything(self) -> bool:
+        """A signal has skill, or some actuator's commands can be judged against the motion."""
+        thresholds = self.command_relations.get("thresholds") or []
+        return bool(self.chosen.judged) or any(t is not None for t in thresholds)
+
+
+@dataclass(frozen=True)
+class _ReadLog:
+    scoring: ScoringLog
+    relation: RelationLog
+    rates_hz: dict[str, float]          # the rate each signal was logged at (median)
+
+
+def _read(path: Path, profile: Profile, progress: Callable[[str], None]) -> _ReadLog:
+    """The log on the model grid, for the network and for the command relations."""
+    log = ingest(path, profile)
+    frame = log.frame
+    for note in frame.slow_commands:
+        progress(f"warning: {path.name}: {note}")
+    rates = {}
+    for name, series in log.signals.series.items():
+        steps = np.diff(series.index.to_numpy(dtype=np.int64))
+        if (steps > 0).any():
+            rates[name] = 1e9 / float(np.median(steps[steps > 0]))
+    return _ReadLog(ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts)),
+                    relation_log(log, profile), rates)
+
+
+def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
+    return _read(path, profile, progress).scoring
+
+
+def _median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
+                  ) -> dict[str, float]:
+    return {name: round(float(np.median(values)), 3) for name in names
+            if (values := [rates[name] for rates in per_log if name in rates])}
+
+
+def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
+    """The log up to where 1 - HELD_OUT_FRACTION of its usable (operating, complete) steps
+    lie, and the rest."""
+    cut = split_point(np.isfinite(log.sensors).all(axis=1), HELD_OUT_FRACTION)
+    head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
+                      tuple(c for c in log.cuts if c < cut))
+    tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
+                      log.sensors[cut:], tuple(c - cut for c in log.cuts if c > cut))
+    return head, tail
+
+
+def horizon_candidates(profile: Profile, horizon_s: float | None) -> list[float | None]:
+    """Horizons to score: the one asked for (``inf``: free run), or every candidate (None:
+    choose) not shorter than g's window."""
+    if horizon_s is not None:
+        return [None if math.isinf(horizon_s) else horizon_s]
+    shortest = profile.window_samples * profile.dt_s
+    return [h for h in HORIZON_CANDIDATES_S if h is None or h >= shortest]
+
+
+def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
+                    holdout: Sequence[Path] = (), hidden: int = 32, seed: int = 0,
+                    iterations_scale: float = 1.0, horizon_s: float | None = None,
+                    keep_unskilled: bool = False,
+                    progress: Callable[[str], None] = lambda _: None,
+                    trainer: Callable[..., Any] | None = None) -> TrainingResult:
+    """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run.
+    ``trainer``: `models.training.train` unless another is given (benchmarks compare)."""
+    from models.fast import FastDynamics
+    from models.store import save_model
+    from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
+
+    training_paths, heldout_paths = split_holdout(logs, holdout)
+    if not training_paths:
+        raise UsageError("no training logs left after holding out")
+    progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
+    read = [_read(p, profile, progress) for p in training_paths]
+    training = [r.scoring for r in read]
+    rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,
+                                                        *profile.sensor_names])
+    read_heldout = [_read(p, profile, progress) for p in heldout_paths]
+    heldout = [r.scoring for r in read_heldout]
+    split = f"{len(heldout)} held-out log(s)"
+    if not heldout:
+        training[0], tail = _split_in_time(training[0])
+        heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
+    stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
+                    s.learning_rate) for s in DEFAULT_STAGES]
+    try:
+        network, normaliser = (trainer or train)([TrainingLog(t.name, t.commands, t.sensors)
+                                     for t in training], hidden=hidden, stages=stages,
+                                    seed=seed, progress=progress)
+    except ValueError as problem:   # the logs hold too little complete, operating data
+        raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
+                         f"{problem}") from None
+    progress("scoring the model against the naive predictors on the held-out data")
+    dynamics = FastDynamics.from_state(
+        {k: v.detach().numpy() for k, v in network.state_dict().items()},
+        network.n_commands, normaliser.delta_ratio)
+    scores = assess(dynamics, np.asarray(normaliser.command_scale),
+                    np.asarray(normaliser.state_scale), training, heldout,
+                    profile.sensor_names, profile.dt_s,
+                    horizon_candidates(profile, horizon_s))
+    chosen = choose_horizon(scores)
+    hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
+    progress("learning how the commands follow the motion")
+    relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
+                                profile)
+    start_state = learn_start_state(
+        [start_reading(t.commands, t.sensors, profile.dt_s) for t in training],
+        [start_reading(r.scoring.commands, r.scoring.sensors, profile.dt_s)
+         for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
+    result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
+                            hours, rates, relations, start_state)
+    result = replace(result, written=result.judges_anything or keep_unskilled)
+    if result.written:
+        metadata = _metadata(output, profile, training_paths, training, heldout, result,
+                             stages, seed)
+        metadata["command_relations"] = relations
+        metadata["start_state"] = start_state
+        save_model(output, network, normaliser, metadata)
+    return result
+
+
+def _complete_steps(log: ScoringLog) -> int:
+    return int(np.isfinite(log.sensors).all(axis=1).sum())
+
+
+def _skill_record(score: HorizonScore) -> dict[str, Any]:
+    def number(value: float) -> float | None:
+        return round(value, 6) if math.isfinite(value) else None
+
+    return {"horizon_s": score.horizon_s, "signals": {
+        name: {"skill": number(s.skill), "judged": s.judged, "samples": s.samples,
+               "versus_linear": number(s.versus_linear), "model_rms": number(s.model_rms),
+               **{f"{k}_rms": number(v) for k, v in s.baseline_rms.items()}}
+        for name, s in score.signals.items()}}
+
+
+def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
+                   heldout_names: Sequence[str], profile: Profile) -> dict[str, Any]:
+    """The model.json keys that say how far the model can be trusted: its horizon, its skill
+    per signal at that horizon (and at every horizon tried), its held-out error."""
+    record = _skill_record(chosen)["signals"]
+    return {
+        "horizon_s": chosen.horizon_s,        # null: the paper's free run
+        "skill": {
+            "method": SKILL_METHOD,
+            "judged_from": round(MIN_SKILL, 4),
+            "why": SKILL_THRESHOLD_REASON,
+            "signals": {name: {"skill": record[name]["skill"], "judged": s.judged,
+                               "samples": s.samples, "best_naive": s.best_naive,
+                               "versus_linear": record[name]["versus_linear"]}
+                        for name, s in chosen.signals.items()},
+            "judged_from_samples": MIN_SCORED_SAMPLES,
+            "horizons": [_skill_record(s) for s in scores],
+        },
+        "heldout_error": {
+            "logs": list(heldout_names),
+            "horizon_s": chosen.horizon_s,
+            "rms": {name: record[name]["model_rms"] for name in chosen.signals},
+            "paper_rms": paper_model_error(profile),
+        },
+    }
+
+
+def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
+              training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
+              result: TrainingResult, stages: Sequence[Any], seed: int) -> dict[str, Any]:
+    digests = [{"log": p.name, "sha256": log_digest(p)} for p in training_paths]
+    return {
+        "name": output.name,
+        "vehicle": profile.name,
+        "profile": profile.source_path,
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "tool_version": __version__,
+        "dt_s": profile.dt_s,
+        "signals": {
+            "commands": list(profile.command_names),
+            "sensors": [{"name": s.name, "unit": s.unit} for s in profile.sensors],
+        },
+        "full_scale": profile.full_scales,
+        "window_samples": profile.window_samples,
+        "thresholds": profile.thresholds,
+        "trained_on": {
+            "vehicle": profile.name,
+            "logs": len(training_paths),
+            "operating_hours": round(result.operating_hours, 4),
+            "heldout_hours": round(sum(_complete_steps(h) for h in heldout)
+                                   * profile.dt_s / 3600, 4),
+            "heldout": result.heldout_split,
+            "model_rate_hz": round(1 / profile.dt_s, 6),
+            "logged_rates_hz": result.logged_rates_hz,
+        },
+        **skill_metadata(result.scores, result.chosen, [h.name for h in heldout], profile),
+        "training": {
+            "data_sha256": hashlib.sha256(
+                "".join(d["sha256"] for d in digests).encode()).hexdigest(),
+            "logs": digests,
+            "steps": sum(len(t.commands) for t in training),
+            "stages": [s.__dict__ for s in stages],
+            "seed": seed,
+        },
+    }
+
+
+def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
+                horizon_s: float | None, progress: Callable[[str], None] = lambda _: None
+                ) -> tuple[list[HorizonScore], HorizonScore]:
+    """Measure an existing model's skill on normal ``logs`` it was not trained on and record
+    it (with the horizon chosen) in ``model.metadata`` (not yet written). Without the
+    training data, the mean and linear yardsticks are fitted on these logs themselves,
+    which favours them: the skill found is, if anything, too low."""
+    from auvdiag_cli.engine.diagnosis import check_model_fits
+
+    for log in logs:
+        check_model_fits(model, profile, log)
+    trained = {e.get("sha256") for e in model.metadata.get("training", {}).get("logs", [])}
+    seen = [p.name for p in logs if log_digest(p) in trained]
+    if seen:
+        raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
+                         "it has not seen")
+    scoring = [_scoring_log(p, profile, progress) for p in logs]
+    scores = assess(model.fast, np.asarray(model.normaliser.command_scale),
+                    np.asarray(model.normaliser.state_scale), scoring, scoring,
+                    profile.sensor_names, profile.dt_s, horizon_candidates(profile, horizon_s))
+    chosen = choose_horizon(scores)
+    model.metadata.update(skill_metadata(scores, chosen, [p.name for p in logs], profile))
+    return scores, chosen

@@ -1,0 +1,165 @@
+"""The machine-readable report (SPEC §5): a plain dict, written as JSON."""
+
+import math
+from datetime import UTC, datetime
+from typing import Any
+
+from auvdiag_cli import __version__
+from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
+from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.diagnosis import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
+from auvdiag_cli.engine.hypotheses import Hypothesis
+
+SCHEMA_VERSION = 1
+
+
+def _finite(value: float | None) -> float | None:
+    return None if value is None or not math.isfinite(value) else value
+
+
+def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
+    substitution = diagnosis.substitution
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "tool": f"auvdiag {__version__}",
+        "log": str(diagnosis.log),
+        "format": diagnosis.format,
+        "vehicle": diagnosis.vehicle,
+        "verdict": diagnosis.verdict.value,
+        "component": diagnosis.component,
+        "candidates": diagnosis.candidates,
+        "case": diagnosis.case,
+        "b": diagnosis.b,
+        "units": diagnosis.sensor_units,
+        "detected_at_s": diagnosis.detected_at_s,
+        "onset_s": diagnosis.onset_s,
+        "duration_s": round(float(diagnosis.time_s[-1]), 3) if diagnosis.time_s.size else None,
+        "start_time_utc": utc_text(diagnosis.start_ns),
+        "completeness": None if diagnosis.completeness is None
+        else diagnosis.completeness.to_dict(),
+        "not_operating_s": diagnosis.not_operating_s,
+        "not_judged": diagnosis.not_judged,
+        "segments": [
+            {
+                "name": r.segment.name,
+                "start_s": round(r.segment.start_s, 3),
+                "end_s": round(r.segment.end_s, 3),
+                "mode": r.segment.mode,
+                "thresholds": r.segment.thresholds,
+                "max_g": {k: _finite(v) for k, v in r.max_g.items()},
+                "b": r.b,
+                "case": r.case,
+                "components": list(r.components),
+            }
+            for r in diagnosis.segments
+        ],
+        "segment_source": diagnosis.segment_source,
+        "degradation": None if diagnosis.degradation is None else {
+            "component": diagnosis.degradation.component, "kind": "weakened",
+            "thrust_fraction": diagnosis.degradation.thrust_fraction,
+            "peak_g_over_threshold": diagnosis.degradation.peak_g_ratio},
+        "hypotheses": _hypotheses(diagnosis),
+        "commands_check": _command_check(diagnosis.command_check),
+        "start_check": _start_check(diagnosis),
+        "active_diagnosis": _active(diagnosis),
+        "substitution": None if substitution is None else {
+            "signal": substitution.signal,
+            "from_s": substitution.from_s,
+            "unit": substitution.unit,
+            "expected_error_rms": substitution.expected_error_rms,
+            "truth_error_rms": _rounded(substitution.truth_error_rms),
+            "failed_sensor_error_rms": _rounded(substitution.failed_error_rms),
+            "track_end_m": {name: [round(v, 3) for v in track.end]
+                            for name, track in substitution.tracks.items()},
+            "track_end_error_m": {
+                name: round(track.distance_to(substitution.tracks["truth"]), 3)
+                for name, track in substitution.tracks.items()
+                if name != "truth" and "truth" in substitution.tracks},
+            "closed_loop": _closed_loop(substitution.closed_loop),
+        },
+        "model": diagnosis.model,
+        "method": {
+            "g": "g_i(k) = 100/(K R_i) * sum_{j=k-K+1..k} |SS_i(j) - SM_i(j)| (mean of K samples)",
+            "window_samples": diagnosis.window_samples,
+            "decision_window_s": diagnosis.decision_window_s,
+            "assumptions": list(PAPER_ASSUMPTIONS),
+        },
+        "notes": diagnosis.notes,
+    }
+
+
+def utc_text(time_ns: int, timespec: str = "seconds") -> str | None:
+    """A time as UTC, when its clock is Unix time (not time since boot) and a date at all."""
+    if time_ns <= EPOCH_CLOCK_NS:
+        return None
+    try:
+        return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec=timespec)
+    except (OverflowError, ValueError, OSError):  # a damaged clock is no date
+        return None
+
+
+def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:
+    if replay is None:
+        return None
+    return {"from_s": replay.start_s, "reached_last_waypoint": replay.reached,
+            "finished_s": replay.finished_s, "miss_m": replay.miss_m,
+            "last_waypoint_m": list(replay.last_waypoint),
+            "end_m": [round(float(replay.x_m[-1]), 3), round(float(replay.y_m[-1]), 3)]}
+
+
+def _rounded(value: float | None) -> float | None:
+    return None if value is None else round(value, 5)
+
+
+def _hypothesis(h: Hypothesis | None) -> dict[str, Any] | None:
+    return None if h is None else {"component": h.component, "kind": h.kind,
+                                   "thrust_fraction": h.thrust_fraction,
+                                   "peak_g_over_threshold": _finite(h.peak_g_ratio),
+                                   "explains": h.explains}
+
+
+def _hypotheses(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    """The hypothesis test's verdict: the best, the runner-up (another component), the
+    margin between them, and whether the pattern table's candidates include the best."""
+    test = diagnosis.hypotheses
+    if test is None:
+        return None
+    return {"best": _hypothesis(test.best), "runner_up": _hypothesis(test.runner_up),
+            "margin": _finite(_rounded(test.margin)),
+            "table_agrees": (test.best.component in diagnosis.candidates
+                             if diagnosis.case is not None else None),
+            "ranked": [_hypothesis(h) for h in test.ranked]}
+
+
+def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
+    if check is None:
+        return None
+    return {"summary": check.describe() if check.judged else "no actuator could be judged",
+            "window_s": check.window_s, "extra_effort_allowed": check.thresholds,
+            "peak_over_threshold": check.peak_ratio, "not_judged": check.not_judged,
+            "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
+            "explained": check.explained,
+            "extra_effort": check.extra_effort}
+
+
+def _start_check(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    start = diagnosis.start_check
+    if start is None:
+        return None
+    return {"summary": start.describe(diagnosis.sensor_units), "judged": start.judged,
+            "deviation": start.deviation, "allowed": start.thresholds, "off": list(start.off),
+            "at_s": start.at_s}
+
+
+def _active(diagnosis: Diagnosis) -> dict[str, Any] | None:
+    active = diagnosis.active
+    if active is None:
+        return None
+    return {
+        "candidates_before": active.candidates_before,
+        "candidates_after": active.candidates,
+        "evidence": [{"log": e.log, "segment": e.segment, "start_s": e.start_s, "b": e.b,
+                      "tested": list(e.tested), "faulty": e.faulty} for e in active.evidence],
+        "recommended_dms": active.recommended_dms,
+        "conflict": active.conflict,
+    }

@@ -1,0 +1,110 @@
+"""The PDF report of one dive, drawn from the JSON report and its time histories only (so a
+saved report can be drawn again without the log or the model)."""
+
+from pathlib import Path
+from typing import Any
+
+from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
+from auvdiag_cli.reports.pdf.plots import (
+    commands_page,
+    residual_page,
+    sensors_page,
+    substitution_page,
+)
+from auvdiag_cli.reports.pdf.style import COLOURS, pdf_document
+from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
+from auvdiag_cli.reports.series import Series
+
+VERDICT_TITLES = {"normal": "NORMAL: no fault detected", "fault": "FAULT",
+                  "undetermined": "UNDETERMINED"}
+
+
+def _banner(document: dict[str, Any]) -> Line:
+    verdict = document["verdict"]
+    text = VERDICT_TITLES.get(verdict, verdict.upper())
+    if verdict == "fault":
+        named = document.get("component") or " or ".join(document.get("candidates") or [])
+        text += f": {named.replace('_', ' ') or 'component not identified'}"
+    return Line(text, size=20, bold=True, banner=COLOURS.get(verdict, COLOURS["error"]))
+
+
+def partial_log_text(document: dict[str, Any]) -> str | None:
+    """"PARTIAL LOG: ..." when the report covers only the readable part of a damaged log."""
+    completeness = document.get("completeness") or {}
+    if completeness.get("status") != "partial":
+        return None
+    read = completeness.get("seconds_read")
+    at = completeness.get("damage_at_byte")
+    where = f" (damage at byte {at} of {completeness.get('bytes_total')})" if at else ""
+    span = f" the first {read:.1f} s" if isinstance(read, int | float) else " part"
+    return f"PARTIAL LOG: only{span} could be read{where}"
+
+
+def first_page_lines(document: dict[str, Any], series: Series | None) -> list[Line]:
+    lines = [_banner(document)]
+    partial = partial_log_text(document)
+    if partial is not None:
+        lines.append(Line(partial, size=13, bold=True, banner=COLOURS["error"]))
+    lines.append(Line(""))
+    for label, value in summary_facts(document):
+        lines += paragraph(f"{label}:  {value}", size=10.5)
+    lines += heading("The paper's assumptions, and what they mean for this log")
+    for number, (assumption, remark) in enumerate(assumption_remarks(document, series), 1):
+        lines += paragraph(f"{number}. {assumption}", size=9.5, bold=True)
+        lines += paragraph(f"here: {remark}", size=9.5, indent=0.02, colour=COLOURS["muted"])
+    return lines
+
+
+def _cell(values: dict[str, Any], digits: int = 1) -> str:
+    return " ".join("-" if v is None else f"{v:.{digits}f}" if isinstance(v, float) else str(v)
+                    for v in values.values())
+
+
+def detail_lines(document: dict[str, Any]) -> list[Line]:
+    signals = list(document.get("b", {}))
+    lines = paragraph(f"Columns per signal, in the order {', '.join(signals)}. Thresholds and "
+                      "g in percent of each signal's full scale.", colour=COLOURS["muted"])
+    header = f"{'segment':<10}{'mode':<9}{'start-end [s]':<17}{'thresholds':<22}" \
+             f"{'max g':<24}{'b':<10}case"
+    lines.append(Line(header, family="monospace", bold=True, size=8.5))
+    for s in document.get("segments", []):
+        span = f"{s['start_s']:.1f}-{s['end_s']:.1f}"
+        case = "-" if s.get("case") is None else str(s["case"])
+        row = (f"{s['name'][:9]:<10}{s['mode']:<9}{span:<17}{_cell(s['thresholds'], 0):<22}"
+               f"{_cell(s['max_g']):<24}{_cell(s['b']):<10}{case}")
+        lines.append(Line(row, family="monospace", size=8.5))
+    active = document.get("active_diagnosis")
+    if active:
+        lines += heading("Active diagnosis")
+        for e in active["evidence"]:
+            outcome = "a fault among" if e["faulty"] else "clears"
+            lines += paragraph(f"{e['segment']} at {e['start_s']:.1f} s in {e['log']}: b = "
+                               f"{''.join(str(v) for v in e['b'].values())} -> {outcome} "
+                               f"{', '.join(e['tested'])}")
+        if active.get("recommended_dms"):
+            lines += paragraph("To decide, run " + " or ".join(active["recommended_dms"])
+                               + " on the next dive.")
+    if document.get("notes"):
+        lines += heading("Notes")
+        for note in document["notes"]:
+            lines += paragraph(f"- {note}")
+    return lines
+
+
+def render_dive_report(document: dict[str, Any], series: Series | None, target: Path) -> int:
+    """Write the PDF; returns its page count."""
+    name = Path(document["log"]).name
+    title = f"auvdiag report: {name}"
+    with pdf_document(target, title, f"Fault diagnosis of {document['log']}") as pdf:
+        pages = write_text_pages(pdf, first_page_lines(document, series), title,
+                                 f"Diagnosis of {name}")
+        pages += write_text_pages(pdf, detail_lines(document), title, "Segments and evidence")
+        if series is None or "measured" not in series:
+            return pages
+        for draw in (sensors_page, residual_page, commands_page, substitution_page):
+            figure = draw(document, series)
+            if figure is not None:
+                figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])
+                pdf.savefig(figure)
+                pages += 1
+    return pages

@@ -1,0 +1,156 @@
+"""The time-history pages of a dive report. Every page shares the time axis, the onset and
+detection markers and the shading of the Diagnosis Motion Sequences."""
+
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from auvdiag_cli.reports.pdf.style import COLOURS, COMMAND_CYCLE, new_page, seconds_label
+from auvdiag_cli.reports.series import Series
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+
+def _names(series: Series, key: str) -> list[str]:
+    return [str(name) for name in series[key]]
+
+
+def _mark_events(ax: "Axes", document: dict[str, Any], label: bool) -> None:
+    for segment in document.get("segments", []):
+        if segment["mode"] == "routine":
+            ax.axvspan(segment["start_s"], segment["end_s"], color=COLOURS["dms"], alpha=0.18,
+                       lw=0)
+            ax.axvline(segment["start_s"], color=COLOURS["dms"], lw=0.6)
+    for key, colour, text in (("onset_s", COLOURS["onset"], "onset"),
+                              ("detected_at_s", COLOURS["alarm"], "detected")):
+        if document.get(key) is not None:
+            ax.axvline(document[key], color=colour, ls="--", lw=1.0,
+                       label=text if label else None)
+
+
+def _figure_legend(figure: "Figure", axes: list["Axes"]) -> None:
+    """One legend under the plots (never over the data), each label once."""
+    entries: dict[str, Any] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+    figure.legend(list(entries.values()), list(entries), loc="outside lower center",
+                  ncols=min(len(entries), 7))
+
+
+def _stacked(document: dict[str, Any], rows: int, title: str) -> tuple["Figure", list["Axes"]]:
+    figure = new_page()
+    axes = list(np.atleast_1d(figure.subplots(rows, 1, sharex=True)))
+    axes[0].set_title(title, loc="left", fontweight="bold")
+    axes[-1].set_xlabel(seconds_label())
+    for ax in axes:
+        _mark_events(ax, document, label=ax is axes[0])
+    return figure, axes
+
+
+def sensors_page(document: dict[str, Any], series: Series) -> "Figure":
+    names, units = _names(series, "sensor_names"), document.get("units", {})
+    figure, axes = _stacked(document, len(names),
+                            "Sensors (SS) and the model of the healthy vehicle (SM); "
+                            "shaded: Diagnosis Motion Sequences")
+    t = series["time_s"]
+    for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        ax.plot(t, series["measured"][:, i], color=COLOURS["measured"], lw=0.8,
+                label="sensor SS")
+        ax.plot(t, series["modelled"][:, i], color=COLOURS["modelled"], lw=0.8,
+                label="model SM")
+        ax.set_ylabel(f"{name} [{units.get(name, '?')}]")
+    _figure_legend(figure, axes)
+    return figure
+
+
+def residual_page(document: dict[str, Any], series: Series) -> "Figure":
+    names = _names(series, "sensor_names")
+    figure, axes = _stacked(document, len(names),
+                            "Residual index g (percent of full scale) against its threshold; "
+                            "red band: b = 1")
+    t = series["time_s"]
+    for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        ax.plot(t, series["g_percent"][:, i], color=COLOURS["measured"], lw=0.8, label="g")
+        ax.step(t, series["thresholds"][:, i], where="post", color=COLOURS["threshold"],
+                lw=1.0, ls=":", label="threshold")
+        ax.fill_between(t, 0, 1, where=series["b"][:, i] > 0, step="post",
+                        color=COLOURS["alarm"], alpha=0.25, lw=0,
+                        transform=ax.get_xaxis_transform(), label="b = 1")
+        ax.set_ylabel(f"g {name} [%]")
+        ax.set_ylim(bottom=0)
+    _figure_legend(figure, axes)
+    return figure
+
+
+def commands_page(document: dict[str, Any], series: Series) -> "Figure":
+    figure, axes = _stacked(document, 1, "Commands, with the Diagnosis Motion Sequences")
+    ax, t = axes[0], series["time_s"]
+    for i, name in enumerate(_names(series, "command_names")):
+        ax.plot(t, series["commands"][:, i], lw=0.9, label=name,
+                color=COMMAND_CYCLE[i % len(COMMAND_CYCLE)])
+    ax.set_ylabel("command (normalised, full scale = 1)")
+    for segment in document.get("segments", []):
+        if segment["mode"] == "routine":
+            ax.annotate(segment["name"], ((segment["start_s"] + segment["end_s"]) / 2, 0.98),
+                        xycoords=("data", "axes fraction"), ha="center", va="top",
+                        fontsize=8, color=COLOURS["muted"], annotation_clip=True,
+                        bbox={"facecolor": "white", "edgecolor": "none", "pad": 1.0})
+    _figure_legend(figure, axes)
+    return figure
+
+
+def substitution_page(document: dict[str, Any], series: Series) -> "Figure | None":
+    substitution = document.get("substitution")
+    if substitution is None or "substituted" not in series:
+        return None
+    figure = new_page()
+    signal_ax, map_ax = figure.subplots(1, 2, width_ratios=[1.4, 1.0])
+    signal = substitution["signal"]
+    column = _names(series, "sensor_names").index(signal)
+    t = series["time_s"]
+    signal_ax.set_title(f"Substituting Control: the model's {signal} replaces the failed "
+                        "sensor", loc="left", fontweight="bold")
+    _mark_events(signal_ax, document, label=True)
+    signal_ax.plot(t, series["measured"][:, column], color=COLOURS["measured"], lw=0.8,
+                   label="failed sensor")
+    signal_ax.plot(t, series["substituted"], color=COLOURS["modelled"], lw=0.9,
+                   label="used signal (model after onset)")
+    if "substituted_truth" in series:
+        signal_ax.plot(t, series["substituted_truth"], color=COLOURS["truth"], lw=0.8,
+                       ls="--", label="truth")
+    signal_ax.set_xlabel(seconds_label())
+    signal_ax.set_ylabel(f"{signal} [{substitution['unit']}]")
+    _draw_tracks(map_ax, series)
+    _figure_legend(figure, [signal_ax, map_ax])
+    return figure
+
+
+TRACKS = (("track_truth_m", "truth", COLOURS["truth"], "--"),
+          ("track_failed_m", "dead-reckoned, failed sensor", COLOURS["measured"], "-"),
+          ("track_substituted_m", "dead-reckoned, substitute", COLOURS["modelled"], "-"),
+          ("closed_loop_m", "closed-loop replay (model as plant)", COLOURS["closed_loop"], "-."))
+
+
+def _draw_tracks(ax: "Axes", series: Series) -> None:
+    """North (x) up, east (y) to the right, as on a chart."""
+    ax.set_title("Tracks", loc="left", fontweight="bold")
+    drawn = False
+    for key, label, colour, style in TRACKS:
+        if key in series:
+            ax.plot(series[key][:, 1], series[key][:, 0], color=colour, ls=style, lw=1.0,
+                    label=label)
+            drawn = True
+    if "waypoints_m" in series:
+        ax.plot(series["waypoints_m"][:, 1], series["waypoints_m"][:, 0], "s", ms=4,
+                color=COLOURS["text"], label="waypoints")
+        drawn = True
+    if not drawn:
+        ax.text(0.5, 0.5, "no navigation signals to dead-reckon", ha="center",
+                transform=ax.transAxes, color=COLOURS["muted"])
+        return
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")

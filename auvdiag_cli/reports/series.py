@@ -1,0 +1,65 @@
+"""The time histories a report plots, kept beside the JSON report as an .npz file so that
+`auvdiag report` can draw the same PDF later without the log or the model. Only plain
+arrays are stored (numbers and strings): loading never unpickles anything."""
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+from auvdiag_cli.engine.diagnosis import Diagnosis
+from auvdiag_cli.errors import UsageError
+
+Series = dict[str, np.ndarray]
+SERIES_SUFFIX = ".series.npz"
+
+
+def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
+    d = diagnosis
+    series: Series = {
+        "time_s": d.time_s,
+        "command_names": np.asarray(d.command_names, dtype=str),
+        "commands": d.commands.astype(np.float32),
+        "sensor_names": np.asarray(d.sensor_names, dtype=str),
+        "thresholds": d.thresholds.astype(np.float32),
+        "b": d.b_series.astype(np.int8),
+    }
+    if d.matching is not None:
+        series["measured"] = d.matching.measured.astype(np.float32)
+        series["modelled"] = d.matching.modelled.astype(np.float32)
+        series["g_percent"] = d.matching.g_percent.astype(np.float32)
+    waypoints = [point for leg in d.mission_legs for point in leg.get("waypoints", [])]
+    if waypoints:
+        series["waypoints_m"] = np.asarray(waypoints, dtype=np.float64)
+    substitution = d.substitution
+    if substitution is not None:
+        series["substituted"] = substitution.substituted.astype(np.float32)
+        if substitution.truth is not None:
+            series["substituted_truth"] = substitution.truth.astype(np.float32)
+        for name, track in substitution.tracks.items():
+            series[f"track_{name}_m"] = np.column_stack([track.x_m, track.y_m])
+        loop = substitution.closed_loop
+        if loop is not None:
+            series["closed_loop_time_s"] = loop.time_s
+            series["closed_loop_m"] = np.column_stack([loop.x_m, loop.y_m])
+    return series
+
+
+def series_path(json_path: Path) -> Path:
+    """report.json → report.series.npz"""
+    return json_path.with_name(json_path.stem + SERIES_SUFFIX)
+
+
+def save_series(series: Series, target: Path) -> None:
+    """Write atomically, like the JSON beside it."""
+    temporary = target.with_name(f".{target.name}.tmp.npz")
+    np.savez_compressed(temporary, **series)  # type: ignore[arg-type]
+    temporary.replace(target)
+
+
+def load_series(source: Path) -> Series:
+    try:
+        with np.load(source, allow_pickle=False) as archive:
+            return {name: archive[name] for name in archive.files}
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as error:
+        raise UsageError(f"{source}: unreadable time histories: {error}") from None

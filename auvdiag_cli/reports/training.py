@@ -1,0 +1,140 @@
+"""What `auvdiag train` and `auvdiag calibrate` print: where the model went, its skill per
+signal against the naive predictors and the horizon chosen (the paper's figures for the
+paper's vehicle only); the thresholds, which log set each, and what to be wary of."""
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from auvdiag_cli.jobs.calibrate import CalibrationResult
+from auvdiag_cli.jobs.train import TrainingResult
+from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, HorizonScore, SignalSkill
+
+
+def horizon_text(horizon_s: float | None) -> str:
+    return "free run" if horizon_s is None else f"{horizon_s:g} s"
+
+
+def _number(value: float) -> str:
+    return f"{value:9.4f}" if math.isfinite(value) else f"{value!s:>9}"
+
+
+def _ratio(value: float) -> str:
+    """A skill-like ratio in 7 characters: far below zero is only 'worse'."""
+    return f"{value:7.2f}" if not value < -99 else f"{'< -99':>7}"
+
+
+def _verdict(s: SignalSkill) -> str:
+    if not s.enough_data:
+        return (f"NO: too little held-out data to measure it ({s.samples} samples, needs "
+                f"{MIN_SCORED_SAMPLES})")
+    return "yes" if s.judged else "NO: not judged (the model cannot predict it)"
+
+
+def _skill_rows(score: HorizonScore) -> list[str]:
+    baselines = list(next(iter(score.signals.values())).baseline_rms)
+    rows = [f"  {'signal':<14}{'skill':>7}{'vs linear':>10}{'model':>10}"
+            + "".join(f"{name:>10}" for name in baselines) + "   judged"]
+    for name, s in score.signals.items():
+        rows.append(f"  {name:<14}{_ratio(s.skill)}   {_ratio(s.versus_linear)} "
+                    f"{_number(s.model_rms)}"
+                    + "".join(f" {_number(s.baseline_rms[b])}" for b in baselines)
+                    + f"   {_verdict(s)}")
+    return rows
+
+
+def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[str]:
+    tried = ", ".join(f"{horizon_text(s.horizon_s)} {len(s.judged)}/{len(s.signals)}"
+                      for s in scores)
+    lines = [f"prediction horizon: {horizon_text(chosen.horizon_s)}"
+             + (f" (signals judged per horizon tried: {tried})" if len(scores) > 1 else "")]
+    lines.append("skill on held-out normal data = 1 - rms_model / the better naive rms "
+                 f"(the last value holds, the training mean), judged from {MIN_SKILL:.2f}; "
+                 "vs linear: the same against a least-squares linear model. rms in the "
+                 "signals' units:")
+    return lines + _skill_rows(chosen)
+
+
+def training_lines(result: TrainingResult, paper_rms: dict[str, float],
+                   command_names: Sequence[str], sensor_names: Sequence[str]) -> list[str]:
+    chosen = result.chosen
+    lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
+             f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
+             f"operating time; held out: {result.heldout_split})"]
+    lines += skill_lines(result.scores, chosen)
+    if paper_rms:
+        lines.append("the paper's model error for this vehicle (rms): "
+                     + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
+    return lines + relation_lines(result.command_relations, command_names) + start_lines(
+        result.start_state, sensor_names)
+
+
+def _listed(names: Sequence[str], most: int = 5) -> str:
+    shown = ", ".join(names[:most])
+    return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
+
+
+def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[str]:
+    """How the commands follow the motion: learned from which logs, and the extra effort
+    each actuator may show before it is called weakened."""
+    if "refused" in entry:
+        return [f"commands not judged against the motion: {entry['refused']}"]
+    fitted = entry.get("fitted_on", {})
+    left_out = fitted.get("open_loop_left_out") or []
+    lines = [f"command relations learned from {len(fitted.get('logs', []))} log(s), "
+             f"{fitted.get('steps', 0)} steps"
+             + (f" (left out as open loop: {_listed(left_out)})" if left_out else "")
+             + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
+    groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
+    for name, threshold, skill in zip(command_names, entry["thresholds"], entry["skill"],
+                                      strict=True):
+        if skill is None or skill < MIN_SKILL:
+            allowed = "not judged (the relation does not predict its commands)"
+        else:
+            allowed = ("not judged (too little held-out data drove it)" if threshold is None
+                       else f"{threshold:.0%}")
+        lines.append(f"  {name:<14}{allowed}" + ("" if skill is None else
+                                                 f"   (skill {skill:.2f})"))
+    lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
+              for g in groups]
+    return lines
+
+
+def start_lines(entry: dict[str, Any], sensor_names: Sequence[str]) -> list[str]:
+    """Where normal logs start, and how far a log's start may lie from it."""
+    if "refused" in entry:
+        return [f"start not judged: {entry['refused']}"]
+    return [f"start learned from {entry['logs']} log starts (first {entry['span_s']:g} s); "
+            "allowed from the normal start: " + ", ".join(
+                f"{name} {reference:.3g} ± {allowed:.3g}" if allowed is not None else
+                f"{name} not judged (normal starts spread)" for name, reference, allowed in zip(
+                    sensor_names, entry["reference"], entry["thresholds"], strict=True))]
+
+
+def calibration_lines(result: CalibrationResult) -> list[str]:
+    lines = [f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
+             f"{result.margin:g}; false alarms on those logs: 0 (rate < "
+             f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
+    for mode in result.modes:
+        kept = ("  (too little data: the profile's thresholds, raised where these logs "
+                "need it)" if mode.kept_default else "")
+        lines.append(f"  {mode.mode:<8} {mode.samples:>7} samples{kept}")
+        for name, evidence in mode.evidence.items():
+            ratio = evidence.dominance
+            beside = ("" if evidence.next_peak is None or ratio is None
+                      else f", {ratio:.2f}x the next log's {evidence.next_peak:g} %")
+            lines.append(f"    {name:<12} max g {mode.max_g[name]:g} % -> threshold "
+                         f"{mode.thresholds[name]:g} %  (set by {evidence.set_by}{beside})")
+    for check in result.faulty:
+        named = check.component or " or ".join(check.candidates) or "-"
+        lines.append(f"  faulty {check.log}: {check.verdict} {named}, peak g "
+                     f"{check.peak_ratio:.1f} x threshold")
+    if result.relation_thresholds_raised:
+        lines.append("  commands vs motion: extra effort allowed raised so that no calibration "
+                     "log alarms: " + ", ".join(f"{k} {v:.0%}" for k, v in
+                                                result.relation_thresholds_raised.items()))
+    if result.start_thresholds_raised:
+        lines.append("  start: how far a start may lie from the normal start raised so that no "
+                     "calibration log alarms: " + ", ".join(result.start_thresholds_raised))
+    lines += [f"warning: {warning}" for warning in result.warnings]
+    return lines

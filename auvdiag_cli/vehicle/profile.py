@@ -1,0 +1,369 @@
+"""Vehicle profiles: TOML files validated once into a typed `Profile`."""
+
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from adapters.signals import (
+    OPERATING,
+    TIME_UNITS,
+    FieldSource,
+    LogSources,
+    SegmentSource,
+    TimeColumn,
+)
+from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.vehicle.controller import EFFORTS, ControllerGains, ControllerSpec
+from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
+from auvdiag_cli.vehicle.toml_reader import TableReader, positive
+
+MISSION_MODE = "mission"
+ROUTINE_THRESHOLDS = "routine"     # thresholds shared by every DMS without its own table
+
+
+@dataclass(frozen=True)
+class Command:
+    name: str
+    component: str
+    description: str
+
+
+@dataclass(frozen=True)
+class Sensor:
+    name: str
+    component: str
+    unit: str
+    full_scale: float
+    description: str
+    truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
+
+
+@dataclass(frozen=True)
+class Navigation:
+    """Which signals dead-reckon the track: a forward speed and a yaw rate."""
+
+    speed: str
+    yaw_rate: str
+
+
+CONTROLLER_KINDS = ("turn-then-go",)
+
+
+@dataclass(frozen=True)
+class PatternRow:
+    case: int
+    b: dict[str, int]
+    components: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class DiagnosisSequence:
+    """A DMS: a fixed command history as steps of (duration_s, one command per actuator)."""
+
+    name: str
+    description: str
+    steps: tuple[tuple[float, tuple[float, ...]], ...]
+
+    @property
+    def duration_s(self) -> float:
+        return sum(duration for duration, _ in self.steps)
+
+
+@dataclass(frozen=True)
+class Profile:
+    name: str
+    description: str
+    dt_s: float
+    commands: tuple[Command, ...]
+    sensors: tuple[Sensor, ...]
+    window_samples: int
+    decision_window_s: float
+    thresholds: dict[str, dict[str, float]]
+    pattern: tuple[PatternRow, ...]
+    dms: dict[str, DiagnosisSequence]
+    sources: dict[str, LogSources]   # per log family: ros, mavlink, dataflash
+    source_path: str
+    navigation: Navigation | None = None
+    controller: ControllerSpec | None = None
+    simulation: SimulationSpec | None = None
+    # Not operating once every command has been neutral this long (None: no such rule).
+    idle_after_s: float | None = None
+    # The replay's prediction horizon: None chosen by `train`, inf the paper's free run.
+    horizon_s: float | None = None
+
+    @property
+    def command_names(self) -> tuple[str, ...]:
+        return tuple(c.name for c in self.commands)
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        return tuple(s.name for s in self.sensors)
+
+    @property
+    def full_scales(self) -> dict[str, float]:
+        return {s.name: s.full_scale for s in self.sensors}
+
+    def sensor(self, name: str) -> Sensor:
+        return next(s for s in self.sensors if s.name == name)
+
+    def thresholds_for(self, mode: str) -> dict[str, float]:
+        """Thresholds of a DMS name or of the mission mode. A DMS without its own table uses
+        the ``routine`` table when there is one; anything else the mission's."""
+        if mode in self.thresholds:
+            return self.thresholds[mode]
+        if mode in self.dms and ROUTINE_THRESHOLDS in self.thresholds:
+            return self.thresholds[ROUTINE_THRESHOLDS]
+        return self.thresholds[MISSION_MODE]
+
+
+def _horizon(matching: TableReader) -> float | None:
+    """``[matching] horizon_s``: "auto" (train chooses; the default), "free" or inf (the
+    paper's free run), or seconds."""
+    value = matching.get("horizon_s", (str, float, int), "auto")
+    if value == "auto":
+        return None
+    if value == "free":
+        return math.inf
+    if isinstance(value, str) or value <= 0:
+        raise ProfileError("key 'matching.horizon_s' must be \"auto\", \"free\" or a positive "
+                           f"number of seconds, got {value!r}")
+    return float(value)
+
+
+def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
+    """Validate a parsed TOML document into a `Profile`."""
+    top = TableReader(data, "")
+    vehicle = top.sub("vehicle")
+    commands = tuple(
+        Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
+        for r in top.items("commands")
+    )
+    sensors = tuple(
+        Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
+               positive(r, "full_scale"), r.get("description", str, ""),
+               r.get("truth_column", str, None))
+        for r in top.items("sensors")
+    )
+    if not commands or not sensors:
+        raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
+    sensor_names = [s.name for s in sensors]
+    signal_names = [c.name for c in commands] + sensor_names
+    if len(set(signal_names)) != len(signal_names):
+        raise ProfileError("signal names in 'commands' and 'sensors' must be unique")
+    if OPERATING in signal_names:
+        raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
+                           "([sources.FAMILY] operating = {...})")
+
+    matching = top.sub("matching")
+    window = matching.get("window_samples", int)
+    if window < 1:
+        raise ProfileError("key 'matching.window_samples' must be at least 1")
+
+    threshold_table = top.sub("thresholds")
+    thresholds: dict[str, dict[str, float]] = {}
+    for mode in threshold_table.table:
+        row = threshold_table.sub(mode)
+        thresholds[mode] = {name: positive(row, name) for name in sensor_names}
+    if MISSION_MODE not in thresholds:
+        raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
+
+    components = {c.component for c in commands} | {s.component for s in sensors}
+    pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
+                       components)
+
+    dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
+    dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
+
+    sources_table = top.sub("sources")
+    sources = {family: _log_sources(sources_table.sub(family), signal_names)
+               for family in sources_table.table}
+    navigation = None
+    if "navigation" in data:
+        nav = top.sub("navigation")
+        navigation = Navigation(nav.get("speed", str), nav.get("yaw_rate", str))
+        for key, name in (("speed", navigation.speed), ("yaw_rate", navigation.yaw_rate)):
+            if name not in sensor_names:
+                raise ProfileError(f"key 'navigation.{key}' names no sensor: {name!r}")
+    controller = _controller(top.sub("controller"), sensor_names,
+                             [c.name for c in commands]) if "controller" in data else None
+    return Profile(
+        name=vehicle.get("name", str),
+        description=vehicle.get("description", str, ""),
+        dt_s=positive(vehicle, "dt_s"),
+        commands=commands,
+        sensors=sensors,
+        window_samples=window,
+        decision_window_s=matching.get("decision_window_s", float, 0.0),
+        horizon_s=_horizon(matching),
+        thresholds=thresholds,
+        pattern=pattern,
+        dms=dms,
+        sources=sources,
+        navigation=navigation,
+        controller=controller,
+        simulation=parse_simulation(top.sub("simulation"), [c.name for c in commands],
+                                    sensor_names) if "simulation" in data else None,
+        source_path=source_path,
+        idle_after_s=positive(top.sub("operating"), "idle_after_s")
+        if "operating" in data else None,
+    )
+
+
+def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
+                ) -> ControllerSpec:
+    kind = reader.get("kind", str)
+    if kind not in CONTROLLER_KINDS:
+        raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
+    for key in ("speed", "yaw_rate", "heave"):
+        if key in reader.table and reader.get(key, str) not in sensor_names:
+            raise ProfileError(f"key '{reader.key(key)}' names no sensor")
+    mix_table = reader.sub("mix")
+    mix = {}
+    for command in mix_table.table:
+        if command not in command_names:
+            raise ProfileError(f"key '{mix_table.key(command)}' names no command")
+        row = mix_table.sub(command)
+        for effort in row.table:
+            if effort not in EFFORTS:
+                raise ProfileError(f"key '{row.key(effort)}' must be one of {EFFORTS}")
+        mix[command] = {effort: row.get(effort, float) for effort in row.table}
+    gains_reader = reader.sub("gains") if "gains" in reader.table else TableReader({}, "gains")
+    known = {f.name for f in fields(ControllerGains)}
+    gains = {}
+    for name in gains_reader.table:
+        if name not in known:
+            raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
+                               f"{kind} (known: {', '.join(sorted(known))})")
+        gains[name] = gains_reader.get(name, float)
+    return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str), mix,
+                          ControllerGains(**gains), reader.get("heave", str, None))
+
+
+def _topic(reader: TableReader) -> str:
+    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key; a CSV
+    `column` is its own topic."""
+    if "column" in reader.table:
+        return str(reader.get("column", str))
+    if "topic" not in reader.table and "message" in reader.table:
+        return str(reader.get("message", str))
+    return str(reader.get("topic", str))
+
+
+def _field(reader: TableReader) -> str:
+    return str(reader.get("column" if "column" in reader.table else "field", str))
+
+
+def _field_source(entry: TableReader) -> FieldSource:
+    where = entry.sub("where").table if "where" in entry.table else {}
+    return FieldSource(
+        _topic(entry), _field(entry), entry.get("scale", float, 1.0),
+        entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
+        entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
+        entry.get("changes_only", bool, False))
+
+
+def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
+    signals_table = reader.sub("signals")
+    signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
+    if "operating" in reader.table:   # a flag: the vehicle is operating where it is not 0
+        signals[OPERATING] = _field_source(reader.sub("operating"))
+    segment = None
+    if "segment" in reader.table:
+        entry = reader.sub("segment")
+        segment = SegmentSource(_topic(entry), _field(entry), entry.get("prefix", str, ""))
+    time = None
+    if "time" in reader.table:
+        entry = reader.sub("time")
+        time = TimeColumn(entry.get("column", str), entry.get("unit", str, "s").lower())
+        if time.unit not in TIME_UNITS:
+            raise ProfileError(f"key '{entry.key('unit')}' must be one of "
+                               f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
+    return LogSources(signals, segment, time)
+
+
+def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
+             ) -> tuple[PatternRow, ...]:
+    """The optional pattern table; a row that repeats another's case or b vector is an
+    error naming both rows."""
+    pattern: list[PatternRow] = []
+    for reader in rows:
+        row = _pattern_row(reader, sensor_names, components)
+        for earlier, other in zip(rows, pattern, strict=False):
+            if other.case == row.case:
+                raise ProfileError(f"key '{reader.key('case')}' repeats case {row.case} of "
+                                   f"{earlier.where}")
+            if other.b == row.b:
+                raise ProfileError(f"key '{reader.key('b')}' repeats the b vector of "
+                                   f"{earlier.where} (case {other.case})")
+        pattern.append(row)
+    return tuple(pattern)
+
+
+def _pattern_row(reader: TableReader, sensor_names: list[str], components: set[str]
+                 ) -> PatternRow:
+    b_reader = reader.sub("b")
+    unknown = [name for name in b_reader.table if name not in sensor_names]
+    if unknown:
+        raise ProfileError(f"key '{b_reader.key(unknown[0])}' names no sensor (b has one bit "
+                           f"per sensor: {', '.join(sensor_names)})")
+    b = {}
+    for name in sensor_names:
+        bit = b_reader.get(name, int)
+        if bit not in (0, 1):
+            raise ProfileError(f"key '{b_reader.key(name)}' must be 0 or 1")
+        b[name] = bit
+    named = [str(c) for c in reader.get("components", list)]
+    strangers = [c for c in named if c not in components]
+    if strangers:
+        raise ProfileError(f"key '{reader.key('components')}' names unknown component "
+                           f"{strangers[0]!r} (the profile's: {', '.join(sorted(components))})")
+    return PatternRow(reader.get("case", int), b, tuple(named))
+
+
+def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
+    steps = []
+    for i, step in enumerate(reader.get("steps", list)):
+        if not isinstance(step, list) or len(step) != n_commands + 1:
+            raise ProfileError(
+                f"key '{reader.key('steps')}[{i}]' must be [duration_s, {n_commands} commands]")
+        duration, *levels = (float(v) for v in step)
+        steps.append((duration, tuple(levels)))
+    return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
+
+
+def builtin_profiles() -> tuple[str, ...]:
+    """The names of the profiles shipped with auvdiag (auvdiag_cli/vehicle/profiles)."""
+    folder = resources.files("auvdiag_cli.vehicle") / "profiles"
+    return tuple(sorted(entry.name.removesuffix(".toml") for entry in folder.iterdir()
+                        if entry.name.endswith(".toml")))
+
+
+def profile_text(path: Path | None = None) -> tuple[str, str]:
+    """A profile's TOML text and where it came from: a file, or a built-in profile by name
+    (see `builtin_profiles`); None is the Twin-Burger of the paper."""
+    name = "twin_burger" if path is None else str(path)
+    if path is None or (name in builtin_profiles() and not path.exists()):
+        resource = resources.files("auvdiag_cli.vehicle") / "profiles" / f"{name}.toml"
+        return resource.read_text(encoding="utf-8"), f"builtin:{name}"
+    try:
+        return path.read_text(encoding="utf-8"), str(path)
+    except OSError as error:
+        raise ProfileError(f"{path}: cannot read profile: {error.strerror} (built-in "
+                           f"profiles: {', '.join(builtin_profiles())})") from None
+
+
+def load_profile(path: Path | None = None) -> Profile:
+    """Load a profile file, or a built-in profile by name (see `builtin_profiles`); None is
+    the Twin-Burger of the paper."""
+    text, where = profile_text(path)
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ProfileError(f"{where}: not valid TOML: {error}") from None
+    try:
+        return parse_profile(data, where)
+    except ProfileError as error:
+        raise ProfileError(f"{where}: {error}") from None
