@@ -42,6 +42,14 @@ class AuditResult:
     def count(self, verdict: str) -> int:
         return sum(1 for r in self.records if not r.get("error") and r.get("verdict") == verdict)
 
+    def summary(self, output: Path) -> str:
+        """The line an audit ends with: what it found and where the results are."""
+        return (f"{len(self.records)} logs: {self.count('normal')} normal, "
+                f"{self.count('fault')} fault, {self.count('undetermined')} undetermined, "
+                f"{self.errors} not analysable, {self.damaged} partial (damaged); "
+                f"{len(self.skipped)} files skipped; "
+                f"{self.computed} diagnosed now, {self.reused} reused; results in {output}")
+
     @property
     def errors(self) -> int:
         return sum(1 for r in self.records if r.get("error"))

@@ -71,3 +71,4 @@ class BarReporter:
 def reporter_for_stderr() -> Reporter:
     console = Console(stderr=True)
     return BarReporter(console) if console.is_terminal else PlainReporter()
+

@@ -1,0 +1,220 @@
+"""`diagnose`, `report` and `audit`: one log, a saved report, a fleet."""
+
+import json
+import os
+from enum import StrEnum
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from auvdiag_cli.cli.app import (
+    EXIT_FAULT,
+    EXIT_NORMAL,
+    EXIT_UNUSABLE,
+    ModelOption,
+    ProfileOption,
+    app,
+    fail,
+    user_errors,
+)
+from auvdiag_cli.errors import UsageError
+
+if TYPE_CHECKING:
+    from auvdiag_cli.audit.job import AuditResult
+    from auvdiag_cli.reports.series import Series
+
+
+@app.command()
+def diagnose(
+    log: Annotated[Path, typer.Argument(help="Log: ROS 1 .bag, ROS 2 bag directory (or its "
+                                             ".db3/.mcap file), standalone .mcap, MAVLink "
+                                             ".tlog, DataFlash .bin or CSV with a header "
+                                             "row.")],
+    model: ModelOption = None,
+    profile: ProfileOption = None,
+    json_path: Annotated[str | None, typer.Option(
+        "--json", help="Write the JSON report to PATH, or to standard output with '-'. "
+                       "Beside a JSON file go its time histories (NAME.series.npz), from "
+                       "which 'auvdiag report' draws the PDF again.",
+        metavar="PATH|-")] = None,
+    pdf_path: Annotated[Path | None, typer.Option(
+        "--pdf", help="Write the PDF report (summary page, time histories, Substituting "
+                      "Control) to PATH.", dir_okay=False)] = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
+    mission: Annotated[Path | None, typer.Option(
+        "--mission", help="Mission plan JSON for the closed-loop Substituting Control replay "
+                          "(default: NAME.mission.json beside the log).", dir_okay=False)
+    ] = None,
+    companions: Annotated[list[Path] | None, typer.Option(
+        "--with", help="Another log of the same vehicle and day whose Diagnosis Motion "
+                       "Sequences may decide between candidates (repeatable).")] = None,
+) -> None:
+    """Diagnose one log. Exit status: 0 no fault, 1 fault found, 2 log not analysable.
+
+    Segments come from the log's markers, or are recognised from the commands; each
+    Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
+    leaves several candidates the DMS runs (in this log or the --with logs) decide."""
+    from adapters import detect_format
+    from auvdiag_cli.engine.diagnosis import Verdict
+    from auvdiag_cli.engine.diagnosis import diagnose as run_diagnosis
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.reports.series import series_from_diagnosis
+    from auvdiag_cli.reports.text import summary_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.store import load_model
+
+    with user_errors(log):
+        detect_format(log)  # a bad path is reported before the model is even loaded
+        vehicle = load_profile(profile)
+        result = run_diagnosis(log, vehicle, load_model(model, vehicle.name), companions or (),
+                               mission)
+        document, series = diagnosis_to_dict(result), series_from_diagnosis(result)
+        if json_path == "-":
+            typer.echo(json.dumps(document, indent=2))
+        elif json_path is not None:
+            _save_report(document, series, Path(json_path))
+        if pdf_path is not None:
+            _render_pdf(document, series, pdf_path)
+        if not quiet:
+            for line in summary_lines(result):
+                typer.echo(line, err=json_path == "-")
+    raise typer.Exit(EXIT_FAULT if result.verdict == Verdict.FAULT else EXIT_NORMAL)
+
+
+def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:
+    """The JSON report and, beside it, the time histories it refers to."""
+    from auvdiag_cli.files import write_json
+    from auvdiag_cli.reports.series import save_series, series_path
+
+    sidecar = series_path(target)
+    save_series(series, sidecar)
+    write_json({**document, "series_file": sidecar.name}, target)
+
+
+def _render_pdf(document: dict[str, Any], series: "Series | None", target: Path) -> None:
+    from auvdiag_cli.reports.pdf.dive import render_dive_report
+
+    try:
+        render_dive_report(document, series, target)
+    except OSError as error:
+        raise UsageError(f"{target}: cannot write the PDF: {error.strerror or error}") from None
+
+
+@app.command()
+def report(
+    json_report: Annotated[Path, typer.Argument(help="A JSON report written by 'auvdiag "
+                                                     "diagnose --json PATH' or by an audit.",
+                                                dir_okay=False)],
+    output: Annotated[Path | None, typer.Option(
+        "--output", "-o", help="PDF to write (default: the JSON's name with .pdf).",
+        dir_okay=False)] = None,
+) -> None:
+    """Draw the PDF report of a saved diagnosis, without the log or the model.
+
+    The time histories come from the NAME.series.npz file written beside the JSON; without
+    it the report has its summary pages only."""
+    from auvdiag_cli.reports.series import load_series
+
+    with user_errors(json_report):
+        document = _read_report(json_report)
+        named = document.get("series_file")
+        sidecar = json_report.with_name(named) if isinstance(named, str) and named else None
+        series = load_series(sidecar) if sidecar is not None and sidecar.is_file() else None
+        if series is None:
+            typer.echo(f"auvdiag: note: {json_report}: no time histories beside it; the PDF "
+                       "has its summary pages only", err=True)
+        target = output or json_report.with_suffix(".pdf")
+        try:
+            _render_pdf(document, series, target)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
+            # The document came from a file: a field missing or of the wrong kind is the
+            # file's problem, not a bug (reports this version writes are drawn in tests).
+            raise UsageError(f"{json_report}: not a complete auvdiag report "
+                             f"({type(error).__name__}: {error})") from None
+        typer.echo(f"report written to {target}")
+
+
+def _read_report(path: Path) -> dict[str, Any]:
+    try:
+        document = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise UsageError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise UsageError(f"{path}: not a readable JSON report: {error}") from None
+    if not isinstance(document, dict) or "verdict" not in document or "log" not in document:
+        raise UsageError(f"{path}: not an auvdiag JSON report (no 'verdict' or 'log')")
+    return document
+
+
+class FailOn(StrEnum):
+    """What makes an audit's exit status non-zero."""
+
+    ANY = "any"
+    DAMAGED = "damaged"
+    FAULT = "fault"
+    ERROR = "error"
+    NONE = "none"
+
+
+def _audit_exit(result: "AuditResult", fail_on: FailOn) -> int:
+    counted = {FailOn.ANY: ("fault", "error"), FailOn.DAMAGED: ("fault", "error", "damaged"),
+               FailOn.FAULT: ("fault",), FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
+    if "error" in counted and result.errors:
+        return EXIT_UNUSABLE
+    if "damaged" in counted and result.damaged:
+        return EXIT_UNUSABLE
+    if "fault" in counted and result.count("fault"):
+        return EXIT_FAULT
+    return EXIT_NORMAL
+
+
+def _terminate_as_interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+@app.command()
+def audit(
+    paths: Annotated[list[str], typer.Argument(
+        help="Logs, folders (walked for logs of every format) or glob patterns.")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Folder for the results.",
+                                         file_okay=False)],
+    model: ModelOption = None,
+    profile: ProfileOption = None,
+    jobs: Annotated[int, typer.Option(
+        "--jobs", "-j", help="Logs diagnosed side by side (default: all cores).", min=1)
+    ] = os.cpu_count() or 1,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Address of a Dask scheduler (e.g. tcp://host:8786) to run on "
+                            "instead of local processes; needs the 'dask' extra, and the "
+                            "workers need the logs at the same paths.")] = None,
+    fail_on: Annotated[FailOn, typer.Option(
+        "--fail-on", help="What makes the exit status non-zero: any (faults: 1, logs not "
+                          "analysable: 2), damaged (as any, and a log analysed only up to "
+                          "damage also gives 2), fault, error, or none.")] = FailOn.ANY,
+) -> None:
+    """Diagnose every log under PATHS and write one table and a fleet summary.
+
+    Writes OUTPUT/audit.csv and OUTPUT/audit.parquet (a row per log; a log that cannot be
+    analysed is a row with its error), OUTPUT/audit.pdf, and OUTPUT/logs/ with each log's
+    JSON report. Results are saved as each log finishes: an interrupted audit loses nothing
+    finished, and running it again only diagnoses what is missing or whose log or model
+    changed. Exit status: 0 all normal, 1 a fault found, 2 a log not analysable."""
+    import signal
+
+    from auvdiag_cli.audit.fleet_pdf import render_fleet_report
+    from auvdiag_cli.audit.job import AuditOptions, run_audit
+    from auvdiag_cli.audit.progress import reporter_for_stderr
+
+    signal.signal(signal.SIGTERM, _terminate_as_interrupt)
+    options = AuditOptions(paths, output, profile, model, jobs, scheduler)
+    with user_errors(output):
+        result = run_audit(options, reporter_for_stderr())
+        render_fleet_report(result.records, result.skipped, output / "audit.pdf",
+                            result.companions, result.interrupted)
+    typer.echo(result.summary(output))
+    if result.interrupted:
+        fail(f"audit interrupted after {result.computed} logs; run it again to finish")
+    raise typer.Exit(_audit_exit(result, fail_on))
+
+

@@ -1,0 +1,181 @@
+"""`train`, `score`, `relate` and `calibrate`: making a model and its thresholds."""
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from auvdiag_cli.cli.app import (
+    EXIT_FAULT,
+    CopyOutputOption,
+    HorizonOption,
+    ModelToUpdateOption,
+    ProfileOption,
+    app,
+    horizon_option,
+    report_progress,
+    user_errors,
+)
+
+
+@app.command()
+def train(
+    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs to learn from.")],
+    output: Annotated[Path, typer.Option("--output", "-o", help="Model directory to write.",
+                                         file_okay=False)],
+    profile: ProfileOption = None,
+    holdout: Annotated[list[Path] | None, typer.Option(
+        "--holdout", help="Held-out normal log for the skill figures (repeatable; default: "
+                          "every fifth log, or the last 20 % of a single log).")] = None,
+    horizon: HorizonOption = None,
+    keep_unskilled: Annotated[bool, typer.Option(
+        "--keep-unskilled", help="Write the model even when no signal has skill (its "
+                                 "diagnoses will judge nothing).")] = False,
+    hidden: Annotated[int, typer.Option(help="Size of the recurrent context.", min=4)] = 32,
+    seed: Annotated[int, typer.Option(help="Random seed of the training.")] = 0,
+    iterations_scale: Annotated[float, typer.Option(
+        help="Multiply every stage's iteration count (e.g. 0.1 for a quick model).",
+        min=0.001)] = 1.0,
+) -> None:
+    """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
+
+    Training runs in stages, short rollouts first and long free-running ones after. The
+    model is then scored on held-out normal data against naive predictors (the last value
+    holds, the mean, a linear model): a signal it cannot predict better is never judged.
+    It also learns how the commands follow the motion (see 'auvdiag relate'). Exit status 1
+    when nothing can be judged (no model is written unless --keep-unskilled)."""
+    from auvdiag_cli.jobs.train import paper_model_error, train_from_logs
+    from auvdiag_cli.reports.training import training_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    with user_errors(output):
+        vehicle = load_profile(profile)
+        result = train_from_logs(logs, output, vehicle, holdout or (), hidden, seed,
+                                 iterations_scale, horizon_option(horizon, vehicle.horizon_s),
+                                 keep_unskilled,
+                                 progress=report_progress)
+    for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
+                               vehicle.sensor_names):
+        typer.echo(line)
+    if not result.judges_anything:
+        typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "
+                   "actuator's commands can be judged (see above)"
+                   + ("" if result.written else "; the model is not written (--keep-unskilled "
+                                                "writes it anyway)"), err=True)
+        raise typer.Exit(EXIT_FAULT)
+
+
+@app.command()
+def score(
+    logs: Annotated[list[Path], typer.Argument(help="Normal logs the model was not trained on.")],
+    model: ModelToUpdateOption,
+    horizon: HorizonOption = None,
+    output: CopyOutputOption = None,
+    profile: ProfileOption = None,
+) -> None:
+    """Measure an existing model's skill per signal on normal logs and record it.
+
+    For models trained before skill was measured, or to re-check a model on new dives: the
+    skill and prediction horizon found replace those in model.json, and signals without
+    skill are no longer judged. Exit status 1 when no signal has skill."""
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.jobs.train import score_model
+    from auvdiag_cli.reports.training import skill_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.store import load_model
+
+    with user_errors(model):
+        vehicle = load_profile(profile)
+        loaded = load_model(model)
+        scores, chosen = score_model(loaded, vehicle, logs,
+                                     horizon_option(horizon, vehicle.horizon_s), report_progress)
+        write_metadata(loaded, output or model)
+    for line in skill_lines(scores, chosen):
+        typer.echo(line)
+    typer.echo(f"skill written to {(output or model) / 'model.json'}")
+    if not chosen.judged:
+        raise typer.Exit(EXIT_FAULT)
+
+
+@app.command()
+def relate(
+    logs: Annotated[list[Path], typer.Argument(help="Normal logs to learn from.")],
+    model: ModelToUpdateOption,
+    holdout: Annotated[list[Path] | None, typer.Option(
+        "--holdout", help="Held-out normal log that sets the thresholds (repeatable; "
+                          "default: every fifth log, or the last 20 % of a single log).")
+    ] = None,
+    output: CopyOutputOption = None,
+    profile: ProfileOption = None,
+) -> None:
+    """Learn how the vehicle's commands follow its motion, and where its logs start.
+
+    A controller holding heading, depth or attitude hides a weakened thruster from the
+    motion by driving it harder; the commands then depart from what the motion needs. This
+    learns that relation from normal logs (DMS runs and open-loop logs are left out) and
+    sets, per actuator, how much extra effort normal logs reach. It also records where the
+    normal logs recorded from rest start, so that a sensor wrong from the first sample is
+    found. 'auvdiag train' does both itself; use this command for a model trained before,
+    or to learn from other dives. What cannot be learned keeps what the model had."""
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.jobs.relate import relate_model
+    from auvdiag_cli.reports.training import relation_lines, start_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.store import load_model
+
+    with user_errors(model):
+        vehicle = load_profile(profile)
+        loaded = load_model(model)
+        relations, start = relate_model(loaded, vehicle, logs, holdout or (), report_progress)
+        if "refused" not in relations or "refused" not in start:
+            write_metadata(loaded, output or model)
+    for line in [*relation_lines(relations, vehicle.command_names),
+                 *start_lines(start, vehicle.sensor_names)]:
+        typer.echo(line)
+    if "refused" in relations and "refused" in start:
+        typer.echo("auvdiag: nothing learned; the model is left as it was", err=True)
+        raise typer.Exit(EXIT_FAULT)
+    typer.echo(f"written to {(output or model) / 'model.json'}")
+    if "refused" in relations:
+        raise typer.Exit(EXIT_FAULT)
+
+
+@app.command()
+def calibrate(
+    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs.")],
+    model: ModelToUpdateOption,
+    faulty: Annotated[list[Path] | None, typer.Option(
+        "--faulty", help="A log with a known fault, to check detection (repeatable).")
+    ] = None,
+    margin: Annotated[float, typer.Option(help="Threshold = margin x largest normal g.")
+                      ] = 1.5,
+    output: CopyOutputOption = None,
+    profile: ProfileOption = None,
+    floor_at_profile: Annotated[bool, typer.Option(
+        "--floor-at-profile", help="Never set a threshold below the profile's for its mode "
+                                   "(for few calibration logs, or signals a DMS hardly moves)."
+    )] = False,
+) -> None:
+    """Set the model's thresholds from the g it reaches on normal logs.
+
+    Per diagnosis mode (mission, ZA, ZB, ZC) and signal: threshold = margin x the largest g
+    on the normal logs (zero false alarms there by construction; the implied rate is stated
+    as a 95 % upper bound). Modes with under 30 s of data keep the profile's
+    thresholds, raised where these logs need it.
+    With --faulty, those logs are diagnosed with the new thresholds to show the margin."""
+    from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
+    from auvdiag_cli.jobs.calibrate import write_metadata
+    from auvdiag_cli.reports.training import calibration_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.store import load_model
+
+    with user_errors(model):
+        loaded = load_model(model)
+        result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin,
+                                 floor_at_profile)
+        write_metadata(loaded, output or model)
+    for line in calibration_lines(result):
+        typer.echo(line)
+    typer.echo(f"thresholds written to {(output or model) / 'model.json'}")
+
+
