@@ -20,8 +20,8 @@ from typing import Any
 from adapters import read_log as _read_signals
 from adapters.signals import Signals
 from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
-from auvdiag_cli.engine.diagnosis import Diagnosis, Verdict
 from auvdiag_cli.engine.diagnosis import diagnose as _diagnose
+from auvdiag_cli.engine.results import Diagnosis, Verdict
 from auvdiag_cli.reports.json_report import diagnosis_to_dict
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_cli.vehicle.profile import load_profile as _load_profile

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from auvdiag_cli.engine.diagnosis import Diagnosis
+    from auvdiag_cli.engine.results import Diagnosis
     from auvdiag_cli.jobs.train import TrainingResult
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"

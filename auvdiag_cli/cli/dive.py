@@ -56,8 +56,8 @@ def diagnose(
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from adapters import detect_format
-    from auvdiag_cli.engine.diagnosis import Verdict
     from auvdiag_cli.engine.diagnosis import diagnose as run_diagnosis
+    from auvdiag_cli.engine.results import Verdict
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import summary_lines

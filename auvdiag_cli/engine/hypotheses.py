@@ -25,8 +25,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
-from auvdiag_cli.engine.residuals import Matching, match, residual_index
+from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
@@ -86,49 +87,42 @@ class _Judge:
 
     measured: np.ndarray
     thresholds: np.ndarray
-    scales: np.ndarray
-    window: int
+    judging: Judging
     onset: int
-    judged: np.ndarray                   # columns of the signals that are judged
 
     def ratio(self, g_after_onset: np.ndarray) -> float:
         """Infinite where g never covers faulty time (the log ends too soon after the
         onset): nothing is explained then."""
-        start = min(self.window, max(0, len(g_after_onset) - 1))
-        g = g_after_onset[start:, self.judged]
-        ratio = peak(g / self.thresholds[self.onset + start:, self.judged])
+        start = min(self.judging.window, max(0, len(g_after_onset) - 1))
+        judged = self.judging.judged_mask
+        g = g_after_onset[start:, judged]
+        ratio = peak(g / self.thresholds[self.onset + start:, judged])
         return round(ratio, 3) if np.isfinite(ratio) else float("inf")
 
     def ratio_of(self, predicted: np.ndarray) -> float:
         after = slice(self.onset, None)
-        return self.ratio(residual_index(self.measured[after], predicted[after], self.scales,
-                                         self.window))
+        return self.ratio(self.judging.g(self.measured[after], predicted[after]))
 
 
-def weigh_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
+def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
                     matching: Matching, thresholds: np.ndarray, onset: int,
-                    restarts: Sequence[int], not_judged: Sequence[str] = ()) -> HypothesisTest:
-    full_scale = model.metadata.get("full_scale", profile.full_scales)
-    window = int(model.metadata.get("window_samples", profile.window_samples))
-    judge = _Judge(matching.measured, thresholds,
-                   np.asarray([full_scale[n] for n in frame.sensor_names]), window, onset,
-                   np.asarray([n not in not_judged for n in frame.sensor_names]))
-    hypotheses = [*_actuator_hypotheses(model, profile, frame, judge, full_scale, restarts),
-                  *_sensor_hypotheses(profile, frame, matching, judge)]
+                    restarts: Sequence[int]) -> HypothesisTest:
+    judge = _Judge(matching.measured, thresholds, judging, onset)
+    hypotheses = [*_actuator_hypotheses(model, judging.profile, frame, judge, restarts),
+                  *_sensor_hypotheses(judging.profile, frame, matching, judge)]
     return HypothesisTest(tuple(sorted(hypotheses, key=lambda h: h.peak_g_ratio)))
 
 
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
-                         judge: _Judge, full_scale: dict[str, float],
-                         restarts: Sequence[int]) -> list[Hypothesis]:
+                         judge: _Judge, restarts: Sequence[int]) -> list[Hypothesis]:
     found = []
     for component in dict.fromkeys(c.component for c in profile.commands):
         columns = [i for i, c in enumerate(profile.commands) if c.component == component]
         for fraction in THRUST_FRACTIONS:
             commands = frame.commands.copy()
             commands[judge.onset:, columns] *= np.sqrt(fraction)
-            trial = match(model, replace(frame, commands=commands), full_scale, judge.window,
-                          restarts)
+            trial = match(model, replace(frame, commands=commands), judge.judging.full_scale,
+                          judge.judging.window, restarts)
             found.append(Hypothesis(component, "dead" if fraction == 0 else "weakened",
                                     judge.ratio(trial.g_percent[judge.onset:]), fraction))
     return found

@@ -14,9 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.engine.detection import binary_vector, decided_b, first_alarm
+from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
-from auvdiag_cli.engine.residuals import residual_index
 from auvdiag_cli.engine.segments import dms_template
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.vehicle.controller import PathFollower, VehicleController
@@ -45,17 +44,10 @@ class DerivedTable:
 
 def _bits(measured: np.ndarray, modelled: np.ndarray, profile: Profile, mode: str,
           model: LoadedModel) -> dict[str, int]:
-    full_scale = model.metadata.get("full_scale", profile.full_scales)
-    scales = np.asarray([full_scale[n] for n in profile.sensor_names])
-    window = int(model.metadata.get("window_samples", profile.window_samples))
-    g = residual_index(measured, modelled, scales, window)
-    limits = np.tile([profile.thresholds_for(mode)[n] for n in profile.sensor_names],
-                     (len(g), 1))
-    b = binary_vector(g, limits)
-    alarm = first_alarm(b)
-    bits = np.zeros(len(profile.sensor_names), bool) if alarm is None else decided_b(
-        b, alarm, round(profile.decision_window_s / profile.dt_s))
-    return {name: int(bits[i]) for i, name in enumerate(profile.sensor_names)}
+    """The b a fault gives on ``mode`` under the profile's own thresholds for it (the
+    table describes the vehicle, not one model's calibration)."""
+    return Judging.of(model, profile).decided_b(measured, modelled,
+                                                profile.thresholds_for(mode))
 
 
 def _faults(profile: Profile) -> list[tuple[str, int | None, int | None]]:

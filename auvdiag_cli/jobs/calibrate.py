@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.diagnosis import Diagnosis, diagnose_ingested
+from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import raise_thresholds, start_reading
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.files import write_json

@@ -7,8 +7,8 @@ from typing import Any
 from auvdiag_cli import __version__
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
-from auvdiag_cli.engine.diagnosis import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
 from auvdiag_cli.engine.hypotheses import Hypothesis
+from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
 
 SCHEMA_VERSION = 1
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from auvdiag_cli.engine.diagnosis import Diagnosis
+from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.errors import UsageError
 
 Series = dict[str, np.ndarray]

@@ -4,8 +4,8 @@ import math
 import textwrap
 
 from adapters import TopicInfo
-from auvdiag_cli.engine.diagnosis import EPOCH_CLOCK_NS, Diagnosis, Verdict
 from auvdiag_cli.engine.hypotheses import HypothesisTest
+from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, Diagnosis, Verdict
 from auvdiag_cli.jobs.inspect import Inspection
 from auvdiag_cli.reports.json_report import utc_text
 

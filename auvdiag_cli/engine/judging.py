@@ -1,0 +1,74 @@
+"""How the signals are judged, worked out once per model and profile and shared by the
+diagnosis, the hypothesis test and the fault signatures: each signal's full scale R_i, g's
+window K, the decision window, the thresholds per mode (calibrated into the model over
+the profile's defaults), and which signals the model has the skill to judge."""
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from auvdiag_cli.engine.detection import binary_vector, decided_b, first_alarm
+from auvdiag_cli.engine.residuals import residual_index
+from auvdiag_cli.vehicle.profile import Profile
+from models.store import LoadedModel
+
+NOT_JUDGED = "not judged (the model cannot predict it)"
+
+
+@dataclass(frozen=True)
+class Judging:
+    sensor_names: tuple[str, ...]
+    full_scale: dict[str, float]         # R_i by signal
+    window: int                          # K, samples of g's mean
+    decision_steps: int                  # b is collected this long after the first alarm
+    profile: Profile                     # with the thresholds calibrated into the model
+    not_judged: dict[str, str]           # signal -> why the model cannot judge it
+
+    @classmethod
+    def of(cls, model: LoadedModel, profile: Profile) -> "Judging":
+        calibrated = model.metadata.get("thresholds")
+        judged = (profile if not calibrated else
+                  replace(profile, thresholds={**profile.thresholds, **calibrated}))
+        return cls(profile.sensor_names,
+                   dict(model.metadata.get("full_scale", profile.full_scales)),
+                   int(model.metadata.get("window_samples", profile.window_samples)),
+                   round(profile.decision_window_s / profile.dt_s), judged,
+                   not_judged_signals(model))
+
+    @property
+    def scales(self) -> np.ndarray:
+        return np.asarray([self.full_scale[name] for name in self.sensor_names])
+
+    @property
+    def judged_mask(self) -> np.ndarray:
+        return np.asarray([name not in self.not_judged for name in self.sensor_names])
+
+    def g(self, measured: np.ndarray, modelled: np.ndarray) -> np.ndarray:
+        return residual_index(measured, modelled, self.scales, self.window)
+
+    def decided_b(self, measured: np.ndarray, modelled: np.ndarray,
+                  thresholds: dict[str, float]) -> dict[str, int]:
+        """The b a run of ``measured`` against ``modelled`` decides at its first alarm
+        under one mode's ``thresholds`` (all zero when it never alarms)."""
+        g = self.g(measured, modelled)
+        b = binary_vector(g, np.tile([thresholds[n] for n in self.sensor_names], (len(g), 1)))
+        alarm = first_alarm(b)
+        bits = (np.zeros(len(self.sensor_names), bool) if alarm is None
+                else decided_b(b, alarm, self.decision_steps))
+        return {name: int(bits[i]) for i, name in enumerate(self.sensor_names)}
+
+
+def not_judged_signals(model: LoadedModel) -> dict[str, str]:
+    """The signals the model has no skill for, with the reason reports print."""
+    signals = model.metadata.get("skill", {}).get("signals", {})
+    needed = model.metadata.get("skill", {}).get("judged_from_samples", 0)
+    reasons = {}
+    for name in model.unskilled:
+        record = signals[name]
+        if record.get("samples", needed) < needed:
+            reasons[name] = (f"not judged (too little held-out data to measure the model's "
+                             f"skill: {record['samples']} samples)")
+        else:
+            skill = record.get("skill")
+            reasons[name] = NOT_JUDGED + ("" if skill is None else f" (skill {skill:.2f})")
+    return reasons

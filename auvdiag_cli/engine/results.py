@@ -1,0 +1,91 @@
+"""What a diagnosis is: the verdict, the component, the evidence beside them and the time
+histories the reports draw. Rendering reads these values and never recomputes them."""
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
+from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.completeness import Completeness
+from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
+from auvdiag_cli.engine.residuals import Matching
+from auvdiag_cli.engine.segments import ROUTINE_MODE, Segment
+from auvdiag_cli.engine.start_check import StartCheck
+from auvdiag_cli.engine.substitution import Substitution
+
+EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
+PAPER_ASSUMPTIONS = (
+    "The environment is steady: a change in how the vehicle moves comes only from its hardware.",
+    "At most one sensor or actuator is defective at a time.",
+    "A component is either normal or totally defective.",
+    "Once defective, a component stays defective until the diagnosis ends.",
+)
+
+
+class Verdict(StrEnum):
+    """What a diagnosis concludes; the value is what the reports write."""
+
+    NORMAL = "normal"                  # something was judged and nothing failed
+    FAULT = "fault"
+    UNDETERMINED = "undetermined"      # nothing could be judged
+
+
+@dataclass
+class SegmentResult:
+    segment: Segment
+    max_g: dict[str, float]
+    b: dict[str, int]
+    case: int | None
+    components: tuple[str, ...]
+
+
+@dataclass
+class Diagnosis:
+    log: Path
+    format: str
+    vehicle: str
+    verdict: Verdict
+    component: str | None
+    candidates: list[str]
+    case: int | None
+    b: dict[str, int]
+    detected_at_s: float | None
+    onset_s: float | None
+    segments: list[SegmentResult]
+    segment_source: str               # "markers" or "commands"
+    substitution: Substitution | None
+    model: dict[str, Any]
+    window_samples: int
+    decision_window_s: float
+    sensor_units: dict[str, str]
+    notes: list[str] = field(default_factory=list)
+    active: ActiveDiagnosis | None = None
+    start_ns: int = 0
+    mission_legs: list[dict[str, Any]] = field(default_factory=list)
+    degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
+    hypotheses: HypothesisTest | None = None
+    # Time histories for reports.
+    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    command_names: tuple[str, ...] = ()
+    sensor_names: tuple[str, ...] = ()
+    matching: Matching | None = None
+    thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    completeness: Completeness | None = None
+    not_operating_s: float = 0.0      # time the operating flag excluded from judgement
+    not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
+    command_check: CommandCheck | None = None   # the commands judged against the motion
+    start_check: StartCheck | None = None       # the log's start against normal starts
+
+
+def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:
+    """The log's DMS segments with their outcome, in absolute time."""
+    return [DmsRun(str(diagnosis.log), r.segment.name,
+                   diagnosis.start_ns + round(r.segment.start_s * 1e9),
+                   diagnosis.start_ns + round(r.segment.end_s * 1e9), r.b)
+            for r in diagnosis.segments if r.segment.mode == ROUTINE_MODE]
