@@ -134,3 +134,23 @@ def test_inside_the_application_no_folder_imports_from_one_above_it():
             if other != folder and other_rank >= rank:
                 wrong.append(f"{module} ({folder}) imports {target} ({other})")
     assert wrong == []
+
+
+MODULE_LINES, FUNCTION_LINES = 400, 60
+
+
+def test_modules_and_functions_stay_small():
+    """Small modules with one job, functions a reader takes in at once."""
+    too_long = []
+    for package in PACKAGES:
+        for path in (ROOT / package).rglob("*.py"):
+            text = path.read_text(encoding="utf-8")
+            where = path.relative_to(ROOT)
+            if len(text.splitlines()) > MODULE_LINES:
+                too_long.append(f"{where}: {len(text.splitlines())} lines")
+            too_long += [f"{where}:{node.lineno} {node.name}: "
+                         f"{node.end_lineno - node.lineno + 1} lines"
+                         for node in ast.walk(ast.parse(text))
+                         if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+                         and node.end_lineno - node.lineno + 1 > FUNCTION_LINES]
+    assert too_long == []

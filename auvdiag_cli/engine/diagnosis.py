@@ -13,13 +13,7 @@ from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.isolation import (
-    apply_active_diagnosis,
-    apply_detection,
-    apply_other_evidence,
-    apply_weakened_thruster,
-    name_by_hypotheses,
-)
+from auvdiag_cli.engine.isolation import apply_other_evidence, isolate
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
@@ -125,9 +119,9 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     residual = np.abs(matching.measured - matching.modelled) / judging.scales
     detection = detect(b_series, residual, thresholds, frame.sensor_names, decision,
                        round(ONSET_LOOKBACK_S / profile.dt_s), [*frame.restarts, *dms_starts])
-    notes = list(signals.notes) + frame.notes
-    notes += [f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s "
-              "(not interpolated)" for gap in frame.gaps]
+    notes = list(signals.notes) + frame.notes + [
+        f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s (not "
+        "interpolated)" for gap in frame.gaps]
     diagnosis = Diagnosis(
         log=signals.path, format=signals.format, vehicle=profile.name, verdict=Verdict.NORMAL,
         component=None, candidates=[], case=_normal_case(profile),
@@ -161,21 +155,11 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         return diagnosis
     if detection is None:
         apply_other_evidence(diagnosis, check, start, profile, model)
-    if detection is not None:
-        apply_detection(diagnosis, detection.b, frame.time_s[detection.alarm_index],
-                         frame.time_s[detection.onset_index], profile, model)
-        test = weigh_hypotheses(model, judging, frame, matching, thresholds,
-                                detection.onset_index, dms_starts)
-        diagnosis.hypotheses = test
-        weak = next((h for h in test.ranked if h.is_actuator), None)
-        if len(diagnosis.candidates) > 1:
-            own = [(run, signals.start_ns) for run in dms_runs(diagnosis)]
-            apply_active_diagnosis(diagnosis, [*own, *companion_runs], profile, model)
-        elif diagnosis.substitution is not None:
-            if weak is not None and weak.explains:
-                apply_weakened_thruster(diagnosis, weak, profile)
-        elif not diagnosis.candidates:
-            name_by_hypotheses(diagnosis, test, profile, model)
+        return diagnosis
+    test = weigh_hypotheses(model, judging, frame, matching, thresholds,
+                            detection.onset_index, dms_starts)
+    isolate(diagnosis, detection.b, frame.time_s[detection.alarm_index],
+            frame.time_s[detection.onset_index], test, companion_runs, profile, model)
     return diagnosis
 
 

@@ -2,12 +2,14 @@
 test, the DMS runs (active diagnosis), a weakened thruster, the start and command checks;
 and Substituting Control for a failed sensor."""
 
+from collections.abc import Sequence
+
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.results import Diagnosis, Verdict
+from auvdiag_cli.engine.results import Diagnosis, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
@@ -18,6 +20,25 @@ from models.store import LoadedModel
 # The candidate the hypotheses name must leave this many times less of its threshold than
 # any other candidate.
 DECISIVE_MARGIN = 2.0
+
+
+def isolate(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, onset_s: float,
+            test: HypothesisTest, companion_runs: Sequence[tuple[DmsRun, int]],
+            profile: Profile, model: LoadedModel) -> None:
+    """The replay alarmed: read b in the pattern table, then let the DMS runs (this log's
+    and its companions'), a weakened thruster's replay or the hypothesis test name the
+    component where the table leaves it open or misreads it."""
+    apply_detection(diagnosis, b, alarm_s, onset_s, profile, model)
+    diagnosis.hypotheses = test
+    weak = next((h for h in test.ranked if h.is_actuator), None)
+    if len(diagnosis.candidates) > 1:
+        own = [(run, diagnosis.start_ns) for run in dms_runs(diagnosis)]
+        apply_active_diagnosis(diagnosis, [*own, *companion_runs], profile, model)
+    elif diagnosis.substitution is not None:
+        if weak is not None and weak.explains:
+            apply_weakened_thruster(diagnosis, weak, profile)
+    elif not diagnosis.candidates:
+        name_by_hypotheses(diagnosis, test, profile, model)
 
 
 def apply_other_evidence(diagnosis: Diagnosis, check: CommandCheck | None,

@@ -195,6 +195,32 @@ def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_
     return means
 
 
+def _grid(cleaned: dict[str, pd.Series], dt_ns: int) -> np.ndarray:
+    """The Δt grid over the time every signal covers; damaged timestamps refused."""
+    first_ns = max(int(s.index[0]) for s in cleaned.values())
+    last_ns = min(int(s.index[-1]) for s in cleaned.values())
+    if last_ns - first_ns < 2 * dt_ns:
+        raise ValueError("the signals overlap for less than two model steps")
+    most = max(s.size for s in cleaned.values())
+    if (last_ns - first_ns) // dt_ns > max(GRID_STEPS_PER_SAMPLE * most, MIN_GRID_LIMIT):
+        raise ValueError(f"the signals span {(last_ns - first_ns) / NS_PER_S:.3g} s but hold "
+                         f"at most {most} samples each: the timestamps are damaged")
+    return np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
+
+
+def _operating_steps(signals: Signals, grid_ns: np.ndarray, commands: np.ndarray,
+                     dt_s: float, idle_after_s: float | None, notes: list[str]) -> np.ndarray:
+    """Where the vehicle operates: the profile's flag, and commanded within the idle limit."""
+    operating = _operating(signals, grid_ns)
+    if idle_after_s is not None:
+        operating &= _commanded(commands, round(idle_after_s / dt_s))
+    # A sample averages the step before it: the first step of a stretch still holds
+    # readings from before it, so operation counts from the second.
+    operating &= np.concatenate(([operating[0]], operating[:-1]))
+    _note_operating(operating, dt_s, notes)
+    return operating
+
+
 def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tuple[str, ...],
              dt_s: float, max_gap_s: float = 1.0, idle_after_s: float | None = None
              ) -> AlignedFrame:
@@ -207,15 +233,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     if empty:
         raise ValueError(f"no usable samples for {', '.join(empty)}")
     dt_ns = round(dt_s * NS_PER_S)
-    first_ns = max(int(s.index[0]) for s in cleaned.values())
-    last_ns = min(int(s.index[-1]) for s in cleaned.values())
-    if last_ns - first_ns < 2 * dt_ns:
-        raise ValueError("the signals overlap for less than two model steps")
-    most = max(s.size for s in cleaned.values())
-    if (last_ns - first_ns) // dt_ns > max(GRID_STEPS_PER_SAMPLE * most, MIN_GRID_LIMIT):
-        raise ValueError(f"the signals span {(last_ns - first_ns) / NS_PER_S:.3g} s but hold "
-                         f"at most {most} samples each: the timestamps are damaged")
-    grid_ns = np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
+    grid_ns = _grid(cleaned, dt_ns)
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}
     blind = np.zeros(len(grid_ns), dtype=bool)     # inside a command gap
@@ -241,13 +259,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     slow = slow_command_note(command_rates, dt_s)
     slow_commands = [] if slow is None else [slow]
     commands = np.column_stack([columns[n] for n in command_names])
-    operating = _operating(signals, grid_ns)
-    if idle_after_s is not None:
-        operating &= _commanded(commands, round(idle_after_s / dt_s))
-    # A sample averages the step before it: the first step of a stretch still holds
-    # readings from before it, so operation counts from the second.
-    operating &= np.concatenate(([operating[0]], operating[:-1]))
-    _note_operating(operating, dt_s, notes)
+    operating = _operating_steps(signals, grid_ns, commands, dt_s, idle_after_s, notes)
     blind |= ~operating
     restarts.update(int(i) + 1 for i in np.flatnonzero(~operating[:-1] & operating[1:]))
     sensors = np.column_stack([columns[n] for n in sensor_names])

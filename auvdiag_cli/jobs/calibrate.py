@@ -133,6 +133,13 @@ def _evidence(per_log: list[tuple[str, np.ndarray]], column: int) -> SignalEvide
                           round(peaks[1][0], 3) if len(peaks) > 1 else None)
 
 
+def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> FaultyCheck:
+    """A log with a known fault, diagnosed with the new thresholds: is it still caught?"""
+    d = diagnose_ingested(ingest(path, profile), profile, calibrated)
+    ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
+    return FaultyCheck(str(path), d.verdict, d.component, d.candidates, round(ratio, 2))
+
+
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5,
               floor_at_profile: bool = False) -> CalibrationResult:
@@ -183,13 +190,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         model.metadata.get("start_state") or {},
         [None if d.matching is None else start_reading(d.commands, d.matching.measured,
                                                        profile.dt_s) for d in diagnoses], margin)
-    calibrated = replace(model, metadata=model.metadata)
-    checks = []
-    for path in faulty_logs:
-        d = diagnose_ingested(ingest(path, profile), profile, calibrated)
-        ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
-        checks.append(FaultyCheck(str(path), d.verdict, d.component, d.candidates,
-                                  round(ratio, 2)))
+    checks = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
+              for path in faulty_logs]
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
         widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),

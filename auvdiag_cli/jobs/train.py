@@ -167,13 +167,8 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     horizon_candidates(profile, horizon_s))
     chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
-    progress("learning how the commands follow the motion")
-    relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
-                                profile)
-    start_state = learn_start_state(
-        [start_reading(t.commands, t.sensors, profile.dt_s) for t in training],
-        [start_reading(r.scoring.commands, r.scoring.sensors, profile.dt_s)
-         for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
+    progress("learning how the commands follow the motion, and where the logs start")
+    relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
                             hours, rates, relations, start_state)
     result = replace(result, written=result.judges_anything or keep_unskilled)
@@ -184,6 +179,20 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         metadata["start_state"] = start_state
         save_model(output, network, normaliser, metadata)
     return result
+
+
+def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_ReadLog],
+                            training: Sequence[ScoringLog], profile: Profile
+                            ) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The command relations and the start state (model.json entries, or why there are
+    none). ``training`` is what the network trained on (a single log's first part)."""
+    relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
+                                profile)
+    start_state = learn_start_state(
+        [start_reading(t.commands, t.sensors, profile.dt_s) for t in training],
+        [start_reading(r.scoring.commands, r.scoring.sensors, profile.dt_s)
+         for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
+    return relations, start_state
 
 
 def _complete_steps(log: ScoringLog) -> int:

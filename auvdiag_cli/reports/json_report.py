@@ -8,7 +8,13 @@ from auvdiag_cli import __version__
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis
-from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis
+from auvdiag_cli.engine.results import (
+    EPOCH_CLOCK_NS,
+    PAPER_ASSUMPTIONS,
+    Diagnosis,
+    SegmentResult,
+)
+from auvdiag_cli.engine.substitution import Substitution
 
 SCHEMA_VERSION = 1
 
@@ -18,7 +24,6 @@ def _finite(value: float | None) -> float | None:
 
 
 def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
-    substitution = diagnosis.substitution
     return {
         "schema_version": SCHEMA_VERSION,
         "tool": f"auvdiag {__version__}",
@@ -39,20 +44,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         else diagnosis.completeness.to_dict(),
         "not_operating_s": diagnosis.not_operating_s,
         "not_judged": diagnosis.not_judged,
-        "segments": [
-            {
-                "name": r.segment.name,
-                "start_s": round(r.segment.start_s, 3),
-                "end_s": round(r.segment.end_s, 3),
-                "mode": r.segment.mode,
-                "thresholds": r.segment.thresholds,
-                "max_g": {k: _finite(v) for k, v in r.max_g.items()},
-                "b": r.b,
-                "case": r.case,
-                "components": list(r.components),
-            }
-            for r in diagnosis.segments
-        ],
+        "segments": [_segment(r) for r in diagnosis.segments],
         "segment_source": diagnosis.segment_source,
         "degradation": None if diagnosis.degradation is None else {
             "component": diagnosis.degradation.component, "kind": "weakened",
@@ -62,21 +54,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "commands_check": _command_check(diagnosis.command_check),
         "start_check": _start_check(diagnosis),
         "active_diagnosis": _active(diagnosis),
-        "substitution": None if substitution is None else {
-            "signal": substitution.signal,
-            "from_s": substitution.from_s,
-            "unit": substitution.unit,
-            "expected_error_rms": substitution.expected_error_rms,
-            "truth_error_rms": _rounded(substitution.truth_error_rms),
-            "failed_sensor_error_rms": _rounded(substitution.failed_error_rms),
-            "track_end_m": {name: [round(v, 3) for v in track.end]
-                            for name, track in substitution.tracks.items()},
-            "track_end_error_m": {
-                name: round(track.distance_to(substitution.tracks["truth"]), 3)
-                for name, track in substitution.tracks.items()
-                if name != "truth" and "truth" in substitution.tracks},
-            "closed_loop": _closed_loop(substitution.closed_loop),
-        },
+        "substitution": _substitution(diagnosis.substitution),
         "model": diagnosis.model,
         "method": {
             "g": "g_i(k) = 100/(K R_i) * sum_{j=k-K+1..k} |SS_i(j) - SM_i(j)| (mean of K samples)",
@@ -85,6 +63,33 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
             "assumptions": list(PAPER_ASSUMPTIONS),
         },
         "notes": diagnosis.notes,
+    }
+
+
+def _segment(r: SegmentResult) -> dict[str, Any]:
+    return {"name": r.segment.name, "start_s": round(r.segment.start_s, 3),
+            "end_s": round(r.segment.end_s, 3), "mode": r.segment.mode,
+            "thresholds": r.segment.thresholds,
+            "max_g": {k: _finite(v) for k, v in r.max_g.items()}, "b": r.b, "case": r.case,
+            "components": list(r.components)}
+
+
+def _substitution(substitution: Substitution | None) -> dict[str, Any] | None:
+    if substitution is None:
+        return None
+    tracks = substitution.tracks
+    return {
+        "signal": substitution.signal,
+        "from_s": substitution.from_s,
+        "unit": substitution.unit,
+        "expected_error_rms": substitution.expected_error_rms,
+        "truth_error_rms": _rounded(substitution.truth_error_rms),
+        "failed_sensor_error_rms": _rounded(substitution.failed_error_rms),
+        "track_end_m": {name: [round(v, 3) for v in track.end] for name, track in tracks.items()},
+        "track_end_error_m": {name: round(track.distance_to(tracks["truth"]), 3)
+                              for name, track in tracks.items()
+                              if name != "truth" and "truth" in tracks},
+        "closed_loop": _closed_loop(substitution.closed_loop),
     }
 
 

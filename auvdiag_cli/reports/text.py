@@ -4,8 +4,10 @@ import math
 import textwrap
 
 from adapters import TopicInfo
+from auvdiag_cli.engine.active import ActiveDiagnosis
 from auvdiag_cli.engine.hypotheses import HypothesisTest
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, Diagnosis, Verdict
+from auvdiag_cli.engine.substitution import Substitution
 from auvdiag_cli.jobs.inspect import Inspection
 from auvdiag_cli.reports.json_report import utc_text
 
@@ -39,39 +41,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in d.b.items()))
         if d.hypotheses is not None:
             lines.append("  " + _hypotheses_line(d.hypotheses))
-        if d.active is not None:
-            for e in d.active.evidence:
-                verdict = "fault among" if e.faulty else "clears"
-                lines.append(f"  active diagnosis: {e.segment} at {e.start_s:.1f} s "
-                             f"({e.log}) tests {', '.join(e.tested)}: b = "
-                             + ", ".join(str(v) for v in e.b.values())
-                             + f" -> {verdict} {', '.join(e.tested)}")
-            if d.active.recommended_dms:
-                lines.append("  cannot tell these apart from this log: run "
-                             + " or ".join(d.active.recommended_dms)
-                             + " on the next dive (or give such a log with --with) to decide")
-        if d.substitution is not None:
-            s = d.substitution
-            error = (f", expected error {s.expected_error_rms:.4f} {s.unit} rms"
-                     if s.expected_error_rms is not None else "")
-            lines.append(f"  substituting control: model {s.signal} replaces the sensor from "
-                         f"{s.from_s:.1f} s{error}")
-            if s.truth_error_rms is not None and s.failed_error_rms is not None:
-                lines.append(f"    against the truth: substituted {s.truth_error_rms:.4f} "
-                             f"{s.unit} rms, failed sensor {s.failed_error_rms:.4f} {s.unit}")
-            if "truth" in s.tracks:
-                lines.append("    dead-reckoned track ends "
-                             f"{s.tracks['substituted'].distance_to(s.tracks['truth']):.2f} m "
-                             "from the true end with the substitute, "
-                             f"{s.tracks['failed'].distance_to(s.tracks['truth']):.2f} m with "
-                             "the failed sensor")
-            loop = s.closed_loop
-            if loop is not None:
-                outcome = (f"reaches its last waypoint at {loop.finished_s:.1f} s"
-                           if loop.reached else "does not reach its last waypoint")
-                lines.append(f"    closed-loop replay (controller fed the model from "
-                             f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
-                             f"{loop.miss_m:.2f} m from it")
+        lines += _active_lines(d.active)
+        lines += _substitution_lines(d.substitution)
     lines += [f"  {name}: {why}" for name, why in d.not_judged.items()]
     check = d.command_check
     if check is not None:
@@ -90,6 +61,50 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines += [f"  note: {note}" for note in d.notes]
     lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
     return [line for line in lines if line]
+
+
+def _active_lines(active: ActiveDiagnosis | None) -> list[str]:
+    if active is None:
+        return []
+    lines: list[str] = []
+    for e in active.evidence:
+        verdict = "fault among" if e.faulty else "clears"
+        lines.append(f"  active diagnosis: {e.segment} at {e.start_s:.1f} s "
+                     f"({e.log}) tests {', '.join(e.tested)}: b = "
+                     + ", ".join(str(v) for v in e.b.values())
+                     + f" -> {verdict} {', '.join(e.tested)}")
+    if active.recommended_dms:
+        lines.append("  cannot tell these apart from this log: run "
+                     + " or ".join(active.recommended_dms)
+                     + " on the next dive (or give such a log with --with) to decide")
+    return lines
+
+
+def _substitution_lines(s: Substitution | None) -> list[str]:
+    if s is None:
+        return []
+    lines = []
+    error = (f", expected error {s.expected_error_rms:.4f} {s.unit} rms"
+             if s.expected_error_rms is not None else "")
+    lines.append(f"  substituting control: model {s.signal} replaces the sensor from "
+                 f"{s.from_s:.1f} s{error}")
+    if s.truth_error_rms is not None and s.failed_error_rms is not None:
+        lines.append(f"    against the truth: substituted {s.truth_error_rms:.4f} "
+                     f"{s.unit} rms, failed sensor {s.failed_error_rms:.4f} {s.unit}")
+    if "truth" in s.tracks:
+        lines.append("    dead-reckoned track ends "
+                     f"{s.tracks['substituted'].distance_to(s.tracks['truth']):.2f} m "
+                     "from the true end with the substitute, "
+                     f"{s.tracks['failed'].distance_to(s.tracks['truth']):.2f} m with "
+                     "the failed sensor")
+    loop = s.closed_loop
+    if loop is not None:
+        outcome = (f"reaches its last waypoint at {loop.finished_s:.1f} s"
+                   if loop.reached else "does not reach its last waypoint")
+        lines.append(f"    closed-loop replay (controller fed the model from "
+                     f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
+                     f"{loop.miss_m:.2f} m from it")
+    return lines
 
 
 def _hypotheses_line(test: HypothesisTest) -> str:

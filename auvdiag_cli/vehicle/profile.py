@@ -133,10 +133,7 @@ def _horizon(matching: TableReader) -> float | None:
     return float(value)
 
 
-def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
-    """Validate a parsed TOML document into a `Profile`."""
-    top = TableReader(data, "")
-    vehicle = top.sub("vehicle")
+def _signals(top: TableReader) -> tuple[tuple[Command, ...], tuple[Sensor, ...]]:
     commands = tuple(
         Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
         for r in top.items("commands")
@@ -149,27 +146,43 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     )
     if not commands or not sensors:
         raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
-    sensor_names = [s.name for s in sensors]
-    signal_names = [c.name for c in commands] + sensor_names
+    signal_names = [c.name for c in commands] + [s.name for s in sensors]
     if len(set(signal_names)) != len(signal_names):
         raise ProfileError("signal names in 'commands' and 'sensors' must be unique")
     if OPERATING in signal_names:
         raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
                            "([sources.FAMILY] operating = {...})")
+    return commands, sensors
 
+
+def _thresholds(table: TableReader, sensor_names: list[str]) -> dict[str, dict[str, float]]:
+    thresholds = {mode: {name: positive(table.sub(mode), name) for name in sensor_names}
+                  for mode in table.table}
+    if MISSION_MODE not in thresholds:
+        raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
+    return thresholds
+
+
+def _navigation(nav: TableReader, sensor_names: list[str]) -> Navigation:
+    navigation = Navigation(nav.get("speed", str), nav.get("yaw_rate", str))
+    for key, name in (("speed", navigation.speed), ("yaw_rate", navigation.yaw_rate)):
+        if name not in sensor_names:
+            raise ProfileError(f"key 'navigation.{key}' names no sensor: {name!r}")
+    return navigation
+
+
+def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
+    """Validate a parsed TOML document into a `Profile`."""
+    top = TableReader(data, "")
+    vehicle = top.sub("vehicle")
+    commands, sensors = _signals(top)
+    sensor_names = [s.name for s in sensors]
+    signal_names = [c.name for c in commands] + sensor_names
     matching = top.sub("matching")
     window = matching.get("window_samples", int)
     if window < 1:
         raise ProfileError("key 'matching.window_samples' must be at least 1")
-
-    threshold_table = top.sub("thresholds")
-    thresholds: dict[str, dict[str, float]] = {}
-    for mode in threshold_table.table:
-        row = threshold_table.sub(mode)
-        thresholds[mode] = {name: positive(row, name) for name in sensor_names}
-    if MISSION_MODE not in thresholds:
-        raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
-
+    thresholds = _thresholds(top.sub("thresholds"), sensor_names)
     components = {c.component for c in commands} | {s.component for s in sensors}
     pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
@@ -180,13 +193,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     sources_table = top.sub("sources")
     sources = {family: _log_sources(sources_table.sub(family), signal_names)
                for family in sources_table.table}
-    navigation = None
-    if "navigation" in data:
-        nav = top.sub("navigation")
-        navigation = Navigation(nav.get("speed", str), nav.get("yaw_rate", str))
-        for key, name in (("speed", navigation.speed), ("yaw_rate", navigation.yaw_rate)):
-            if name not in sensor_names:
-                raise ProfileError(f"key 'navigation.{key}' names no sensor: {name!r}")
+    navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
+        else None
     controller = _controller(top.sub("controller"), sensor_names,
                              [c.name for c in commands]) if "controller" in data else None
     return Profile(
