@@ -44,6 +44,10 @@ ModelToUpdateOption = Annotated[Path, typer.Option(
 CopyOutputOption = Annotated[Path | None, typer.Option(
     "--output", "-o", help="Write an updated copy of the model here instead of changing "
                            "--model.", file_okay=False)]
+HoldoutOption = Annotated[list[Path] | None, typer.Option(
+    "--holdout", help="Held-out normal log: the skill figures and the command relations' and "
+                      "start's allowances are measured on it (repeatable; default: every "
+                      "fifth log, or the last 20 % of a single log).")]
 HorizonOption = Annotated[str | None, typer.Option(
     "--horizon", help="How long the model predicts before the replay re-starts from the "
                       "measured state: 'auto' (chosen on the held-out data), 'free' (the "

@@ -8,6 +8,7 @@ import typer
 from auvdiag_cli.cli.app import (
     EXIT_FAULT,
     CopyOutputOption,
+    HoldoutOption,
     HorizonOption,
     ModelToUpdateOption,
     ProfileOption,
@@ -24,9 +25,7 @@ def train(
     output: Annotated[Path, typer.Option("--output", "-o", help="Model directory to write.",
                                          file_okay=False)],
     profile: ProfileOption = None,
-    holdout: Annotated[list[Path] | None, typer.Option(
-        "--holdout", help="Held-out normal log for the skill figures (repeatable; default: "
-                          "every fifth log, or the last 20 % of a single log).")] = None,
+    holdout: HoldoutOption = None,
     horizon: HorizonOption = None,
     keep_unskilled: Annotated[bool, typer.Option(
         "--keep-unskilled", help="Write the model even when no signal has skill (its "
@@ -101,10 +100,7 @@ def score(
 def relate(
     logs: Annotated[list[Path], typer.Argument(help="Normal logs to learn from.")],
     model: ModelToUpdateOption,
-    holdout: Annotated[list[Path] | None, typer.Option(
-        "--holdout", help="Held-out normal log that sets the thresholds (repeatable; "
-                          "default: every fifth log, or the last 20 % of a single log).")
-    ] = None,
+    holdout: HoldoutOption = None,
     output: CopyOutputOption = None,
     profile: ProfileOption = None,
 ) -> None:
