@@ -60,11 +60,12 @@ def _score(diagnosis: "Diagnosis") -> float:
     """The run's largest ratio to a threshold (the alarm's margin): g over the judged
     signals, a start's deviation over its allowance, an actuator's extra effort."""
     ratios = [0.0]
-    if diagnosis.matching is not None:
-        judged = [i for i, n in enumerate(diagnosis.sensor_names)
+    matching = diagnosis.evidence.matching
+    if matching is not None:
+        judged = [i for i, n in enumerate(diagnosis.evidence.sensor_names)
                   if n not in diagnosis.not_judged]
         with np.errstate(invalid="ignore", divide="ignore"):
-            g = diagnosis.matching.g_percent[:, judged] / diagnosis.thresholds[:, judged]
+            g = matching.g_percent[:, judged] / diagnosis.evidence.thresholds[:, judged]
         ratios += [float(np.nanmax(g))] if np.isfinite(g).any() else []
     start = diagnosis.start_check
     if start is not None and start.judged:
@@ -234,9 +235,10 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
         raised = [k for k, v in d.b.items() if v]
         inside = "-"
         if d.detected_at_s is not None:
-            index = int(abs(d.time_s - d.detected_at_s).argmin())
+            index = int(abs(d.evidence.time_s - d.detected_at_s).argmin())
             # Outside operating time the sensors are set aside (NaN on the grid).
-            measured = d.matching.measured[index] if d.matching is not None else []
+            matching = d.evidence.matching
+            measured = matching.measured[index] if matching is not None else []
             inside = "yes" if bool(np.isfinite(measured).any()) else "no"
         lines.append(f"| {name} | {d.verdict} | {', '.join(raised) or '-'} | {inside} | "
                      f"{', '.join(d.not_judged) or '-'} |")

@@ -43,6 +43,24 @@ class SegmentResult:
     components: tuple[str, ...]
 
 
+@dataclass(frozen=True)
+class Evidence:
+    """The time histories behind a verdict, on the model grid: what the reports plot and
+    calibration measures; the verdict itself never needs them."""
+
+    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
+    commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    command_names: tuple[str, ...] = ()
+    sensor_names: tuple[str, ...] = ()
+    matching: Matching | None = None          # SS, SM and g
+    thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+
+    @property
+    def duration_s(self) -> float | None:
+        return float(self.time_s[-1]) if self.time_s.size else None
+
+
 @dataclass
 class Diagnosis:
     log: Path
@@ -68,14 +86,7 @@ class Diagnosis:
     mission_legs: list[dict[str, Any]] = field(default_factory=list)
     degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
     hypotheses: HypothesisTest | None = None
-    # Time histories for reports.
-    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
-    commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-    command_names: tuple[str, ...] = ()
-    sensor_names: tuple[str, ...] = ()
-    matching: Matching | None = None
-    thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-    b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    evidence: "Evidence" = field(default_factory=lambda: Evidence())
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
     not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not

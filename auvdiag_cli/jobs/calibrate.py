@@ -93,13 +93,13 @@ def _mode_key(segment_name: str) -> str:
 
 
 def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
-    assert diagnosis.matching is not None
+    assert diagnosis.evidence.matching is not None
     result: dict[str, list[np.ndarray]] = {}
     for segment in diagnosis.segments:
-        inside = ((diagnosis.time_s >= segment.segment.start_s)
-                  & (diagnosis.time_s <= segment.segment.end_s))
+        inside = ((diagnosis.evidence.time_s >= segment.segment.start_s)
+                  & (diagnosis.evidence.time_s <= segment.segment.end_s))
         result.setdefault(_mode_key(segment.segment.name), []).append(
-            diagnosis.matching.g_percent[inside])
+            diagnosis.evidence.matching.g_percent[inside])
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
 
 
@@ -114,8 +114,8 @@ def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
               sensor_names: tuple[str, ...]) -> dict[str, float]:
     """Held-out error / error on these (in-sample) logs, per signal, at least
     IN_SAMPLE_MIN_WIDENING."""
-    residuals = np.concatenate([d.matching.measured - d.matching.modelled
-                                for d in diagnoses if d.matching is not None])
+    residuals = np.concatenate([d.evidence.matching.measured - d.evidence.matching.modelled
+                                for d in diagnoses if d.evidence.matching is not None])
     heldout = model.metadata.get("heldout_error", {}).get("rms", {})
     widening = {}
     for i, name in enumerate(sensor_names):
@@ -136,7 +136,8 @@ def _evidence(per_log: list[tuple[str, np.ndarray]], column: int) -> SignalEvide
 def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> FaultyCheck:
     """A log with a known fault, diagnosed with the new thresholds: is it still caught?"""
     d = diagnose_ingested(ingest(path, profile), profile, calibrated)
-    ratio = peak(d.matching.g_percent / d.thresholds) if d.matching else 0.0
+    evidence = d.evidence
+    ratio = peak(evidence.matching.g_percent / evidence.thresholds) if evidence.matching else 0.0
     return FaultyCheck(str(path), d.verdict, d.component, d.candidates, round(ratio, 2))
 
 
@@ -188,8 +189,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     raised = widen_thresholds(model, [d.command_check for d in diagnoses], margin)
     starts_raised = raise_thresholds(
         model.metadata.get("start_state") or {},
-        [None if d.matching is None else start_reading(d.commands, d.matching.measured,
-                                                       profile.dt_s) for d in diagnoses], margin)
+        [None if e.matching is None else start_reading(e.commands, e.matching.measured,
+                                                       profile.dt_s)
+         for e in (d.evidence for d in diagnoses)], margin)
     checks = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
               for path in faulty_logs]
     result = CalibrationResult(

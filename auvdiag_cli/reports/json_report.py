@@ -38,7 +38,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "units": diagnosis.sensor_units,
         "detected_at_s": diagnosis.detected_at_s,
         "onset_s": diagnosis.onset_s,
-        "duration_s": round(float(diagnosis.time_s[-1]), 3) if diagnosis.time_s.size else None,
+        "duration_s": _rounded(diagnosis.evidence.duration_s),
         "start_time_utc": utc_text(diagnosis.start_ns),
         "completeness": None if diagnosis.completeness is None
         else diagnosis.completeness.to_dict(),

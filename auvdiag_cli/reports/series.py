@@ -17,17 +17,17 @@ SERIES_SUFFIX = ".series.npz"
 def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
     d = diagnosis
     series: Series = {
-        "time_s": d.time_s,
-        "command_names": np.asarray(d.command_names, dtype=str),
-        "commands": d.commands.astype(np.float32),
-        "sensor_names": np.asarray(d.sensor_names, dtype=str),
-        "thresholds": d.thresholds.astype(np.float32),
-        "b": d.b_series.astype(np.int8),
+        "time_s": d.evidence.time_s,
+        "command_names": np.asarray(d.evidence.command_names, dtype=str),
+        "commands": d.evidence.commands.astype(np.float32),
+        "sensor_names": np.asarray(d.evidence.sensor_names, dtype=str),
+        "thresholds": d.evidence.thresholds.astype(np.float32),
+        "b": d.evidence.b_series.astype(np.int8),
     }
-    if d.matching is not None:
-        series["measured"] = d.matching.measured.astype(np.float32)
-        series["modelled"] = d.matching.modelled.astype(np.float32)
-        series["g_percent"] = d.matching.g_percent.astype(np.float32)
+    if d.evidence.matching is not None:
+        series["measured"] = d.evidence.matching.measured.astype(np.float32)
+        series["modelled"] = d.evidence.matching.modelled.astype(np.float32)
+        series["g_percent"] = d.evidence.matching.g_percent.astype(np.float32)
     waypoints = [point for leg in d.mission_legs for point in leg.get("waypoints", [])]
     if waypoints:
         series["waypoints_m"] = np.asarray(waypoints, dtype=np.float64)
