@@ -29,8 +29,15 @@ def test_sample_log_report_matches_expected_and_truth(expected_path):
     result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
     report = json.loads(result.stdout)
     assert result.exit_code == (1 if expected["verdict"] == "fault" else 0)
-    for key in ("verdict", "component", "candidates", "case", "b", "format"):
+    assert set(report) == set(expected)                 # the schema did not drift
+    for key in ("verdict", "component", "candidates", "case", "b", "format", "duration_s",
+                "segment_source", "not_judged", "completeness"):
         assert report[key] == expected[key], key
+    assert [(s["name"], s["mode"], s["b"]) for s in report["segments"]] == [
+        (s["name"], s["mode"], s["b"]) for s in expected["segments"]]
+    assert report["commands_check"]["named"] == expected["commands_check"]["named"]
+    for key in ("judged", "off"):
+        assert report["start_check"][key] == expected["start_check"][key], key
     for key in ("onset_s", "detected_at_s"):
         assert (report[key] is None) == (expected[key] is None)
         if expected[key] is not None:
