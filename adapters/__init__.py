@@ -39,9 +39,11 @@ class Adapter(Protocol):
 
     def sniff(self, path: Path) -> str | None: ...
 
-    def read(self, path: Path, sources: LogSources) -> Signals: ...
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
+        """``fmt``: what `sniff` said, so that the log is recognised once."""
+        ...
 
-    def inventory(self, path: Path) -> LogInventory: ...
+    def inventory(self, path: Path, fmt: str) -> LogInventory: ...
 
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
@@ -75,10 +77,10 @@ def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:
     if mapping is None:
         raise LogError(path, f"the profile has no [sources.{adapter.family}] mapping for "
                              f"{fmt} logs")
-    return adapter.read(path, mapping)
+    return adapter.read(path, mapping, fmt)
 
 
 def inventory(path: Path) -> tuple[LogInventory, str]:
     """What the log at ``path`` holds, and the profile family that maps its signals."""
-    adapter, _ = _find_adapter(path)
-    return adapter.inventory(path), adapter.family
+    adapter, fmt = _find_adapter(path)
+    return adapter.inventory(path, fmt), adapter.family

@@ -178,7 +178,7 @@ class CsvAdapter:
         return "csv" if named and len(row) == len(header) and any(map(is_number, row)) \
             else None
 
-    def read(self, path: Path, sources: LogSources) -> Signals:
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         if sources.time is None:
             raise LogError(path, "the profile's [sources.csv] does not say which column holds "
                                  "the time (time = { column = ..., unit = ... })")
@@ -213,7 +213,7 @@ class CsvAdapter:
         if lost:
             collector.notes.append("left out: " + "; ".join(lost))
 
-    def inventory(self, path: Path) -> LogInventory:
+    def inventory(self, path: Path, fmt: str) -> LogInventory:
         """Every column with its count of non-empty cells (the time column is not known
         without a profile, so there is no span)."""
         rows = csv_rows(path)

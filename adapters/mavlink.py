@@ -45,7 +45,7 @@ class TlogAdapter:
         (time_us,) = struct.unpack(">Q", head[:8])
         return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
 
-    def read(self, path: Path, sources: LogSources) -> Signals:
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
         index = index_file(path, "tlog", _message_names())
         classes = _message_classes()
@@ -67,7 +67,7 @@ class TlogAdapter:
         return _finish(collector, "tlog", None if first_us is None else first_us * 1000,
                        index, "MAVLink")
 
-    def inventory(self, path: Path) -> LogInventory:
+    def inventory(self, path: Path, fmt: str) -> LogInventory:
         return _inventory("tlog", index_file(path, "tlog", _message_names()), "MAVLink")
 
 
@@ -81,7 +81,7 @@ class DataflashAdapter:
         with path.open("rb") as stream:
             return "bin" if stream.read(3) == DATAFLASH_HEADER else None
 
-    def read(self, path: Path, sources: LogSources) -> Signals:
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
         index = index_file(path, "bin")
         type_ids = {declared.name: type_id for type_id, declared in index.formats.items()}
@@ -96,7 +96,7 @@ class DataflashAdapter:
             _add_timed(collector, topic, times_us, rows, divisors)
         return _finish(collector, "bin", None, index, "DataFlash")
 
-    def inventory(self, path: Path) -> LogInventory:
+    def inventory(self, path: Path, fmt: str) -> LogInventory:
         return _inventory("bin", index_file(path, "bin"), "DataFlash")
 
 

@@ -104,7 +104,7 @@ class McapAdapter:
         with path.open("rb") as stream:
             return "mcap" if stream.read(len(MCAP_MAGIC)) == MCAP_MAGIC else None
 
-    def read(self, path: Path, sources: LogSources) -> Signals:
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         with path.open("rb") as stream:
             summary = _summary(stream, path.stat().st_size)
             if summary is not None and summary.chunk_indexes:
@@ -138,7 +138,7 @@ class McapAdapter:
                                 stats.message_end_time if stats else None, router.topics,
                                 time_ordered=True)
 
-    def inventory(self, path: Path) -> LogInventory:
+    def inventory(self, path: Path, fmt: str) -> LogInventory:
         """From the summary when it has statistics, else by a raw scan (nothing decoded)."""
         with path.open("rb") as stream:
             summary = _summary(stream, path.stat().st_size)

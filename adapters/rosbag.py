@@ -80,10 +80,7 @@ class RosbagAdapter:
             return "ros2-mcap"
         return None
 
-    def read(self, path: Path, sources: LogSources) -> Signals:
-        fmt = self.sniff(path)
-        if fmt is None:
-            raise LogError(path, "not a ROS bag")
+    def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
         with _named_for_rosbags(path, fmt) as readable:
             try:
@@ -100,16 +97,13 @@ class RosbagAdapter:
             finally:
                 reader.close()
 
-    def inventory(self, path: Path) -> LogInventory:
-        fmt = self.sniff(path)
-        if fmt is None:
-            raise LogError(path, "not a ROS bag")
+    def inventory(self, path: Path, fmt: str) -> LogInventory:
         with _named_for_rosbags(path, fmt) as readable:
             try:
                 reader = _open_reader(readable)
             except Exception as error:  # damaged: read what the records still say
                 if fmt == "ros2-mcap":
-                    inventory = McapAdapter().inventory(self._mcap_file(path))
+                    inventory = McapAdapter().inventory(self._mcap_file(path), "mcap")
                     inventory.format = fmt
                     return inventory
                 if fmt == "bag":
