@@ -60,12 +60,12 @@ def _score(diagnosis: "Diagnosis") -> float:
     """The run's largest ratio to a threshold (the alarm's margin): g over the judged
     signals, a start's deviation over its allowance, an actuator's extra effort."""
     ratios = [0.0]
-    matching = diagnosis.evidence.matching
+    matching = diagnosis.histories.matching
     if matching is not None:
-        judged = [i for i, n in enumerate(diagnosis.evidence.sensor_names)
+        judged = [i for i, n in enumerate(diagnosis.histories.sensor_names)
                   if n not in diagnosis.not_judged]
         with np.errstate(invalid="ignore", divide="ignore"):
-            g = matching.g_percent[:, judged] / diagnosis.evidence.thresholds[:, judged]
+            g = matching.g_percent[:, judged] / diagnosis.histories.thresholds[:, judged]
         ratios += [float(np.nanmax(g))] if np.isfinite(g).any() else []
     start = diagnosis.start_check
     if start is not None and start.judged:
@@ -140,7 +140,7 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
               "effort; the AUC is the chance that a faulty run scores above a held-out Normal "
               "one.",
               "", "Commands against the motion, fold 1: "
-              + "; ".join(line.strip() for line in relation_lines(
+              + "; ".join(line.strip().rstrip(":") for line in relation_lines(
                   first.command_relations, profile.command_names)), ""]
     return lines + separability(folder, folds)
 
@@ -235,9 +235,9 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
         raised = [k for k, v in d.b.items() if v]
         inside = "-"
         if d.detected_at_s is not None:
-            index = int(abs(d.evidence.time_s - d.detected_at_s).argmin())
+            index = int(abs(d.histories.time_s - d.detected_at_s).argmin())
             # Outside operating time the sensors are set aside (NaN on the grid).
-            matching = d.evidence.matching
+            matching = d.histories.matching
             measured = matching.measured[index] if matching is not None else []
             inside = "yes" if bool(np.isfinite(measured).any()) else "no"
         lines.append(f"| {name} | {d.verdict} | {', '.join(raised) or '-'} | {inside} | "

@@ -108,7 +108,7 @@ def child_diagnose(path: Path) -> dict:
     total = time.perf_counter() - started
     return {"total_s": total, "imports_s": imported, **{f"{k}_s": v for k, v in stages.items()},
             "rest_s": total - imported - sum(stages.values()), "peak_mb": peak_rss_mb(),
-            "steps": int(result.evidence.time_s.size), "verdict": result.verdict}
+            "steps": int(result.histories.time_s.size), "verdict": result.verdict}
 
 
 def child_raw(path: Path, fmt: str) -> dict:

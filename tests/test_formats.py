@@ -40,10 +40,10 @@ def test_every_format_gives_the_same_diagnosis(make_log, profile, model, referen
     if expected.detected_at_s is not None:
         assert result.detected_at_s == pytest.approx(expected.detected_at_s, abs=0.25)
         assert result.onset_s == pytest.approx(expected.onset_s, abs=0.25)
-    assert len(result.evidence.time_s) == pytest.approx(len(expected.evidence.time_s), abs=1)
-    steps = min(len(result.evidence.time_s), len(expected.evidence.time_s))
-    np.testing.assert_allclose(result.evidence.matching.g_percent[:steps],
-                               expected.evidence.matching.g_percent[:steps],
+    assert len(result.histories.time_s) == pytest.approx(len(expected.histories.time_s), abs=1)
+    steps = min(len(result.histories.time_s), len(expected.histories.time_s))
+    np.testing.assert_allclose(result.histories.matching.g_percent[:steps],
+                               expected.histories.matching.g_percent[:steps],
                                atol=G_TOLERANCE.get(fmt, 1e-6), equal_nan=True)
 
 

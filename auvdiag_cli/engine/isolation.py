@@ -253,17 +253,17 @@ def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,
     """The verdict names one component; a failed sensor gets Substituting Control."""
     diagnosis.component = component
     sensor = next((s for s in profile.sensors if s.component == component), None)
-    evidence = diagnosis.evidence
-    matching = evidence.matching
+    histories = diagnosis.histories
+    matching = histories.matching
     if sensor is not None and diagnosis.onset_s is not None and matching is not None:
         errors = model.metadata.get("heldout_error", {}).get("rms", {})
         diagnosis.substitution = substitute(
-            diagnosis.log, sensor, evidence.sensor_names, evidence.time_s, matching.measured,
+            diagnosis.log, sensor, histories.sensor_names, histories.time_s, matching.measured,
             matching.modelled, diagnosis.onset_s, profile.navigation, errors.get(sensor.name))
         if profile.controller is not None and diagnosis.mission_legs:
             diagnosis.substitution.closed_loop = replay_closed_loop(
-                model, profile.controller, evidence.sensor_names, evidence.command_names,
-                evidence.time_s, evidence.commands, matching.measured, diagnosis.onset_s,
+                model, profile.controller, histories.sensor_names, histories.command_names,
+                histories.time_s, histories.commands, matching.measured, diagnosis.onset_s,
                 diagnosis.mission_legs, profile.dt_s)
 
 

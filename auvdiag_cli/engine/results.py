@@ -44,7 +44,7 @@ class SegmentResult:
 
 
 @dataclass(frozen=True)
-class Evidence:
+class Histories:
     """The time histories behind a verdict, on the model grid: what the reports plot and
     calibration measures; the verdict itself never needs them."""
 
@@ -86,7 +86,7 @@ class Diagnosis:
     mission_legs: list[dict[str, Any]] = field(default_factory=list)
     degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
     hypotheses: HypothesisTest | None = None
-    evidence: "Evidence" = field(default_factory=lambda: Evidence())
+    histories: "Histories" = field(default_factory=lambda: Histories())
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
     not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not

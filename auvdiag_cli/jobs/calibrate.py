@@ -93,13 +93,13 @@ def _mode_key(segment_name: str) -> str:
 
 
 def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
-    assert diagnosis.evidence.matching is not None
+    assert diagnosis.histories.matching is not None
     result: dict[str, list[np.ndarray]] = {}
     for segment in diagnosis.segments:
-        inside = ((diagnosis.evidence.time_s >= segment.segment.start_s)
-                  & (diagnosis.evidence.time_s <= segment.segment.end_s))
+        inside = ((diagnosis.histories.time_s >= segment.segment.start_s)
+                  & (diagnosis.histories.time_s <= segment.segment.end_s))
         result.setdefault(_mode_key(segment.segment.name), []).append(
-            diagnosis.evidence.matching.g_percent[inside])
+            diagnosis.histories.matching.g_percent[inside])
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
 
 
@@ -114,8 +114,8 @@ def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
               sensor_names: tuple[str, ...]) -> dict[str, float]:
     """Held-out error / error on these (in-sample) logs, per signal, at least
     IN_SAMPLE_MIN_WIDENING."""
-    residuals = np.concatenate([d.evidence.matching.measured - d.evidence.matching.modelled
-                                for d in diagnoses if d.evidence.matching is not None])
+    residuals = np.concatenate([d.histories.matching.measured - d.histories.matching.modelled
+                                for d in diagnoses if d.histories.matching is not None])
     heldout = model.metadata.get("heldout_error", {}).get("rms", {})
     widening = {}
     for i, name in enumerate(sensor_names):
@@ -136,8 +136,8 @@ def _evidence(per_log: list[tuple[str, np.ndarray]], column: int) -> SignalEvide
 def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> FaultyCheck:
     """A log with a known fault, diagnosed with the new thresholds: is it still caught?"""
     d = diagnose_ingested(ingest(path, profile), profile, calibrated)
-    evidence = d.evidence
-    ratio = peak(evidence.matching.g_percent / evidence.thresholds) if evidence.matching else 0.0
+    histories = d.histories
+    ratio = peak(histories.matching.g_percent / histories.thresholds) if histories.matching else 0.0
     return FaultyCheck(str(path), d.verdict, d.component, d.candidates, round(ratio, 2))
 
 
@@ -191,7 +191,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         model.metadata.get("start_state") or {},
         [None if e.matching is None else start_reading(e.commands, e.matching.measured,
                                                        profile.dt_s)
-         for e in (d.evidence for d in diagnoses)], margin)
+         for e in (d.histories for d in diagnoses)], margin)
     checks = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
               for path in faulty_logs]
     result = CalibrationResult(

@@ -38,7 +38,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "units": diagnosis.sensor_units,
         "detected_at_s": diagnosis.detected_at_s,
         "onset_s": diagnosis.onset_s,
-        "duration_s": _seconds(diagnosis.evidence.duration_s),
+        "duration_s": _seconds(diagnosis.histories.duration_s),
         "start_time_utc": utc_text(diagnosis.start_ns),
         "completeness": None if diagnosis.completeness is None
         else diagnosis.completeness.to_dict(),

@@ -17,17 +17,17 @@ SERIES_SUFFIX = ".series.npz"
 def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
     d = diagnosis
     series: Series = {
-        "time_s": d.evidence.time_s,
-        "command_names": np.asarray(d.evidence.command_names, dtype=str),
-        "commands": d.evidence.commands.astype(np.float32),
-        "sensor_names": np.asarray(d.evidence.sensor_names, dtype=str),
-        "thresholds": d.evidence.thresholds.astype(np.float32),
-        "b": d.evidence.b_series.astype(np.int8),
+        "time_s": d.histories.time_s,
+        "command_names": np.asarray(d.histories.command_names, dtype=str),
+        "commands": d.histories.commands.astype(np.float32),
+        "sensor_names": np.asarray(d.histories.sensor_names, dtype=str),
+        "thresholds": d.histories.thresholds.astype(np.float32),
+        "b": d.histories.b_series.astype(np.int8),
     }
-    if d.evidence.matching is not None:
-        series["measured"] = d.evidence.matching.measured.astype(np.float32)
-        series["modelled"] = d.evidence.matching.modelled.astype(np.float32)
-        series["g_percent"] = d.evidence.matching.g_percent.astype(np.float32)
+    if d.histories.matching is not None:
+        series["measured"] = d.histories.matching.measured.astype(np.float32)
+        series["modelled"] = d.histories.matching.modelled.astype(np.float32)
+        series["g_percent"] = d.histories.matching.g_percent.astype(np.float32)
     waypoints = [point for leg in d.mission_legs for point in leg.get("waypoints", [])]
     if waypoints:
         series["waypoints_m"] = np.asarray(waypoints, dtype=np.float64)

@@ -20,7 +20,7 @@ def _components(names: list[str]) -> str:
 
 def summary_lines(diagnosis: Diagnosis) -> list[str]:
     d = diagnosis
-    duration = d.evidence.duration_s or 0.0
+    duration = d.histories.duration_s or 0.0
     lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
     if d.completeness is not None and not d.completeness.complete:
         lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
