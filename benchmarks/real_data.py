@@ -140,7 +140,7 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
               "effort; the AUC is the chance that a faulty run scores above a held-out Normal "
               "one.",
               "", "Commands against the motion, fold 1: "
-              + "; ".join(line.strip().rstrip(":") for line in relation_lines(
+              + "; ".join(" ".join(line.split()).rstrip(":") for line in relation_lines(
                   first.command_relations, profile.command_names)), ""]
     return lines + separability(folder, folds)
 
