@@ -11,6 +11,7 @@ from adapters.mavlink import DataflashAdapter, TlogAdapter
 from adapters.mcap import McapAdapter
 from adapters.rosbag import RosbagAdapter
 from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSource, Signals
+from adapters.ulog import UlogAdapter
 
 __all__ = [
     "FieldSource",
@@ -32,7 +33,8 @@ class Adapter(Protocol):
 
     @property
     def family(self) -> str:
-        """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash`` or ``csv``."""
+        """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash``, ``ulog`` or
+        ``csv``."""
 
     @property
     def formats(self) -> tuple[str, ...]: ...
@@ -49,7 +51,7 @@ class Adapter(Protocol):
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
 # CSV last: it is recognised by being text with a header, which the binary formats are not.
 ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(), McapAdapter(), TlogAdapter(),
-                                 DataflashAdapter(), CsvAdapter())
+                                 DataflashAdapter(), UlogAdapter(), CsvAdapter())
 
 
 def _find_adapter(path: Path) -> tuple[Adapter, str]:

@@ -16,8 +16,9 @@ from adapters.timebase import MAX_TIME_NS, spikes
 
 # How far a container's recorded start or end may lie outside the data it holds.
 MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
-# Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one).
-INSTANCE_FIELDS = ("I", "Instance")
+# Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one; a
+# ULog topic's multi id is read as `instance`).
+INSTANCE_FIELDS = ("I", "Instance", "instance")
 # A topic's messages as columns: field path → one value per message.
 ColumnSource = Callable[[str], np.ndarray]
 

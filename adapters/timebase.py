@@ -11,6 +11,9 @@ MAX_TIME_NS = 1 << 62
 # they agree with each other: one corrupted record, not a clock jump or a gap.
 SPIKE_TOLERANCE_NS = 1_000_000_000
 END_SPIKE_RATIO = 100
+# Neighbours a gap apart (a damaged stretch was skipped) still unmask a time that lies
+# outside both of them, this many times further away than they are from each other.
+GAP_SPIKE_RATIO = 10
 
 
 def plausible_us(times_us: np.ndarray) -> np.ndarray:
@@ -20,7 +23,8 @@ def plausible_us(times_us: np.ndarray) -> np.ndarray:
 
 def spikes(times_ns: np.ndarray, tolerance_ns: int = SPIKE_TOLERANCE_NS) -> np.ndarray:
     """Mask of isolated times, in stored order, that are far from both neighbours while the
-    neighbours are close to each other (at the ends: far from the next, which is close to
+    neighbours are close to each other, or lie outside both far beyond the gap between
+    them (at the ends: far from the next, which is close to
     the one after)."""
     times = np.asarray(times_ns, dtype=np.int64)
     mask = np.zeros(times.size, bool)
@@ -30,7 +34,13 @@ def spikes(times_ns: np.ndarray, tolerance_ns: int = SPIKE_TOLERANCE_NS) -> np.n
     as_float = times.astype(np.float64)
     step = np.abs(np.diff(as_float))
     far_before, far_after = step[:-1] > tolerance_ns, step[1:] > tolerance_ns
-    neighbours_agree = np.abs(as_float[2:] - as_float[:-2]) <= tolerance_ns
+    neighbour_gap = np.abs(as_float[2:] - as_float[:-2])
+    middle = as_float[1:-1]
+    outside = (middle > np.maximum(as_float[:-2], as_float[2:])) | (
+        middle < np.minimum(as_float[:-2], as_float[2:]))
+    nearest = np.minimum(step[:-1], step[1:])
+    neighbours_agree = (neighbour_gap <= tolerance_ns) | (
+        outside & (nearest > GAP_SPIKE_RATIO * neighbour_gap + tolerance_ns))
     mask[1:-1] = far_before & far_after & neighbours_agree
     # At the ends one neighbour must do: far from it, and far beyond the usual spacing
     # (a 1 Hz heartbeat's first gap of 1.05 s is no spike).

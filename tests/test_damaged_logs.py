@@ -9,7 +9,7 @@ from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
 DAMAGE_WORDS = ("cut short", "damaged", "index unusable")
 runner = CliRunner()
 

@@ -7,10 +7,10 @@ from adapters import LogError, detect_format, read_log
 from auvdiag_cli.engine.diagnosis import diagnose
 from models.store import load_model
 
-ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]
+ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
 # MAVLink and DataFlash carry thruster commands as integer PWM µs (1/400 of full command)
-# and sensor values as float32; ROS formats carry float64.
-G_TOLERANCE = {"tlog": 0.5, "bin": 0.5}
+# and sensor values as float32 (ULog: float32 throughout); ROS formats carry float64.
+G_TOLERANCE = {"tlog": 0.5, "bin": 0.5, "ulog": 0.5}
 
 
 @pytest.fixture(scope="module")

@@ -28,6 +28,7 @@ class AuditOptions:
     model: Path | None = None
     jobs: int = 1
     scheduler: str | None = None
+    mcap: bool = False           # each diagnosis also as an MCAP beside its JSON
 
 
 @dataclass
@@ -86,7 +87,7 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
     inputs, model_dir = _inputs(options)
     options.output.mkdir(parents=True, exist_ok=True)
     found = discover(options.paths, exclude=[options.output])
-    store = ResultStore(options.output, inputs)
+    store = ResultStore(options.output, inputs, options.mcap)
     result = AuditResult(skipped=found.skipped, companions=len(found.companions))
     done: dict[str, dict[str, Any]] = {}
     digests: dict[str, str] = {}

@@ -12,6 +12,7 @@ from auvdiag_cli import __version__
 from auvdiag_cli.audit.worker import AuditOutcome
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.files import write_json
+from auvdiag_cli.reports.mcap_export import write_diagnosis_mcap
 from auvdiag_cli.reports.series import save_series, series_path
 
 RESULTS_FOLDER = "logs"
@@ -39,10 +40,11 @@ class Inputs:
 
 
 class ResultStore:
-    def __init__(self, output: Path, inputs: Inputs) -> None:
+    def __init__(self, output: Path, inputs: Inputs, mcap: bool = False) -> None:
         self.folder = output / RESULTS_FOLDER
         self.folder.mkdir(parents=True, exist_ok=True)
         self.inputs = inputs
+        self.mcap = mcap     # also write each diagnosis as an MCAP beside its JSON
 
     def path_for(self, log: Path) -> Path:
         """A readable, collision-free name: the log's name and a hash of its full path."""
@@ -61,6 +63,8 @@ class ResultStore:
         if any(stamp.get(key) != wanted[key] for key in ("log_sha256", "model_sha256",
                                                          "profile_sha256")):
             return None
+        if self.mcap and not record.get("error") and not path.with_suffix(".mcap").is_file():
+            return None
         return record
 
     def save(self, outcome: AuditOutcome, log_sha256: str) -> dict[str, Any]:
@@ -72,6 +76,9 @@ class ResultStore:
             sidecar = series_path(path)
             save_series(outcome.series, sidecar)
             record["series_file"] = sidecar.name
+            if self.mcap and outcome.document is not None and outcome.final:
+                write_diagnosis_mcap(outcome.document, outcome.series,
+                                     path.with_suffix(".mcap"))
         record["audit"] = {**self.inputs.stamp(log_sha256), "seconds": outcome.seconds,
                            "peak_rss_mb": outcome.peak_rss_mb, "result_file": path.name}
         if outcome.final:

@@ -41,6 +41,11 @@ def diagnose(
     pdf_path: Annotated[Path | None, typer.Option(
         "--pdf", help="Write the PDF report (summary page, time histories, Substituting "
                       "Control) to PATH.", dir_okay=False)] = None,
+    mcap_path: Annotated[Path | None, typer.Option(
+        "--mcap", help="Write the diagnosis as an MCAP file (sensor, model, g, threshold, b "
+                       "per signal; commands; segments; onset, detection and verdict as "
+                       "events) on the log's own clock, to open beside the log in Foxglove "
+                       "or PlotJuggler.", dir_okay=False)] = None,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No terminal summary.")] = False,
     mission: Annotated[Path | None, typer.Option(
         "--mission", help="Mission plan JSON for the closed-loop Substituting Control replay "
@@ -69,17 +74,27 @@ def diagnose(
         vehicle = load_profile(profile)
         result = run_diagnosis(log, vehicle, load_model(model, vehicle.name), companions or (),
                                mission)
-        document, series = diagnosis_to_dict(result), series_from_diagnosis(result)
-        if json_path == "-":
-            typer.echo(json.dumps(document, indent=2))
-        elif json_path is not None:
-            _save_report(document, series, Path(json_path))
-        if pdf_path is not None:
-            _render_pdf(document, series, pdf_path)
+        _write_reports(diagnosis_to_dict(result), series_from_diagnosis(result), json_path,
+                       pdf_path, mcap_path)
         if not quiet:
             for line in summary_lines(result):
                 typer.echo(line, err=json_path == "-")
     raise typer.Exit(EXIT_FAULT if result.verdict == Verdict.FAULT else EXIT_NORMAL)
+
+
+def _write_reports(document: dict[str, Any], series: "Series", json_path: str | None,
+                   pdf_path: Path | None, mcap_path: Path | None) -> None:
+    """The JSON (to a file or standard output), the PDF and the MCAP asked for."""
+    if json_path == "-":
+        typer.echo(json.dumps(document, indent=2))
+    elif json_path is not None:
+        _save_report(document, series, Path(json_path))
+    if pdf_path is not None:
+        _render_pdf(document, series, pdf_path)
+    if mcap_path is not None:
+        from auvdiag_cli.reports.mcap_export import write_diagnosis_mcap
+
+        write_diagnosis_mcap(document, series, mcap_path)
 
 
 def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:
@@ -192,6 +207,9 @@ def audit(
         "--fail-on", help="What makes the exit status non-zero: any (faults: 1, logs not "
                           "analysable: 2), damaged (as any, and a log analysed only up to "
                           "damage also gives 2), fault, error, or none.")] = FailOn.ANY,
+    mcap: Annotated[bool, typer.Option(
+        "--mcap", help="Also write each log's diagnosis as an MCAP (OUTPUT/logs/NAME.mcap) "
+                       "to open beside the log in Foxglove or PlotJuggler.")] = False,
 ) -> None:
     """Diagnose every log under PATHS and write one table and a fleet summary.
 
@@ -207,7 +225,7 @@ def audit(
     from auvdiag_cli.audit.progress import reporter_for_stderr
 
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
-    options = AuditOptions(paths, output, profile, model, jobs, scheduler)
+    options = AuditOptions(paths, output, profile, model, jobs, scheduler, mcap)
     with user_errors(output):
         result = run_audit(options, reporter_for_stderr())
         render_fleet_report(result.records, result.skipped, output / "audit.pdf",

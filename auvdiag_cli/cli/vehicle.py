@@ -26,7 +26,7 @@ def simulate(
     log_format: Annotated[str, typer.Option(
         "--format", help="Log format: bag (ROS 1), db3 (ROS 2, sqlite3), ros2-mcap (ROS 2, "
                          "mcap storage), mcap (standalone), tlog (MAVLink), bin (DataFlash), "
-                         "csv (the profile's [sources.csv] columns)."
+                         "ulog (PX4), csv (the profile's [sources.csv] columns)."
     )] = "ros2-mcap",
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
     fault_at: Annotated[float | None, typer.Option(

@@ -18,6 +18,8 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
     d = diagnosis
     series: Series = {
         "time_s": d.histories.time_s,
+        # The log's own clock: time_s counts from here (the MCAP export needs it).
+        "start_ns": np.asarray(d.start_ns, dtype=np.int64),
         "command_names": np.asarray(d.histories.command_names, dtype=str),
         "commands": d.histories.commands.astype(np.float32),
         "sensor_names": np.asarray(d.histories.sensor_names, dtype=str),
