@@ -103,7 +103,8 @@ def test_fleet_pdf_lists_problems_and_skipped_files(full_audit):
     assert "notes.txt" in summary                       # the unrelated file, listed
     assert "paper-normal.truth.json" not in summary     # a log's companion, only counted
     assert "1 files named after a log" in summary
-    assert "Verdicts by vehicle and date" in reader.pages[-1].extract_text()
+    assert "Verdicts by vehicle and date" in reader.pages[-2].extract_text()
+    assert "Health over time" in reader.pages[-1].extract_text()
 
 
 def test_fail_on_chooses_what_counts(full_audit, fleet):

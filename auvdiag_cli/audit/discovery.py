@@ -28,14 +28,22 @@ def _set_companions_apart(found: Discovery) -> None:
     stems: dict[Path, set[str]] = {}
     for log in found.logs:
         stems.setdefault(log.parent.resolve(), set()).add(log.stem)
+    def named_after_a_log(path: Path) -> bool:
+        beside = stems.get(path.parent.resolve(), set()) - {path.stem}
+        return any(path.name.startswith(f"{stem}.") for stem in beside)
+
     unrelated = []
     for path, reason in found.skipped:
-        beside = stems.get(path.parent.resolve(), set())
-        if any(path.name.startswith(f"{stem}.") for stem in beside):
+        if named_after_a_log(path):
             found.companions.append(path)
         else:
             unrelated.append((path, reason))
     found.skipped = unrelated
+    # A companion can itself read as a log (a truth table is a CSV with a header): NAME.x.csv
+    # beside NAME.mcap is the log's, not a dive of its own.
+    readable_companions = [log for log in found.logs if named_after_a_log(log)]
+    found.companions += readable_companions
+    found.logs = [log for log in found.logs if log not in readable_companions]
 
 
 def _expand(pattern: str) -> list[Path]:

@@ -1,5 +1,6 @@
-"""The fleet summary of an audit: totals and problem logs in words, then verdicts by vehicle
-and date, faults by component, a timeline, and the worst g of each log."""
+"""The fleet summary of an audit: totals, problem logs and the trend test in words, then
+verdicts by vehicle and date, faults by component, a timeline, the worst g of each log, and
+each vehicle's margin history."""
 
 from collections import Counter
 from collections.abc import Sequence
@@ -7,6 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from auvdiag_cli.audit.table import flatten
+from auvdiag_cli.audit.trend import fleet_trend, trend_lines
+from auvdiag_cli.audit.trend_pdf import trend_page
 from auvdiag_cli.reports.pdf.style import COLOURS, new_page, pdf_document
 from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
 
@@ -154,12 +157,20 @@ def render_fleet_report(records: Sequence[dict[str, Any]], skipped: Sequence[tup
                         target: Path, companions: int = 0, interrupted: bool = False) -> int:
     rows = sorted((flatten(r) for r in records), key=lambda r: str(r["log"]))
     title = "auvdiag fleet audit"
+    trend = fleet_trend(records)
+    text = summary_lines(rows, skipped, companions, interrupted) + heading("Health over time")
+    for line in trend_lines(trend):
+        text += paragraph(line, family="monospace", size=7.5, colour=COLOURS["fault"]
+                          if "SHRINKING" in line else COLOURS["text"])
     with pdf_document(target, title, f"Audit of {len(rows)} logs") as pdf:
-        pages = write_text_pages(pdf, summary_lines(rows, skipped, companions, interrupted), title,
-                                 "Fleet audit")
+        pages = write_text_pages(pdf, text, title, "Fleet audit")
         if rows:
             figure = charts_page(rows)
             figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])
             pdf.savefig(figure)
+            pages += 1
+        health = trend_page(records, trend)
+        if health is not None:
+            pdf.savefig(health)
             pages += 1
     return pages
