@@ -12,13 +12,16 @@ from numba import njit
 
 @njit(cache=True, fastmath={"reassoc", "contract"})
 def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarray,
-                   initial_states: np.ndarray, states_to_gates: np.ndarray,
-                   hidden_to_gates: np.ndarray, hidden_bias: np.ndarray,
-                   hidden_to_head: np.ndarray, states_to_head: np.ndarray,
-                   head_to_out: np.ndarray, out_bias: np.ndarray, delta_ratio: np.float32,
-                   states: np.ndarray) -> None:
-    """Fill ``states`` (batch, steps, n_s). Weights are transposed (outputs × inputs) so
-    every dot product reads contiguous memory."""
+                   initial_states: np.ndarray, hidden_states: np.ndarray,
+                   states_to_gates: np.ndarray, hidden_to_gates: np.ndarray,
+                   hidden_bias: np.ndarray, hidden_to_head: np.ndarray,
+                   states_to_head: np.ndarray, head_to_out: np.ndarray, out_bias: np.ndarray,
+                   delta_ratio: np.float32, states: np.ndarray) -> None:
+    """Advance ``batch`` rollouts over ``steps`` commands: ``states`` (batch, steps, n_s)
+    gets the state after each step; ``hidden_states`` (batch, h) comes in as the hidden
+    state before the first step and leaves as the one after the last, so a long replay runs
+    in chunks. Weights are transposed (outputs × inputs) so every dot product reads
+    contiguous memory."""
     batch, steps, three_h = gates_from_commands.shape
     h = three_h // 3
     n_s = initial_states.shape[1]
@@ -28,10 +31,9 @@ def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarr
     layer = np.empty(h, np.float32)
     state = np.empty(n_s, np.float32)
     for b in range(batch):
-        hidden[:] = 0.0
+        hidden[:] = hidden_states[b]
         state[:] = initial_states[b]
-        states[b, 0] = state
-        for k in range(steps - 1):
+        for k in range(steps):
             for j in range(three_h):
                 acc = gates_from_commands[b, k, j]
                 for i in range(n_s):
@@ -58,4 +60,5 @@ def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarr
                 for i in range(h):
                     acc += head_to_out[j, i] * layer[i]
                 state[j] = state[j] + delta_ratio * acc
-            states[b, k + 1] = state
+            states[b, k] = state
+        hidden_states[b] = hidden

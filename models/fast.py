@@ -22,6 +22,10 @@ Engine = Literal["auto", "numpy", "compiled"]
 # Loading the compiled kernel costs about 0.4 s a process; the NumPy loop about 20 µs a
 # step. Below this many steps the NumPy loop is done before numba would have loaded.
 COMPILED_PAYS_FROM_STEPS = 20_000
+# The commands' contributions to the gates are held for this many values at once (16 MB of
+# float32), however many rollouts and steps a replay has; at least CHUNK_STEPS_MIN steps.
+CHUNK_VALUES = 4 << 20
+CHUNK_STEPS_MIN = 16
 
 
 @cache
@@ -84,41 +88,50 @@ class FastDynamics:
     def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
                 engine: Engine = "auto") -> np.ndarray:
         """Free-run ``batch`` rollouts in normalised units: commands (batch, steps, n_c),
-        initial states (batch, n_s) → states x̂(0 … steps−1), (batch, steps, n_s)."""
+        initial states (batch, n_s) → states x̂(0 … steps−1), (batch, steps, n_s).
+
+        What the commands contribute to the gates is worked out a chunk of steps at a time
+        (the hidden state carried across), so memory stays bounded however long the log."""
         commands = commands.astype(np.float32, copy=False)
         batch, steps, _ = commands.shape
-        # Everything the commands contribute, for every step at once.
-        gates_from_commands = commands @ self.input_commands + self.input_bias
-        head_from_commands = commands @ self.head_commands + self.head_bias
         states = np.empty((batch, steps, self.out_bias.size), np.float32)
-        state = initial_states.astype(np.float32)
-        if _use_compiled(engine, steps):
-            self._compiled_rollout(gates_from_commands, head_from_commands, state, states)
-            return states
+        states[:, 0] = initial_states.astype(np.float32)
         hidden = np.zeros((batch, self.hidden), np.float32)
-        states[:, 0] = state
-        for k in range(steps - 1):
-            state, hidden = self.advance(gates_from_commands[:, k], head_from_commands[:, k],
-                                         state, hidden)
-            states[:, k + 1] = state
+        compiled = _use_compiled(engine, steps)
+        chunk_steps = max(CHUNK_STEPS_MIN, CHUNK_VALUES // (batch * self.input_bias.size))
+        for first in range(0, steps - 1, chunk_steps):
+            last = min(first + chunk_steps, steps - 1)      # steps first … last − 1 advance
+            chunk = commands[:, first:last]
+            gates = chunk @ self.input_commands + self.input_bias
+            head = chunk @ self.head_commands + self.head_bias
+            if compiled:
+                self._compiled_rollout(gates, head, states[:, first], hidden,
+                                       states[:, first + 1:last + 1])
+                continue
+            state = states[:, first]
+            for k in range(last - first):
+                state, hidden = self.advance(gates[:, k], head[:, k], state, hidden)
+                states[:, first + k + 1] = state
         return states
 
     def _compiled_rollout(self, gates_from_commands: np.ndarray,
                           head_from_commands: np.ndarray, initial_states: np.ndarray,
-                          states: np.ndarray) -> None:
+                          hidden: np.ndarray, states: np.ndarray) -> None:
         from models.compiled import rollout_kernel
 
         def outputs_by_inputs(weights: np.ndarray) -> np.ndarray:
             return np.ascontiguousarray(weights.T)
 
+        out = np.empty(states.shape, np.float32)
         rollout_kernel(np.ascontiguousarray(gates_from_commands),
                        np.ascontiguousarray(head_from_commands),
-                       np.ascontiguousarray(initial_states),
+                       np.ascontiguousarray(initial_states), hidden,
                        outputs_by_inputs(self.input_states),
                        outputs_by_inputs(self.hidden_weights), self.hidden_bias,
                        outputs_by_inputs(self.head_hidden), outputs_by_inputs(self.head_states),
                        outputs_by_inputs(self.out_weights), self.out_bias,
-                       np.float32(self.delta_ratio), states)
+                       np.float32(self.delta_ratio), out)
+        states[:] = out
 
     def advance(self, gates_from_command: np.ndarray, head_from_command: np.ndarray,
                 state: np.ndarray, hidden: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

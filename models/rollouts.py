@@ -87,16 +87,37 @@ def start_states(sensors: np.ndarray, plan: Sequence[Rollout]) -> np.ndarray:
 def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
                 plan: Sequence[Rollout], command_scale: np.ndarray,
                 state_scale: np.ndarray) -> np.ndarray:
-    """Every rollout of ``plan`` advanced together (in normalised units); the prediction in
-    physical units, NaN where nothing is predicted."""
+    """Every rollout of ``plan`` advanced (in normalised units), in batches of rollouts of
+    like length so that padding never doubles the memory; the prediction in physical units,
+    NaN where nothing is predicted."""
     modelled = np.full(sensors.shape, np.nan)
-    if not plan:
-        return modelled
-    longest = max(r.end - r.start for r in plan)
-    batch = np.stack([np.pad(commands[r.start:r.end], ((0, longest - (r.end - r.start)), (0, 0)),
-                             mode="edge") for r in plan])
-    starts = start_states(sensors, plan)
-    states = dynamics.rollout(batch / command_scale, starts / state_scale)
-    for row, r in enumerate(plan):
-        modelled[r.start:r.end] = states[row, :r.end - r.start].astype(np.float64) * state_scale
+    starts = start_states(sensors, plan) / state_scale if plan else np.empty((0, 0))
+    for rows in _batches_of_like_length(plan):
+        longest = max(plan[row].end - plan[row].start for row in rows)
+        batch = np.stack([np.pad(commands[plan[row].start:plan[row].end],
+                                 ((0, longest - (plan[row].end - plan[row].start)), (0, 0)),
+                                 mode="edge") for row in rows]) / command_scale
+        states = dynamics.rollout(batch.astype(np.float32), starts[rows])
+        for k, row in enumerate(rows):
+            r = plan[row]
+            modelled[r.start:r.end] = states[k, :r.end - r.start].astype(np.float64) \
+                * state_scale
     return modelled
+
+
+def _batches_of_like_length(plan: Sequence[Rollout]) -> list[list[int]]:
+    """Rollout indices, longest first, grouped while a group padded to its longest holds at
+    most twice its own steps."""
+    order = sorted(range(len(plan)), key=lambda i: plan[i].start - plan[i].end)
+    batches: list[list[int]] = []
+    for index in order:
+        length = plan[index].end - plan[index].start
+        if batches:
+            group = batches[-1]
+            longest = plan[group[0]].end - plan[group[0]].start
+            held = sum(plan[i].end - plan[i].start for i in group) + length
+            if longest * (len(group) + 1) <= 2 * held:
+                group.append(index)
+                continue
+        batches.append([index])
+    return batches

@@ -66,3 +66,19 @@ def test_long_replays_take_the_compiled_loop_and_short_ones_need_not(monkeypatch
     assert not fast._use_compiled("auto", 600)
     assert fast._use_compiled("auto", fast.COMPILED_PAYS_FROM_STEPS)
     assert not fast._use_compiled("numpy", 10**6)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_replay_run_in_chunks_is_the_same_replay(monkeypatch, engine):
+    """Long replays work out the commands' contributions a chunk at a time (bounded memory):
+    the hidden state carried across chunk edges must make it the very same replay."""
+    import models.fast
+
+    model = load_model()
+    rng = np.random.default_rng(6)
+    commands = np.repeat(rng.uniform(-0.8, 0.8, (50, 2)), 20, axis=0)
+    start = rng.normal(0.0, 0.05, 2)
+    reference = replay(model.network, model.normaliser, commands, start)
+    monkeypatch.setattr(models.fast, "CHUNK_VALUES", 7 * 3 * model.fast.hidden)
+    chunked = fast_replay(model.fast, model.normaliser, commands, start, engine)
+    np.testing.assert_allclose(chunked, reference, rtol=0, atol=1e-6)
