@@ -33,6 +33,13 @@ def compiled_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
+def expect_steps(steps: int) -> None:
+    """Say that about ``steps`` replay steps are coming in several calls (rollouts batched
+    by length): the compiled loop is loaded now if they pay for it together."""
+    if compiled_available() and steps >= COMPILED_PAYS_FROM_STEPS:
+        importlib.import_module("models.compiled")
+
+
 def _use_compiled(engine: Engine, steps: int) -> bool:
     if engine == "numpy":
         return False

@@ -18,6 +18,8 @@ from typing import Protocol
 
 import numpy as np
 
+from models.fast import expect_steps
+
 START_HALF_WIDTH = 2          # a start state is the median of 5 samples
 
 
@@ -92,7 +94,9 @@ def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
     NaN where nothing is predicted."""
     modelled = np.full(sensors.shape, np.nan)
     starts = start_states(sensors, plan) / state_scale if plan else np.empty((0, 0))
-    for rows in _batches_of_like_length(plan):
+    batches = _batches_of_like_length(plan)
+    expect_steps(sum(plan[rows[0]].end - plan[rows[0]].start for rows in batches))
+    for rows in batches:
         longest = max(plan[row].end - plan[row].start for row in rows)
         batch = np.stack([np.pad(commands[plan[row].start:plan[row].end],
                                  ((0, longest - (plan[row].end - plan[row].start)), (0, 0)),
