@@ -64,3 +64,17 @@ def profile_without(tmp_path: Path) -> Callable[[str, str], Path]:
         return path
 
     return cut
+
+
+# Files that train models or simulate fleets, slowest first: run first, they let the two
+# workers finish together (longest job first) instead of one waiting on a late start.
+SLOWEST_FIRST = ("test_startup.py", "test_model.py", "test_fuzz.py", "test_trend.py",
+                 "test_calibrate.py", "test_audit.py", "test_skill.py")
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    def rank(item: pytest.Item) -> int:
+        name = item.path.name
+        return SLOWEST_FIRST.index(name) if name in SLOWEST_FIRST else len(SLOWEST_FIRST)
+
+    items.sort(key=rank)   # stable: the order inside a file is kept
