@@ -40,8 +40,10 @@ def _set_companions_apart(found: Discovery) -> None:
             unrelated.append((path, reason))
     found.skipped = unrelated
     # A companion can itself read as a log (a truth table is a CSV with a header): NAME.x.csv
-    # beside NAME.mcap is the log's, not a dive of its own.
-    readable_companions = [log for log in found.logs if named_after_a_log(log)]
+    # beside NAME.mcap is the log's, not a dive of its own. Binary logs (run.1.bin beside
+    # run.bin) stay dives.
+    readable_companions = [log for log in found.logs if log.suffix.lower() == ".csv"
+                           and named_after_a_log(log)]
     found.companions += readable_companions
     found.logs = [log for log in found.logs if log not in readable_companions]
 

@@ -66,6 +66,12 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
     }
 
 
+def named_components(document: dict[str, Any]) -> str:
+    """What a report blames, in words: its component, or its candidates joined by "or"
+    ("" when it names none)."""
+    return str(document.get("component") or " or ".join(document.get("candidates") or []))
+
+
 def _seconds(value: float | None) -> float | None:
     return None if value is None else round(value, 3)
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.reports.json_report import named_components
 from auvdiag_cli.reports.series import Series
 
 TOPIC_PREFIX = "/auvdiag"
@@ -97,7 +98,7 @@ def _events(document: dict[str, Any]) -> Iterator[tuple[float, int, str]]:
         found.append((document["onset_s"], LOG_LEVEL_WARNING,
                       "fault onset (estimated): the residual starts to grow"))
     if document.get("detected_at_s") is not None:
-        named = document.get("component") or " or ".join(document.get("candidates") or [])
+        named = named_components(document)
         found.append((document["detected_at_s"], LOG_LEVEL_WARNING,
                       f"fault detected: {named or 'component not identified'}"))
     yield from sorted(found)
@@ -105,7 +106,7 @@ def _events(document: dict[str, Any]) -> Iterator[tuple[float, int, str]]:
 
 def verdict_text(document: dict[str, Any]) -> str:
     verdict = str(document["verdict"])
-    named = document.get("component") or " or ".join(document.get("candidates") or [])
+    named = named_components(document)
     return verdict.upper() + (f": {named}" if verdict == "fault" and named else "")
 
 

@@ -4,6 +4,7 @@ saved report can be drawn again without the log or the model)."""
 from pathlib import Path
 from typing import Any
 
+from auvdiag_cli.reports.json_report import named_components
 from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
 from auvdiag_cli.reports.pdf.plots import (
     commands_page,
@@ -23,7 +24,7 @@ def _banner(document: dict[str, Any]) -> Line:
     verdict = document["verdict"]
     text = VERDICT_TITLES.get(verdict, verdict.upper())
     if verdict == "fault":
-        named = document.get("component") or " or ".join(document.get("candidates") or [])
+        named = named_components(document)
         text += f": {named.replace('_', ' ') or 'component not identified'}"
     return Line(text, size=20, bold=True, banner=COLOURS.get(verdict, COLOURS["error"]))
 
