@@ -106,6 +106,12 @@ class SignalCollector:
         self.impossible_times += 1
         return False
 
+    def accepts_times(self, times_ns: np.ndarray) -> np.ndarray:
+        """`accepts_time` for many stored times at once: which to keep."""
+        keep = (times_ns >= 0) & (times_ns < MAX_TIME_NS)
+        self.impossible_times += int(keep.size - np.count_nonzero(keep))
+        return keep
+
     def damaged(self, reason: str, at_byte: int | None = None) -> None:
         """The file could be read only up to here (the first damage found is kept)."""
         if self.damage is None:

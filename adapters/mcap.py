@@ -4,18 +4,19 @@ chunks holding wanted channels are read straight from their index; a file withou
 specification makes summaries, indexes and statistics optional) or a damaged file is read
 front to back, up to the damage."""
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, BinaryIO
 
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
+from adapters.mcap_index import RECORD_HEAD, IndexUnusable, chunk_data, locate, read_index_entries
 from adapters.mcap_records import (
     MCAP_MAGIC,
     ChannelRouter,
     Progress,
-    chunk_records,
+    decompressed,
+    records_in,
     schema_fields,
     walk_records,
 )
@@ -127,11 +128,9 @@ class McapAdapter:
         missing = collector.missing_topics(set(router.topics))
         if missing:
             raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
-        wanted = set(router.routes)
         # File order, not a merge by log time (the merge costs more than decoding);
         # resampling sorts a series if its messages were stored out of order.
-        for record in _wanted_chunks(stream, summary, wanted):
-            router.take(record)
+        _read_wanted_chunks(stream, summary, router)
         router.flush()
         stats = summary.statistics
         return collector.finish("mcap", stats.message_start_time if stats else None,
@@ -155,17 +154,30 @@ class McapAdapter:
             return _scanned_inventory(stream, path.stat().st_size)
 
 
-def _wanted_chunks(stream: BinaryIO, summary: Any, wanted: set[int]) -> Iterator[Any]:
-    """The records of every chunk that may hold a wanted channel, in file order, one chunk
-    in memory at a time."""
+def _read_wanted_chunks(stream: BinaryIO, summary: Any, router: ChannelRouter) -> None:
+    """Every chunk that may hold a wanted channel, in file order, one in memory at a time:
+    its wanted messages found through its message indexes, or, where it has none that can
+    be followed, by walking its records."""
     from mcap.data_stream import ReadDataStream
     from mcap.records import Chunk
 
+    wanted = set(router.routes)
     for index in sorted(summary.chunk_indexes, key=lambda i: i.chunk_start_offset):
         if index.message_index_offsets and wanted.isdisjoint(index.message_index_offsets):
             continue                                  # no wanted channel in this chunk
-        stream.seek(index.chunk_start_offset + 1 + 8)  # opcode and record length
-        yield from chunk_records(Chunk.read(ReadDataStream(stream)))
+        stream.seek(index.chunk_start_offset + RECORD_HEAD)
+        chunk = Chunk.read(ReadDataStream(stream))
+        data = chunk_data(chunk, decompressed(chunk))
+        try:
+            entries = read_index_entries(stream, index, wanted)
+            located = {c: locate(data, c, found) for c, found in entries.items()}
+        except IndexUnusable:
+            located = None
+        if located is None or not index.message_index_offsets:
+            for record in records_in(chunk, data):
+                router.take(record)
+        else:
+            router.take_located(data, located)
 
 
 def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:

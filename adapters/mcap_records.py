@@ -11,9 +11,12 @@ import io
 from collections.abc import Callable, Iterator
 from typing import Any, BinaryIO
 
+import numpy as np
+
 from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.limits import MAX_CHUNK_BYTES
+from adapters.mcap_index import LocatedMessages, chunk_data
 from adapters.ros_columns import TopicBatches
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -39,7 +42,7 @@ def decoder_factories() -> list[Any]:
     return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory()]
 
 
-def _decompressed(chunk: Any) -> bytes:
+def decompressed(chunk: Any) -> bytes:
     """The chunk's records, at most ``uncompressed_size`` bytes of them."""
     size = chunk.uncompressed_size
     if size > MAX_CHUNK_BYTES:
@@ -67,13 +70,18 @@ def _decompressed(chunk: Any) -> bytes:
 
 def chunk_records(chunk: Any) -> Iterator[Any]:
     """The records inside a chunk (its CRC checked when it has one)."""
+    yield from records_in(chunk, chunk_data(chunk, decompressed(chunk)))
+
+
+def records_in(chunk: Any, data: np.ndarray) -> Iterator[Any]:
+    """The records of a chunk whose uncompressed ``data`` is already checked."""
     from dataclasses import replace
 
     from mcap.stream_reader import breakup_chunk
 
-    data = _decompressed(chunk)
-    plain = replace(chunk, compression="", data=data, uncompressed_size=len(data))
-    yield from breakup_chunk(plain, validate_crc=True)
+    plain = replace(chunk, compression="", data=data.tobytes(), uncompressed_size=data.size,
+                    uncompressed_crc=0)
+    yield from breakup_chunk(plain)
 
 
 def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
@@ -167,6 +175,17 @@ class ChannelRouter:
             self.batches.append(topic, time_ns, data)
         else:
             self.collector.add(topic, time_ns, decode(data))
+
+    def take_located(self, data: np.ndarray, located: dict[int, LocatedMessages]) -> None:
+        """A chunk's wanted messages, found through its message indexes."""
+        for channel_id, found in located.items():
+            topic, decode = self.routes[channel_id]
+            if decode is None:
+                self.batches.extend(topic, found.times_ns, data, found.starts, found.ends)
+                continue
+            for time_ns, start, end in zip(found.times_ns.tolist(), found.starts.tolist(),
+                                           found.ends.tolist(), strict=True):
+                self.collector.add(topic, time_ns, decode(data[start:end].tobytes()))
 
     def flush(self) -> None:
         self.batches.flush()

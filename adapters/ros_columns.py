@@ -23,7 +23,7 @@ import numpy as np
 from adapters.collect import SignalCollector
 from adapters.fieldnames import ros_field_paths
 from adapters.fieldpath import parse_field_path
-from adapters.packed import gather_words
+from adapters.packed import gather_words, gathered
 
 PRIMITIVES = {"bool": "u1", "byte": "u1", "char": "u1", "int8": "i1", "uint8": "u1",
               "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
@@ -49,6 +49,12 @@ class RawMessages:
         self.starts.append(len(self.buffer))
         self.times_ns.append(time_ns)
         self.buffer += raw
+
+    def extend(self, times_ns: np.ndarray, block: np.ndarray, begins: np.ndarray) -> None:
+        """Many messages stored back to back in ``block``, each from its ``begins``."""
+        self.starts.frombytes((begins + len(self.buffer)).astype(np.int64).tobytes())
+        self.times_ns.frombytes(times_ns.astype(np.int64).tobytes())
+        self.buffer += block.tobytes()
 
     def __len__(self) -> int:
         return len(self.starts)
@@ -206,6 +212,16 @@ class TopicBatches:
             return
         batch = self.pending.setdefault(topic, RawMessages(self.cdr))
         batch.append(time_ns, raw)
+        if len(batch.buffer) >= self.BATCH_BYTES:
+            self._add(topic, self.pending.pop(topic))
+
+    def extend(self, topic: str, times_ns: np.ndarray, data: np.ndarray, starts: np.ndarray,
+               ends: np.ndarray) -> None:
+        """Many messages of a topic at once: message i is ``data[starts[i]:ends[i]]``."""
+        keep = self.collector.accepts_times(times_ns)
+        block, begins = gathered(data, starts[keep], ends[keep])
+        batch = self.pending.setdefault(topic, RawMessages(self.cdr))
+        batch.extend(times_ns[keep], block, begins)
         if len(batch.buffer) >= self.BATCH_BYTES:
             self._add(topic, self.pending.pop(topic))
 

@@ -51,8 +51,13 @@ def make_fleet(folder: Path, logs: int, distinct: int) -> None:
               f"{fault.component if fault else 'none'})", file=sys.stderr, flush=True)
     fleet = folder / "fleet"
     fleet.mkdir()
+    expected = {}
     for number in range(logs):
-        shutil.copy(sources[number % distinct], fleet / f"dive-{number:03d}.mcap")
+        source = sources[number % distinct]
+        shutil.copy(source, fleet / f"dive-{number:03d}.mcap")
+        truth = json.loads(source.with_suffix(".truth.json").read_text())["expected"]
+        expected[f"dive-{number:03d}.mcap"] = truth["verdict"]
+    (folder / "expected.json").write_text(json.dumps(expected, indent=1))
 
 
 def run_audit(fleet: Path, output: Path, extra: list[str]) -> tuple[float, list[dict]]:
@@ -78,8 +83,10 @@ def measure(fleet: Path, workdir: Path, mode: str, jobs: int) -> dict:
         seconds, records = run_audit(fleet, output, ["--jobs", "1" if mode == "serial"
                                                      else str(jobs)])
     errors = [r for r in records if r.get("error")]
+    expected = json.loads((workdir / "expected.json").read_text())
+    right = sum(r["verdict"] == expected.get(Path(r["log"]).name) for r in records)
     return {"mode": mode, "workers": 1 if mode == "serial" else jobs, "logs": len(records),
-            "errors": len(errors), "seconds": round(seconds, 1),
+            "errors": len(errors), "verdicts_as_simulated": right, "seconds": round(seconds, 1),
             "logs_per_minute": round(60 * len(records) / seconds, 2),
             "diagnosis_s_median": round(sorted(r["audit"]["seconds"] for r in records)
                                         [len(records) // 2], 2),
@@ -111,13 +118,15 @@ def main() -> None:
     print(f"Measured {date.today()} on {platform.machine()}, {os.cpu_count()} cores: "
           f"{args.logs} simulated dives of 61-90 min ({args.distinct} distinct, copied), "
           "standalone MCAP, shipped model.\n")
-    print("| mode | workers | logs/min | speed-up vs serial | median s/log | peak RSS/worker |")
-    print("|---|---|---|---|---|---|")
+    print("| mode | workers | logs/min | speed-up vs serial | median s/log | peak RSS/worker "
+          "| verdicts as simulated |")
+    print("|---|---|---|---|---|---|---|")
     for r in results:
         ratio = (f"{r['logs_per_minute'] / serial['logs_per_minute']:.2f}x" if serial
                  else "-")
         print(f"| {r['mode']} | {r['workers']} | {r['logs_per_minute']:.1f} | {ratio} | "
-              f"{r['diagnosis_s_median']:.1f} | {r['peak_rss_mb_per_worker']:.0f} MB |")
+              f"{r['diagnosis_s_median']:.1f} | {r['peak_rss_mb_per_worker']:.0f} MB | "
+              f"{r['verdicts_as_simulated']}/{r['logs']} |")
     if args.json:
         args.json.write_text(json.dumps({"date": str(date.today()), "machine":
                                          platform.machine(), "cores": os.cpu_count(),

@@ -19,8 +19,9 @@ import numpy as np
 from models.normaliser import Normaliser
 
 Engine = Literal["auto", "numpy", "compiled"]
-# Loading the compiled kernel costs about 0.4 s a process; the NumPy loop about 20 µs a
-# step. Below this many steps the NumPy loop is done before numba would have loaded.
+# Loading the compiled kernel costs about 0.4 s a process; the NumPy loop 8-20 µs a step
+# of one rollout (the less, the more rollouts advance together). Below this many rollout
+# steps (rollouts x steps) the NumPy loop is done before numba would have loaded.
 COMPILED_PAYS_FROM_STEPS = 20_000
 # The commands' contributions to the gates are held for this many values at once (16 MB of
 # float32), however many rollouts and steps a replay has; at least CHUNK_STEPS_MIN steps.
@@ -34,13 +35,13 @@ def compiled_available() -> bool:
 
 
 def expect_steps(steps: int) -> None:
-    """Say that about ``steps`` replay steps are coming in several calls (rollouts batched
+    """Say that about ``steps`` rollout steps are coming in several calls (rollouts batched
     by length): the compiled loop is loaded now if they pay for it together."""
     if compiled_available() and steps >= COMPILED_PAYS_FROM_STEPS:
         importlib.import_module("models.compiled")
 
 
-def _use_compiled(engine: Engine, steps: int) -> bool:
+def _use_compiled(engine: Engine, rollout_steps: int) -> bool:
     if engine == "numpy":
         return False
     if engine == "compiled":
@@ -48,7 +49,8 @@ def _use_compiled(engine: Engine, steps: int) -> bool:
             raise RuntimeError("the compiled replay needs numba (pip install numba)")
         return True
     already_loaded = "models.compiled" in sys.modules
-    return compiled_available() and (already_loaded or steps >= COMPILED_PAYS_FROM_STEPS)
+    return compiled_available() and (already_loaded
+                                     or rollout_steps >= COMPILED_PAYS_FROM_STEPS)
 
 
 @dataclass(frozen=True)
@@ -104,7 +106,7 @@ class FastDynamics:
         states = np.empty((batch, steps, self.out_bias.size), np.float32)
         states[:, 0] = initial_states.astype(np.float32)
         hidden = np.zeros((batch, self.hidden), np.float32)
-        compiled = _use_compiled(engine, steps)
+        compiled = _use_compiled(engine, batch * steps)
         chunk_steps = max(CHUNK_STEPS_MIN, CHUNK_VALUES // (batch * self.input_bias.size))
         for first in range(0, steps - 1, chunk_steps):
             last = min(first + chunk_steps, steps - 1)      # steps first … last − 1 advance

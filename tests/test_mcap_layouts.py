@@ -121,3 +121,48 @@ def test_summary_without_channels_is_inspected(tmp_path, dive_cache, profile):
     result = runner.invoke(app, ["inspect", str(path)])
     assert result.exit_code == 0, result.output
     assert "/imu/data" in result.stdout and "MISSING" not in result.stdout
+
+
+def _read_signals(path, profile):
+    from adapters.mcap import McapAdapter
+
+    return McapAdapter().read(path, profile.sources["ros"], "mcap")
+
+
+def test_wanted_messages_are_found_through_the_message_indexes(tmp_path, dive_cache, profile,
+                                                               monkeypatch):
+    """With message indexes no chunk is walked record by record."""
+    import adapters.mcap
+
+    path = _write(tmp_path / "indexed.mcap", dive_cache, profile, chunk_size=16_384)
+    walked = _read_signals(path, profile)
+
+    def never(*_):
+        raise AssertionError("a chunk was walked record by record")
+
+    monkeypatch.setattr(adapters.mcap, "records_in", never)
+    indexed = _read_signals(path, profile)
+    assert walked.series.keys() == indexed.series.keys() and indexed.messages_read > 1000
+    for name, series in walked.series.items():
+        assert series.equals(indexed.series[name])
+
+
+def test_a_message_index_that_does_not_match_its_chunk_is_not_followed(
+        tmp_path, dive_cache, profile, canonical, monkeypatch):
+    """An index entry pointing one byte off its message: that chunk is walked instead."""
+    from mcap.reader import SeekingReader
+
+    import adapters.mcap
+
+    path = _write(tmp_path / "bad-index.mcap", dive_cache, profile, chunk_size=16_384)
+    with path.open("rb") as stream:
+        chunk_index = SeekingReader(stream).get_summary().chunk_indexes[3]
+    data = bytearray(path.read_bytes())
+    at = min(chunk_index.message_index_offsets.values()) + 1 + 8 + 2 + 4 + 8  # 1st offset
+    data[at:at + 8] = struct.pack("<Q", struct.unpack_from("<Q", data, at)[0] + 1)
+    path.write_bytes(bytes(data))
+    walks = []
+    records_in = adapters.mcap.records_in
+    monkeypatch.setattr(adapters.mcap, "records_in",
+                        lambda *a: walks.append(a) or records_in(*a))
+    assert _diagnosis(path) == canonical and len(walks) == 1

@@ -130,3 +130,19 @@ def test_a_message_cut_short_is_not_read_past_its_end():
     batch.append(0, serialise(store, "cdr", message, AWKWARD_TYPE)[:-6])
     with pytest.raises(NotColumnar):
         ColumnReader(batch, AWKWARD_TYPE, store).column("big")
+
+
+@pytest.mark.parametrize("ends", [[9, 104, 304], [9, 106, 301]], ids=["one-size", "sizes"])
+def test_messages_gathered_from_a_chunk_read_as_if_appended_one_by_one(ends):
+    from adapters.packed import gathered
+
+    data = np.random.default_rng(3).integers(0, 256, 1000, dtype=np.uint8)
+    starts = np.array([5, 100, 300])
+    one_by_one, at_once = RawMessages(True), RawMessages(True)
+    for batch in (one_by_one, at_once):
+        batch.append(7, b"earlier")
+    for time_ns, (a, b) in enumerate(zip(starts, ends, strict=True)):
+        one_by_one.append(time_ns, data[a:b].tobytes())
+    at_once.extend(np.arange(3), *gathered(data, starts, np.array(ends)))
+    assert at_once.buffer == one_by_one.buffer and at_once.messages() == one_by_one.messages()
+    assert list(at_once.times_ns) == list(one_by_one.times_ns) == [7, 0, 1, 2]

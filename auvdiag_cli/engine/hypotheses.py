@@ -122,7 +122,7 @@ def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFra
             commands = frame.commands.copy()
             commands[judge.onset:, columns] *= np.sqrt(fraction)
             trial = match(model, replace(frame, commands=commands), judge.judging.full_scale,
-                          judge.judging.window, restarts)
+                          judge.judging.window, restarts, since=judge.onset)
             found.append(Hypothesis(component, "dead" if fraction == 0 else "weakened",
                                     judge.ratio(trial.g_percent[judge.onset:]), fraction))
     return found

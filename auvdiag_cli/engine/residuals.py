@@ -48,12 +48,15 @@ def residual_index(measured: np.ndarray, modelled: np.ndarray, full_scale: np.nd
 
 
 def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
-          window: int, restarts: Sequence[int] = ()) -> Matching:
+          window: int, restarts: Sequence[int] = (), since: int = 0) -> Matching:
     """Replay the log's commands and compute g, restarting at ``frame.restarts`` and
-    ``restarts`` (grid indices), and every horizon of the model inside them."""
+    ``restarts`` (grid indices), and every horizon of the model inside them. Only g from
+    step ``since`` on is wanted: rollouts that end a window or more before it are not run
+    (SM and g stay NaN there)."""
     measured = frame.sensors
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
-    plan = plan_rollouts(measured, [*frame.restarts, *restarts], model.horizon_steps)
+    plan = [r for r in plan_rollouts(measured, [*frame.restarts, *restarts],
+                                     model.horizon_steps) if r.end > since - window]
     modelled = replay_plan(model.fast, frame.commands, measured, plan,
                            np.asarray(model.normaliser.command_scale),
                            np.asarray(model.normaliser.state_scale))
