@@ -22,7 +22,7 @@ from adapters.mcap_records import (
 )
 from adapters.signals import LogSources, Signals
 
-__all__ = ["MCAP_MAGIC", "McapAdapter", "read_sequential"]
+__all__ = ["MCAP_MAGIC", "McapAdapter", "read_mcap", "read_sequential"]
 
 
 def _problem(error: BaseException) -> str:
@@ -106,36 +106,7 @@ class McapAdapter:
             return "mcap" if stream.read(len(MCAP_MAGIC)) == MCAP_MAGIC else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
-        with path.open("rb") as stream:
-            summary = _summary(stream, path.stat().st_size)
-            if summary is not None and summary.chunk_indexes:
-                collector = SignalCollector(path, sources)
-                try:
-                    return self._read_indexed(summary, stream, collector)
-                except LogError:
-                    raise
-                except Exception:  # a damaged chunk: read the file front to back instead
-                    pass
-        return read_sequential(path, SignalCollector(path, sources), "mcap")
-
-    def _read_indexed(self, summary: Any, stream: BinaryIO, collector: SignalCollector
-                      ) -> Signals:
-        router = ChannelRouter(collector)
-        for schema in summary.schemas.values():
-            router.take(schema)
-        for channel in summary.channels.values():
-            router.take(channel)
-        missing = collector.missing_topics(set(router.topics))
-        if missing:
-            raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
-        # File order, not a merge by log time (the merge costs more than decoding);
-        # resampling sorts a series if its messages were stored out of order.
-        _read_wanted_chunks(stream, summary, router)
-        router.flush()
-        stats = summary.statistics
-        return collector.finish("mcap", stats.message_start_time if stats else None,
-                                stats.message_end_time if stats else None, router.topics,
-                                time_ordered=True)
+        return read_mcap(path, path, sources, fmt)
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         """From the summary when it has statistics, else by a raw scan (nothing decoded)."""
@@ -152,6 +123,42 @@ class McapAdapter:
                                     sorted(topics, key=lambda t: t.name))
             stream.seek(0)
             return _scanned_inventory(stream, path.stat().st_size)
+
+
+def read_mcap(storage: Path, path: Path, sources: LogSources, fmt: str) -> Signals:
+    """The profile's signals from the MCAP file ``storage`` of the log ``path`` (the file
+    itself, or a ROS 2 bag holding it): through the chunk indexes when the summary is whole,
+    else, or when a chunk is damaged, front to back."""
+    with storage.open("rb") as stream:
+        summary = _summary(stream, storage.stat().st_size)
+        if summary is not None and summary.chunk_indexes:
+            try:
+                return _read_indexed(summary, stream, SignalCollector(path, sources), fmt)
+            except LogError:
+                raise
+            except Exception:  # a damaged chunk: read the file front to back instead
+                pass
+    return read_sequential(storage, SignalCollector(path, sources), fmt)
+
+
+def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector, fmt: str
+                  ) -> Signals:
+    router = ChannelRouter(collector)
+    for schema in summary.schemas.values():
+        router.take(schema)
+    for channel in summary.channels.values():
+        router.take(channel)
+    missing = collector.missing_topics(set(router.topics))
+    if missing:
+        raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
+    # File order, not a merge by log time (the merge costs more than decoding);
+    # resampling sorts a series if its messages were stored out of order.
+    _read_wanted_chunks(stream, summary, router)
+    router.flush()
+    stats = summary.statistics
+    return collector.finish(fmt, stats.message_start_time if stats else None,
+                            stats.message_end_time if stats else None, router.topics,
+                            time_ordered=True)
 
 
 def _read_wanted_chunks(stream: BinaryIO, summary: Any, router: ChannelRouter) -> None:

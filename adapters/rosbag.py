@@ -1,5 +1,6 @@
 """ROS 1 bags and ROS 2 bags (sqlite3 or mcap storage, directory or storage file) through
-rosbags' AnyReader; message definitions come from the bag itself."""
+rosbags' AnyReader; message definitions come from the bag itself. A ROS 2 bag stored in one
+MCAP file is read as MCAP (`adapters.mcap`)."""
 
 import contextlib
 import tempfile
@@ -11,7 +12,7 @@ from adapters.collect import SignalCollector
 from adapters.errors import LogError
 from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.mcap import MCAP_MAGIC, McapAdapter, read_sequential
+from adapters.mcap import MCAP_MAGIC, McapAdapter, read_mcap, read_sequential
 from adapters.ros_columns import TopicBatches
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
@@ -81,6 +82,10 @@ class RosbagAdapter:
         return None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
+        if fmt == "ros2-mcap" and (path.is_file() or len(_storage_files(path)) == 1):
+            # One MCAP storage file is plain MCAP: read through its chunk indexes, which is
+            # several times faster than rosbags' message iteration.
+            return read_mcap(self._mcap_file(path), path, sources, fmt)
         collector = SignalCollector(path, sources)
         with _named_for_rosbags(path, fmt) as readable:
             try:
