@@ -154,8 +154,11 @@ def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector, fm
     # File order, not a merge by log time (the merge costs more than decoding);
     # resampling sorts a series if its messages were stored out of order.
     _read_wanted_chunks(stream, summary, router)
-    router.flush()
     stats = summary.statistics
+    if stats is not None and any(router.counts.get(c, 0) < stats.channel_message_counts.get(
+            c, 0) for c in router.routes):
+        raise IndexUnusable("the chunk indexes leave out messages the statistics count")
+    router.flush()
     return collector.finish(fmt, stats.message_start_time if stats else None,
                             stats.message_end_time if stats else None, router.topics,
                             time_ordered=True)

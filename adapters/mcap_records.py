@@ -149,6 +149,7 @@ class ChannelRouter:
         self.batches = TopicBatches(collector, self.msgtypes, True, self.store,
                                     self.store.deserialize_cdr)
         self.factories = decoder_factories()
+        self.counts: dict[int, int] = {}                 # wanted channel → messages taken
 
     def take(self, record: Any) -> None:
         from mcap.records import Channel, Message, Schema
@@ -171,6 +172,7 @@ class ChannelRouter:
         if route is None:
             return
         topic, decode = route
+        self.counts[channel_id] = self.counts.get(channel_id, 0) + 1
         if decode is None:
             self.batches.append(topic, time_ns, data)
         else:
@@ -180,6 +182,7 @@ class ChannelRouter:
         """A chunk's wanted messages, found through its message indexes."""
         for channel_id, found in located.items():
             topic, decode = self.routes[channel_id]
+            self.counts[channel_id] = self.counts.get(channel_id, 0) + found.times_ns.size
             if decode is None:
                 self.batches.extend(topic, found.times_ns, data, found.starts, found.ends)
                 continue

@@ -166,3 +166,24 @@ def test_a_message_index_that_does_not_match_its_chunk_is_not_followed(
     monkeypatch.setattr(adapters.mcap, "records_in",
                         lambda *a: walks.append(a) or records_in(*a))
     assert _diagnosis(path) == canonical and len(walks) == 1
+
+
+def test_indexes_that_leave_out_messages_the_statistics_count_are_not_trusted(
+        tmp_path, dive_cache, profile, monkeypatch):
+    """A chunk whose message indexes list only some of its channels: the messages counted
+    in the statistics and not found make the reader go front to back instead."""
+    import adapters.mcap
+
+    path = _write(tmp_path / "short-index.mcap", dive_cache, profile, chunk_size=16_384)
+    whole = _read_signals(path, profile)
+    read_index_entries = adapters.mcap.read_index_entries
+
+    def one_channel_short(stream, chunk_index, channels):
+        entries = read_index_entries(stream, chunk_index, channels)
+        return dict(list(entries.items())[1:]) if chunk_index.chunk_start_offset > 10_000 \
+            else entries
+
+    monkeypatch.setattr(adapters.mcap, "read_index_entries", one_channel_short)
+    short = _read_signals(path, profile)
+    for name, series in whole.series.items():
+        assert series.equals(short.series[name])
