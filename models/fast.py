@@ -23,9 +23,9 @@ Engine = Literal["auto", "numpy", "compiled"]
 # of one rollout (the less, the more rollouts advance together). Below this many rollout
 # steps (rollouts x steps) the NumPy loop is done before numba would have loaded.
 COMPILED_PAYS_FROM_STEPS = 20_000
-# The commands' contributions to the gates are held for this many values at once (16 MB of
+# The commands' contributions to the gates are held for this many values at once (4 MB of
 # float32), however many rollouts and steps a replay has; at least CHUNK_STEPS_MIN steps.
-CHUNK_VALUES = 4 << 20
+CHUNK_VALUES = 1 << 20
 CHUNK_STEPS_MIN = 16
 
 
