@@ -4,13 +4,14 @@ of a second instead of most of one.
 
 Compiled once per machine (about 3 s, cached beside this file or in the user's cache);
 loading the cached kernel costs about 0.4 s per process, mostly importing numba. Only
-``reassoc`` and ``contract`` are relaxed: NaN and infinity keep their meaning."""
+``reassoc`` and ``contract`` are relaxed: NaN and infinity keep their meaning. NumPy's error
+model drops the zero-division checks (a logistic's denominator is never zero): about 8 %."""
 
 import numpy as np
 from numba import njit
 
 
-@njit(cache=True, fastmath={"reassoc", "contract"})
+@njit(cache=True, fastmath={"reassoc", "contract"}, error_model="numpy")
 def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarray,
                    initial_states: np.ndarray, hidden_states: np.ndarray,
                    states_to_gates: np.ndarray, hidden_to_gates: np.ndarray,
