@@ -210,18 +210,25 @@ class TopicBatches:
     def append(self, topic: str, time_ns: int, raw: bytes | memoryview) -> None:
         if not self.collector.accepts_time(time_ns):
             return
-        batch = self.pending.setdefault(topic, RawMessages(self.cdr))
+        batch = self._batch(topic)
         batch.append(time_ns, raw)
-        if len(batch.buffer) >= self.BATCH_BYTES:
-            self._add(topic, self.pending.pop(topic))
+        self._hand_over_if_full(topic, batch)
 
     def extend(self, topic: str, times_ns: np.ndarray, data: np.ndarray, starts: np.ndarray,
                ends: np.ndarray) -> None:
         """Many messages of a topic at once: message i is ``data[starts[i]:ends[i]]``."""
         keep = self.collector.accepts_times(times_ns)
-        block, begins = gathered(data, starts[keep], ends[keep])
-        batch = self.pending.setdefault(topic, RawMessages(self.cdr))
-        batch.extend(times_ns[keep], block, begins)
+        batch = self._batch(topic)
+        batch.extend(times_ns[keep], *gathered(data, starts[keep], ends[keep]))
+        self._hand_over_if_full(topic, batch)
+
+    def _batch(self, topic: str) -> RawMessages:
+        batch = self.pending.get(topic)
+        if batch is None:        # not setdefault: that would build a batch per message
+            batch = self.pending[topic] = RawMessages(self.cdr)
+        return batch
+
+    def _hand_over_if_full(self, topic: str, batch: RawMessages) -> None:
         if len(batch.buffer) >= self.BATCH_BYTES:
             self._add(topic, self.pending.pop(topic))
 
