@@ -108,6 +108,9 @@ def main() -> None:
           flush=True)
     if not (workdir / "fleet").is_dir():
         make_fleet(workdir, args.logs, args.distinct)
+    elif not (workdir / "expected.json").is_file():
+        raise SystemExit(f"{workdir}: a fleet without expected.json (made by an older version "
+                         "of this benchmark); use a new --workdir")
     results = []
     for mode in args.modes.split(","):
         shutil.rmtree(workdir / f"out-{mode}", ignore_errors=True)
