@@ -2,13 +2,9 @@
 NumPy's in float64: within a float32 ulp everywhere, NaN and infinity kept."""
 
 import numpy as np
-import pytest
+from numba import njit
 
-pytest.importorskip("numba")
-
-from numba import njit  # noqa: E402
-
-from models.compiled import fast_logistic, fast_tanh  # noqa: E402
+from models.compiled import fast_logistic, fast_tanh
 
 FLOAT32_ULP_AT_ONE = float(np.spacing(np.float32(1.0)))
 
