@@ -22,10 +22,11 @@ import time
 from datetime import date
 from pathlib import Path
 
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
 ROS_TOPICS = ["/thrusters/command", "/flow/velocity", "/imu/data", "/diagnosis/sequence"]
 MAVLINK_TYPES = ["SERVO_OUTPUT_RAW", "NAMED_VALUE_FLOAT", "ATTITUDE", "STATUSTEXT"]
 DATAFLASH_TYPES = ["RCOU", "FLOW", "IMU", "MSG"]
+ULOG_TOPICS = ["actuator_motors", "airspeed", "vehicle_angular_velocity"]
 IMAGE_BYTES = 300_000
 
 
@@ -62,9 +63,10 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
     paths = {}
     for fmt in FORMATS:
         path = workdir / {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
-                          "bin": "dive.bin"}.get(fmt, f"dive_{fmt}")
+                          "bin": "dive.bin", "ulog": "dive.ulg"}.get(fmt, f"dive_{fmt}")
         started = time.perf_counter()
-        write_log(dive, profile, path, fmt, [camera] if fmt not in ("tlog", "bin") else [])
+        ros = fmt not in ("tlog", "bin", "ulog")
+        write_log(dive, profile, path, fmt, [camera] if ros else [])
         size = sum(p.stat().st_size for p in path.rglob("*")) if path.is_dir() else \
             path.stat().st_size
         print(f"wrote {fmt:<9} {size / 1e9:6.2f} GB in {time.perf_counter() - started:5.1f} s",
@@ -102,6 +104,12 @@ def read_raw(path: Path, fmt: str) -> int:
             mcap_reader = make_reader(stream, decoder_factories=[DecoderFactory()])
             for _ in mcap_reader.iter_decoded_messages(topics=ROS_TOPICS):
                 count += 1
+    elif fmt == "ulog":
+        from pyulog import ULog
+
+        ulog = ULog(str(path), message_name_filter_list=ULOG_TOPICS)
+        count = sum(len(d.data["timestamp"]) for d in ulog.data_list) + len(
+            ulog.logged_messages)
     else:
         from pymavlink import DFReader, mavutil
 
