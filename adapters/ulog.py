@@ -31,12 +31,12 @@ TIMESTAMP = "timestamp"
 HEADER_BYTES = 16
 
 
-def _load(path: Path, topics: list[str] | None) -> Any:
+def _load(path: Path, topics: list[str] | None, framing: "Framing") -> Any:
     """pyulog's parse of the file (only ``topics`` decoded), its errors as LogError. pyulog
     prints warnings about damaged bytes: they become notes, not terminal output."""
     from pyulog import ULog
 
-    damaged = walk_framing(path).definitions_damaged_at
+    damaged = framing.definitions_damaged_at
     if damaged is not None:
         raise LogError(path, f"the ULog's definitions (message formats, parameters) are "
                              f"damaged at byte {damaged}: its messages cannot be decoded")
@@ -87,7 +87,8 @@ class UlogAdapter:
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
         wanted = sorted(collector.topics - {LOGGING_TOPIC})
-        ulog = _load(path, wanted)
+        framing = walk_framing(path)
+        ulog = _load(path, wanted, framing)
         by_name = _instances(ulog)
         for topic in wanted:
             if topic in by_name:
@@ -98,13 +99,13 @@ class UlogAdapter:
             for message in ulog.logged_messages:
                 collector.add(LOGGING_TOPIC, int(message.timestamp) * 1000,
                               {"message": message.message})
-        _note_damage(ulog, collector)
+        _note_damage(ulog, framing, collector)
         return collector.finish("ulog", int(ulog.start_timestamp) * 1000,
                                 int(ulog.last_timestamp) * 1000,
                                 {name: "ULog" for name in by_name})
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
-        ulog = _load(path, None)
+        ulog = _load(path, None, walk_framing(path))
         topics = []
         for name, instances in sorted(_instances(ulog).items()):
             _, columns = _topic_columns(instances)
@@ -162,11 +163,11 @@ def _damage_text(ulog: Any) -> str:
             "some messages are missing")
 
 
-def _note_damage(ulog: Any, collector: SignalCollector) -> None:
+def _note_damage(ulog: Any, framing: Framing, collector: SignalCollector) -> None:
     if ulog.file_corruption:
         collector.notes.append(_damage_text(ulog))
         collector.damaged(_damage_text(ulog))
-    cut = walk_framing(collector.path).cut_at
+    cut = framing.cut_at
     if cut is not None:
         reason = f"the ULog ends inside a message at byte {cut}: the file was cut short"
         collector.notes.append(reason)
