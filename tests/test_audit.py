@@ -27,6 +27,7 @@ FLEET = [
     ("mission-fast-ccw", "tlog", "normal", None),
     ("mission-large-cw", "bin", "normal", None),
 ]
+SUFFIXES = {"bag": ".bag", "mcap": ".mcap", "tlog": ".tlog", "bin": ".bin"}
 STABLE_COLUMNS = ["log", "format", "verdict", "component", "candidates", "case", "onset_s",
                   "detected_at_s", "worst_g_ratio", "error"]
 
@@ -42,9 +43,8 @@ def _copy(source: Path, target: Path) -> Path:
 @pytest.fixture(scope="module")
 def fleet(make_log, tmp_path_factory) -> Path:
     folder = tmp_path_factory.mktemp("fleet")
-    suffixes = {"bag": ".bag", "mcap": ".mcap", "tlog": ".tlog", "bin": ".bin"}
     for scenario, fmt, _, _ in FLEET:
-        _copy(make_log(scenario, 11, fmt), folder / f"{scenario}{suffixes.get(fmt, '')}")
+        _copy(make_log(scenario, 11, fmt), folder / f"{scenario}{SUFFIXES.get(fmt, '')}")
     whole = (folder / "paper-flow-sensor-covered.bag").read_bytes()
     (folder / "damaged.bag").write_bytes(whole[:20_000])     # cut inside the first chunk
     (folder / "notes.txt").write_text("dive notes, not a log\n")
@@ -171,6 +171,32 @@ def test_audit_on_a_dask_local_cluster(fleet, full_audit, tmp_path):
     assert code == 2, text
     pd.testing.assert_frame_equal(table(output)[STABLE_COLUMNS],
                                   table(full_audit)[STABLE_COLUMNS])
+
+
+def test_a_dask_audit_does_not_leave_fetched_results_on_the_workers(fleet):
+    """Each log's time histories stay in a worker's memory while the audit holds its future;
+    held to the end, a fleet's worth piles up on the workers."""
+    distributed = pytest.importorskip("distributed")
+    from auvdiag_cli.audit.runner import run_dask
+    from auvdiag_cli.audit.worker import AuditTask
+
+    tasks = [AuditTask(str(fleet / f"{scenario}{SUFFIXES.get(fmt, '')}"), None, None)
+             for scenario, fmt, _, _ in FLEET]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        outcomes = run_dask(tasks, cluster.scheduler_address)
+        fetched = [next(outcomes) for _ in tasks]      # the audit still running, at its last
+
+        def held() -> int:
+            return sum(client.run(lambda dask_worker: len(dask_worker.data)).values())
+
+        deadline = time.monotonic() + 10
+        while held() > 1 and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert held() <= 1          # at most the last result, released when the audit goes on
+        outcomes.close()
+    assert all(outcome.document is not None for outcome in fetched)
 
 
 def test_unreachable_scheduler_is_one_line(fleet, tmp_path):

@@ -56,11 +56,17 @@ def run_dask(tasks: Sequence[AuditTask], address: str) -> Iterator[AuditOutcome]
     try:
         futures = client.map(analyse, list(tasks), pure=False)
         owner = {future.key: task for future, task in zip(futures, tasks, strict=True)}
-        for future in dask_completed(futures):
+        # A worker keeps a result while a future here refers to it: hand each one back once
+        # fetched, or every log's time histories stay on the workers to the end.
+        completed = dask_completed(futures)
+        del futures
+        for future in completed:
             try:
                 yield future.result()
             except Exception as error:
                 yield _lost(owner[future.key], error)
+            finally:
+                future.release()
     finally:
         client.close()
 
