@@ -16,6 +16,7 @@ import numpy as np
 
 from auvdiag_errors import ModelError
 from models.command_relations import CommandRelations
+from models.effort_model import EffortModel
 from models.fast import FastDynamics
 from models.normaliser import Normaliser
 
@@ -99,6 +100,13 @@ class LoadedModel:
         entry = self.metadata.get("command_relations")
         return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
 
+    @cached_property
+    def effort(self) -> EffortModel | None:
+        """Each actuator's normal share of its group's effort; None where the model has none
+        (trained before effort was learnt, or the logs could not teach it)."""
+        entry = self.metadata.get("effort")
+        return None if not entry or "groups" not in entry else EffortModel.from_json(entry)
+
     @property
     def command_names(self) -> tuple[str, ...]:
         return tuple(self.metadata["signals"]["commands"])
@@ -175,6 +183,7 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
                                 norm["delta_ratio"])
         model = LoadedModel(_read_weights(directory, version), normaliser, metadata, label)
         fast = model.fast        # checks every weight is there with the architecture's shape
+        _ = model.effort         # and that an effort entry refits
         if (fast.hidden, fast.input_states.shape[0]) != (arch["hidden"], arch["n_states"]):
             raise ValueError("weights do not match the architecture in the metadata")
     except Exception as error:  # bad archives, pickle refusals, missing or misshapen weights

@@ -41,8 +41,11 @@ def train(
     Training runs in stages, short rollouts first and long free-running ones after. The
     model is then scored on held-out normal data against naive predictors (the last value
     holds, the mean, a linear model): a signal it cannot predict better is never judged.
-    It also learns how the commands follow the motion (see 'auvdiag relate'). Exit status 1
-    when nothing can be judged (no model is written unless --keep-unskilled)."""
+    It also learns how the commands follow the motion (see 'auvdiag relate') and, for the
+    profile's groups of actuators that act alike ([[effort]]), each actuator's normal share
+    of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs
+    (needs three normal logs with steady operation). Exit status 1 when nothing can be
+    judged (no model is written unless --keep-unskilled)."""
     from auvdiag_cli.jobs.train import paper_model_error, train_from_logs
     from auvdiag_cli.reports.training import training_lines
     from auvdiag_cli.vehicle.profile import load_profile
@@ -58,7 +61,7 @@ def train(
         typer.echo(line)
     if not result.judges_anything:
         typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "
-                   "actuator's commands can be judged (see above)"
+                   "actuator's commands or share of the effort can be judged (see above)"
                    + ("" if result.written else "; the model is not written (--keep-unskilled "
                                                 "writes it anyway)"), err=True)
         raise typer.Exit(EXIT_FAULT)

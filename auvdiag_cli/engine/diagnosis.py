@@ -10,6 +10,7 @@ import numpy as np
 from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
+from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.detection import binary_vector, decided_b, detect, first_alarm, look_up
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -146,21 +147,25 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     diagnosis.start_check = check_start(model.metadata.get("start_state"), frame.commands,
                                         frame.sensors, frame.time_s, frame.sensor_names,
                                         frame.dt_s)
-    check, start = diagnosis.command_check, diagnosis.start_check
+    diagnosis.effort_check = _check_effort(log, segments, profile, model, diagnosis.notes)
+    check, start, effort = diagnosis.command_check, diagnosis.start_check, diagnosis.effort_check
     if len(not_judged) == len(frame.sensor_names):
         diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
-        if (check is not None and check.judged) or start.judged:
-            apply_other_evidence(diagnosis, check, start, profile, model)
+        if (check is not None and check.judged) or start.judged or (
+                effort is not None and effort.judged):
+            apply_other_evidence(diagnosis, check, start, effort, profile, model)
             return diagnosis
         diagnosis.verdict, diagnosis.case = Verdict.UNDETERMINED, None
         return diagnosis
     if detection is None:
-        apply_other_evidence(diagnosis, check, start, profile, model)
+        apply_other_evidence(diagnosis, check, start, effort, profile, model)
         return diagnosis
     test = weigh_hypotheses(model, judging, frame, matching, thresholds,
                             detection.onset_index, dms_starts)
     isolate(diagnosis, detection.b, frame.time_s[detection.alarm_index],
             frame.time_s[detection.onset_index], test, companion_runs, profile, model)
+    if effort is not None and effort.suspects:
+        diagnosis.notes.append(f"the effort too: {effort.describe()}")
     return diagnosis
 
 
@@ -177,6 +182,22 @@ def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
     frame = log.frame
     return check_commands(relations, profile, frame.commands, frame.sensors,
                           mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
+
+
+def _check_effort(log: IngestedLog, segments: list[Segment], profile: Profile,
+                  model: LoadedModel, notes: list[str]) -> EffortCheck | None:
+    """Each actuator's share of its group's effort over the steps a controller or a pilot
+    drove (not the DMS runs)."""
+    effort = model.effort
+    if effort is None:
+        if profile.effort_groups:
+            why = (model.metadata.get("effort") or {}).get("refused")
+            notes.append("effort shares not judged: " + (
+                why or "the model has no effort model (train it again to learn one)"))
+        return None
+    frame = log.frame
+    return check_effort(effort, profile, frame.commands,
+                        mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
 
 
 def _normal_case(profile: Profile) -> int | None:

@@ -8,6 +8,7 @@ from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.results import Diagnosis, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
@@ -42,11 +43,15 @@ def isolate(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, onset_s: fl
 
 
 def apply_other_evidence(diagnosis: Diagnosis, check: CommandCheck | None,
-                          start: StartCheck, profile: Profile, model: LoadedModel) -> None:
-    """The replay raised no alarm: a sensor that read wrong from the start, or an actuator
-    driven harder than the motion needs, still makes the verdict."""
+                          start: StartCheck, effort: EffortCheck | None, profile: Profile,
+                          model: LoadedModel) -> None:
+    """The replay raised no alarm: a sensor that read wrong from the start, an actuator
+    carrying more of its group's effort than on normal logs, or one driven harder than the
+    motion needs, still makes the verdict."""
     if start.off:
         _apply_start_alarm(diagnosis, start, profile, model)
+    elif effort is not None and effort.suspects:
+        _apply_effort_alarm(diagnosis, effort, check, profile, model)
     elif check is not None and check.alarm_s is not None:
         _apply_command_alarm(diagnosis, check, profile, model)
 
@@ -61,6 +66,25 @@ def _apply_start_alarm(diagnosis: Diagnosis, start: StartCheck, profile: Profile
         s.component for s in profile.sensors if s.name in start.off))
     diagnosis.notes.append("found at the start of the log: "
                            + start.describe(diagnosis.sensor_units))
+    if len(diagnosis.candidates) == 1:
+        _name_component(diagnosis, diagnosis.candidates[0], profile, model)
+
+
+def _apply_effort_alarm(diagnosis: Diagnosis, effort: EffortCheck,
+                        check: CommandCheck | None, profile: Profile,
+                        model: LoadedModel) -> None:
+    """An actuator carries more of its group's effort than on normal logs: the controller
+    drives it harder to make up for a weakness near it. Shares that fell are the others
+    taking less of the total, not faults of their own."""
+    diagnosis.verdict, diagnosis.case = Verdict.FAULT, None
+    diagnosis.detected_at_s, diagnosis.onset_s = effort.alarm_s, effort.onset_s
+    diagnosis.candidates = list(effort.named)
+    note = f"found in the effort the actuators carry: {effort.describe()}"
+    if len(effort.named) > 1:
+        note += "; more than one actuator is driven harder (a fault near several of them?)"
+    if check is not None and check.alarm_s is not None:
+        note += f"; the commands against the motion: {check.describe()}"
+    diagnosis.notes.append(note)
     if len(diagnosis.candidates) == 1:
         _name_component(diagnosis, diagnosis.candidates[0], profile, model)
 

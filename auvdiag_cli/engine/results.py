@@ -11,6 +11,7 @@ import numpy as np
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.segments import ROUTINE_MODE, Segment
@@ -92,6 +93,7 @@ class Diagnosis:
     not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
     command_check: CommandCheck | None = None   # the commands judged against the motion
     start_check: StartCheck | None = None       # the log's start against normal starts
+    effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
 
 
 def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:

@@ -16,6 +16,7 @@ from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.jobs.effort import learn_effort_entry
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
@@ -62,12 +63,17 @@ class TrainingResult:
     logged_rates_hz: dict[str, float]   # per signal, median over the training logs
     command_relations: dict[str, Any]   # model.json's entry: the relation or why none
     start_state: dict[str, Any]         # model.json's entry: where normal logs start
+    effort: dict[str, Any]              # model.json's entry: each actuator's share of effort
+    effort_notes: tuple[str, ...] = ()  # logs the effort model left out, and why
 
     @property
     def judges_anything(self) -> bool:
-        """A signal has skill, or some actuator's commands can be judged against the motion."""
+        """A signal has skill, some actuator's commands can be judged against the motion, or
+        some actuator's share of the effort can be judged."""
         thresholds = self.command_relations.get("thresholds") or []
-        return bool(self.chosen.judged) or any(t is not None for t in thresholds)
+        effort_judged = any("normal" in g for g in self.effort.get("groups", []))
+        return bool(self.chosen.judged) or any(t is not None for t in thresholds) \
+            or effort_judged
 
 
 @dataclass(frozen=True)
@@ -169,14 +175,18 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
     progress("learning how the commands follow the motion, and where the logs start")
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
+    progress("learning each actuator's share of the effort")
+    effort, effort_notes = learn_effort_entry([r.relation for r in [*read, *read_heldout]],
+                                              profile)
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
-                            hours, rates, relations, start_state)
+                            hours, rates, relations, start_state, effort, tuple(effort_notes))
     result = replace(result, written=result.judges_anything or keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, seed)
         metadata["command_relations"] = relations
         metadata["start_state"] = start_state
+        metadata["effort"] = effort
         save_model(output, network, normaliser, metadata)
     return result
 

@@ -66,7 +66,8 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
     return lines + relation_lines(result.command_relations, command_names) + start_lines(
-        result.start_state, sensor_names)
+        result.start_state, sensor_names) + effort_lines(result.effort) + [
+        f"  left out: {note}" for note in result.effort_notes]
 
 
 def _listed(names: Sequence[str], most: int = 5) -> str:
@@ -109,6 +110,33 @@ def start_lines(entry: dict[str, Any], sensor_names: Sequence[str]) -> list[str]
                 f"{name} {reference:.3g} ± {allowed:.3g}" if allowed is not None else
                 f"{name} not judged (normal starts spread)" for name, reference, allowed in zip(
                     sensor_names, entry["reference"], entry["thresholds"], strict=True))]
+
+
+def effort_lines(entry: dict[str, Any]) -> list[str]:
+    """Lines for `train` and `calibrate`: per group, each actuator's normal share and
+    spread, the threshold and the false-alarm budget, or why it is not judged."""
+    if "groups" not in entry:
+        return [f"effort: {entry.get('refused', 'not judged')}"]
+    lines = []
+    rate = float(entry["false_alarm_rate"])
+    for group in entry["groups"]:
+        logs = len(group["logs"])
+        if "normal" not in group:
+            lines.append(f"effort of {group['name']}: {group['refused']}")
+            continue
+        normal = group["normal"]
+        shares = normal["share"]
+        mean = shares if not normal["conditioned_on_level"] else [
+            sum(column) / len(column) for column in zip(*shares, strict=True)]
+        parts = ", ".join(f"{m} {s:.3f} ± {d:.3f}" for m, s, d in zip(
+            group["members"], mean, normal["spread"], strict=True))
+        lines.append(
+            f"effort of {group['name']} ({logs} normal logs, {group['window_s']:.1f} s windows"
+            f"{', by level' if normal['conditioned_on_level'] else ''}): share {parts}; "
+            f"driven harder past z {normal['threshold_z']:.2f} (false alarms budgeted at "
+            f"{rate:.1%} of normal logs; each normal log judged by the others: largest z "
+            f"{normal['leave_one_out_max_z']:.2f})")
+    return lines
 
 
 def calibration_lines(result: CalibrationResult) -> list[str]:

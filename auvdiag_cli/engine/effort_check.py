@@ -1,0 +1,193 @@
+"""Each actuator's share of its group's effort in one log, against its normal band
+(`models.effort`): an actuator whose share rises beyond its threshold is driven harder than
+on normal logs, the mark of a damaged or fouled propeller, a weak motor or a load near it,
+which the controller hides from the motion. A share that falls while another rises is the
+normalisation (the shares of a group average to one), never a fault of its own.
+
+Two tests share the false-alarm budget: the departure over the whole log's steady time,
+and (for a fault that begins during the log) over the span from each later window start to
+the end. The onset is the start whose departure stands out most; the detection, the first
+moment the departure from that start crosses its threshold."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from auvdiag_cli.vehicle.profile import Profile
+from models.effort import MIN_WINDOWS, GroupFit, Thresholds, expected_share, window_shares
+from models.effort_model import EffortLog, EffortModel, GroupSetup
+
+
+@dataclass(frozen=True)
+class ActuatorEffort:
+    name: str
+    component: str
+    group: str
+    share: float | None          # of the group's mean effort, over the log's steady time
+    normal_share: float | None   # what normal logs give for the same operating conditions
+    spread: float | None         # σ of the share between normal logs of this length
+    departure: float | None      # share / normal share − 1 (0.10: carries 10 % more)
+    ratio: float | None          # the largest z over its threshold (either test); > 1 alarms
+    not_judged: str | None       # why not, or None
+
+    @property
+    def driven_harder(self) -> bool:
+        return self.ratio is not None and self.ratio > 1
+
+
+@dataclass(frozen=True)
+class EffortSeries:
+    """A group's shares window by window, for the report's page."""
+
+    group: str
+    members: tuple[str, ...]
+    time_s: np.ndarray          # (windows,) end of each window
+    shares: np.ndarray          # (windows, members)
+    normal: np.ndarray          # (windows, members) normal share for the window's conditions
+    band: np.ndarray            # (members,) σ of one window's share about normal
+
+
+@dataclass(frozen=True)
+class EffortCheck:
+    actuators: tuple[ActuatorEffort, ...]
+    false_alarm_rate: float      # the budget per log the thresholds were set for
+    alarm_s: float | None
+    onset_s: float | None
+    named: tuple[str, ...]       # components of the actuators driven harder
+    series: tuple[EffortSeries, ...]
+
+    @property
+    def judged(self) -> bool:
+        return any(a.not_judged is None for a in self.actuators)
+
+    @property
+    def suspects(self) -> tuple[ActuatorEffort, ...]:
+        return tuple(sorted((a for a in self.actuators if a.driven_harder),
+                            key=lambda a: -(a.ratio or 0.0)))
+
+    def describe(self) -> str:
+        suspects = self.suspects
+        if not suspects:
+            judged = [a for a in self.actuators if a.not_judged is None]
+            if not judged:
+                return "not judged"
+            worst = max(judged, key=lambda a: a.ratio or 0.0)
+            return (f"every actuator carries its normal share of the effort (closest: "
+                    f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
+                    "its threshold)")
+        parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
+                 f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
+                 for a in suspects]
+        return ("; ".join(parts) + ": a damaged or fouled propeller, a weak motor, or a load "
+                "near it")
+
+
+def _cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Running sums with a zero row in front: effort (steps+1, members) and level per bin
+    (steps+1, bins)."""
+    by_bin = np.zeros((len(level), n_bins))
+    by_bin[np.arange(len(level)), bins] = level
+    pad = lambda a: np.vstack([np.zeros((1, a.shape[1])), np.cumsum(a, axis=0)])  # noqa: E731
+    return pad(effort), pad(by_bin)
+
+
+@dataclass(frozen=True)
+class _Spans:
+    """Departures of spans [start, end) of the steady steps, in units of their σ."""
+
+    fit: GroupFit
+    effort_sum: np.ndarray
+    level_sum: np.ndarray
+    dt_s: float
+
+    def z(self, start: int, end: np.ndarray | int) -> np.ndarray:
+        ends = np.atleast_1d(end)
+        effort = self.effort_sum[ends] - self.effort_sum[start]
+        level = self.level_sum[ends] - self.level_sum[start]
+        total = level.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = effort / total[:, None]
+            normal = level @ self.fit.means / total[:, None]
+        return np.asarray((share - normal) / self.fit.sigma((ends - start) * self.dt_s))
+
+
+def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
+                 time_s: np.ndarray, dt_s: float
+                 ) -> tuple[np.ndarray, float | None, float | None, EffortSeries, tuple]:
+    """(ratio per actuator, onset_s, alarm_s, series, whole-log figures)."""
+    effort, level, usable = log.group_efforts(setup.group)
+    steady = np.flatnonzero(setup.steady(level, usable))
+    effort, level, times = effort[steady], level[steady], time_s[steady]
+    window = setup.window_steps(dt_s)
+    bins = np.digitize(level, setup.edges)
+    spans = _Spans(fit, *_cumulative(effort, level, bins, len(setup.edges) + 1), dt_s)
+    n = len(level)
+    whole_threshold = thresholds.whole_log(fit)
+    starts = list(range(window, n - MIN_WINDOWS * window + 1, window))
+    later_threshold = thresholds.later_start(fit, len(starts))
+    candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
+    ratios = np.array([spans.z(s, n)[0] / t for s, t in candidates])     # (starts, members)
+    per_actuator = ratios.max(axis=0)
+    level_by_bin = np.bincount(bins, weights=level, minlength=len(setup.edges) + 1)
+    share = effort.sum(axis=0) / level.sum()
+    normal = expected_share(fit.means, level_by_bin)
+    figures = (share, normal, fit.sigma(n * dt_s))
+    series = _series(setup, fit, effort, level, bins, times, window)
+    top = int(np.argmax(per_actuator))
+    if per_actuator[top] <= 1:
+        return per_actuator, None, None, series, figures
+    start, threshold = candidates[int(np.argmax(ratios[:, top]))]
+    running = spans.z(start, np.arange(start + window, n + 1))[:, top]
+    crossed = np.flatnonzero(running > threshold)
+    alarm = start + window + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
+    return per_actuator, float(times[start]), float(times[alarm]), series, figures
+
+
+def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
+            bins: np.ndarray, times: np.ndarray, window: int) -> EffortSeries:
+    shares, last = window_shares(effort, level, window)
+    normal = np.array([expected_share(fit.means, np.bincount(
+        bins[i - window + 1:i + 1], weights=level[i - window + 1:i + 1],
+        minlength=len(setup.edges) + 1)) for i in last]).reshape(len(last), -1)
+    return EffortSeries(setup.group.name, setup.group.members, times[last], shares, normal,
+                        fit.sigma(setup.window_s))
+
+
+def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
+                 usable: np.ndarray, time_s: np.ndarray) -> EffortCheck:
+    """Judge one log's effort shares (``usable``: operating and not a DMS run)."""
+    log = EffortLog("", commands, usable, profile.command_names)
+    component = {c.name: c.component for c in profile.commands}
+    actuators: list[ActuatorEffort] = []
+    series: list[EffortSeries] = []
+    onsets: list[tuple[float, float, float, str]] = []   # (alarm, onset, ratio, group)
+    for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
+        members = setup.group.members
+        why = refused
+        if fit is not None and model.thresholds is not None:
+            _, level, ok = log.group_efforts(setup.group)
+            steady_s = float(setup.steady(level, ok).sum()) * model.dt_s
+            if steady_s < setup.needs_s():
+                why = (f"not judged (too little steady effort in this log: {steady_s:.1f} s "
+                       f"at {setup.min_level:.3g} of full scale or more, needs "
+                       f"{setup.needs_s():.0f} s)")
+        if why is not None or fit is None or model.thresholds is None:
+            actuators += [ActuatorEffort(m, component[m], setup.group.name, None, None, None,
+                                         None, None, why) for m in members]
+            continue
+        ratio, onset, alarm, group_series, (share, normal, sigma) = _judge_group(
+            setup, fit, model.thresholds, log, time_s, model.dt_s)
+        series.append(group_series)
+        actuators += [ActuatorEffort(
+            m, component[m], setup.group.name, round(float(share[k]), 4),
+            round(float(normal[k]), 4), round(float(sigma[k]), 4),
+            round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None)
+            for k, m in enumerate(members)]
+        if alarm is not None and onset is not None:
+            onsets.append((alarm, onset, float(ratio.max()), setup.group.name))
+    named = tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder))
+    first = min(onsets, default=None)
+    return EffortCheck(tuple(actuators), model.false_alarm_rate,
+                       None if first is None else round(first[0], 3),
+                       None if first is None else round(first[1], 3), named, tuple(series))

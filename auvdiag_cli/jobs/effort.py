@@ -1,0 +1,40 @@
+"""Learning each actuator's normal share of the effort (`models.effort`) from normal logs:
+part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."""
+
+from collections.abc import Sequence
+from typing import Any
+
+from auvdiag_cli.vehicle.profile import Profile
+from models.command_relations import RelationLog
+from models.effort import DEFAULT_FALSE_ALARM_RATE
+from models.effort_model import EffortLog, EffortModel, learn_effort
+
+NO_GROUPS = ("not judged (the profile declares no actuators that act alike: add [[effort]] "
+             "groups)")
+
+
+def effort_log(log: RelationLog, profile: Profile) -> EffortLog:
+    """The steps an effort share may speak for are those a command relation may: operating,
+    outside the DMS runs (fixed commands, not a controller's)."""
+    return EffortLog(log.name, log.commands, log.usable, profile.command_names)
+
+
+def learn_effort_entry(logs: Sequence[RelationLog], profile: Profile,
+                       false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE
+                       ) -> tuple[dict[str, Any], list[str]]:
+    """The model.json ``effort`` entry (or why there is none), and notes on logs left out."""
+    if not profile.effort_groups:
+        return {"refused": NO_GROUPS}, []
+    model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
+                                profile.dt_s, false_alarm_rate)
+    if model is None:
+        return {"refused": "not judged (the actuators of its groups never operate in these "
+                           "logs)"}, notes
+    return model.to_json(), notes
+
+
+def refit_effort(model: EffortModel, logs: Sequence[RelationLog], profile: Profile,
+                 false_alarm_rate: float | None) -> tuple[EffortModel, list[str]]:
+    """``model`` with these normal logs added (those it already holds are not counted twice)
+    and, when given, a new false-alarm budget."""
+    return model.with_logs([effort_log(g, profile) for g in logs], false_alarm_rate)

@@ -1,0 +1,233 @@
+"""The effort each actuator carries: its steady share of what the controller asks of the
+actuators that act alike (the four rotors of a quadrotor, the horizontal thrusters of a
+vectored ROV), learnt per vehicle from normal logs.
+
+A controller holding attitude and depth drives a weak thruster or a damaged propeller
+harder, so the fault shows in the commands' steady *level*, not in the motion and not in
+their variation (mostly the controller reacting to noise). A healthy vehicle's shares are
+not equal (centre of mass, trim, wear), so each is learnt, with its spread between normal
+logs. Effort of actuator i at a step: |command_i| / |factor_i| (the frame's mixing factor:
+the share it carries by design); the group's level is the mean effort; a span's share is
+Σ effort_i / Σ level over its steady steps (the level weights the steps: a share at idle
+means little). Steady: operating, and the level at least ``min_level``.
+
+Noise model of a span's departure from normal (share − normal share): a between-log offset
+(spread σ_b, measured between normal logs) plus within-log noise that averages out over the
+span (σ_w for one window of W seconds, measured between a log's windows). For a span of T
+seconds: σ(T)² = σ_b² + σ_w² · W · (1/T − 1/T_typ), where σ_b is measured on logs of the
+typical steady time T_typ. A new log's z = departure / (σ(T) √(1 + 1/n)) is Student-t with
+n − 1 degrees of freedom under normal operation (n normal logs)."""
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from models.student_t import quantile
+
+LEVEL_BINS = 3                # operating conditions: the level's terciles on normal logs
+MIN_LOGS = 3                  # normal logs needed to judge a group
+MIN_WINDOWS = 2               # steady windows a log needs to be summarised or judged
+CONDITIONED_GAIN = 0.9        # condition on the level only when it cuts the spread this much
+MIN_BIN_LOGS = 2              # logs with steady time in a level bin for its own share
+SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
+WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the rest: later starts
+DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
+
+
+@dataclass(frozen=True)
+class EffortGroup:
+    """Actuators that act alike on the vehicle (from the profile)."""
+
+    name: str
+    members: tuple[str, ...]          # command names
+    factors: tuple[float, ...]        # |mixing factor| of each: the share it carries by design
+    min_level: float | None = None    # steady from this level up; None: learnt
+    window_s: float | None = None     # judging window; None: a sixth of a typical log
+
+
+def efforts(commands: np.ndarray, factors: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+    """(effort per step and actuator, the group's level per step) of the group's commands."""
+    effort = np.abs(commands) / np.asarray(factors, float)
+    return effort, effort.mean(axis=1)
+
+
+@dataclass(frozen=True)
+class GroupLog:
+    """One log's steady effort in one group, as a model keeps it to refit from."""
+
+    log: str
+    steady_s: float
+    effort: np.ndarray       # (bins, members): Σ effort over the steady steps of each level bin
+    level: np.ndarray        # (bins,): Σ level
+    within_var: np.ndarray   # (members,): variance of its windows' shares about its own
+    windows: int
+
+    @property
+    def share(self) -> np.ndarray:
+        return self.effort.sum(axis=0) / self.level.sum()
+
+    def to_json(self) -> dict[str, Any]:
+        return {"log": self.log, "steady_s": round(self.steady_s, 3),
+                "effort": self.effort.round(6).tolist(), "level": self.level.round(6).tolist(),
+                "within_var": self.within_var.round(9).tolist(), "windows": self.windows}
+
+    @classmethod
+    def from_json(cls, entry: dict[str, Any]) -> "GroupLog":
+        return cls(str(entry["log"]), float(entry["steady_s"]), np.asarray(entry["effort"], float),
+                   np.asarray(entry["level"], float), np.asarray(entry["within_var"], float),
+                   int(entry["windows"]))
+
+
+def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Shares over consecutive windows of ``window_steps`` steady steps (the last partial
+    window dropped), and the index of each window's last step."""
+    count = len(level) // window_steps
+    used = count * window_steps
+    sums = effort[:used].reshape(count, window_steps, -1).sum(axis=1)
+    levels = level[:used].reshape(count, window_steps).sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return sums / levels[:, None], np.arange(count) * window_steps + window_steps - 1
+
+
+def summarise(name: str, effort: np.ndarray, level: np.ndarray, edges: np.ndarray,
+              window_steps: int, dt_s: float) -> GroupLog | None:
+    """A log's steady steps (already selected) as a `GroupLog`; None when they make fewer
+    than MIN_WINDOWS windows."""
+    if len(level) < MIN_WINDOWS * window_steps or level.sum() <= 0:
+        return None
+    bins = np.digitize(level, edges)
+    sums = np.zeros((len(edges) + 1, effort.shape[1]))
+    np.add.at(sums, bins, effort)
+    levels = np.bincount(bins, weights=level, minlength=len(edges) + 1)
+    shares, _ = window_shares(effort, level, window_steps)
+    own = effort.sum(axis=0) / level.sum()
+    within = ((shares - own) ** 2).sum(axis=0) / (len(shares) - 1)
+    return GroupLog(name, len(level) * dt_s, sums, levels, within, len(shares))
+
+
+def _bin_means(logs: Sequence[GroupLog], conditioned: bool) -> np.ndarray:
+    """(bins, members): the normal share in each level bin (every bin the pooled share when
+    not conditioned, or where fewer than MIN_BIN_LOGS logs reach the bin)."""
+    effort = np.sum([g.effort for g in logs], axis=0)
+    level = np.sum([g.level for g in logs], axis=0)
+    pooled = effort.sum(axis=0) / level.sum()
+    means = np.tile(pooled, (len(level), 1))
+    if conditioned:
+        reached = np.sum([g.level > 0 for g in logs], axis=0)
+        for b in np.flatnonzero(reached >= MIN_BIN_LOGS):
+            means[b] = effort[b] / level[b]
+    return means
+
+
+def expected_share(means: np.ndarray, level: np.ndarray) -> np.ndarray:
+    """The normal share of a span with this much level in each bin (its own mix of
+    operating conditions)."""
+    return np.asarray(level @ means / level.sum())
+
+
+def _departures(logs: Sequence[GroupLog], conditioned: bool, leave_out: bool) -> np.ndarray:
+    """(logs, members): each log's share minus the normal share, the normal share fitted on
+    every log, or with ``leave_out`` on the others."""
+    rows = []
+    for i, log in enumerate(logs):
+        fit = [g for j, g in enumerate(logs) if j != i] if leave_out else logs
+        rows.append(log.share - expected_share(_bin_means(fit, conditioned), log.level))
+    return np.array(rows)
+
+
+@dataclass(frozen=True)
+class GroupFit:
+    """A group's normal effort, fitted from its normal logs."""
+
+    group: EffortGroup
+    edges: np.ndarray          # level bin edges
+    min_level: float
+    window_s: float
+    conditioned: bool          # the share depends on the level (kept when it cut the spread)
+    means: np.ndarray          # (bins, members)
+    spread: np.ndarray         # (members,) σ_b: between logs, for a log of typical length
+    within: np.ndarray         # (members,) σ_w: between one log's windows
+    typical_s: float           # median steady time of a normal log
+    logs: int
+    dof: float                 # of the spread's estimate
+    loo_z: np.ndarray          # (logs, members): each normal log judged by the others
+
+    def sigma(self, span_s: float | np.ndarray) -> np.ndarray:
+        """(…, members): σ(T) of a span of ``span_s`` steady seconds."""
+        span = np.asarray(span_s, float)[..., None]
+        extra = self.within ** 2 * self.window_s * (1 / span - 1 / self.typical_s)
+        noise = np.maximum(self.spread ** 2 + extra, self.within ** 2 * self.window_s / span)
+        return np.asarray(np.sqrt(np.maximum(noise, SPREAD_FLOOR ** 2))
+                          * math.sqrt(1 + 1 / self.logs))
+
+
+def fit_group(group: EffortGroup, logs: Sequence[GroupLog], edges: np.ndarray,
+              min_level: float, window_s: float) -> GroupFit:
+    """The normal shares (conditioned on the level where that validates better, leave one
+    log out), their spreads, and each normal log's z judged by the others."""
+    pooled = np.sqrt((_departures(logs, False, True) ** 2).mean())
+    conditioned = bool(np.sqrt((_departures(logs, True, True) ** 2).mean())
+                       <= CONDITIONED_GAIN * pooled)
+    n = len(logs)
+    departures = _departures(logs, conditioned, False)
+    between = np.sqrt((departures ** 2).sum(axis=0) / (n - 1))
+    windows = sum(g.windows for g in logs)
+    within = np.sqrt(np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0)
+                     / max(1, windows - n))
+    typical = float(np.median([g.steady_s for g in logs]))
+    floor = within * math.sqrt(window_s / typical)
+    # With few logs, the windows inside them say how much a log's share wanders at least.
+    spread = np.maximum(between, floor)
+    dof = float(n - 1) if (between >= floor).all() else float(max(n - 1, windows - n))
+    fit = GroupFit(group, edges, min_level, window_s, conditioned, _bin_means(logs, conditioned),
+                   spread, within, typical, n, dof, np.zeros((n, len(group.members))))
+    loo = []
+    for i, log in enumerate(logs):
+        others = [g for j, g in enumerate(logs) if j != i]
+        rest = fit_group_fixed(fit, others)
+        departure = log.share - expected_share(rest.means, log.level)
+        loo.append(departure / rest.sigma(log.steady_s))
+    return replace(fit, loo_z=np.array(loo))
+
+
+def fit_group_fixed(fit: GroupFit, logs: Sequence[GroupLog]) -> GroupFit:
+    """``fit`` refitted on other logs with its choices (conditioning, bins) kept."""
+    n = len(logs)
+    departures = _departures(logs, fit.conditioned, False)
+    between = np.sqrt((departures ** 2).sum(axis=0) / max(1, n - 1))
+    typical = float(np.median([g.steady_s for g in logs]))
+    spread = np.maximum(between, fit.within * math.sqrt(fit.window_s / typical))
+    return replace(fit, means=_bin_means(logs, fit.conditioned), spread=spread,
+                   typical_s=typical, logs=n)
+
+
+@dataclass(frozen=True)
+class Thresholds:
+    """z thresholds for a false-alarm budget, and what leave-one-log-out said of them."""
+
+    false_alarm_rate: float      # per log, the budget over every judged actuator
+    actuators: int               # judged actuators (the budget's Bonferroni split)
+    inflation: float             # ≥ 1: how much wider the normal logs scattered than modelled
+
+    def whole_log(self, fit: GroupFit) -> float:
+        share = WHOLE_LOG_BUDGET * self.false_alarm_rate / self.actuators
+        return self.inflation * quantile(1 - share, fit.dof)
+
+    def later_start(self, fit: GroupFit, starts: int) -> float:
+        """For the departure from one of ``starts`` later window starts to the end."""
+        share = (1 - WHOLE_LOG_BUDGET) * self.false_alarm_rate / (self.actuators
+                                                                  * max(1, starts))
+        return self.inflation * quantile(1 - share, fit.dof)
+
+
+def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:
+    """The budget split over the actuators; widened where the normal logs, each judged by
+    the others, scattered more than Student's t says (median |z| against its quartile)."""
+    actuators = sum(len(f.group.members) for f in fits)
+    ratios = [float(np.median(np.abs(f.loo_z))) / quantile(0.75, max(1.0, f.logs - 2.0))
+              for f in fits]
+    return Thresholds(false_alarm_rate, actuators, max(1.0, *ratios))

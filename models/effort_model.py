@@ -1,0 +1,219 @@
+"""A vehicle's normal effort model: every group's fit from normal logs, the thresholds for
+a false-alarm budget, and the per-log summaries it was fitted from (so that `calibrate`
+can add normal logs and refit, and the model file says what it rests on). Stored in
+model.json as the ``effort`` entry; the fit is recomputed from the summaries at load, so
+the numbers a report shows and the ones that judged can never drift apart."""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from models.effort import (
+    DEFAULT_FALSE_ALARM_RATE,
+    LEVEL_BINS,
+    MIN_LOGS,
+    MIN_WINDOWS,
+    EffortGroup,
+    GroupFit,
+    GroupLog,
+    Thresholds,
+    efforts,
+    fit_group,
+    summarise,
+    thresholds_for,
+)
+
+FORMAT_VERSION = 1
+MIN_WINDOW_S, MAX_WINDOW_S = 2.0, 30.0
+WINDOWS_PER_LOG = 6           # the window: this fraction of a typical log's steady time
+IDLE_LEVEL = 1e-3             # a level this low is an actuator at rest, not operating
+LEARNT_MIN_LEVEL = 0.5        # of the median operating level: steady from there up
+
+
+@dataclass(frozen=True)
+class EffortLog:
+    """One log's commands on the model grid, and the steps that may be judged."""
+
+    name: str
+    commands: np.ndarray          # (steps, n_commands)
+    usable: np.ndarray            # (steps,) operating, not a DMS run
+    command_names: tuple[str, ...]
+
+    def group_efforts(self, group: EffortGroup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(effort, level, usable) of the group's actuators; NaN commands are not usable."""
+        columns = [self.command_names.index(name) for name in group.members]
+        selected = self.commands[:, columns]
+        effort, level = efforts(np.nan_to_num(selected), group.factors)
+        return effort, level, self.usable & np.isfinite(selected).all(axis=1)
+
+
+@dataclass(frozen=True)
+class GroupSetup:
+    """What a group's fit fixes before fitting: the steady level, bins and window."""
+
+    group: EffortGroup
+    min_level: float
+    edges: np.ndarray
+    window_s: float
+
+    def steady(self, level: np.ndarray, usable: np.ndarray) -> np.ndarray:
+        return usable & (level >= self.min_level)
+
+    def summarise(self, log: EffortLog, dt_s: float) -> GroupLog | None:
+        effort, level, usable = log.group_efforts(self.group)
+        steady = self.steady(level, usable)
+        return summarise(log.name, effort[steady], level[steady], self.edges,
+                         self.window_steps(dt_s), dt_s)
+
+    def window_steps(self, dt_s: float) -> int:
+        return max(1, round(self.window_s / dt_s))
+
+    def needs_s(self) -> float:
+        return MIN_WINDOWS * self.window_s
+
+
+@dataclass(frozen=True)
+class EffortModel:
+    dt_s: float
+    false_alarm_rate: float
+    setups: tuple[GroupSetup, ...]
+    summaries: tuple[tuple[GroupLog, ...], ...]    # per setup
+    fits: tuple[GroupFit | None, ...]              # None: too few logs to judge the group
+    refused: tuple[str | None, ...]                # per setup: why it is not judged
+    thresholds: Thresholds | None
+
+    @classmethod
+    def fitted(cls, setups: Sequence[GroupSetup], summaries: Sequence[Sequence[GroupLog]],
+               dt_s: float, false_alarm_rate: float) -> "EffortModel":
+        fits: list[GroupFit | None] = []
+        refused: list[str | None] = []
+        for setup, logs in zip(setups, summaries, strict=True):
+            if len(logs) < MIN_LOGS:
+                fits.append(None)
+                refused.append(
+                    f"not judged (needs {MIN_LOGS} normal logs with {setup.needs_s():.0f} s "
+                    f"of steady effort each, at least {setup.min_level:.3g} of full scale; "
+                    f"had {len(logs)})")
+                continue
+            fits.append(fit_group(setup.group, logs, setup.edges, setup.min_level,
+                                  setup.window_s))
+            refused.append(None)
+        judged = [f for f in fits if f is not None]
+        return cls(dt_s, false_alarm_rate, tuple(setups), tuple(tuple(s) for s in summaries),
+                   tuple(fits), tuple(refused),
+                   thresholds_for(judged, false_alarm_rate) if judged else None)
+
+    @property
+    def judges_anything(self) -> bool:
+        return self.thresholds is not None
+
+    def with_logs(self, logs: Sequence[EffortLog], false_alarm_rate: float | None
+                  ) -> tuple["EffortModel", list[str]]:
+        """This model refitted with more normal logs (each summarised with the model's own
+        levels, bins and windows), and what was left out."""
+        notes: list[str] = []
+        summaries = []
+        for setup, kept in zip(self.setups, self.summaries, strict=True):
+            known = {g.log for g in kept}
+            added = list(kept)
+            for log in logs:
+                summary = setup.summarise(log, self.dt_s)
+                if summary is None:
+                    notes.append(f"{log.name}: too little steady effort in {setup.group.name} "
+                                 f"(needs {setup.needs_s():.0f} s)")
+                elif summary.log not in known:
+                    added.append(summary)
+            summaries.append(added)
+        rate = self.false_alarm_rate if false_alarm_rate is None else false_alarm_rate
+        return EffortModel.fitted(self.setups, summaries, self.dt_s, rate), notes
+
+    def to_json(self) -> dict[str, Any]:
+        groups = []
+        for setup, logs, fit, why in zip(self.setups, self.summaries, self.fits, self.refused,
+                                         strict=True):
+            entry: dict[str, Any] = {
+                "name": setup.group.name, "members": list(setup.group.members),
+                "factors": list(setup.group.factors), "min_level": round(setup.min_level, 6),
+                "level_edges": setup.edges.round(6).tolist(), "window_s": setup.window_s,
+                "logs": [g.to_json() for g in logs]}
+            if fit is None:
+                entry["refused"] = why
+            else:
+                entry["normal"] = _readable(fit, self.thresholds)
+            groups.append(entry)
+        return {"version": FORMAT_VERSION, "dt_s": self.dt_s,
+                "false_alarm_rate": self.false_alarm_rate, "groups": groups}
+
+    @classmethod
+    def from_json(cls, entry: dict[str, Any]) -> "EffortModel":
+        if entry.get("version") != FORMAT_VERSION:
+            raise ValueError(f"effort model version {entry.get('version')} is not supported")
+        setups, summaries = [], []
+        for g in entry["groups"]:
+            group = EffortGroup(str(g["name"]), tuple(g["members"]),
+                                tuple(float(f) for f in g["factors"]), float(g["min_level"]),
+                                float(g["window_s"]))
+            setups.append(GroupSetup(group, float(g["min_level"]),
+                                     np.asarray(g["level_edges"], float), float(g["window_s"])))
+            summaries.append([GroupLog.from_json(s) for s in g["logs"]])
+        return cls.fitted(setups, summaries, float(entry["dt_s"]),
+                          float(entry["false_alarm_rate"]))
+
+
+def _readable(fit: GroupFit, thresholds: Thresholds | None) -> dict[str, Any]:
+    """What a reader of model.json wants to see; never read back."""
+    share = fit.means.mean(axis=0) if not fit.conditioned else fit.means
+    return {"share": np.round(share, 4).tolist(), "spread": fit.spread.round(4).tolist(),
+            "within_window": fit.within.round(4).tolist(), "conditioned_on_level":
+            fit.conditioned, "logs": fit.logs, "typical_steady_s": round(fit.typical_s, 2),
+            "threshold_z": None if thresholds is None else round(thresholds.whole_log(fit), 3),
+            "leave_one_out_max_z": round(float(fit.loo_z.max()), 3)}
+
+
+def learn_effort(groups: Sequence[EffortGroup], logs: Sequence[EffortLog], dt_s: float,
+                 false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE
+                 ) -> tuple[EffortModel | None, list[str]]:
+    """The effort model of ``groups`` from normal ``logs`` (None when no group has any
+    steady effort at all), and notes on the logs left out."""
+    setups = [s for g in groups if (s := _setup(g, logs, dt_s)) is not None]
+    if not setups:
+        return None, []
+    notes: list[str] = []
+    summaries = []
+    for setup in setups:
+        kept = []
+        for log in logs:
+            summary = setup.summarise(log, dt_s)
+            if summary is None:
+                notes.append(f"{log.name}: too little steady effort in {setup.group.name} "
+                             f"(needs {setup.needs_s():.0f} s)")
+            else:
+                kept.append(summary)
+        summaries.append(kept)
+    return EffortModel.fitted(setups, summaries, dt_s, false_alarm_rate), notes
+
+
+def _setup(group: EffortGroup, logs: Sequence[EffortLog], dt_s: float) -> GroupSetup | None:
+    """The steady level (the profile's, or half the median operating level), the level
+    terciles and the window (the profile's, or a sixth of a typical log's steady time)."""
+    usable_levels = []
+    for log in logs:
+        _, level, usable = log.group_efforts(group)
+        usable_levels.append(level[usable & (level > IDLE_LEVEL)])
+    operating = np.concatenate(usable_levels) if usable_levels else np.empty(0)
+    if not operating.size:
+        return None
+    min_level = group.min_level if group.min_level is not None else float(
+        LEARNT_MIN_LEVEL * np.median(operating))
+    steady = operating[operating >= min_level]
+    if not steady.size:
+        return None
+    edges = np.quantile(steady, np.arange(1, LEVEL_BINS) / LEVEL_BINS)
+    window_s = group.window_s
+    if window_s is None:
+        per_log = [float((u >= min_level).sum()) * dt_s for u in usable_levels]
+        window_s = float(np.clip(np.median(per_log) / WINDOWS_PER_LOG, MIN_WINDOW_S,
+                                 MAX_WINDOW_S))
+    return GroupSetup(group, min_level, edges, window_s)
