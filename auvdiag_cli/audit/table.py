@@ -12,7 +12,8 @@ FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "no
                  "verdict", "completeness", "not_judged", "component", "candidates", "case",
                  "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
-                 "substituted_signal", "weakened_thrust_fraction", "recommended_dms",
+                 "substituted_signal", "weakened_thrust_fraction", "driven_harder",
+                 "worst_effort_ratio", "worst_effort_actuator", "recommended_dms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
 
 
@@ -30,6 +31,14 @@ def _worst_g(segments: list[dict[str, Any]], not_judged: Sequence[str]
     return worst
 
 
+def _worst_effort(record: dict[str, Any]) -> tuple[float | None, str | None]:
+    """The judged actuator whose share of the effort came closest to its threshold."""
+    shares = (record.get("actuators") or {}).get("shares") or {}
+    judged = [(entry["over_threshold"], name) for name, entry in shares.items()
+              if entry.get("over_threshold") is not None]
+    return max(judged, default=(None, None))
+
+
 def flatten(record: dict[str, Any]) -> dict[str, Any]:
     """One table row from a stored per-log record (a report, or an error)."""
     segments = record.get("segments") or []
@@ -38,6 +47,7 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
     degradation = record.get("degradation") or {}
     active = record.get("active_diagnosis") or {}
     audit = record.get("audit", {})
+    effort_ratio, effort_actuator = _worst_effort(record)
     row: dict[str, Any] = {
         "log": record["log"], "format": record.get("format"), "vehicle": record.get("vehicle"),
         "start_time_utc": record.get("start_time_utc"), "duration_s": record.get("duration_s"),
@@ -54,6 +64,10 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
         "routine_segments": sum(1 for s in segments if s["mode"] == "routine"),
         "substituted_signal": substitution.get("signal"),
         "weakened_thrust_fraction": degradation.get("thrust_fraction"),
+        "driven_harder": ";".join(name for name, entry in (
+            (record.get("actuators") or {}).get("shares") or {}).items()
+            if entry.get("driven_harder")),
+        "worst_effort_ratio": effort_ratio, "worst_effort_actuator": effort_actuator,
         "recommended_dms": ";".join(active.get("recommended_dms") or []),
         "model": (record.get("model") or {}).get("name"),
         "error": record.get("error"), "log_sha256": audit.get("log_sha256"),

@@ -4,7 +4,9 @@ that flags a vehicle whose margin is shrinking before any dive alarms.
 
 The margin of a dive on a signal is its peak ratio to the threshold: g over the judged
 sensors (the largest over the segments), an actuator's extra effort over what its command
-relation allows. 1 is an alarm. The trend test is Mann-Kendall's rank test on a vehicle's
+relation allows, an actuator's share of its group's effort (its departure from normal over
+the threshold, "motor_3 share": a share creeping up over weeks of dives is a thruster
+fouling or wearing). 1 is an alarm. The trend test is Mann-Kendall's rank test on a vehicle's
 last N dives (one-sided: the ratio rising), with Sen's slope for its size; a signal is
 flagged when the test's p-value is below alpha divided by the number of the vehicle's
 signals (Bonferroni) and none of those dives alarmed on it. The
@@ -80,7 +82,8 @@ def vehicle_of(log: str) -> str:
 
 
 def dive_margins(record: dict[str, Any]) -> dict[str, float]:
-    """A report's peak ratio to the threshold per judged sensor and per judged actuator."""
+    """A report's peak ratio to the threshold per judged sensor and per judged actuator
+    (its commands against the motion, and its share of the effort)."""
     not_judged = set(record.get("not_judged") or {})
     ratios: dict[str, float] = {}
     for segment in record.get("segments") or []:
@@ -94,6 +97,11 @@ def dive_margins(record: dict[str, Any]) -> dict[str, float]:
         if ratio is not None and math.isfinite(ratio) and actuator not in \
                 (check.get("not_judged") or {}):
             ratios[actuator] = float(ratio)
+    shares = (record.get("actuators") or {}).get("shares") or {}
+    for actuator, entry in shares.items():
+        ratio = entry.get("over_threshold")
+        if ratio is not None and math.isfinite(ratio):
+            ratios[f"{actuator} share"] = float(ratio)
     return ratios
 
 

@@ -10,8 +10,8 @@ import numpy as np
 from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
-from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.detection import binary_vector, decided_b, detect, first_alarm, look_up
+from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import apply_other_evidence, isolate

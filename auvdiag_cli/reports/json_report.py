@@ -7,6 +7,7 @@ from typing import Any
 from auvdiag_cli import __version__
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis
 from auvdiag_cli.engine.results import (
     EPOCH_CLOCK_NS,
@@ -53,6 +54,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "hypotheses": _hypotheses(diagnosis),
         "commands_check": _command_check(diagnosis.command_check),
         "start_check": _start_check(diagnosis),
+        "actuators": _actuators(diagnosis.effort_check),
         "active_diagnosis": _active(diagnosis),
         "substitution": _substitution(diagnosis.substitution),
         "model": diagnosis.model,
@@ -155,6 +157,22 @@ def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
             "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
             "explained": check.explained,
             "extra_effort": check.extra_effort}
+
+
+def _actuators(check: EffortCheck | None) -> dict[str, Any] | None:
+    """Each actuator's share of its group's effort against normal logs (null: the model has
+    no effort model)."""
+    if check is None:
+        return None
+    return {"summary": check.describe(), "judged": check.judged,
+            "false_alarm_rate": check.false_alarm_rate, "alarm_s": check.alarm_s,
+            "onset_s": check.onset_s, "named": list(check.named),
+            "shares": {a.name: {"group": a.group, "component": a.component, "share": a.share,
+                                "normal_share": a.normal_share, "spread": a.spread,
+                                "departure": a.departure, "over_threshold": a.ratio,
+                                "driven_harder": a.driven_harder,
+                                "judged": a.not_judged is None, "not_judged": a.not_judged}
+                       for a in check.actuators}}
 
 
 def _start_check(diagnosis: Diagnosis) -> dict[str, Any] | None:

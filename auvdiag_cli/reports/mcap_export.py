@@ -8,6 +8,8 @@ with a JSON schema, which both viewers plot without plugins. Topics (see the REA
   ``model`` (SM), ``g_percent``, ``threshold_percent``, ``b`` (0/1), and ``substituted``
   where Substituting Control replaced the sensor;
 - ``/auvdiag/commands``: the actuator commands, each model step;
+- ``/auvdiag/effort/GROUP``: each actuator's share of its group's effort, window by window,
+  and the normal share for the window's conditions (``NAME`` and ``NAME_normal``);
 - ``/auvdiag/segments``: one message at the start of each segment (DMS run or mission);
 - ``/auvdiag/events``: onset, detection and the verdict, as ``foxglove.Log`` messages (the
   Log panel lists them);
@@ -61,7 +63,7 @@ def _number(value: Any) -> float | None:
     return float(f"{number:.7g}") if math.isfinite(number) else None
 
 
-def _commands_schema(names: list[str]) -> dict[str, Any]:
+def _numbers_schema(names: list[str]) -> dict[str, Any]:
     return {"type": "object", "properties": {name: _NUMBER for name in names}}
 
 
@@ -124,6 +126,7 @@ def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path)
             channels = _Channels(writer)
             _write_time_histories(channels, document, series, times_ns)
             _write_segments(channels, document, start_ns)
+            _write_effort(channels, series, start_ns)
             _write_events(channels, document, start_ns, int(times_ns[-1]) if times_ns.size
                           else start_ns)
             writer.add_metadata("auvdiag", {
@@ -152,7 +155,7 @@ def _write_time_histories(channels: _Channels, document: dict[str, Any], series:
                "b": series["b"]}
     present = {key: values for key, values in columns.items()
                if values is not None and values.shape == (times_ns.size, len(names))}
-    commands_schema = _commands_schema(commands)
+    commands_schema = _numbers_schema(commands)
     for step, time_ns in enumerate(times_ns.tolist()):
         for column, name in enumerate(names):
             body = {key: _number(values[step, column]) for key, values in present.items()}
@@ -165,6 +168,21 @@ def _write_time_histories(channels: _Channels, document: dict[str, Any], series:
             channels.write(f"{TOPIC_PREFIX}/commands", "auvdiag.Commands",
                            {name: _number(series["commands"][step, k])
                             for k, name in enumerate(commands)}, time_ns, commands_schema)
+
+
+def _write_effort(channels: _Channels, series: Series, start_ns: int) -> None:
+    for k, group in enumerate(str(g) for g in series.get("effort_groups", [])):
+        members = [str(m) for m in series[f"effort_{k}_members"]]
+        fields = [name for m in members for name in (m, f"{m}_normal")]
+        schema = _numbers_schema(fields)
+        shares, normal = series[f"effort_{k}_shares"], series[f"effort_{k}_normal"]
+        for row, seconds in enumerate(series[f"effort_{k}_time_s"].tolist()):
+            body: dict[str, float | None] = {}
+            for i, member in enumerate(members):
+                body[member] = _number(shares[row, i])
+                body[f"{member}_normal"] = _number(normal[row, i])
+            channels.write(f"{TOPIC_PREFIX}/effort/{group}", "auvdiag.EffortShares", body,
+                           start_ns + round(seconds * 1e9), schema)
 
 
 def _write_segments(channels: _Channels, document: dict[str, Any], start_ns: int) -> None:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.errors import UsageError
 
@@ -30,6 +31,8 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
         series["measured"] = d.histories.matching.measured.astype(np.float32)
         series["modelled"] = d.histories.matching.modelled.astype(np.float32)
         series["g_percent"] = d.histories.matching.g_percent.astype(np.float32)
+    if d.effort_check is not None:
+        series.update(effort_series(d.effort_check))
     waypoints = [point for leg in d.mission_legs for point in leg.get("waypoints", [])]
     if waypoints:
         series["waypoints_m"] = np.asarray(waypoints, dtype=np.float64)
@@ -44,6 +47,18 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
         if loop is not None:
             series["closed_loop_time_s"] = loop.time_s
             series["closed_loop_m"] = np.column_stack([loop.x_m, loop.y_m])
+    return series
+
+
+def effort_series(check: EffortCheck) -> Series:
+    """Each judged group's window shares, normal shares and band, keyed by group number."""
+    series: Series = {"effort_groups": np.asarray([g.group for g in check.series], dtype=str)}
+    for k, group in enumerate(check.series):
+        series[f"effort_{k}_members"] = np.asarray(group.members, dtype=str)
+        series[f"effort_{k}_time_s"] = group.time_s
+        series[f"effort_{k}_shares"] = group.shares.astype(np.float32)
+        series[f"effort_{k}_normal"] = group.normal.astype(np.float32)
+        series[f"effort_{k}_band"] = group.band.astype(np.float32)
     return series
 
 

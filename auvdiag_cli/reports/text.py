@@ -5,6 +5,7 @@ import textwrap
 
 from adapters import TopicInfo
 from auvdiag_cli.engine.active import ActiveDiagnosis
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import HypothesisTest
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, Diagnosis, Verdict
 from auvdiag_cli.engine.substitution import Substitution
@@ -51,6 +52,7 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines += [f"    {name}: {why}" for name, why in check.not_judged.items()]
     if d.start_check is not None:
         lines.append("  start: " + d.start_check.describe(d.sensor_units))
+    lines += effort_lines(d.effort_check)
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"
@@ -61,6 +63,24 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines += [f"  note: {note}" for note in d.notes]
     lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
     return [line for line in lines if line]
+
+
+def effort_lines(check: EffortCheck | None) -> list[str]:
+    """The effort line and each actuator's share against its normal band (or why not)."""
+    if check is None:
+        return []
+    lines = ["  effort: " + check.describe()]
+    shares = [f"{a.name} {a.share:.3f} ({a.normal_share:.3f} ± {a.spread:.3f}, "
+              f"{a.departure:+.0%})" for a in check.actuators
+              if a.share is not None and a.normal_share is not None
+              and a.spread is not None and a.departure is not None]
+    if shares:
+        lines += textwrap.wrap("shares (normal ± spread): " + ", ".join(shares),
+                               width=DETAIL_WIDTH, initial_indent="    ",
+                               subsequent_indent="      ")
+    reasons = dict.fromkeys(f"{a.group}: {a.not_judged}" for a in check.actuators
+                            if a.not_judged is not None)
+    return lines + [f"    {reason}" for reason in reasons]
 
 
 def _active_lines(active: ActiveDiagnosis | None) -> list[str]:

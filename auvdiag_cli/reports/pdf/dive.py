@@ -8,6 +8,7 @@ from auvdiag_cli.reports.json_report import named_components
 from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
 from auvdiag_cli.reports.pdf.plots import (
     commands_page,
+    effort_page,
     residual_page,
     sensors_page,
     substitution_page,
@@ -102,7 +103,7 @@ def render_dive_report(document: dict[str, Any], series: Series | None, target: 
         pages += write_text_pages(pdf, detail_lines(document), title, "Segments and evidence")
         if series is None or "measured" not in series:
             return pages
-        for draw in (sensors_page, residual_page, commands_page, substitution_page):
+        for draw in (sensors_page, residual_page, commands_page, effort_page, substitution_page):
             figure = draw(document, series)
             if figure is not None:
                 figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])

@@ -103,6 +103,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     commands = document.get("commands_check")
     if commands:
         facts.append(("Commands vs motion", commands["summary"]))
+    actuators = document.get("actuators")
+    if actuators and actuators.get("judged"):
+        facts.append(("Effort shares", actuators["summary"]))
     start = document.get("start_check")
     if start and start.get("judged"):
         facts.append(("Start", start["summary"]))

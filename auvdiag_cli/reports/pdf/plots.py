@@ -102,6 +102,33 @@ def commands_page(document: dict[str, Any], series: Series) -> "Figure":
     return figure
 
 
+def effort_page(document: dict[str, Any], series: Series) -> "Figure | None":
+    """Each actuator's share of its group's effort, window by window, against the normal
+    share for the same conditions (dashed) and its band of ± one window's spread."""
+    groups = [str(g) for g in series.get("effort_groups", [])]
+    if not groups:
+        return None
+    shares = (document.get("actuators") or {}).get("shares", {})
+    figure, axes = _stacked(document, len(groups),
+                            "Share of the group's effort per actuator (1 = the group's mean); "
+                            "dashed: normal share, band: ± one window's normal spread")
+    for k, (ax, group) in enumerate(zip(axes, groups, strict=True)):
+        t = series[f"effort_{k}_time_s"]
+        for i, name in enumerate(_names(series, f"effort_{k}_members")):
+            colour = COMMAND_CYCLE[i % len(COMMAND_CYCLE)]
+            harder = shares.get(name, {}).get("driven_harder", False)
+            normal = series[f"effort_{k}_normal"][:, i]
+            band = float(series[f"effort_{k}_band"][i])
+            ax.fill_between(t, normal - band, normal + band, color=colour, alpha=0.12, lw=0)
+            ax.plot(t, normal, color=colour, lw=0.8, ls="--")
+            ax.plot(t, series[f"effort_{k}_shares"][:, i], color=colour, marker=".",
+                    lw=2.2 if harder else 1.0,
+                    label=f"{name} (driven harder)" if harder else name)
+        ax.set_ylabel(f"share of {group}")
+    _figure_legend(figure, axes)
+    return figure
+
+
 def substitution_page(document: dict[str, Any], series: Series) -> "Figure | None":
     substitution = document.get("substitution")
     if substitution is None or "substituted" not in series:
