@@ -69,6 +69,12 @@ class GroupLog:
     def share(self) -> np.ndarray:
         return self.effort.sum(axis=0) / self.level.sum()
 
+    @property
+    def identity(self) -> tuple[Any, ...]:
+        """Equal for the same log summarised twice (names alone repeat across folders)."""
+        return (self.log, round(self.steady_s, 3),
+                tuple(np.round(self.effort.sum(axis=0), 4).tolist()))
+
     def to_json(self) -> dict[str, Any]:
         return {"log": self.log, "steady_s": round(self.steady_s, 3),
                 "effort": self.effort.round(6).tolist(), "level": self.level.round(6).tolist(),

@@ -116,14 +116,16 @@ class EffortModel:
         notes: list[str] = []
         summaries = []
         for setup, kept in zip(self.setups, self.summaries, strict=True):
-            known = {g.log for g in kept}
+            known = {g.identity for g in kept}
             added = list(kept)
             for log in logs:
                 summary = setup.summarise(log, self.dt_s)
                 if summary is None:
                     notes.append(f"{log.name}: too little steady effort in {setup.group.name} "
                                  f"(needs {setup.needs_s():.0f} s)")
-                elif summary.log not in known:
+                elif summary.identity in known:
+                    notes.append(f"{log.name}: already among the model's normal logs")
+                else:
                     added.append(summary)
             summaries.append(added)
         rate = self.false_alarm_rate if false_alarm_rate is None else false_alarm_rate

@@ -154,6 +154,9 @@ def calibrate(
         "--floor-at-profile", help="Never set a threshold below the profile's for its mode "
                                    "(for few calibration logs, or signals a DMS hardly moves)."
     )] = False,
+    false_alarm_rate: Annotated[float | None, typer.Option(
+        "--false-alarm-rate", help="Effort shares: the share of normal logs allowed to alarm "
+                                   "(default: the model's, 0.01 when trained).")] = None,
 ) -> None:
     """Set the model's thresholds from the g it reaches on normal logs.
 
@@ -161,7 +164,10 @@ def calibrate(
     on the normal logs (zero false alarms there by construction; the implied rate is stated
     as a 95 % upper bound). Modes with under 30 s of data keep the profile's
     thresholds, raised where these logs need it.
-    With --faulty, those logs are diagnosed with the new thresholds to show the margin."""
+    With --faulty, those logs are diagnosed with the new thresholds to show the margin.
+    Where the profile groups actuators that act alike ([[effort]]), the normal effort
+    shares are refitted with these logs added (learnt from them if the model has none),
+    their thresholds set for --false-alarm-rate with each normal log judged by the others."""
     from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
     from auvdiag_cli.jobs.calibrate import write_metadata
     from auvdiag_cli.reports.training import calibration_lines
@@ -171,7 +177,7 @@ def calibrate(
     with user_errors(model):
         loaded = load_model(model)
         result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin,
-                                 floor_at_profile)
+                                 floor_at_profile, false_alarm_rate)
         write_metadata(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)

@@ -18,14 +18,16 @@ import numpy as np
 
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
-from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import raise_thresholds, start_reading
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.files import write_json
-from auvdiag_cli.jobs.relate import widen_thresholds
+from auvdiag_cli.jobs.effort import learn_effort_entry, refit_effort
+from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
+from models.effort import DEFAULT_FALSE_ALARM_RATE
 from models.store import METADATA_FILE, LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
@@ -86,6 +88,8 @@ class CalibrationResult:
     warnings: list[str]
     relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
     start_thresholds_raised: list[str]             # sensors whose start allowance was raised
+    effort: dict[str, Any] | None = None           # the refitted effort entry, if any
+    effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
 
 
 def _mode_key(segment_name: str) -> str:
@@ -143,18 +147,24 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5,
-              floor_at_profile: bool = False) -> CalibrationResult:
+              floor_at_profile: bool = False, false_alarm_rate: float | None = None
+              ) -> CalibrationResult:
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise)."""
+    trip on the next dive's noise). The effort model is refitted with these normal logs
+    added (``false_alarm_rate``: a new budget per log for its thresholds)."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
+    if false_alarm_rate is not None and not 0 < false_alarm_rate < 0.5:
+        raise UsageError("--false-alarm-rate must lie between 0 and 0.5 (a share of normal "
+                         f"logs), got {false_alarm_rate}")
     in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
-    diagnoses = [diagnose_ingested(ingest(path, profile), profile, base)
-                 for path in normal_logs]
+    ingested = [ingest(path, profile) for path in normal_logs]
+    diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
+    effort, effort_notes = _refit_effort(model, profile, ingested, false_alarm_rate)
     widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
                                  if p in in_sample], profile.sensor_names) if in_sample else {}
     factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
@@ -197,9 +207,29 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
         widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
-        raised, [profile.sensor_names[i] for i in starts_raised])
+        raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes))
     model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
+
+
+def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],
+                  false_alarm_rate: float | None) -> tuple[dict[str, Any] | None, list[str]]:
+    """The effort model with these normal logs added (learnt from them where the model has
+    none yet), written into ``model.metadata``; None where the profile has no groups."""
+    if not profile.effort_groups:
+        return None, []
+    relations = [relation_log(log, profile) for log in logs]
+    if model.effort is None:
+        entry, notes = learn_effort_entry(
+            relations, profile, DEFAULT_FALSE_ALARM_RATE if false_alarm_rate is None
+            else false_alarm_rate)
+    else:
+        refit, notes = refit_effort(model.effort, relations, profile, false_alarm_rate)
+        entry = refit.to_json()
+    if "groups" in entry:
+        model.metadata["effort"] = entry
+        model.__dict__.pop("effort", None)        # the cached parse is stale
+    return entry, notes
 
 
 def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],

@@ -164,5 +164,8 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
     if result.start_thresholds_raised:
         lines.append("  start: how far a start may lie from the normal start raised so that no "
                      "calibration log alarms: " + ", ".join(result.start_thresholds_raised))
+    if result.effort is not None:
+        lines += effort_lines(result.effort)
+        lines += [f"  left out: {note}" for note in result.effort_notes]
     lines += [f"warning: {warning}" for warning in result.warnings]
     return lines
