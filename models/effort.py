@@ -27,7 +27,9 @@ import numpy as np
 
 from models.student_t import quantile
 
-LEVEL_BINS = 3                # operating conditions: the level's terciles on normal logs
+LEVEL_BINS = 3                # operating conditions of a one-way group (rotors): the level's
+                              # terciles on normal logs; of a two-way group (a vectored ROV's
+                              # thrusters): which of them push in reverse
 MIN_LOGS = 3                  # normal logs needed to judge a group
 MIN_WINDOWS = 2               # steady windows a log needs to be summarised or judged
 CONDITIONED_GAIN = 0.9        # condition on the level only when it cuts the spread this much
@@ -99,16 +101,15 @@ def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
         return sums / levels[:, None], np.arange(count) * window_steps + window_steps - 1
 
 
-def summarise(name: str, effort: np.ndarray, level: np.ndarray, edges: np.ndarray,
-              window_steps: int, dt_s: float) -> GroupLog | None:
-    """A log's steady steps (already selected) as a `GroupLog`; None when they make fewer
-    than MIN_WINDOWS windows."""
+def summarise(name: str, effort: np.ndarray, level: np.ndarray, bins: np.ndarray,
+              n_bins: int, window_steps: int, dt_s: float) -> GroupLog | None:
+    """A log's steady steps (already selected, each in its operating-condition bin) as a
+    `GroupLog`; None when they make fewer than MIN_WINDOWS windows."""
     if len(level) < MIN_WINDOWS * window_steps or level.sum() <= 0:
         return None
-    bins = np.digitize(level, edges)
-    sums = np.zeros((len(edges) + 1, effort.shape[1]))
+    sums = np.zeros((n_bins, effort.shape[1]))
     np.add.at(sums, bins, effort)
-    levels = np.bincount(bins, weights=level, minlength=len(edges) + 1)
+    levels = np.bincount(bins, weights=level, minlength=n_bins)
     shares, _ = window_shares(effort, level, window_steps)
     own = effort.sum(axis=0) / level.sum()
     within = ((shares - own) ** 2).sum(axis=0) / (len(shares) - 1)
@@ -150,7 +151,6 @@ class GroupFit:
     """A group's normal effort, fitted from its normal logs."""
 
     group: EffortGroup
-    edges: np.ndarray          # level bin edges
     min_level: float
     window_s: float
     conditioned: bool          # the share depends on the level (kept when it cut the spread)
@@ -171,8 +171,8 @@ class GroupFit:
                           * math.sqrt(1 + 1 / self.logs))
 
 
-def fit_group(group: EffortGroup, logs: Sequence[GroupLog], edges: np.ndarray,
-              min_level: float, window_s: float) -> GroupFit:
+def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
+              window_s: float) -> GroupFit:
     """The normal shares (conditioned on the level where that validates better, leave one
     log out), their spreads, and each normal log's z judged by the others."""
     pooled = np.sqrt((_departures(logs, False, True) ** 2).mean())
@@ -189,7 +189,7 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], edges: np.ndarray,
     # With few logs, the windows inside them say how much a log's share wanders at least.
     spread = np.maximum(between, floor)
     dof = float(n - 1) if (between >= floor).all() else float(max(n - 1, windows - n))
-    fit = GroupFit(group, edges, min_level, window_s, conditioned, _bin_means(logs, conditioned),
+    fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
                    spread, within, typical, n, dof, np.zeros((n, len(group.members))))
     loo = []
     for i, log in enumerate(logs):

@@ -41,10 +41,13 @@ class EffortLog:
     usable: np.ndarray            # (steps,) operating, not a DMS run
     command_names: tuple[str, ...]
 
+    def group_commands(self, group: EffortGroup) -> np.ndarray:
+        columns = [self.command_names.index(name) for name in group.members]
+        return self.commands[:, columns]
+
     def group_efforts(self, group: EffortGroup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(effort, level, usable) of the group's actuators; NaN commands are not usable."""
-        columns = [self.command_names.index(name) for name in group.members]
-        selected = self.commands[:, columns]
+        selected = self.group_commands(group)
         effort, level = efforts(np.nan_to_num(selected), group.factors)
         return effort, level, self.usable & np.isfinite(selected).all(axis=1)
 
@@ -55,17 +58,37 @@ class GroupSetup:
 
     group: EffortGroup
     min_level: float
-    edges: np.ndarray
+    edges: np.ndarray        # level terciles (a one-way group's conditions)
     window_s: float
+    two_way: bool            # some actuator pushed in reverse on normal logs
+
+    @property
+    def n_bins(self) -> int:
+        return 2 ** len(self.group.members) if self.two_way else len(self.edges) + 1
+
+    def bins(self, commands: np.ndarray, level: np.ndarray) -> np.ndarray:
+        """Each step's operating condition: for a two-way group the pattern of actuators
+        pushing in reverse (forward, turning, backing off load them differently), else the
+        level's tercile (hover, climb)."""
+        if self.two_way:
+            return np.asarray((commands < 0) @ (1 << np.arange(commands.shape[1])), int)
+        return np.digitize(level, self.edges)
 
     def steady(self, level: np.ndarray, usable: np.ndarray) -> np.ndarray:
         return usable & (level >= self.min_level)
 
-    def summarise(self, log: EffortLog, dt_s: float) -> GroupLog | None:
+    def steady_steps(self, log: EffortLog) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                    np.ndarray]:
+        """(indices, effort, level, condition bin) of the log's steady steps."""
         effort, level, usable = log.group_efforts(self.group)
-        steady = self.steady(level, usable)
-        return summarise(log.name, effort[steady], level[steady], self.edges,
-                         self.window_steps(dt_s), dt_s)
+        steady = np.flatnonzero(self.steady(level, usable))
+        commands = np.nan_to_num(log.group_commands(self.group)[steady])
+        return steady, effort[steady], level[steady], self.bins(commands, level[steady])
+
+    def summarise(self, log: EffortLog, dt_s: float) -> GroupLog | None:
+        _, effort, level, bins = self.steady_steps(log)
+        return summarise(log.name, effort, level, bins, self.n_bins, self.window_steps(dt_s),
+                         dt_s)
 
     def window_steps(self, dt_s: float) -> int:
         return max(1, round(self.window_s / dt_s))
@@ -97,8 +120,7 @@ class EffortModel:
                     f"of steady effort each, at least {setup.min_level:.3g} of full scale; "
                     f"had {len(logs)})")
                 continue
-            fits.append(fit_group(setup.group, logs, setup.edges, setup.min_level,
-                                  setup.window_s))
+            fits.append(fit_group(setup.group, logs, setup.min_level, setup.window_s))
             refused.append(None)
         judged = [f for f in fits if f is not None]
         return cls(dt_s, false_alarm_rate, tuple(setups), tuple(tuple(s) for s in summaries),
@@ -139,6 +161,7 @@ class EffortModel:
                 "name": setup.group.name, "members": list(setup.group.members),
                 "factors": list(setup.group.factors), "min_level": round(setup.min_level, 6),
                 "level_edges": setup.edges.round(6).tolist(), "window_s": setup.window_s,
+                "two_way": setup.two_way,
                 "logs": [g.to_json() for g in logs]}
             if fit is None:
                 entry["refused"] = why
@@ -158,7 +181,8 @@ class EffortModel:
                                 tuple(float(f) for f in g["factors"]), float(g["min_level"]),
                                 float(g["window_s"]))
             setups.append(GroupSetup(group, float(g["min_level"]),
-                                     np.asarray(g["level_edges"], float), float(g["window_s"])))
+                                     np.asarray(g["level_edges"], float), float(g["window_s"]),
+                                     bool(g["two_way"])))
             summaries.append([GroupLog.from_json(s) for s in g["logs"]])
         return cls.fitted(setups, summaries, float(entry["dt_s"]),
                           float(entry["false_alarm_rate"]))
@@ -201,9 +225,12 @@ def _setup(group: EffortGroup, logs: Sequence[EffortLog], dt_s: float) -> GroupS
     """The steady level (the profile's, or half the median operating level), the level
     terciles and the window (the profile's, or a sixth of a typical log's steady time)."""
     usable_levels = []
+    reverse = False
     for log in logs:
         _, level, usable = log.group_efforts(group)
-        usable_levels.append(level[usable & (level > IDLE_LEVEL)])
+        active = usable & (level > IDLE_LEVEL)
+        usable_levels.append(level[active])
+        reverse |= bool((log.group_commands(group)[active] < -IDLE_LEVEL).any())
     operating = np.concatenate(usable_levels) if usable_levels else np.empty(0)
     if not operating.size:
         return None
@@ -218,4 +245,4 @@ def _setup(group: EffortGroup, logs: Sequence[EffortLog], dt_s: float) -> GroupS
         per_log = [float((u >= min_level).sum()) * dt_s for u in usable_levels]
         window_s = float(np.clip(np.median(per_log) / WINDOWS_PER_LOG, MIN_WINDOW_S,
                                  MAX_WINDOW_S))
-    return GroupSetup(group, min_level, edges, window_s)
+    return GroupSetup(group, min_level, edges, window_s, reverse)

@@ -116,12 +116,10 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
                  time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, float | None, float | None, EffortSeries, tuple]:
     """(ratio per actuator, onset_s, alarm_s, series, whole-log figures)."""
-    effort, level, usable = log.group_efforts(setup.group)
-    steady = np.flatnonzero(setup.steady(level, usable))
-    effort, level, times = effort[steady], level[steady], time_s[steady]
+    steady, effort, level, bins = setup.steady_steps(log)
+    times = time_s[steady]
     window = setup.window_steps(dt_s)
-    bins = np.digitize(level, setup.edges)
-    spans = _Spans(fit, *_cumulative(effort, level, bins, len(setup.edges) + 1), dt_s)
+    spans = _Spans(fit, *_cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
     whole_threshold = thresholds.whole_log(fit)
     starts = list(range(window, n - MIN_WINDOWS * window + 1, window))
@@ -129,7 +127,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     ratios = np.array([spans.z(s, n)[0] / t for s, t in candidates])     # (starts, members)
     per_actuator = ratios.max(axis=0)
-    level_by_bin = np.bincount(bins, weights=level, minlength=len(setup.edges) + 1)
+    level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
     normal = expected_share(fit.means, level_by_bin)
     figures = (share, normal, fit.sigma(n * dt_s))
@@ -149,7 +147,7 @@ def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndar
     shares, last = window_shares(effort, level, window)
     normal = np.array([expected_share(fit.means, np.bincount(
         bins[i - window + 1:i + 1], weights=level[i - window + 1:i + 1],
-        minlength=len(setup.edges) + 1)) for i in last]).reshape(len(last), -1)
+        minlength=setup.n_bins)) for i in last]).reshape(len(last), -1)
     return EffortSeries(setup.group.name, setup.group.members, times[last], shares, normal,
                         fit.sigma(setup.window_s))
 
