@@ -5,10 +5,10 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden test
+	bench-train bench-train-busy bench-real bench-hidden bench-effort test
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden
+	bench-train bench-train-busy bench-real bench-hidden bench-effort
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -62,3 +62,8 @@ bench-hidden:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/hidden_faults.py --seeds 3 --jobs 2 > $(OUT)/hidden_faults.md
 	$(PYTHON) benchmarks/readme.py hidden_faults $(OUT)/hidden_faults.md
+
+bench-effort:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/effort.py > $(OUT)/effort.md
+	$(PYTHON) benchmarks/readme.py effort $(OUT)/effort.md
