@@ -40,6 +40,31 @@ class Proposal:
     unit: str
     check: str            # what the user must check
     full_scale: float = 1.0
+    level: float = 0.0    # a command's median magnitude where it is not neutral
+    two_way: bool = False  # a command that also runs negative (a thruster that reverses)
+
+
+ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
+NEUTRAL = 1e-3
+
+
+def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
+                  ) -> list[list[str]]:
+    """Commands that look like actuators acting alike: all one-way or all two-way, with
+    typical levels within ALIKE_LEVELS of each other (rotors; a ROV's thrusters), and not
+    one command logged several times (``identical``: sets of names with equal values)."""
+    ordered = sorted((p for p in commands if p.level > NEUTRAL),
+                     key=lambda p: (p.two_way, p.level))
+    groups: list[list[Proposal]] = []
+    for proposal in ordered:
+        group = groups[-1] if groups else None
+        if group and group[0].two_way == proposal.two_way and \
+                proposal.level <= ALIKE_LEVELS * group[0].level:
+            group.append(proposal)
+        else:
+            groups.append([proposal])
+    names = [[p.name for p in group] for group in groups if len(group) > 1]
+    return [group for group in names if frozenset(group) not in identical]
 
 
 def _signal_name(topic: str, field: str) -> str:
@@ -113,11 +138,12 @@ def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
 
 
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None
-               ) -> tuple[list[Proposal], list[Proposal]]:
+               ) -> tuple[list[Proposal], list[Proposal], list[list[str]]]:
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
            for kind, source in _candidates(contents, family)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
     commands, sensors = [], []
+    command_values: list[np.ndarray] = []
     for key, (kind, source) in raw.items():
         series = values.get(key)
         if series is None or series.size < 2 or not np.nanstd(series) > 0:
@@ -130,7 +156,12 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             check = ("PWM µs mapped as ArduPilot does, (pwm - 1500) / 400: check the neutral "
                      "and the direction; remove outputs that are no thruster (lights, camera "
                      "mount)" if pwm else "should run -1 … 1: set scale and offset")
-            commands.append(Proposal(name, converted, "1", check))
+            value = series * converted.scale + converted.offset
+            moving = np.abs(value[np.isfinite(value) & (np.abs(value) > NEUTRAL)])
+            commands.append(Proposal(name, converted, "1", check,
+                                     level=float(np.median(moving)) if moving.size else 0.0,
+                                     two_way=bool((value < -NEUTRAL).any())))
+            command_values.append(value)
         else:
             unit = "rad/s" if re.search(r"speed$|^Gyr|angular|gyro", source.field) else "?"
             check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
@@ -141,7 +172,17 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                     ", CTUN CRt in cm/s)" if factor == -0.01 else ")")
             full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
             sensors.append(Proposal(name, source, unit, check, _nice(full_scale)))
-    return _unique(commands), _unique(sensors)
+    commands = _unique(commands)
+    return commands, _unique(sensors), effort_groups(commands, _repeated(commands, command_values))
+
+
+def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
+    """Sets of commands whose logged values are all equal: one command logged several times
+    (the Haizhe AUV's pwm1 … pwm4), never a group whose shares could differ."""
+    groups: dict[bytes, list[str]] = {}
+    for proposal, value in zip(commands, values, strict=True):
+        groups.setdefault(np.nan_to_num(value).tobytes(), []).append(proposal.name)
+    return {frozenset(names) for names in groups.values() if len(names) > 1}
 
 
 def _unique(proposals: list[Proposal]) -> list[Proposal]:
@@ -207,18 +248,18 @@ def draft_profile(path: Path, name: str) -> str:
     if family == "csv" and time is None:
         raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
                          "write [sources.csv] time = { column, unit } by hand")
-    commands, sensors = _proposals(path, family, contents, time)
+    commands, sensors, groups = _proposals(path, family, contents, time)
     if not commands or not sensors:
         what = "command (motor output, thrust, PWM)" if not commands else "sensor"
         raise UsageError(f"{path}: found no {what} field that varies in this log; write the "
                          "profile by hand (see `auvdiag inspect` for the fields)")
     operating = _operating(path, family, contents)
-    return _render(path, name, family, commands, sensors, operating, time)
+    return _render(path, name, family, commands, sensors, operating, time, groups)
 
 
 def _render(path: Path, name: str, family: str, commands: list[Proposal],
             sensors: list[Proposal], operating: FieldSource | None,
-            time: TimeColumn | None) -> str:
+            time: TimeColumn | None, groups: list[list[str]]) -> str:
     lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
              "# Every signal below is in that log and varies there. Lines marked CHECK are",
              "# what the log cannot tell: read them before you train.", "",
@@ -235,6 +276,13 @@ def _render(path: Path, name: str, family: str, commands: list[Proposal],
                   f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
                   "percentile",
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+    for number, group in enumerate(groups, 1):
+        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
+                  "levels in this", "# log): each one's share of their effort is judged. "
+                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
+                  "thrusters apart), add the mixing factors.", "[[effort]]",
+                  f'name = "group_{number}"',
+                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
     names = [p.name for p in sensors]
     lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
               'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",
