@@ -6,8 +6,9 @@ normalisation (the shares of a group average to one), never a fault of its own.
 
 Two tests share the false-alarm budget: the departure over the whole log's steady time,
 and (for a fault that begins during the log) over the span from each later window start to
-the end. The onset is the start whose departure stands out most; the detection, the first
-moment the departure from that start crosses its threshold."""
+the end. The onset is the earliest start whose departure comes within ONSET_TIE of the
+largest; the detection, the first moment the departure from that start crosses its
+threshold."""
 
 from dataclasses import dataclass
 
@@ -16,6 +17,9 @@ import numpy as np
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import MIN_WINDOWS, GroupFit, Thresholds, expected_share, window_shares
 from models.effort_model import EffortLog, EffortModel, GroupSetup
+
+
+ONSET_TIE = 0.9
 
 
 @dataclass(frozen=True)
@@ -125,7 +129,8 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     starts = list(range(window, n - MIN_WINDOWS * window + 1, window))
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
-    ratios = np.array([spans.z(s, n)[0] / t for s, t in candidates])     # (starts, members)
+    z = np.array([spans.z(s, n)[0] for s, _ in candidates])            # (starts, members)
+    ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
@@ -135,7 +140,10 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
         return per_actuator, None, None, series, figures
-    start, threshold = candidates[int(np.argmax(ratios[:, top]))]
+    # The span that departs most from normal starts near the onset; earlier starts dilute
+    # it with normal time, later ones lose fault time. The earliest near the most wins ties.
+    start, threshold = candidates[int(np.flatnonzero(
+        z[:, top] >= ONSET_TIE * z[:, top].max())[0])]
     running = spans.z(start, np.arange(start + window, n + 1))[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = start + window + (int(crossed[0]) if crossed.size else len(running) - 1) - 1

@@ -1,0 +1,227 @@
+"""The effort each actuator carries: learnt from normal CSV flights written here (a
+controller that shares the load unequally, as a real one does), judged on a flight whose
+motor 3 is driven harder from 15 s; refusals with too few logs; thresholds to a budget; the
+real CrazyPAD flights where ../shared/data holds them."""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.errors import ProfileError
+from models.student_t import quantile
+
+runner = CliRunner()
+SHARES = np.array([1.07, 0.87, 1.13, 0.93])
+CRAZYPAD = Path(__file__).resolve().parents[2] / "shared" / "data" / "crazypad"
+RATE_HZ = 100
+
+
+def write_flight(path: Path, seed: int, seconds: float = 30.0, weak_from_s: float | None = None,
+                 extra: float = 0.15) -> Path:
+    """A Crazyflie-style CSV flight: on the ground 2 s, then hovering and climbing, the
+    controller's noise on every motor; from ``weak_from_s`` motor 3 carries ``extra`` more."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, seconds, 1 / RATE_HZ)
+    level = np.where(t < 2.0, 0.0, 0.6 + 0.05 * np.sin(t / 3.0))
+    shares = np.tile(SHARES * (1 + rng.normal(0, 0.004, 4)), (len(t), 1))
+    if weak_from_s is not None:
+        shares[t >= weak_from_s, 2] *= 1 + extra
+    shares /= shares.mean(axis=1, keepdims=True)
+    motors = level[:, None] * shares * (1 + rng.normal(0, 0.03, (len(t), 4)))
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["time_us", "motor_m1", "motor_m2", "motor_m3", "motor_m4",
+                         "stateEstimate_vx", "stateEstimate_vy", "stateEstimate_vz"])
+        for k, time in enumerate(t):
+            writer.writerow([int(5e6 + time * 1e6), *(int(v * 65535) for v in motors[k]),
+                             *rng.normal(0, 0.05, 3).round(4)])
+    return path
+
+
+def invoke(*arguments: str) -> tuple[int, str]:
+    result = runner.invoke(app, list(arguments))
+    assert "unexpected" not in result.output and "Traceback" not in result.output
+    return result.exit_code, result.output
+
+
+@pytest.fixture(scope="module")
+def flights(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("flights")
+    for seed in range(5):
+        write_flight(folder / f"normal_{seed}.csv", seed)
+    write_flight(folder / "later_normal.csv", 50)
+    write_flight(folder / "weak_motor_3.csv", 51, weak_from_s=15.0)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def model(flights: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    target = tmp_path_factory.mktemp("model") / "cf"
+    code, output = invoke("train", *(str(flights / f"normal_{s}.csv") for s in range(5)),
+                          "--profile", "crazyflie", "--output", str(target),
+                          "--iterations-scale", "0.02", "--hidden", "8")
+    assert code == 0, output
+    return target
+
+
+def test_student_t_quantiles_match_the_tables():
+    for p, dof, table in ((0.975, 1, 12.706), (0.975, 5, 2.571), (0.995, 6, 3.707),
+                          (0.999, 30, 3.385), (0.975, 1000, 1.962)):
+        assert quantile(p, dof) == pytest.approx(table, abs=2e-3)
+
+
+def test_train_keeps_a_model_that_judges_only_the_effort(model: Path):
+    entry = json.loads((model / "model.json").read_text())["effort"]
+    group = entry["groups"][0]
+    assert group["members"] == ["motor_1", "motor_2", "motor_3", "motor_4"]
+    assert len(group["logs"]) == 5
+    share = np.mean(np.atleast_2d(group["normal"]["share"]), axis=0)
+    assert share == pytest.approx(SHARES / SHARES.mean(), abs=0.01)
+    assert group["normal"]["threshold_z"] > 2
+
+
+def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Path,
+                                                       tmp_path: Path):
+    code, output = invoke("diagnose", str(flights / "weak_motor_3.csv"), "--profile",
+                          "crazyflie", "--model", str(model), "--json", str(tmp_path / "d.json"),
+                          "--pdf", str(tmp_path / "d.pdf"))
+    assert code == 1, output
+    report = json.loads((tmp_path / "d.json").read_text())
+    assert report["component"] == "motor_3"
+    actuators = report["actuators"]
+    assert [n for n, a in actuators["shares"].items() if a["driven_harder"]] == ["motor_3"]
+    assert actuators["shares"]["motor_3"]["departure"] > 0.03
+    # The others fell: the normalisation, never a second fault.
+    assert all(a["departure"] < 0 for n, a in actuators["shares"].items() if n != "motor_3")
+    assert 10.0 <= report["onset_s"] <= 20.0 <= report["detected_at_s"] <= 30.0
+    assert "carries" in output and "more of the effort" in output
+    from pypdf import PdfReader
+
+    text = "".join(page.extract_text() for page in PdfReader(tmp_path / "d.pdf").pages)
+    assert "Share of the group's effort" in text and "motor_3 (driven harder)" in text
+
+
+def test_a_normal_flight_is_normal(flights: Path, model: Path):
+    code, output = invoke("diagnose", str(flights / "later_normal.csv"), "--profile",
+                          "crazyflie", "--model", str(model), "--json", "-", "--quiet")
+    assert code == 0, output
+    actuators = json.loads(output)["actuators"]
+    assert actuators["judged"] and not actuators["named"]
+    assert all(a["over_threshold"] < 1 for a in actuators["shares"].values())
+
+
+def test_too_few_normal_logs_or_too_little_steady_time_are_not_judged(flights: Path,
+                                                                       model: Path,
+                                                                       tmp_path: Path):
+    code, output = invoke("train", str(flights / "normal_0.csv"), str(flights / "normal_1.csv"),
+                          "--profile", "crazyflie", "--output", str(tmp_path / "m"),
+                          "--iterations-scale", "0.02", "--hidden", "8")
+    assert code == 1
+    assert "needs 3 normal logs" in output and not (tmp_path / "m").exists()
+    short = write_flight(tmp_path / "short.csv", 7, seconds=4.0)
+    code, output = invoke("diagnose", str(short), "--profile", "crazyflie", "--model",
+                          str(model), "--json", "-", "--quiet")
+    shares = json.loads(output)["actuators"]["shares"]
+    assert "too little steady effort in this log" in shares["motor_1"]["not_judged"]
+    assert json.loads(output)["verdict"] == "undetermined"
+
+
+def test_calibrate_sets_the_threshold_for_a_false_alarm_budget(flights: Path, model: Path,
+                                                               tmp_path: Path):
+    def threshold(directory: Path) -> float:
+        entry = json.loads((directory / "model.json").read_text())["effort"]
+        return float(entry["groups"][0]["normal"]["threshold_z"])
+
+    strict, loose = tmp_path / "strict", tmp_path / "loose"
+    for target, rate in ((strict, "0.001"), (loose, "0.1")):
+        code, output = invoke("calibrate", "--model", str(model), "--output", str(target),
+                              "--profile", "crazyflie", str(flights / "later_normal.csv"),
+                              "--false-alarm-rate", rate)
+        assert code == 0, output
+        assert "6 normal logs" in output
+    assert threshold(strict) > threshold(model) > threshold(loose)
+    code, output = invoke("calibrate", "--model", str(model), "--output", str(tmp_path / "x"),
+                          "--profile", "crazyflie", str(flights / "later_normal.csv"),
+                          "--false-alarm-rate", "0.7")
+    assert code == 2 and "--false-alarm-rate" in output
+
+
+def test_the_audit_table_and_the_trend_carry_the_shares():
+    from auvdiag_cli.audit.table import flatten
+    from auvdiag_cli.audit.trend import dive_margins
+
+    record = {"log": "fleet/cf/a.csv", "verdict": "fault", "actuators": {"shares": {
+        "motor_1": {"over_threshold": -0.2, "driven_harder": False},
+        "motor_3": {"over_threshold": 1.4, "driven_harder": True},
+        "motor_4": {"over_threshold": None, "driven_harder": False}}}}
+    row = flatten(record)
+    assert (row["driven_harder"], row["worst_effort_actuator"], row["worst_effort_ratio"]) == \
+        ("motor_3", "motor_3", 1.4)
+    assert dive_margins(record) == {"motor_1 share": -0.2, "motor_3 share": 1.4}
+
+
+def test_effort_groups_in_a_profile_are_checked(tmp_path: Path):
+    from auvdiag_cli.vehicle.profile import load_profile, profile_text
+
+    text, _ = profile_text(Path("crazyflie"))
+    for bad, words in (('actuators = ["motor_1", "motor_9"]', "two or more distinct"),
+                       ('actuators = ["motor_1"]', "two or more distinct"),
+                       ('actuators = ["motor_1", "motor_2"]\nfactors = [1.0]', "one non-zero")):
+        path = tmp_path / "p.toml"
+        path.write_text(text.replace(
+            'actuators = ["motor_1", "motor_2", "motor_3", "motor_4"]', bad))
+        with pytest.raises(ProfileError, match=words):
+            load_profile(path)
+
+
+def test_init_profile_proposes_groups_of_alike_commands():
+    from adapters.signals import FieldSource
+    from auvdiag_cli.jobs.profile_draft import Proposal, effort_groups
+
+    def command(name: str, level: float, two_way: bool) -> Proposal:
+        return Proposal(name, FieldSource("RCOU", name), "1", "", level=level, two_way=two_way)
+
+    rotors = [command(f"c{k}", 0.55 + 0.02 * k, False) for k in range(4)]
+    assert effort_groups(rotors, set()) == [["c0", "c1", "c2", "c3"]]
+    mixed = [*rotors[:2], command("gimbal", 0.05, False), command("t1", 0.3, True),
+             command("t2", 0.35, True)]
+    assert effort_groups(mixed, set()) == [["c0", "c1"], ["t1", "t2"]]
+    assert effort_groups(rotors, {frozenset(["c0", "c1", "c2", "c3"])}) == []
+
+
+@pytest.mark.skipif(not (CRAZYPAD / "labels.csv").is_file(),
+                    reason="CrazyPAD data not found at ../shared/data/crazypad")
+def test_crazypad_cut_propeller_found_and_named_without_false_alarms():
+    from auvdiag_cli.engine.effort_check import check_effort
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.effort import effort_log
+    from auvdiag_cli.jobs.relate import relation_log
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.effort_model import learn_effort
+
+    profile = load_profile(Path("crazyflie"))
+
+    def read(folder: str) -> list:
+        return [relation_log(ingest(p, profile), profile)
+                for p in sorted((CRAZYPAD / "E8" / folder).glob("*.csv"))]
+
+    def judged(model, log) -> tuple[str, ...]:
+        check = check_effort(model, profile, log.commands, log.usable,
+                             profile.dt_s * np.arange(len(log.commands)))
+        return check.named
+
+    normal = read("normal_flight")
+    for k, log in enumerate(normal):
+        others, _ = learn_effort(profile.effort_groups,
+                                 [effort_log(g, profile) for i, g in enumerate(normal) if i != k],
+                                 profile.dt_s)
+        assert judged(others, log) == ()
+    model, _ = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in normal],
+                            profile.dt_s)
+    for log in read("cut_propeller_M3_3.5mm_3.5mm_40mm") + read("cut_propeller_M3_4mm_4mm_39mm"):
+        assert judged(model, log) == ("motor_3",)
