@@ -151,8 +151,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     check, start, effort = diagnosis.command_check, diagnosis.start_check, diagnosis.effort_check
     if len(not_judged) == len(frame.sensor_names):
         diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
-        if (check is not None and check.judged) or start.judged or (
-                effort is not None and effort.judged):
+        if any(other is not None and other.judged for other in (check, start, effort)):
             apply_other_evidence(diagnosis, check, start, effort, profile, model)
             return diagnosis
         diagnosis.verdict, diagnosis.case = Verdict.UNDETERMINED, None
@@ -164,8 +163,6 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                             detection.onset_index, dms_starts)
     isolate(diagnosis, detection.b, frame.time_s[detection.alarm_index],
             frame.time_s[detection.onset_index], test, companion_runs, profile, model)
-    if effort is not None and effort.suspects:
-        diagnosis.notes.append(f"the effort too: {effort.describe()}")
     return diagnosis
 
 

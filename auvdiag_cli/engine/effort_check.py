@@ -18,7 +18,6 @@ from auvdiag_cli.vehicle.profile import Profile
 from models.effort import MIN_WINDOWS, GroupFit, Thresholds, expected_share, window_shares
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 
-
 ONSET_TIE = 0.9
 
 

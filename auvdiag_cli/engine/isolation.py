@@ -31,6 +31,9 @@ def isolate(diagnosis: Diagnosis, b: dict[str, int], alarm_s: float, onset_s: fl
     component where the table leaves it open or misreads it."""
     apply_detection(diagnosis, b, alarm_s, onset_s, profile, model)
     diagnosis.hypotheses = test
+    effort = diagnosis.effort_check
+    if effort is not None and effort.suspects:
+        diagnosis.notes.append(f"the effort too: {effort.describe()}")
     weak = next((h for h in test.ranked if h.is_actuator), None)
     if len(diagnosis.candidates) > 1:
         own = [(run, diagnosis.start_ns) for run in dms_runs(diagnosis)]

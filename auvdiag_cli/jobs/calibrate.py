@@ -152,13 +152,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise). The effort model is refitted with these normal logs
-    added (``false_alarm_rate``: a new budget per log for its thresholds)."""
+    trip on the next dive's noise). The effort model is refitted with these logs added."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
-    if false_alarm_rate is not None and not 0 < false_alarm_rate < 0.5:
-        raise UsageError("--false-alarm-rate must lie between 0 and 0.5 (a share of normal "
-                         f"logs), got {false_alarm_rate}")
     in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
@@ -215,7 +211,11 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
 def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],
                   false_alarm_rate: float | None) -> tuple[dict[str, Any] | None, list[str]]:
     """The effort model with these normal logs added (learnt from them where the model has
-    none yet), written into ``model.metadata``; None where the profile has no groups."""
+    none yet), written into ``model.metadata``; None where the profile has no groups.
+    ``false_alarm_rate``: a new budget (a share of normal logs) for its thresholds."""
+    if false_alarm_rate is not None and not 0 < false_alarm_rate < 0.5:
+        raise UsageError("--false-alarm-rate must lie between 0 and 0.5 (a share of normal "
+                         f"logs), got {false_alarm_rate}")
     if not profile.effort_groups:
         return None, []
     relations = [relation_log(log, profile) for log in logs]

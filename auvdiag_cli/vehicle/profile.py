@@ -17,6 +17,7 @@ from adapters.signals import (
 )
 from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.controller import EFFORTS, ControllerGains, ControllerSpec
+from auvdiag_cli.vehicle.effort_groups import parse_effort_group
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
 from models.effort import EffortGroup
@@ -220,33 +221,10 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         source_path=source_path,
         idle_after_s=positive(top.sub("operating"), "idle_after_s")
         if "operating" in data else None,
-        effort_groups=tuple(_effort_group(r, commands) for r in top.items("effort"))
+        effort_groups=tuple(parse_effort_group(r, [c.name for c in commands])
+                            for r in top.items("effort"))
         if "effort" in data else (),
     )
-
-
-def _effort_group(reader: TableReader, commands: tuple[Command, ...]) -> EffortGroup:
-    """``[[effort]]``: ``name``, ``actuators`` (two or more commands), optional ``factors``
-    (the frame's mixing factor of each, by magnitude), ``min_level`` (steady from this
-    command level up) and ``window_s``."""
-    names = [c.name for c in commands]
-    members = reader.get("actuators", list)
-    unknown = [m for m in members if m not in names]
-    if unknown or len(members) < 2 or len(set(members)) != len(members):
-        raise ProfileError(f"key '{reader.key('actuators')}' must name two or more distinct "
-                           f"commands (the profile's: {', '.join(names)})")
-    factors = reader.get("factors", list, [1.0] * len(members))
-    if len(factors) != len(members) or not all(
-            isinstance(f, int | float) and not isinstance(f, bool) and f != 0 for f in factors):
-        raise ProfileError(f"key '{reader.key('factors')}' must hold one non-zero number per "
-                           "actuator")
-    min_level = reader.get("min_level", float, None)
-    window = reader.get("window_s", float, None)
-    for key, value in (("min_level", min_level), ("window_s", window)):
-        if value is not None and value <= 0:
-            raise ProfileError(f"key '{reader.key(key)}' must be positive, got {value}")
-    return EffortGroup(reader.get("name", str), tuple(str(m) for m in members),
-                       tuple(abs(float(f)) for f in factors), min_level, window)
 
 
 def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]

@@ -1,0 +1,29 @@
+"""``[[effort]]`` in a profile: actuators that act alike, whose shares of their effort are
+judged (`models.effort`)."""
+
+from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.vehicle.toml_reader import TableReader
+from models.effort import EffortGroup
+
+
+def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
+    """``[[effort]]``: ``name``, ``actuators`` (two or more commands), optional ``factors``
+    (the frame's mixing factor of each, by magnitude), ``min_level`` (steady from this
+    command level up) and ``window_s``."""
+    members = reader.get("actuators", list)
+    unknown = [m for m in members if m not in names]
+    if unknown or len(members) < 2 or len(set(members)) != len(members):
+        raise ProfileError(f"key '{reader.key('actuators')}' must name two or more distinct "
+                           f"commands (the profile's: {', '.join(names)})")
+    factors = reader.get("factors", list, [1.0] * len(members))
+    if len(factors) != len(members) or not all(
+            isinstance(f, int | float) and not isinstance(f, bool) and f != 0 for f in factors):
+        raise ProfileError(f"key '{reader.key('factors')}' must hold one non-zero number per "
+                           "actuator")
+    min_level = reader.get("min_level", float, None)
+    window = reader.get("window_s", float, None)
+    for key, value in (("min_level", min_level), ("window_s", window)):
+        if value is not None and value <= 0:
+            raise ProfileError(f"key '{reader.key(key)}' must be positive, got {value}")
+    return EffortGroup(reader.get("name", str), tuple(str(m) for m in members),
+                       tuple(abs(float(f)) for f in factors), min_level, window)
