@@ -6,6 +6,7 @@ threshold unless that margin over its largest g is higher). On those logs that g
 false alarms by construction; the false-alarm rate it implies elsewhere is stated as the
 rule-of-three upper bound (no event in T hours: fewer than 3/T per hour at 95 % confidence).
 Faulty logs, when given, are diagnosed with the new thresholds to show the detection margin.
+The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
 from collections.abc import Sequence
@@ -152,7 +153,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise). The effort model is refitted with these logs added."""
+    trip on the next dive's noise)."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
     in_sample = _in_sample(model, normal_logs)

@@ -173,8 +173,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     horizon_candidates(profile, horizon_s))
     chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
-    progress("learning how the commands follow the motion, where the logs start, and each "
-             "actuator's share of the effort")
+    progress("learning the command relations, the start state and the effort shares")
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
     effort, effort_notes = learn_effort_entry([r.relation for r in [*read, *read_heldout]],
                                               profile)
