@@ -147,9 +147,8 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
 
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
-              faulty_logs: Sequence[Path] = (), margin: float = 1.5,
-              floor_at_profile: bool = False, false_alarm_rate: float | None = None
-              ) -> CalibrationResult:
+              faulty_logs: Sequence[Path] = (), margin: float = 1.5, floor_at_profile: bool = False,
+              false_alarm_rate: float | None = None) -> CalibrationResult:
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
