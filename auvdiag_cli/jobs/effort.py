@@ -28,8 +28,8 @@ def learn_effort_entry(logs: Sequence[RelationLog], profile: Profile,
     model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
                                 profile.dt_s, false_alarm_rate)
     if model is None:
-        return {"refused": "not judged (the actuators of its groups never operate in these "
-                           "logs)"}, notes
+        return {"refused": "not judged (the actuators of its groups never work at a steady "
+                           "level, min_level or more, in these logs)"}, notes
     return model.to_json(), notes
 
 
