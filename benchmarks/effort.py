@@ -9,9 +9,10 @@ BlueROV2, and false alarms on normal logs.
   normal flight is judged by a model learnt from the other normal flights (leave one out),
   every defective flight by the model of all normal flights. No defect label is used.
 - Simulated BlueROV2 (`bluerov2` profile, its turn-then-go controller holding heading,
-  speed and depth): the effort model learnt from normal missions, judged on normal missions
-  of other noise seeds and on the missions with one thruster weakened to 50-90 % of its
-  thrust from 60 s.
+  speed and depth) and simulated quadrotor (`arducopter_quad`, its hover-and-turn
+  controller holding height, heading and the roll and pitch rates): the effort model learnt
+  from normal missions, judged on normal missions of other noise seeds and on the missions
+  with one thruster or rotor weakened to 50-90 % of its thrust from 60 s.
 
 Usage: python benchmarks/effort.py [--data DIR] > effort.md
 """
@@ -137,8 +138,8 @@ def _conditions(two_way: bool, fit: GroupFit | None) -> str:
     return "by thrust direction" if two_way else "by level"
 
 
-def bluerov2() -> list[str]:
-    profile = load_profile(Path("bluerov2"))
+def simulated(profile_name: str, title: str) -> list[str]:
+    profile = load_profile(Path(profile_name))
     with tempfile.TemporaryDirectory() as folder:
         work = Path(folder)
         training = [_simulated(profile, name, seed, work)
@@ -146,28 +147,30 @@ def bluerov2() -> list[str]:
         model = _learn(profile, training)
         normal = [_judge(model, profile, _simulated(profile, name, seed, work))
                   for seed in (101, 102) for name in NORMAL_MISSIONS]
-        thrusters = [c.component for c in profile.commands]
+        components = [c.component for c in profile.commands]
         rows = []
         for fraction in FRACTIONS:
             cells = []
-            for k, thruster in enumerate(thrusters, 1):
+            for component in components:
                 check = _judge(model, profile, _simulated(
-                    profile, f"mission-thruster-{k}-weak", 201, work, fraction))
+                    profile, f"mission-{component.replace('_', '-')}-weak", 201, work,
+                    fraction))
+                named = set(check.named)
                 mark = "-"
                 if check.suspects:
-                    mark = ("named" if check.named == (thruster,) else "in a pair"
-                            if thruster in check.named else "other")
+                    mark = ("named" if named == {component} else "in a pair"
+                            if component in named else "other")
                 cells.append(mark)
             rows.append(f"| {fraction:.0%} | " + " | ".join(cells) + " |")
     alarms = sum(bool(c.suspects) for c in normal)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)})"
                        for setup, fit in zip(model.setups, model.fits, strict=True))
-    return ["", f"**Simulated BlueROV2** (`bluerov2`, {len(training)} normal missions to "
+    return ["", f"**Simulated {title}** (`{profile_name}`, {len(training)} normal missions to "
             f"learn from; groups {groups}): false alarms on {len(normal)} normal missions of "
-            f"other seeds: {alarms}. One thruster weakened from 60 s (- not found; named; in a "
-            "pair: named with the thruster whose command moves with it):", "",
-            "| thrust kept | " + " | ".join(thrusters) + " |",
-            "|---" * (len(thrusters) + 1) + "|", *rows]
+            f"other seeds: {alarms}. One actuator weakened from 60 s (- not found; named; in a "
+            "pair: named with the actuator whose command moves with it):", "",
+            "| thrust kept | " + " | ".join(components) + " |",
+            "|---" * (len(components) + 1) + "|", *rows]
 
 
 def main() -> None:
@@ -181,7 +184,8 @@ def main() -> None:
         lines += crazypad(root)
     else:
         lines.append(f"CrazyPAD: not found at {root} (skipped).")
-    lines += bluerov2()
+    lines += simulated("bluerov2", "BlueROV2")
+    lines += simulated("arducopter_quad", "quadrotor")
     print("\n".join(lines))
 
 

@@ -225,3 +225,49 @@ def test_crazypad_cut_propeller_found_and_named_without_false_alarms():
                             profile.dt_s)
     for log in read("cut_propeller_M3_3.5mm_3.5mm_40mm") + read("cut_propeller_M3_4mm_4mm_39mm"):
         assert judged(model, log) == ("motor_3",)
+
+
+def test_a_simulated_quadrotor_names_its_weak_rotor(tmp_path: Path):
+    """The arducopter_quad profile flown by its hover-and-turn controller and written as
+    real .tlog files: learnt from normal missions, a normal mission of another seed is not
+    flagged, and a rotor keeping half its thrust from 60 s is named alone, its command risen
+    by about 1/sqrt(0.5) where the others stay."""
+    from auvdiag_cli.engine.effort_check import check_effort
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.effort import effort_log
+    from auvdiag_cli.jobs.relate import relation_log
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.effort_model import learn_effort
+
+    profile = load_profile(Path("arducopter_quad"))
+
+    def flown(scenario: str, seed: int, *extra: str) -> Path:
+        path = tmp_path / f"{scenario}-{seed}.tlog"
+        code, output = invoke("simulate", scenario, "--profile", "arducopter_quad",
+                              "--format", "tlog", "--seed", str(seed), "-o", str(path),
+                              *extra)
+        assert code == 0, output
+        return path
+
+    def logged(path: Path):  # type: ignore[no-untyped-def]
+        return relation_log(ingest(path, profile), profile)
+
+    normal = [logged(flown(name, seed)) for seed in (1, 2)
+              for name in ("paper-normal", "mission-ccw", "mission-fast-cw")]
+    model, why = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in normal],
+                              profile.dt_s)
+    assert model is not None, why
+
+    def judged(path: Path):  # type: ignore[no-untyped-def]
+        log = logged(path)
+        return log, check_effort(model, profile, log.commands, log.usable,
+                                 profile.dt_s * np.arange(len(log.commands)))
+
+    _, calm = judged(flown("mission-large-cw", 7))
+    assert not calm.suspects
+    log, weak = judged(flown("mission-motor-2-weak", 8))
+    assert weak.named == ("motor_2",)
+    after = log.commands[round(75 / profile.dt_s):]
+    before = log.commands[round(20 / profile.dt_s):round(55 / profile.dt_s)]
+    risen = np.median(after, axis=0) / np.median(before, axis=0)
+    assert risen[1] > 1.3 and np.all(np.abs(risen[[0, 2, 3]] - 1) < 0.06)

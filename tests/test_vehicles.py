@@ -193,8 +193,8 @@ def test_twin_burger_model_is_refused_for_another_vehicle(tmp_path):
 
 
 @pytest.mark.parametrize(("edit", "message"), [
-    ("[simulation.dofs.roll]\ninertia = 1.0\nlinear_drag = 1.0\nquadratic_drag = 1.0\n",
-     "simulation.dofs' must name some of surge, sway, heave, yaw"),
+    ("[simulation.dofs.flip]\ninertia = 1.0\nlinear_drag = 1.0\nquadratic_drag = 1.0\n",
+     "simulation.dofs' must name some of surge, sway, heave, yaw, roll, pitch"),
     ('[[simulation.sensors]]\nsensor = "ghost"\nmeasures = "surge"\nrate_hz = 10.0\n'
      'noise = 0.0\nquantum = 0.001\n', "simulation.sensors' must describe the sensors"),
 ])

@@ -12,6 +12,7 @@ import typer
 
 from auvdiag_cli import __version__
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.vehicle.profile import builtin_profiles
 
 if TYPE_CHECKING:
     pass
@@ -34,9 +35,9 @@ ModelOption = Annotated[Path | None, typer.Option(
     "--model", help="Model directory (default: the model shipped for the profile's vehicle).",
     file_okay=False)]
 ProfileOption = Annotated[Path | None, typer.Option(
-    "--profile", help="Vehicle profile TOML, or a built-in one by name: twin_burger (the "
-                      "default), three_thruster, bluerov2 (with DVL), bluerov2_standard, "
-                      "bluerov2_heavy (no DVL), haizhe.",
+    "--profile", help="Vehicle profile TOML, or a built-in one by name: "
+                      + ", ".join(f"{name} (the default)" if name == "twin_burger" else name
+                                  for name in builtin_profiles()) + ".",
     dir_okay=False)]
 
 ModelToUpdateOption = Annotated[Path, typer.Option(

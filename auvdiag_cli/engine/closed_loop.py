@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.vehicle.controller import ControllerSpec, PathFollower, VehicleController
+from auvdiag_cli.vehicle.controller import ControllerSpec, VehicleController
+from auvdiag_cli.vehicle.followers import make_follower
 from models.fast import FastStepper
 from models.rollouts import robust_state
 from models.store import LoadedModel
@@ -46,7 +47,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     waypoints = [(float(x), float(y)) for x, y in leg["waypoints"]]
     gains = spec.gains_for(float(leg["cruise_speed_mps"]) if "cruise_speed_mps" in leg
                            else None)
-    controller = PathFollower(waypoints, gains, [float(d) for d in leg.get("depths_m", [])])
+    controller = make_follower(spec, waypoints, gains, [float(d) for d in leg.get("depths_m", [])])
     vehicle = VehicleController(spec, sensor_names, command_names, controller)
     first = int(np.searchsorted(time_s, float(leg["start_s"])))
     onset = int(np.searchsorted(time_s, onset_s))

@@ -18,7 +18,8 @@ from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.segments import dms_template
 from auvdiag_cli.errors import UsageError
-from auvdiag_cli.vehicle.controller import PathFollower, VehicleController
+from auvdiag_cli.vehicle.controller import VehicleController
+from auvdiag_cli.vehicle.followers import make_follower
 from auvdiag_cli.vehicle.profile import MISSION_MODE, PatternRow, Profile
 from models.fast import FastStepper, fast_replay
 from models.store import LoadedModel
@@ -129,9 +130,9 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
     spec = profile.controller
     assert spec is not None
     depths = profile.simulation.mission_depths_m if profile.simulation else ()
-    controller = PathFollower(waypoints, spec.gains,
-                              [depths[i % len(depths)] for i in range(len(waypoints))]
-                              if depths else [])
+    controller = make_follower(spec, waypoints, spec.gains,
+                               [depths[i % len(depths)] for i in range(len(waypoints))]
+                               if depths else [])
     plant = FastStepper(model.fast, model.normaliser)
     plant.warm_up(np.empty((0, len(profile.command_names))),
                   np.zeros(len(profile.sensor_names)))

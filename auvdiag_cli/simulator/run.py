@@ -10,13 +10,10 @@ import pandas as pd
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import Phase, Scenario
 from auvdiag_cli.simulator.vehicle import Vehicle
-from auvdiag_cli.vehicle.controller import (
-    PathFollower,
-    VehicleController,
-    rectangle_waypoints,
-)
+from auvdiag_cli.vehicle.controller import VehicleController, rectangle_waypoints
+from auvdiag_cli.vehicle.followers import make_follower
 from auvdiag_cli.vehicle.profile import Profile
-from auvdiag_cli.vehicle.simulation_spec import TRUTH_COLUMNS, SimulationSpec
+from auvdiag_cli.vehicle.simulation_spec import TRUTH_COLUMNS, SensorPhysics, SimulationSpec
 
 PHYSICS_DT_S = 0.01
 CONTROL_EVERY = 10      # physics ticks per command (10 Hz)
@@ -77,10 +74,11 @@ def _quantise(value: float, quantum: float) -> float:
 class _SensorChannel:
     """One simulated sensor: when it samples, its noise, and its last reading."""
 
-    def __init__(self, name: str, component: str, every: int, noise: "_Noise", quantum: float,
-                 measures: str) -> None:
-        self.name, self.component, self.every = name, component, every
-        self.noise, self.quantum, self.measures = noise, quantum, measures
+    def __init__(self, physics: SensorPhysics, component: str, every: int, noise: "_Noise"
+                 ) -> None:
+        self.name, self.component, self.every = physics.sensor, component, every
+        self.noise, self.quantum, self.measures = noise, physics.quantum, physics.measures
+        self.scale = physics.scale
         self.last = 0.0
 
 
@@ -94,9 +92,9 @@ class _Dive:
         self.vehicle = Vehicle(spec)
         self.rng = rng
         self.channels = [
-            _SensorChannel(physics.sensor, profile.sensor(physics.sensor).component,
+            _SensorChannel(physics, profile.sensor(physics.sensor).component,
                            max(1, round(1.0 / (physics.rate_hz * PHYSICS_DT_S))),
-                           _Noise(rng, physics.noise), physics.quantum, physics.measures)
+                           _Noise(rng, physics.noise))
             for physics in spec.sensors]
         self.disturbance_noise = {dof: _Noise(rng, p.disturbance) for dof, p in spec.dofs.items()}
         self.disturbance = dict.fromkeys(spec.dofs, 0.0)
@@ -140,7 +138,7 @@ class _Dive:
                                     *(channel.last for channel in self.channels)))
         for channel in self.channels:
             if self.tick % channel.every == channel.every // 2:
-                reading = vehicle.velocity[channel.measures] + channel.noise.draw()
+                reading = channel.scale * vehicle.velocity[channel.measures] + channel.noise.draw()
                 channel.last = _quantise(self.sensor(channel.component, reading),
                                          channel.quantum)
                 self.out.sensors[channel.name].add(t + self.jitter(), channel.last)
@@ -189,7 +187,7 @@ class _Dive:
         gains = profile.controller.gains_for(spec.cruise_speed_mps)
         depths = self.spec.mission_depths_m
         depths_m = [depths[i % len(depths)] for i in range(len(waypoints))] if depths else []
-        follower = PathFollower(waypoints, gains, depths_m)
+        follower = make_follower(profile.controller, waypoints, gains, depths_m)
         controller = VehicleController(profile.controller, profile.sensor_names,
                                        profile.command_names, follower)
         plan: dict[str, object] = {"start_s": round(self.time_s, 6), "waypoints": waypoints,

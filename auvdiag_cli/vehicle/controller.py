@@ -1,17 +1,21 @@
 """The vehicle's own mission controller: dead-reckoning navigation from its sensors, a
 turn-then-go waypoint guidance, PI loops on speed (flow sensor) and yaw rate (yaw-rate
-sensor), and for vehicles that keep depth a depth loop on the integrated heave rate. Because
-the loops are closed on the sensors, a sensor fault changes the commands, as it did on the
-real vehicle. The loops output efforts (surge, yaw, heave) that the profile's mix turns into
-actuator commands."""
+sensor), for vehicles that keep depth a depth loop on the integrated heave rate, and for
+vehicles that must hold their attitude (multirotors) PI loops holding the roll and pitch
+rates at zero. Because the loops are closed on the sensors, a sensor fault changes the
+commands, as it did on the real vehicle, and a weak actuator is driven harder. The loops
+output efforts (surge, yaw, heave, roll, pitch) that the profile's mix turns into actuator
+commands."""
 
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from typing import Protocol
 
 import numpy as np
 
-EFFORTS = ("surge", "yaw", "heave")
+EFFORTS = ("surge", "yaw", "heave", "roll", "pitch")
+CONTROLLER_KINDS = ("turn-then-go", "hover-and-turn")
 
 
 @dataclass(frozen=True)
@@ -36,21 +40,28 @@ class ControllerGains:
     heave_kp: float = 2.0
     heave_ki: float = 1.0
     heave_feedforward: float = 1.0       # heave command per sqrt(m/s)
+    heave_bias: float = 0.0              # heave effort that holds the vehicle up (a hover)
+    rate_hold_kp: float = 0.02           # roll and pitch rate holds, effort per rad/s
+    rate_hold_ki: float = 0.1
 
 
 @dataclass(frozen=True)
 class ControllerSpec:
-    """The vehicle's own mission controller, for closed-loop replays: its kind (the only one
-    implemented is "turn-then-go", see auvdiag_cli.vehicle.controller), the sensors it is fed (a
-    heave-rate sensor when it also keeps depth), how its surge/yaw/heave efforts are mixed
-    onto the commands, and gains that differ from the defaults."""
+    """The vehicle's own mission controller, for closed-loop replays: its kind
+    ("turn-then-go", a vehicle that sails its path; "hover-and-turn", a multirotor that holds
+    its place and turns to each leg's heading), the sensors it is fed (a heave-rate sensor
+    when it also keeps depth or height, roll and pitch rates when it holds its attitude), how
+    its efforts are mixed onto the commands, and gains that differ from the defaults."""
 
     kind: str
-    speed: str
+    speed: str | None                    # none for a vehicle that does not sail its path
     yaw_rate: str
-    mix: dict[str, dict[str, float]]     # command -> effort (surge, yaw, heave) -> factor
+    mix: dict[str, dict[str, float]]     # command -> effort (EFFORTS) -> factor
     gains: ControllerGains                 # the profile's, over the defaults
     heave: str | None = None
+    heave_sign: float = 1.0              # -1: the heave sensor reads up positive (a climb)
+    roll_rate: str | None = None
+    pitch_rate: str | None = None
 
     def gains_for(self, cruise_speed_mps: float | None = None) -> ControllerGains:
         """The gains, with a mission's own cruise speed where it sets one."""
@@ -72,32 +83,60 @@ def _clip(value: float, limit: float) -> float:
     return max(-limit, min(limit, value))
 
 
-class PathFollower:
-    """Steps at the control rate; returns the efforts {surge, yaw, heave}. ``depths_m`` gives
-    the depth to hold on the way to each waypoint (none: the heave effort stays zero)."""
+class FollowerLoops:
+    """The loops every follower closes: yaw rate to a reference, and the depth (or height)
+    of the leg under way through the integrated heave rate."""
+
+    def __init__(self, gains: ControllerGains, depths_m: Sequence[float]) -> None:
+        self.gains = gains
+        self.depths_m = list(depths_m)
+        self.target = 0
+        self.x = self.y = self.heading = self.depth = 0.0
+        self.yaw_integral = self.heave_integral = 0.0
+
+    def yaw_effort(self, rate_ref: float, yaw_rate_rps: float, dt_s: float) -> float:
+        g = self.gains
+        rate_error = rate_ref - yaw_rate_rps
+        self.yaw_integral = _clip(self.yaw_integral + rate_error * dt_s, g.integral_limit)
+        return (g.yaw_feedforward * _signed_sqrt(rate_ref) + g.yaw_kp * rate_error
+                + g.yaw_ki * self.yaw_integral)
+
+    def heave_effort(self, heave_mps: float, dt_s: float) -> float:
+        g = self.gains
+        self.depth += heave_mps * dt_s
+        if not self.depths_m:
+            return g.heave_bias
+        target = self.depths_m[min(self.target, len(self.depths_m) - 1)]
+        heave_ref = _clip(g.depth_gain * (target - self.depth), g.heave_rate_limit_mps)
+        heave_error = heave_ref - heave_mps
+        self.heave_integral = _clip(self.heave_integral + heave_error * dt_s, g.integral_limit)
+        return (g.heave_bias + g.heave_feedforward * _signed_sqrt(heave_ref)
+                + g.heave_kp * heave_error + g.heave_ki * self.heave_integral)
+
+
+class PathFollower(FollowerLoops):
+    """Turn-then-go: steps at the control rate; returns the efforts {surge, yaw, heave}.
+    ``depths_m`` gives the depth to hold on the way to each waypoint (none: the heave effort
+    stays at its bias)."""
 
     def __init__(self, waypoints: list[tuple[float, float]], gains: ControllerGains,
                  depths_m: Sequence[float] = ()) -> None:
+        super().__init__(gains, depths_m)
         self.waypoints = waypoints
-        self.depths_m = list(depths_m)
-        self.gains = gains
-        self.target = 0
         self.turning = True
-        self.x = self.y = self.heading = self.depth = 0.0
         self.speed_ref = 0.0
-        self.speed_integral = self.yaw_integral = self.heave_integral = 0.0
+        self.speed_integral = 0.0
 
     @property
     def finished(self) -> bool:
         return self.target >= len(self.waypoints)
 
-    def step(self, flow_mps: float, yaw_rate_rps: float, dt_s: float, heave_mps: float = 0.0
-             ) -> dict[str, float]:
+    def step(self, signals: Mapping[str, float], dt_s: float) -> dict[str, float]:
         g = self.gains
+        flow_mps, yaw_rate_rps = signals["speed"], signals["yaw_rate"]
         self.heading += yaw_rate_rps * dt_s
         self.x += flow_mps * math.cos(self.heading) * dt_s
         self.y += flow_mps * math.sin(self.heading) * dt_s
-        self.depth += heave_mps * dt_s
         rate_ref, speed_target = 0.0, 0.0
         if not self.finished:
             wx, wy = self.waypoints[self.target]
@@ -117,26 +156,38 @@ class PathFollower:
         ramp = g.speed_ramp_mps2 * dt_s
         self.speed_ref = min(speed_target, self.speed_ref + ramp)
         speed_error = self.speed_ref - flow_mps
-        rate_error = rate_ref - yaw_rate_rps
         self.speed_integral = _clip(self.speed_integral + speed_error * dt_s, g.integral_limit)
-        self.yaw_integral = _clip(self.yaw_integral + rate_error * dt_s, g.integral_limit)
         common = (g.speed_feedforward * _signed_sqrt(self.speed_ref) + g.speed_kp * speed_error
                   + g.speed_ki * self.speed_integral)
-        differential = (g.yaw_feedforward * _signed_sqrt(rate_ref) + g.yaw_kp * rate_error
-                        + g.yaw_ki * self.yaw_integral)
-        return {"surge": common, "yaw": differential, "heave": self._heave_effort(heave_mps,
-                                                                                   dt_s)}
+        return {"surge": common, "yaw": self.yaw_effort(rate_ref, yaw_rate_rps, dt_s),
+                "heave": self.heave_effort(signals.get("heave", 0.0), dt_s)}
 
-    def _heave_effort(self, heave_mps: float, dt_s: float) -> float:
-        if not self.depths_m:
-            return 0.0
+
+class RateHold:
+    """PI loop holding an angular rate (roll or pitch) at zero: a multirotor's attitude hold,
+    whose integral carries the steady torque a weak actuator leaves unbalanced."""
+
+    def __init__(self, gains: ControllerGains) -> None:
+        self.gains = gains
+        self.integral = 0.0
+
+    def step(self, rate_rps: float, dt_s: float) -> float:
         g = self.gains
-        target = self.depths_m[min(self.target, len(self.depths_m) - 1)]
-        heave_ref = _clip(g.depth_gain * (target - self.depth), g.heave_rate_limit_mps)
-        heave_error = heave_ref - heave_mps
-        self.heave_integral = _clip(self.heave_integral + heave_error * dt_s, g.integral_limit)
-        return (g.heave_feedforward * _signed_sqrt(heave_ref) + g.heave_kp * heave_error
-                + g.heave_ki * self.heave_integral)
+        self.integral = _clip(self.integral - rate_rps * dt_s, g.integral_limit)
+        return -g.rate_hold_kp * rate_rps + g.rate_hold_ki * self.integral
+
+
+class Follower(Protocol):
+    """Guidance at the control rate: signals by role in, efforts out."""
+
+    x: float
+    y: float
+    heading: float
+
+    @property
+    def finished(self) -> bool: ...
+
+    def step(self, signals: Mapping[str, float], dt_s: float) -> dict[str, float]: ...
 
 
 def mix_commands(mix: Mapping[str, Mapping[str, float]], command_names: Sequence[str],
@@ -155,16 +206,22 @@ class VehicleController:
     commands out (profile order)."""
 
     def __init__(self, spec: ControllerSpec, sensor_names: Sequence[str],
-                 command_names: Sequence[str], follower: PathFollower) -> None:
+                 command_names: Sequence[str], follower: Follower) -> None:
         self.spec, self.follower, self.command_names = spec, follower, command_names
-        self.speed = sensor_names.index(spec.speed)
-        self.yaw_rate = sensor_names.index(spec.yaw_rate)
-        self.heave = None if spec.heave is None else sensor_names.index(spec.heave)
+        roles = {"speed": spec.speed, "yaw_rate": spec.yaw_rate, "heave": spec.heave}
+        self.roles = {role: sensor_names.index(name) for role, name in roles.items()
+                      if name is not None}
+        self.holds = {effort: (sensor_names.index(name), RateHold(spec.gains))
+                      for effort, name in (("roll", spec.roll_rate), ("pitch", spec.pitch_rate))
+                      if name is not None}
 
     def step(self, readings: Sequence[float] | np.ndarray, dt_s: float) -> np.ndarray:
-        heave = 0.0 if self.heave is None else float(readings[self.heave])
-        efforts = self.follower.step(float(readings[self.speed]), float(readings[self.yaw_rate]),
-                                     dt_s, heave)
+        signals = {role: float(readings[index]) for role, index in self.roles.items()}
+        if "heave" in signals:
+            signals["heave"] *= self.spec.heave_sign
+        efforts = dict.fromkeys(EFFORTS, 0.0) | self.follower.step(signals, dt_s)
+        for effort, (index, hold) in self.holds.items():
+            efforts[effort] = hold.step(float(readings[index]), dt_s)
         return mix_commands(self.spec.mix, self.command_names, efforts)
 
 

@@ -16,7 +16,12 @@ from adapters.signals import (
     TimeColumn,
 )
 from auvdiag_cli.errors import ProfileError
-from auvdiag_cli.vehicle.controller import EFFORTS, ControllerGains, ControllerSpec
+from auvdiag_cli.vehicle.controller import (
+    CONTROLLER_KINDS,
+    EFFORTS,
+    ControllerGains,
+    ControllerSpec,
+)
 from auvdiag_cli.vehicle.effort_groups import parse_effort_group
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
@@ -49,9 +54,6 @@ class Navigation:
 
     speed: str
     yaw_rate: str
-
-
-CONTROLLER_KINDS = ("turn-then-go",)
 
 
 @dataclass(frozen=True)
@@ -232,9 +234,12 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
     kind = reader.get("kind", str)
     if kind not in CONTROLLER_KINDS:
         raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
-    for key in ("speed", "yaw_rate", "heave"):
+    for key in ("speed", "yaw_rate", "heave", "roll_rate", "pitch_rate"):
         if key in reader.table and reader.get(key, str) not in sensor_names:
             raise ProfileError(f"key '{reader.key(key)}' names no sensor")
+    if kind == "turn-then-go" and "speed" not in reader.table:
+        raise ProfileError(f"key '{reader.key('speed')}' is missing: a turn-then-go "
+                           "controller needs a speed sensor")
     mix_table = reader.sub("mix")
     mix = {}
     for command in mix_table.table:
@@ -253,8 +258,10 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
             raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
                                f"{kind} (known: {', '.join(sorted(known))})")
         gains[name] = gains_reader.get(name, float)
-    return ControllerSpec(kind, reader.get("speed", str), reader.get("yaw_rate", str), mix,
-                          ControllerGains(**gains), reader.get("heave", str, None))
+    return ControllerSpec(kind, reader.get("speed", str, None), reader.get("yaw_rate", str),
+                          mix, ControllerGains(**gains), reader.get("heave", str, None),
+                          -1.0 if reader.get("heave_up", bool, False) else 1.0,
+                          reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None))
 
 
 def _topic(reader: TableReader) -> str:

@@ -6,10 +6,12 @@ from dataclasses import dataclass, field
 from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
 
-# Body-frame degrees of freedom the simulator knows; heave is positive down.
-DOFS = ("surge", "sway", "heave", "yaw")
+# Body-frame degrees of freedom the simulator knows; heave is positive down. Roll and pitch
+# are rates only: the attitude they integrate to does not feed back (a multirotor's
+# attitude hold keeps it small).
+DOFS = ("surge", "sway", "heave", "yaw", "roll", "pitch")
 TRUTH_COLUMNS = {"surge": "surge_mps", "sway": "sway_mps", "heave": "heave_mps",
-                 "yaw": "yaw_rate_rps"}
+                 "yaw": "yaw_rate_rps", "roll": "roll_rate_rps", "pitch": "pitch_rate_rps"}
 
 
 @dataclass(frozen=True)
@@ -47,14 +49,15 @@ class ThrusterPhysics:
 
 @dataclass(frozen=True)
 class SensorPhysics:
-    """What a sensor measures and how: its degree of freedom, rate, white noise (1 σ, in the
-    sensor's unit) and quantisation step."""
+    """What a sensor measures and how: its degree of freedom (times ``scale``: -1 for a climb
+    rate, up positive), rate, white noise (1 σ, in the sensor's unit) and quantisation step."""
 
     sensor: str
     measures: str
     rate_hz: float
     noise: float
     quantum: float
+    scale: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -108,7 +111,8 @@ def parse_simulation(reader: TableReader, command_names: list[str],
             raise ProfileError(f"key '{row.key('measures')}' names no simulated degree of "
                                f"freedom: {measures!r}")
         sensors.append(SensorPhysics(row.get("sensor", str), measures, positive(row, "rate_hz"),
-                                     row.get("noise", float), positive(row, "quantum")))
+                                     row.get("noise", float), positive(row, "quantum"),
+                                 row.get("scale", float, 1.0)))
     if [s.sensor for s in sensors] != sensor_names:
         raise ProfileError(f"key '{reader.key('sensors')}' must describe the sensors "
                            f"{', '.join(sensor_names)} in that order")

@@ -1,13 +1,16 @@
 """MAVLink telemetry logs (.tlog) the way a ground station records an ArduSub vehicle, laid
 out by the profile's `[sources.mavlink]` table: each record is the receive time (big-endian
-µs since the Unix epoch) and a MAVLink 2 frame; a heartbeat every second."""
+µs since the Unix epoch) and a MAVLink 2 frame; a heartbeat every second, of the vehicle
+type and armed flag the profile's operating source reads (a submarine, disarmed, without
+one)."""
 
 import struct
 from pathlib import Path
 from typing import Any
 
+from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import Record, dive_records
+from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
 from auvdiag_cli.vehicle.profile import Profile
 
 HEARTBEAT_PERIOD_NS = 1_000_000_000
@@ -43,10 +46,21 @@ def mavlink_message(dialect: Any, record: Record, boot_ns: int) -> Any:
     return cls(**values)
 
 
+def _heartbeat_identity(profile: Profile) -> tuple[int, int]:
+    """(vehicle type, base mode) of the heartbeat: armed the whole dive when the profile reads
+    its operating time from the heartbeat."""
+    source = family_sources(profile, "mavlink").signals.get(OPERATING)
+    if source is None or source.topic != "HEARTBEAT":
+        return MAV_TYPE_SUBMARINE, 0
+    where = dict(source.where)
+    return int(where.get("type", MAV_TYPE_SUBMARINE)), source.bits
+
+
 def write_tlog(dive: SimulatedDive, profile: Profile, path: Path) -> None:
     from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
     mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    vehicle_type, base_mode = _heartbeat_identity(profile)
     boot_ns = dive.start_ns
     next_heartbeat = boot_ns
     with path.open("wb") as stream:
@@ -57,6 +71,6 @@ def write_tlog(dive: SimulatedDive, profile: Profile, path: Path) -> None:
         for record in dive_records(dive, profile, "mavlink"):
             while next_heartbeat <= record.time_ns:
                 emit(next_heartbeat, mav.heartbeat_encode(
-                    MAV_TYPE_SUBMARINE, MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0))
+                    vehicle_type, MAV_AUTOPILOT_ARDUPILOTMEGA, base_mode, 0, 0))
                 next_heartbeat += HEARTBEAT_PERIOD_NS
             emit(record.time_ns, mavlink_message(mavlink, record, boot_ns))
