@@ -51,22 +51,15 @@ MISSIONS = {"4x2-cw": {}, "4x2-ccw": {"clockwise": False},
 
 def baseline_model(learned: "LoadedModel", frames: list["AlignedFrame"]) -> "LoadedModel":
     """A model directory's worth of baseline: the learned model's signals and metadata (deep
-    copied: calibration writes into it) with the linear free run as its replay path."""
+    copied: calibration writes into it) with every signal read from the linear model."""
     import copy
-    from dataclasses import dataclass as model_dataclass
 
-    from models.store import LoadedModel
+    from models.store import LINEAR_KEY, LoadedModel
 
-    @model_dataclass
-    class LinearBaseline(LoadedModel):
-        linear: LinearDynamics | None = None
-
-        @property
-        def fast(self) -> Any:  # the replay path every diagnosis step uses
-            return self.linear
-
-    return LinearBaseline(learned.state, learned.normaliser, copy.deepcopy(learned.metadata),
-                          "linear baseline", fit_linear(frames, learned.normaliser))
+    metadata = copy.deepcopy(learned.metadata)
+    metadata["predictors"] = {"per_signal": dict.fromkeys(learned.sensor_names, "linear")}
+    return LoadedModel(learned.state, learned.normaliser, metadata, "linear baseline",
+                       {LINEAR_KEY: fit_linear(frames, learned.normaliser).weights})
 
 
 def fit_linear(frames: list["AlignedFrame"], normaliser: "Normaliser") -> LinearDynamics:

@@ -20,6 +20,8 @@ from collections.abc import Callable, Sequence
 from datetime import date
 from pathlib import Path
 
+import numpy as np
+
 SCENARIOS = ["paper-normal", "mission-ccw", "mission-large-cw", "mission-large-ccw",
              "mission-fast-cw", "mission-fast-ccw", "mission-sprint-cw", "mission-sprint-ccw",
              "all-dms-and-mission", "excitation"]
@@ -86,9 +88,10 @@ def main() -> None:
 
     def before(sequences: Sequence[training.TrainingLog], hidden: int,
                stages: Sequence[training.Stage], seed: int,
-               progress: Callable[[str], None] | None) -> object:
+               progress: Callable[[str], None] | None, linear: np.ndarray | None = None
+               ) -> object:
         """The trainer as it was: torch's default thread count."""
-        return training._train(sequences, hidden, stages, 64, seed, progress)
+        return training._train(sequences, hidden, stages, 64, seed, progress, linear)
 
     with tempfile.TemporaryDirectory() as work:
         logs, heldout = simulated_logs(Path(work), args.minutes)

@@ -50,12 +50,14 @@ def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarr
                    states_to_gates: np.ndarray, hidden_to_gates: np.ndarray,
                    hidden_bias: np.ndarray, hidden_to_head: np.ndarray,
                    states_to_head: np.ndarray, head_to_out: np.ndarray, out_bias: np.ndarray,
-                   delta_ratio: np.float32, states: np.ndarray) -> None:
+                   delta_ratio: np.float32, linear_from_commands: np.ndarray,
+                   states_to_linear: np.ndarray, states: np.ndarray) -> None:
     """Advance ``batch`` rollouts over ``steps`` commands: ``states`` (batch, steps, n_s)
     gets the state after each step; ``hidden_states`` (batch, h) comes in as the hidden
     state before the first step and leaves as the one after the last, so a long replay runs
-    in chunks. Weights are transposed (outputs × inputs) so every dot product reads
-    contiguous memory."""
+    in chunks. The linear part (zero for a network alone) adds ``linear_from_commands``
+    and ``states_to_linear`` times the state. Weights are transposed (outputs × inputs)
+    so every dot product reads contiguous memory."""
     batch, steps, three_h = gates_from_commands.shape
     h = three_h // 3
     n_s = initial_states.shape[1]
@@ -64,6 +66,7 @@ def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarr
     h_gates = np.empty(three_h, np.float32)
     layer = np.empty(h, np.float32)
     state = np.empty(n_s, np.float32)
+    following = np.empty(n_s, np.float32)
     for b in range(batch):
         hidden[:] = hidden_states[b]
         state[:] = initial_states[b]
@@ -95,6 +98,10 @@ def rollout_kernel(gates_from_commands: np.ndarray, head_from_commands: np.ndarr
                 acc = out_bias[j]
                 for i in range(h):
                     acc += head_to_out[j, i] * layer[i]
-                state[j] = state[j] + delta_ratio * acc
+                linear = linear_from_commands[b, k, j]
+                for i in range(n_s):
+                    linear += states_to_linear[j, i] * state[i]
+                following[j] = state[j] + delta_ratio * acc + linear
+            state[:] = following
             states[b, k] = state
         hidden_states[b] = hidden

@@ -69,11 +69,15 @@ class FastDynamics:
     out_weights: np.ndarray      # (H, n_states)
     out_bias: np.ndarray         # (n_states,)
     delta_ratio: float
+    # The fixed linear model the network sits on, [x̂, c, 1] · W: (n_s + n_c + 1, n_s);
+    # zero for a network alone.
+    linear: np.ndarray
 
     @classmethod
     def from_state(cls, state: Mapping[str, np.ndarray], n_commands: int,
-                   delta_ratio: float) -> "FastDynamics":
-        """From the network's state dict (names as `RecurrentDynamics` has them)."""
+                   delta_ratio: float, linear: np.ndarray | None = None) -> "FastDynamics":
+        """From the network's state dict (names as `RecurrentDynamics` has them) and the
+        linear model under it, if any."""
         def weight(name: str) -> np.ndarray:
             return np.asarray(state[name], dtype=np.float32)
 
@@ -81,6 +85,7 @@ class FastDynamics:
         w_ih, w_hh, w1 = weight("cell.weight_ih"), weight("cell.weight_hh"), weight(
             "head.0.weight")                     # w1: (H, H + nc + ns): [hidden, c, x]
         hidden = w_hh.shape[1]
+        n_s = w_ih.shape[1] - nc
         return cls(
             input_commands=w_ih[:, :nc].T.copy(), input_states=w_ih[:, nc:].T.copy(),
             input_bias=weight("cell.bias_ih"), hidden_weights=w_hh.T.copy(),
@@ -88,7 +93,15 @@ class FastDynamics:
             head_commands=w1[:, hidden:hidden + nc].T.copy(),
             head_states=w1[:, hidden + nc:].T.copy(), head_bias=weight("head.0.bias"),
             out_weights=weight("head.2.weight").T.copy(), out_bias=weight("head.2.bias"),
-            delta_ratio=float(delta_ratio))
+            delta_ratio=float(delta_ratio),
+            linear=np.zeros((n_s + nc + 1, n_s), np.float32) if linear is None
+            else np.asarray(linear, np.float32))
+
+    def linear_from(self, commands: np.ndarray) -> np.ndarray:
+        """What the commands (…, n_c) and the bias give the linear part's step."""
+        n_s = self.out_bias.size
+        result: np.ndarray = commands @ self.linear[n_s:-1] + self.linear[-1]
+        return result
 
     @property
     def hidden(self) -> int:
@@ -113,19 +126,22 @@ class FastDynamics:
             chunk = commands[:, first:last]
             gates = chunk @ self.input_commands + self.input_bias
             head = chunk @ self.head_commands + self.head_bias
+            linear = self.linear_from(chunk)
             if compiled:
-                self._compiled_rollout(gates, head, states[:, first], hidden,
+                self._compiled_rollout(gates, head, linear, states[:, first], hidden,
                                        states[:, first + 1:last + 1])
                 continue
             state = states[:, first]
             for k in range(last - first):
-                state, hidden = self.advance(gates[:, k], head[:, k], state, hidden)
+                state, hidden = self.advance(gates[:, k], head[:, k], linear[:, k], state,
+                                             hidden)
                 states[:, first + k + 1] = state
         return states
 
     def _compiled_rollout(self, gates_from_commands: np.ndarray,
-                          head_from_commands: np.ndarray, initial_states: np.ndarray,
-                          hidden: np.ndarray, states: np.ndarray) -> None:
+                          head_from_commands: np.ndarray, linear_from_commands: np.ndarray,
+                          initial_states: np.ndarray, hidden: np.ndarray, states: np.ndarray
+                          ) -> None:
         from models.compiled import rollout_kernel
 
         def outputs_by_inputs(weights: np.ndarray) -> np.ndarray:
@@ -139,11 +155,14 @@ class FastDynamics:
                        outputs_by_inputs(self.hidden_weights), self.hidden_bias,
                        outputs_by_inputs(self.head_hidden), outputs_by_inputs(self.head_states),
                        outputs_by_inputs(self.out_weights), self.out_bias,
-                       np.float32(self.delta_ratio), out)
+                       np.float32(self.delta_ratio),
+                       np.ascontiguousarray(linear_from_commands, np.float32),
+                       outputs_by_inputs(self.linear[:self.out_bias.size]), out)
         states[:] = out
 
     def advance(self, gates_from_command: np.ndarray, head_from_command: np.ndarray,
-                state: np.ndarray, hidden: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                linear_from_command: np.ndarray, state: np.ndarray, hidden: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
         """One step, given what the command contributes (see `rollout`)."""
         h = self.hidden
         x_gates = gates_from_command + state @ self.input_states
@@ -154,7 +173,49 @@ class FastDynamics:
         candidate = np.tanh(x_gates[:, 2 * h:] + reset * h_gates[:, 2 * h:])
         hidden = candidate + update * (hidden - candidate)
         layer = np.tanh(hidden @ self.head_hidden + head_from_command + state @ self.head_states)
-        return state + self.delta_ratio * (layer @ self.out_weights + self.out_bias), hidden
+        linear = linear_from_command + state @ self.linear[:self.out_bias.size]
+        return (state + self.delta_ratio * (layer @ self.out_weights + self.out_bias) + linear,
+                hidden)
+
+
+# The predictors a model can keep per signal, simplest first (kept on a tie).
+PREDICTOR_KINDS = ("linear", "network", "network-on-linear")
+NETWORK = "network"
+
+
+def linear_only(linear: np.ndarray, n_commands: int) -> FastDynamics:
+    """The least-squares linear model alone, as a `FastDynamics` whose network part is one
+    hidden unit with every weight zero (it adds nothing)."""
+    n_s = linear.shape[1]
+
+    def zeros(*shape: int) -> np.ndarray:
+        return np.zeros(shape, np.float32)
+
+    return FastDynamics(zeros(n_commands, 3), zeros(n_s, 3), zeros(3), zeros(1, 3), zeros(3),
+                        zeros(1, 1), zeros(n_commands, 1), zeros(n_s, 1), zeros(1),
+                        zeros(1, n_s), zeros(n_s), 0.0, np.asarray(linear, np.float32))
+
+
+@dataclass(frozen=True)
+class ChosenDynamics:
+    """Each signal predicted by the predictor that won it on held-out data: every member
+    runs its own rollout (its state feeds only itself, as in scoring), and each signal is
+    read from its own member's."""
+
+    members: tuple[FastDynamics, ...]
+    source: tuple[int, ...]          # per signal, the index of its member
+
+    @classmethod
+    def single(cls, dynamics: FastDynamics) -> "ChosenDynamics":
+        return cls((dynamics,), (0,) * dynamics.out_bias.size)
+
+    def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
+                engine: Engine = "auto") -> np.ndarray:
+        runs = {m: self.members[m].rollout(commands, initial_states, engine)
+                for m in dict.fromkeys(self.source)}
+        if len(runs) == 1:
+            return next(iter(runs.values()))
+        return np.stack([runs[m][..., i] for i, m in enumerate(self.source)], axis=-1)
 
 
 class FastStepper:
@@ -162,40 +223,43 @@ class FastStepper:
     chooses the next command. ``warm_up`` replays a command history first, exactly as a
     free run does, so the context matches the replay up to that point."""
 
-    def __init__(self, dynamics: FastDynamics, normaliser: Normaliser) -> None:
+    def __init__(self, dynamics: ChosenDynamics, normaliser: Normaliser) -> None:
         self.dynamics, self.normaliser = dynamics, normaliser
         self.command_scale = np.asarray(normaliser.command_scale)
         self.state_scale = np.asarray(normaliser.state_scale)
-        self.hidden = np.zeros((1, dynamics.hidden), np.float32)
-        self.state = np.zeros((1, dynamics.out_bias.size), np.float32)
+        self.hidden = [np.zeros((1, m.hidden), np.float32) for m in dynamics.members]
+        self.states = [np.zeros((1, m.out_bias.size), np.float32) for m in dynamics.members]
 
     def warm_up(self, commands: np.ndarray, initial_state: np.ndarray) -> np.ndarray:
         """Run over ``commands`` from ``initial_state``; return the state after the last."""
-        self.state = (np.asarray(initial_state) / self.state_scale).astype(np.float32)[None]
+        start = (np.asarray(initial_state) / self.state_scale).astype(np.float32)[None]
+        self.states = [start.copy() for _ in self.dynamics.members]
         for command in commands:
             self.step(command)
         return self.current
 
     @property
     def current(self) -> np.ndarray:
-        return self.state[0].astype(np.float64) * self.state_scale
+        chosen = [self.states[m][0, i] for i, m in enumerate(self.dynamics.source)]
+        return np.asarray(chosen, np.float64) * self.state_scale
 
     def step(self, command: np.ndarray) -> np.ndarray:
-        d = self.dynamics
         scaled = (np.asarray(command) / self.command_scale).astype(np.float32)[None]
-        self.state, self.hidden = d.advance(scaled @ d.input_commands + d.input_bias,
-                                            scaled @ d.head_commands + d.head_bias,
-                                            self.state, self.hidden)
+        for m, d in enumerate(self.dynamics.members):
+            self.states[m], self.hidden[m] = d.advance(
+                scaled @ d.input_commands + d.input_bias, scaled @ d.head_commands
+                + d.head_bias, d.linear_from(scaled), self.states[m], self.hidden[m])
         return self.current
 
 
-def fast_replay(dynamics: FastDynamics, normaliser: Normaliser, commands: np.ndarray,
+def fast_replay(dynamics: FastDynamics | ChosenDynamics, normaliser: Normaliser,
+                commands: np.ndarray,
                 initial_state: np.ndarray, engine: Engine = "auto") -> np.ndarray:
     """`models.dynamics.replay` on the NumPy path: SM(t) in physical units, (steps, n_s)."""
     return fast_replay_batch(dynamics, normaliser, [commands], [initial_state], engine)[0]
 
 
-def fast_replay_batch(dynamics: FastDynamics, normaliser: Normaliser,
+def fast_replay_batch(dynamics: FastDynamics | ChosenDynamics, normaliser: Normaliser,
                       commands: list[np.ndarray], initial_states: list[np.ndarray],
                       engine: Engine = "auto") -> list[np.ndarray]:
     """Several independent replays advanced together; each keeps its own length (shorter

@@ -20,8 +20,8 @@ rms_hold / rms_model ≥ 1.5, i.e. skill ≥ 1 − 1/1.5 = 1/3. Below it the mod
 failed sensor from its own error.
 """
 
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -87,6 +87,7 @@ class SignalSkill:
 class HorizonScore:
     horizon_s: float | None
     signals: dict[str, SignalSkill]
+    predictors: dict[str, str] = field(default_factory=dict)   # signal -> predictor kept
 
     @property
     def judged(self) -> tuple[str, ...]:
@@ -152,3 +153,32 @@ def assess(dynamics: Rollouts, command_scale: np.ndarray, state_scale: np.ndarra
     return [score_horizon(predictors, heldout, command_scale, state_scale, sensor_names,
                           None if h is None else max(1, round(h / dt_s)), h)
             for h in horizons_s]
+
+
+# A predictor kept over a simpler one must beat it by this much skill (noise in the
+# held-out figures should not buy complexity).
+SKILL_MARGIN = 0.02
+
+
+def choose_predictors(scores: Mapping[str, Sequence[HorizonScore]]) -> list[HorizonScore]:
+    """Per horizon, each signal's best predictor on the held-out data: ``scores`` holds each
+    candidate's scores (simplest candidate first, the same horizons in the same order); a
+    later candidate replaces an earlier one only by beating it by SKILL_MARGIN."""
+    kinds = list(scores)
+    combined = []
+    for at_horizon in zip(*scores.values(), strict=True):
+        signals, kept = {}, {}
+        for name in at_horizon[0].signals:
+            best = 0
+            for k in range(1, len(kinds)):
+                if _skill_or_worst(at_horizon[k].signals[name]) > _skill_or_worst(
+                        at_horizon[best].signals[name]) + SKILL_MARGIN:
+                    best = k
+            signals[name], kept[name] = at_horizon[best].signals[name], kinds[best]
+        combined.append(HorizonScore(at_horizon[0].horizon_s, signals, kept))
+    return combined
+
+
+def _skill_or_worst(skill: SignalSkill) -> float:
+    value = skill.skill
+    return value if np.isfinite(value) else float("-inf")

@@ -1,12 +1,15 @@
 """Model directories: ``weights.npz`` (the network's state dict as plain arrays, loaded with
-``allow_pickle=False`` so no code runs) and ``model.json`` (readable, versioned metadata).
+``allow_pickle=False`` so no code runs; beside it, where training kept them, ``linear``, the
+least-squares linear model, and ``on_linear/…``, the network trained on top of it) and
+``model.json`` (readable, versioned metadata; ``predictors`` says which predictor each
+signal is read from).
 Diagnosis runs on the NumPy path and never imports torch; the torch module is built only
 when asked for (training, comparisons). Version 1 directories (``weights.pt``, a torch state
 dict read with ``weights_only=True``) still load."""
 
 import hashlib
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -17,7 +20,7 @@ import numpy as np
 from auvdiag_errors import ModelError
 from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
-from models.fast import FastDynamics
+from models.fast import NETWORK, PREDICTOR_KINDS, ChosenDynamics, FastDynamics, linear_only
 from models.normaliser import Normaliser
 
 if TYPE_CHECKING:
@@ -26,6 +29,7 @@ if TYPE_CHECKING:
 FORMAT_NAME = "auvdiag-model"
 FORMAT_VERSION = 2
 WEIGHTS_FILE, METADATA_FILE = "weights.npz", "model.json"
+LINEAR_KEY, ON_LINEAR_PREFIX = "linear", "on_linear/"
 LEGACY_WEIGHTS_FILE = "weights.pt"          # format version 1
 
 
@@ -39,6 +43,7 @@ class LoadedModel:
     normaliser: Normaliser
     metadata: dict[str, Any]
     path: str
+    extra: dict[str, np.ndarray] = field(default_factory=dict)   # linear, on_linear/…
 
     @cached_property
     def network(self) -> "RecurrentDynamics":
@@ -61,6 +66,37 @@ class LoadedModel:
                                        self.normaliser.delta_ratio)
 
     @property
+    def predictors(self) -> dict[str, str]:
+        """Which predictor each signal is read from (the network alone for a model trained
+        before the choice was made)."""
+        chosen = self.metadata.get("predictors", {}).get("per_signal", {})
+        return {name: chosen.get(name, NETWORK) for name in self.sensor_names}
+
+    @cached_property
+    def dynamics(self) -> ChosenDynamics:
+        """The replay: each signal from its chosen predictor (the diagnosis hot path)."""
+        kinds = list(self.predictors.values())
+        order = list(dict.fromkeys(kinds))
+        return ChosenDynamics(tuple(self._member(kind) for kind in order),
+                              tuple(order.index(kind) for kind in kinds))
+
+    def _member(self, kind: str) -> FastDynamics:
+        if kind not in PREDICTOR_KINDS:
+            raise ValueError(f"unknown predictor {kind!r}")
+        if kind == NETWORK:
+            return self.fast
+        n_commands = self.metadata["architecture"]["n_commands"]
+        if LINEAR_KEY not in self.extra:
+            raise ValueError(f"model.json reads signals from the {kind} predictor, but "
+                             f"{WEIGHTS_FILE} holds no linear model")
+        linear = self.extra[LINEAR_KEY]
+        if kind == "linear":
+            return linear_only(linear, n_commands)
+        state = {k[len(ON_LINEAR_PREFIX):]: v for k, v in self.extra.items()
+                 if k.startswith(ON_LINEAR_PREFIX)}
+        return FastDynamics.from_state(state, n_commands, self.normaliser.delta_ratio, linear)
+
+    @property
     def identity(self) -> dict[str, Any]:
         """What a report needs to say which model judged the log."""
         meta = self.metadata
@@ -68,6 +104,7 @@ class LoadedModel:
                 "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
                 "horizon_s": meta.get("horizon_s"), "skill": self.skill,
+                "predictors": self.predictors,
                 "thresholds_calibrated": "calibration" in meta}
 
     @property
@@ -122,11 +159,13 @@ def default_model_dir(vehicle: str = "twin-burger") -> Path:
 
 
 def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normaliser,
-               metadata: dict[str, Any]) -> None:
-    """Write weights and metadata; the metadata gains the architecture and weight digest."""
+               metadata: dict[str, Any], extra: dict[str, np.ndarray] | None = None) -> None:
+    """Write weights and metadata; the metadata gains the architecture and weight digest.
+    ``extra``: the other predictors' arrays (``linear``, ``on_linear/…``)."""
     directory.mkdir(parents=True, exist_ok=True)
     weights = directory / WEIGHTS_FILE
     arrays = {k: v.detach().numpy().copy() for k, v in network.state_dict().items()}
+    arrays |= extra or {}
     np.savez(weights, **arrays)  # type: ignore[arg-type]
     full = {
         "format": FORMAT_NAME,
@@ -181,8 +220,12 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         arch, norm = metadata["architecture"], metadata["normalisation"]
         normaliser = Normaliser(tuple(norm["command_scale"]), tuple(norm["state_scale"]),
                                 norm["delta_ratio"])
-        model = LoadedModel(_read_weights(directory, version), normaliser, metadata, label)
+        arrays = _read_weights(directory, version)
+        extra = {k: arrays.pop(k) for k in list(arrays)
+                 if k == LINEAR_KEY or k.startswith(ON_LINEAR_PREFIX)}
+        model = LoadedModel(arrays, normaliser, metadata, label, extra)
         fast = model.fast        # checks every weight is there with the architecture's shape
+        _ = model.dynamics       # and every predictor a signal is read from
         _ = model.effort         # and that an effort entry refits
         if (fast.hidden, fast.input_states.shape[0]) != (arch["hidden"], arch["n_states"]):
             raise ValueError("weights do not match the architecture in the metadata")

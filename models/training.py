@@ -105,28 +105,29 @@ def _duration(seconds: float) -> str:
 
 def train(sequences: Sequence[TrainingLog], hidden: int = 32,
           stages: Sequence[Stage] = DEFAULT_STAGES, batch_size: int = 64, seed: int = 0,
-          progress: Callable[[str], None] | None = None
+          progress: Callable[[str], None] | None = None, linear: np.ndarray | None = None
           ) -> tuple[RecurrentDynamics, Normaliser]:
     """Train a model on normal-condition logs; returns the network and its normaliser.
+    ``linear``: a fixed linear model (normalised units) the network learns on top of.
 
     Runs on one thread: the network's matrices are small, and a second thread only waits
     on the first (on a busy two-core machine it made training tens of times slower)."""
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        return _train(sequences, hidden, stages, batch_size, seed, progress)
+        return _train(sequences, hidden, stages, batch_size, seed, progress, linear)
     finally:
         torch.set_num_threads(threads)
 
 
 def _train(sequences: Sequence[TrainingLog], hidden: int, stages: Sequence[Stage],
-           batch_size: int, seed: int, progress: Callable[[str], None] | None
-           ) -> tuple[RecurrentDynamics, Normaliser]:
+           batch_size: int, seed: int, progress: Callable[[str], None] | None,
+           linear: np.ndarray | None) -> tuple[RecurrentDynamics, Normaliser]:
     torch.manual_seed(seed)
     generator = np.random.default_rng(seed)
     normaliser = fit_normaliser(sequences)
     n_commands, n_states = sequences[0].commands.shape[1], sequences[0].sensors.shape[1]
-    network = RecurrentDynamics(n_commands, n_states, hidden, normaliser.delta_ratio)
+    network = RecurrentDynamics(n_commands, n_states, hidden, normaliser.delta_ratio, linear)
     longest = max(longest_complete_stretch(s.sensors) for s in sequences)
     if longest < 2:
         raise ValueError("no two consecutive samples with every sensor measured")
@@ -143,6 +144,8 @@ def _train(sequences: Sequence[TrainingLog], hidden: int, stages: Sequence[Stage
             pick = torch.as_tensor(generator.integers(0, len(commands), batch_size))
             predicted = network(commands[pick], states[pick][:, 0])
             loss = torch.mean((predicted - states[pick]) ** 2)
+            if not torch.isfinite(loss):    # a linear model under it that diverges
+                raise ValueError(f"the rollouts diverge at a horizon of {horizon} steps")
             optimiser.zero_grad()
             loss.backward()
             torch.nn.utils.clip_grad_norm_(network.parameters(), 1.0)

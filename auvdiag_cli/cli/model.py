@@ -17,6 +17,7 @@ from auvdiag_cli.cli.app import (
     report_progress,
     user_errors,
 )
+from auvdiag_cli.errors import UsageError
 
 
 @app.command()
@@ -35,12 +36,18 @@ def train(
     iterations_scale: Annotated[float, typer.Option(
         help="Multiply every stage's iteration count (e.g. 0.1 for a quick model).",
         min=0.001)] = 1.0,
+    predictor: Annotated[list[str] | None, typer.Option(
+        "--predictor", help="A predictor each signal may be read from: linear, network, "
+                            "network-on-linear (repeatable; default: all three, the best "
+                            "per signal on the held-out data).")] = None,
 ) -> None:
     """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
 
-    Training runs in stages, short rollouts first and long free-running ones after. The
-    model is then scored on held-out normal data against naive predictors (the last value
-    holds, the mean, a linear model): a signal it cannot predict better is never judged.
+    Three predictors are fitted: a least-squares linear model, the recurrent network
+    (trained in stages, short rollouts first and long free-running ones after), and the
+    network on top of the linear model. Each signal is read from the one with the best skill
+    on held-out normal data, against naive predictors (the last value holds, the mean): a
+    signal that none predicts better is never judged.
     It also learns how the commands follow the motion (see 'auvdiag relate') and, for the
     profile's groups of actuators that act alike ([[effort]]), each actuator's normal share
     of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs
@@ -49,13 +56,18 @@ def train(
     from auvdiag_cli.jobs.train import paper_model_error, train_from_logs
     from auvdiag_cli.reports.training import training_lines
     from auvdiag_cli.vehicle.profile import load_profile
+    from models.fast import PREDICTOR_KINDS
 
     with user_errors(output):
+        unknown = [p for p in predictor or () if p not in PREDICTOR_KINDS]
+        if unknown:
+            raise UsageError(f"unknown predictor {', '.join(unknown)} (known: "
+                             f"{', '.join(PREDICTOR_KINDS)})")
         vehicle = load_profile(profile)
         result = train_from_logs(logs, output, vehicle, holdout or (), hidden, seed,
                                  iterations_scale, horizon_option(horizon, vehicle.horizon_s),
-                                 keep_unskilled,
-                                 progress=report_progress)
+                                 keep_unskilled, progress=report_progress,
+                                 predictors=predictor or PREDICTOR_KINDS)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
                                vehicle.sensor_names):
         typer.echo(line)

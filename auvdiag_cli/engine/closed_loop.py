@@ -54,7 +54,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     # Before the onset the sensors were sound: they bring the controller to its state then.
     for row in np.nan_to_num(measured[first:onset]):
         vehicle.step(row, dt_s)
-    stepper = FastStepper(model.fast, model.normaliser)
+    stepper = FastStepper(model.dynamics, model.normaliser)
     state = stepper.warm_up(commands[first:onset],
                            np.nan_to_num(robust_state(measured, first, first, onset + 1)))
     path, issued = [(controller.x, controller.y)], []

@@ -83,11 +83,11 @@ def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | Non
 
 def _open_loop(model: LoadedModel, profile: Profile, mode: str, history: OpenLoop,
                actuator: int | None, sensor: int | None) -> dict[str, int]:
-    modelled = fast_replay(model.fast, model.normaliser, history.commands, history.start)
+    modelled = fast_replay(model.dynamics, model.normaliser, history.commands, history.start)
     executed = history.commands.copy()
     if actuator is not None:
         executed[history.fault_step:, actuator] = 0.0
-    measured = fast_replay(model.fast, model.normaliser, executed, history.start)
+    measured = fast_replay(model.dynamics, model.normaliser, executed, history.start)
     if sensor is not None:
         measured[history.fault_step:, sensor] = 0.0
     return _bits(measured, modelled, profile, mode, model)
@@ -133,7 +133,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
     controller = make_follower(spec, waypoints, spec.gains,
                                [depths[i % len(depths)] for i in range(len(waypoints))]
                                if depths else [])
-    plant = FastStepper(model.fast, model.normaliser)
+    plant = FastStepper(model.dynamics, model.normaliser)
     plant.warm_up(np.empty((0, len(profile.command_names))),
                   np.zeros(len(profile.sensor_names)))
     vehicle = VehicleController(spec, profile.sensor_names, profile.command_names, controller)
@@ -150,7 +150,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
         if actuator is not None and step >= fault_step:
             executed[actuator] = 0.0
         plant.step(executed)
-    modelled = fast_replay(model.fast, model.normaliser, np.asarray(commands), readings[0])
+    modelled = fast_replay(model.dynamics, model.normaliser, np.asarray(commands), readings[0])
     return _bits(np.asarray(readings), modelled, profile, MISSION_MODE, model)
 
 

@@ -4,7 +4,7 @@ held-out normal data, choose the prediction horizon, and write a model directory
 import hashlib
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -16,15 +16,18 @@ from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.errors import UsageError
+from auvdiag_cli.jobs.candidates import fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_entry
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
 from models.command_relations import RelationLog
+from models.fast import PREDICTOR_KINDS
 from models.skill import (
     HORIZON_CANDIDATES_S,
     MIN_SCORED_SAMPLES,
     MIN_SKILL,
+    SKILL_MARGIN,
     HorizonScore,
     ScoringLog,
     assess,
@@ -40,6 +43,10 @@ PAPER_VEHICLE = "twin-burger"
 SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
                 "replays re-starting every horizon from a median start state; versus_linear "
                 "= 1 - rms_model / rms_linear")
+PREDICTOR_METHOD = ("each signal is read from the predictor with the best held-out skill at "
+                    "the horizon chosen: linear (least squares), network, or "
+                    "network-on-linear; a more complex one must win by "
+                    f"{SKILL_MARGIN} skill")
 SKILL_THRESHOLD_REASON = (
     "a stuck or dead sensor leaves a residual of about rms_hold; it clears a threshold of "
     "1.5 x the normal g only if rms_hold / rms_model >= 1.5, i.e. skill >= 1/3")
@@ -65,6 +72,8 @@ class TrainingResult:
     start_state: dict[str, Any]         # model.json's entry: where normal logs start
     effort: dict[str, Any]              # model.json's entry: each actuator's share of effort
     effort_notes: tuple[str, ...] = ()  # logs the effort model left out, and why
+    by_predictor: dict[str, list[HorizonScore]] = field(default_factory=dict)
+    predictor_notes: tuple[str, ...] = ()   # predictors left out, and why
 
     @property
     def judges_anything(self) -> bool:
@@ -133,10 +142,11 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                     iterations_scale: float = 1.0, horizon_s: float | None = None,
                     keep_unskilled: bool = False,
                     progress: Callable[[str], None] = lambda _: None,
-                    trainer: Callable[..., Any] | None = None) -> TrainingResult:
+                    trainer: Callable[..., Any] | None = None,
+                    predictors: Sequence[str] = PREDICTOR_KINDS) -> TrainingResult:
     """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run.
-    ``trainer``: `models.training.train` unless another is given (benchmarks compare)."""
-    from models.fast import FastDynamics
+    ``trainer``: `models.training.train` unless another is given (benchmarks compare).
+    ``predictors``: the kinds each signal may be read from (chosen by held-out skill)."""
     from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
@@ -156,21 +166,20 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
+    sequences = [TrainingLog(t.name, t.commands, t.sensors) for t in training]
+
+    def fit_network(linear: np.ndarray | None) -> Any:
+        return (trainer or train)(sequences, hidden=hidden, stages=stages, seed=seed,
+                                  progress=progress, linear=linear)
+
     try:
-        network, normaliser = (trainer or train)([TrainingLog(t.name, t.commands, t.sensors)
-                                     for t in training], hidden=hidden, stages=stages,
-                                    seed=seed, progress=progress)
+        fitted = fit_candidates(training, heldout, profile.sensor_names, profile.dt_s,
+                                horizon_candidates(profile, horizon_s), predictors,
+                                fit_network, progress)
     except ValueError as problem:   # the logs hold too little complete, operating data
         raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
                          f"{problem}") from None
-    progress("scoring the model against the naive predictors on the held-out data")
-    dynamics = FastDynamics.from_state(
-        {k: v.detach().numpy() for k, v in network.state_dict().items()},
-        network.n_commands, normaliser.delta_ratio)
-    scores = assess(dynamics, np.asarray(normaliser.command_scale),
-                    np.asarray(normaliser.state_scale), training, heldout,
-                    profile.sensor_names, profile.dt_s,
-                    horizon_candidates(profile, horizon_s))
+    scores = fitted.scores
     chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
     progress("learning the command relations, the start state and the effort shares")
@@ -178,15 +187,15 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     effort, effort_notes = learn_effort_entry([r.relation for r in [*read, *read_heldout]],
                                               profile)
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
-                            hours, rates, relations, start_state, effort, tuple(effort_notes))
+                            hours, rates, relations, start_state, effort, tuple(effort_notes),
+                            fitted.by_kind, fitted.notes)
     result = replace(result, written=result.judges_anything or keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, seed)
-        metadata["command_relations"] = relations
-        metadata["start_state"] = start_state
-        metadata["effort"] = effort
-        save_model(output, network, normaliser, metadata)
+        metadata |= {"command_relations": relations, "start_state": start_state,
+                     "effort": effort}
+        save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     return result
 
 
@@ -236,6 +245,10 @@ def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
                         for name, s in chosen.signals.items()},
             "judged_from_samples": MIN_SCORED_SAMPLES,
             "horizons": [_skill_record(s) for s in scores],
+        },
+        "predictors": {
+            "method": PREDICTOR_METHOD,
+            "per_signal": dict(chosen.predictors),
         },
         "heldout_error": {
             "logs": list(heldout_names),
@@ -303,9 +316,10 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
         raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
                          "it has not seen")
     scoring = [_scoring_log(p, profile, progress) for p in logs]
-    scores = assess(model.fast, np.asarray(model.normaliser.command_scale),
-                    np.asarray(model.normaliser.state_scale), scoring, scoring,
-                    profile.sensor_names, profile.dt_s, horizon_candidates(profile, horizon_s))
+    scores = [replace(score, predictors=model.predictors) for score in assess(
+        model.dynamics, np.asarray(model.normaliser.command_scale),
+        np.asarray(model.normaliser.state_scale), scoring, scoring, profile.sensor_names,
+        profile.dt_s, horizon_candidates(profile, horizon_s))]
     chosen = choose_horizon(scores)
     model.metadata.update(skill_metadata(scores, chosen, [p.name for p in logs], profile))
     return scores, chosen

@@ -8,7 +8,8 @@ from typing import Any
 
 from auvdiag_cli.jobs.calibrate import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
-from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, HorizonScore, SignalSkill
+from models.fast import NETWORK
+from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
 
 
 def horizon_text(horizon_s: float | None) -> str:
@@ -33,14 +34,31 @@ def _verdict(s: SignalSkill) -> str:
 
 def _skill_rows(score: HorizonScore) -> list[str]:
     baselines = list(next(iter(score.signals.values())).baseline_rms)
-    rows = [f"  {'signal':<14}{'skill':>7}{'vs linear':>10}{'model':>10}"
+    rows = [f"  {'signal':<14}{'predictor':<19}{'skill':>7}{'vs linear':>10}{'model':>10}"
             + "".join(f"{name:>10}" for name in baselines) + "   judged"]
     for name, s in score.signals.items():
-        rows.append(f"  {name:<14}{_ratio(s.skill)}   {_ratio(s.versus_linear)} "
-                    f"{_number(s.model_rms)}"
+        rows.append(f"  {name:<14}{score.predictors.get(name, NETWORK):<19}{_ratio(s.skill)}"
+                    f"   {_ratio(s.versus_linear)} {_number(s.model_rms)}"
                     + "".join(f" {_number(s.baseline_rms[b])}" for b in baselines)
                     + f"   {_verdict(s)}")
     return rows
+
+
+def predictor_lines(result: TrainingResult) -> list[str]:
+    """Each predictor's skill per signal at the horizon chosen: why each signal is read
+    from the one it is."""
+    horizons = [s.horizon_s for s in result.scores]
+    at = horizons.index(result.chosen.horizon_s)
+    if len(result.by_predictor) < 2:
+        return [f"  left out: {note}" for note in result.predictor_notes]
+    lines = [f"skill per predictor at {horizon_text(result.chosen.horizon_s)} (each signal is "
+             "read from the best; a more complex one must win by "
+             f"{SKILL_MARGIN:g}):"]
+    for name in result.chosen.signals:
+        lines.append(f"  {name:<14}" + ", ".join(
+            f"{kind} {_ratio(scores[at].signals[name].skill).strip()}"
+            for kind, scores in result.by_predictor.items()))
+    return lines + [f"  left out: {note}" for note in result.predictor_notes]
 
 
 def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[str]:
@@ -61,7 +79,7 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
              f"operating time; held out: {result.heldout_split})"]
-    lines += skill_lines(result.scores, chosen)
+    lines += skill_lines(result.scores, chosen) + predictor_lines(result)
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))

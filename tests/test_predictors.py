@@ -1,0 +1,169 @@
+"""Model choice by validation: the linear model, the network and the network on top of the
+linear model, each signal read from the one with the best held-out skill; the replay of a
+model that mixes them, free and one step at a time, and on every engine."""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from models.dynamics import RecurrentDynamics
+from models.fast import ChosenDynamics, FastDynamics, FastStepper, linear_only
+from models.normaliser import Normaliser
+from models.store import load_model
+
+runner = CliRunner()
+
+
+def write_linear_vehicle(path: Path, seed: int, seconds: float = 240.0) -> Path:
+    """A CSV log of a vehicle whose speed is a first-order lag of its command (exactly what
+    a linear model describes), with the command stepping every few seconds."""
+    rng = np.random.default_rng(seed)
+    dt = 0.1
+    steps = round(seconds / dt)
+    levels = np.repeat(rng.uniform(-1, 1, steps // 30 + 1), 30)[:steps]
+    speed = np.zeros(steps)
+    for k in range(1, steps):
+        speed[k] = speed[k - 1] + dt * (0.8 * levels[k - 1] - speed[k - 1]) / 2.0
+    measured = speed + rng.normal(0, 0.01, steps)
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["t", "cmd", "speed"])
+        for k in range(steps):
+            writer.writerow([f"{k * dt:.3f}", f"{levels[k]:.4f}", f"{measured[k]:.5f}"])
+    return path
+
+
+PROFILE = """
+[vehicle]
+name = "lagged"
+description = "a vehicle whose speed lags its command"
+dt_s = 0.1
+
+[[commands]]
+name = "cmd"
+component = "thruster"
+description = "the thruster command"
+
+[[sensors]]
+name = "speed"
+component = "speed_sensor"
+unit = "m/s"
+full_scale = 1.0
+description = "speed"
+
+[matching]
+window_samples = 20
+decision_window_s = 3.0
+
+[thresholds.mission]
+speed = 15.0
+
+[[pattern]]
+case = 0
+b = { speed = 0 }
+components = []
+
+[sources.csv]
+time = { column = "t", unit = "s" }
+
+[sources.csv.signals]
+cmd = { column = "cmd" }
+speed = { column = "speed" }
+"""
+
+
+@pytest.fixture(scope="module")
+def lagged(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
+    folder = tmp_path_factory.mktemp("lagged")
+    profile = folder / "lagged.toml"
+    profile.write_text(PROFILE)
+    logs = [write_linear_vehicle(folder / f"run_{seed}.csv", seed) for seed in range(4)]
+    output = folder / "model"
+    result = runner.invoke(app, ["train", *map(str, logs[:3]), "--holdout", str(logs[3]),
+                                 "--profile", str(profile), "-o", str(output),
+                                 "--iterations-scale", "0.05", "--hidden", "8"])
+    assert result.exit_code == 0, result.output
+    return profile, output, folder
+
+
+def test_a_linear_vehicle_is_read_from_the_linear_model(lagged: tuple[Path, Path, Path]):
+    profile, output, folder = lagged
+    meta = json.loads((output / "model.json").read_text())
+    assert meta["predictors"]["per_signal"] == {"speed": "linear"}
+    assert meta["skill"]["signals"]["speed"]["skill"] > 0.8
+    model = load_model(output)
+    assert model.predictors == {"speed": "linear"}
+    assert {"linear"} | {k for k in model.extra if k.startswith("on_linear/")} <= set(
+        model.extra)
+    # The diagnosis reads the signal from it and says so.
+    log = write_linear_vehicle(folder / "later.csv", 9, seconds=120.0)
+    report = folder / "later.json"
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(profile), "--model",
+                                 str(output), "--json", str(report)])
+    assert result.exit_code == 0, result.output
+    assert json.loads(report.read_text())["model"]["predictors"] == {"speed": "linear"}
+
+
+def test_the_choice_can_be_narrowed(lagged: tuple[Path, Path, Path], tmp_path: Path):
+    profile, _, folder = lagged
+    logs = sorted(folder.glob("run_*.csv"))
+    result = runner.invoke(app, ["train", *map(str, logs[:3]), "--holdout", str(logs[3]),
+                                 "--profile", str(profile), "-o", str(tmp_path / "m"),
+                                 "--iterations-scale", "0.02", "--hidden", "8",
+                                 "--predictor", "network", "--keep-unskilled"])
+    assert "skill per predictor" not in result.output      # one candidate: nothing to choose
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    assert meta["predictors"]["per_signal"] == {"speed": "network"}
+    bad = runner.invoke(app, ["train", *map(str, logs), "--profile", str(profile), "-o",
+                              str(tmp_path / "n"), "--predictor", "spline"])
+    assert bad.exit_code == 2 and "unknown predictor spline" in bad.output
+
+
+def _network_on_linear(seed: int) -> tuple[RecurrentDynamics, np.ndarray]:
+    torch.manual_seed(seed)
+    linear = np.random.default_rng(seed).normal(0, 0.05, (2 + 2 + 1, 2))
+    linear[:2] -= 0.1 * np.eye(2)         # a stable linear model: its state decays
+    linear = linear.astype(np.float32)
+    return RecurrentDynamics(2, 2, 8, 0.1, linear), linear
+
+
+@pytest.mark.parametrize("engine", ["numpy", "compiled"])
+def test_the_network_on_a_linear_model_replays_as_torch_does(engine: str):
+    pytest.importorskip("numba")
+    network, linear = _network_on_linear(3)
+    commands = np.random.default_rng(1).uniform(-1, 1, (1, 300, 2)).astype(np.float32)
+    start = np.array([[0.3, -0.2]], np.float32)
+    with torch.inference_mode():
+        reference = network(torch.from_numpy(commands), torch.from_numpy(start)).numpy()
+    fast = FastDynamics.from_state({k: v.numpy() for k, v in network.state_dict().items()},
+                                   2, 0.1, linear)
+    np.testing.assert_allclose(fast.rollout(commands, start, engine), reference, atol=2e-5)
+    # The linear model alone is the linear part with nothing added.
+    alone = linear_only(linear, 2).rollout(commands, start, engine)
+    state = start[0].astype(np.float64)
+    for k in range(1, 300):
+        state = state + np.concatenate([state, commands[0, k - 1], [1.0]]) @ linear
+        np.testing.assert_allclose(alone[0, k], state, rtol=1e-4, atol=1e-5)
+
+
+def test_a_mixed_model_reads_each_signal_from_its_own_predictor_free_and_stepped():
+    network, linear = _network_on_linear(5)
+    on_linear = FastDynamics.from_state(
+        {k: v.numpy() for k, v in network.state_dict().items()}, 2, 0.1, linear)
+    alone = linear_only(linear, 2)
+    mixed = ChosenDynamics((alone, on_linear), (1, 0))
+    commands = np.random.default_rng(2).uniform(-1, 1, (1, 80, 2)).astype(np.float32)
+    start = np.array([[0.1, 0.4]], np.float32)
+    free = mixed.rollout(commands, start, "numpy")
+    np.testing.assert_array_equal(free[..., 0], on_linear.rollout(commands, start,
+                                                                  "numpy")[..., 0])
+    np.testing.assert_array_equal(free[..., 1], alone.rollout(commands, start, "numpy")[..., 1])
+    stepper = FastStepper(mixed, Normaliser((1.0, 1.0), (1.0, 1.0)))
+    stepper.warm_up(commands[0, :40], start[0])
+    np.testing.assert_allclose(stepper.current, free[0, 40], atol=1e-5)
