@@ -29,6 +29,11 @@ class LogError(AuvdiagError):
         super().__init__(f"{path}: {self.problem}")
 
 
+class LogNotOperating(LogError):
+    """The vehicle never operates in the log (never armed, or idle throughout): there is
+    nothing in it to judge or to learn from."""
+
+
 class ProfileError(AuvdiagError):
     """A vehicle profile does not validate; the message names the key."""
 

@@ -20,13 +20,15 @@ from models.store import load_model
 runner = CliRunner()
 
 
-def write_linear_vehicle(path: Path, seed: int, seconds: float = 240.0) -> Path:
+def write_linear_vehicle(path: Path, seed: int, seconds: float = 240.0,
+                         idle: bool = False) -> Path:
     """A CSV log of a vehicle whose speed is a first-order lag of its command (exactly what
-    a linear model describes), with the command stepping every few seconds."""
+    a linear model describes), with the command stepping every few seconds; ``idle``: the
+    command stays at neutral (a log recorded on deck)."""
     rng = np.random.default_rng(seed)
     dt = 0.1
     steps = round(seconds / dt)
-    levels = np.repeat(rng.uniform(-1, 1, steps // 30 + 1), 30)[:steps]
+    levels = np.repeat(rng.uniform(-1, 1, steps // 30 + 1), 30)[:steps] * (not idle)
     speed = np.zeros(steps)
     for k in range(1, steps):
         speed[k] = speed[k - 1] + dt * (0.8 * levels[k - 1] - speed[k - 1]) / 2.0
@@ -56,6 +58,9 @@ component = "speed_sensor"
 unit = "m/s"
 full_scale = 1.0
 description = "speed"
+
+[operating]
+idle_after_s = 1.0
 
 [matching]
 window_samples = 20
@@ -167,3 +172,34 @@ def test_a_mixed_model_reads_each_signal_from_its_own_predictor_free_and_stepped
     stepper = FastStepper(mixed, Normaliser((1.0, 1.0), (1.0, 1.0)))
     stepper.warm_up(commands[0, :40], start[0])
     np.testing.assert_allclose(stepper.current, free[0, 40], atol=1e-5)
+
+
+def test_a_folder_of_a_days_logs_trains_leaving_out_those_never_operated(
+        lagged: tuple[Path, Path, Path], tmp_path: Path):
+    profile, _, folder = lagged
+    day = tmp_path / "day"
+    day.mkdir()
+    for log in sorted(folder.glob("run_*.csv")):
+        (day / log.name).write_bytes(log.read_bytes())
+    write_linear_vehicle(day / "on_deck.csv", 20, seconds=60.0, idle=True)
+    (day / "notes.txt").write_text("calm sea")
+    result = runner.invoke(app, ["train", str(day), "--profile", str(profile), "-o",
+                                 str(tmp_path / "m"), "--iterations-scale", "0.02",
+                                 "--hidden", "8", "--predictor", "linear"])
+    assert result.exit_code == 0, result.output
+    assert "left out on_deck.csv: the vehicle never operates" in result.output
+    assert "notes.txt: not a log this tool reads" in result.output
+    meta = json.loads((tmp_path / "m" / "model.json").read_text())
+    assert meta["trained_on"]["logs"] + len(meta["heldout_error"]["logs"]) == 4
+    # Calibration leaves it out the same way; a folder of nothing but idle logs is refused.
+    result = runner.invoke(app, ["calibrate", str(day), "--model", str(tmp_path / "m"),
+                                 "--profile", str(profile)])
+    assert result.exit_code == 0 and "left out on_deck.csv" in result.output, result.output
+    idle = tmp_path / "idle"
+    idle.mkdir()
+    write_linear_vehicle(idle / "deck_1.csv", 21, seconds=60.0, idle=True)
+    result = runner.invoke(app, ["train", str(idle), "--profile", str(profile), "-o",
+                                 str(tmp_path / "n")])
+    assert result.exit_code == 2
+    assert "nothing to train on: the vehicle never operates in any of the 1 log(s)" in (
+        result.output)

@@ -101,6 +101,25 @@ def report_progress(message: str) -> None:
     typer.echo(message, err=True)
 
 
+def log_paths(paths: list[Path]) -> list[Path]:
+    """The logs given, a folder standing for every log under it (a ROS 2 bag folder is
+    one log); what a folder holds that is not a log is named on stderr."""
+    from auvdiag_cli.audit.discovery import ROS2_METADATA, discover
+
+    expanded: list[Path] = []
+    for path in paths:
+        if not path.is_dir() or (path / ROS2_METADATA).is_file():
+            expanded.append(path)
+            continue
+        found = discover([str(path)])
+        for skipped, why in found.skipped:
+            report_progress(f"left out {skipped}: {why}")
+        if not found.logs:
+            raise UsageError(f"{path}: the folder holds no log this tool reads")
+        expanded += found.logs
+    return expanded
+
+
 def horizon_option(text: str | None, profile_default: float | None) -> float | None:
     """--horizon as the trainer takes it: None chooses, inf is the paper's free run; no
     option keeps the profile's ``[matching] horizon_s``."""

@@ -14,6 +14,7 @@ from auvdiag_cli.cli.app import (
     ProfileOption,
     app,
     horizon_option,
+    log_paths,
     report_progress,
     user_errors,
 )
@@ -22,7 +23,9 @@ from auvdiag_cli.errors import UsageError
 
 @app.command()
 def train(
-    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs to learn from.")],
+    logs: Annotated[list[Path], typer.Argument(
+        help="Normal-condition logs to learn from, or folders of them (logs in which the "
+             "vehicle never operates are left out).")],
     output: Annotated[Path, typer.Option("--output", "-o", help="Model directory to write.",
                                          file_okay=False)],
     profile: ProfileOption = None,
@@ -64,7 +67,8 @@ def train(
             raise UsageError(f"unknown predictor {', '.join(unknown)} (known: "
                              f"{', '.join(PREDICTOR_KINDS)})")
         vehicle = load_profile(profile)
-        result = train_from_logs(logs, output, vehicle, holdout or (), hidden, seed,
+        result = train_from_logs(log_paths(logs), output, vehicle,
+                                 log_paths(holdout or []), hidden, seed,
                                  iterations_scale, horizon_option(horizon, vehicle.horizon_s),
                                  keep_unskilled, progress=report_progress,
                                  predictors=predictor or PREDICTOR_KINDS)
@@ -153,7 +157,9 @@ def relate(
 
 @app.command()
 def calibrate(
-    logs: Annotated[list[Path], typer.Argument(help="Normal-condition logs.")],
+    logs: Annotated[list[Path], typer.Argument(
+        help="Normal-condition logs, or folders of them (logs in which the vehicle never "
+             "operates are left out).")],
     model: ModelToUpdateOption,
     faulty: Annotated[list[Path] | None, typer.Option(
         "--faulty", help="A log with a known fault, to check detection (repeatable).")
@@ -188,8 +194,9 @@ def calibrate(
 
     with user_errors(model):
         loaded = load_model(model)
-        result = run_calibration(loaded, load_profile(profile), logs, faulty or (), margin,
-                                 floor_at_profile, false_alarm_rate)
+        result = run_calibration(loaded, load_profile(profile), log_paths(logs),
+                                 log_paths(faulty or []), margin, floor_at_profile,
+                                 false_alarm_rate, progress=report_progress)
         write_metadata(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)

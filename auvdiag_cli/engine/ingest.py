@@ -5,8 +5,9 @@ from pathlib import Path
 
 from adapters import LogError, Signals, read_log
 from auvdiag_cli.engine.outliers import remove_spikes
-from auvdiag_cli.engine.resample import AlignedFrame, resample
+from auvdiag_cli.engine.resample import AlignedFrame, NeverOperates, resample
 from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_errors import LogNotOperating
 
 
 @dataclass
@@ -21,6 +22,8 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
                          max_gap_s, profile.idle_after_s)
+    except NeverOperates as error:
+        raise LogNotOperating(path, str(error)) from None
     except ValueError as error:
         raise LogError(path, str(error)) from None
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,

@@ -159,9 +159,13 @@ def _operating(signals: Signals, grid_ns: np.ndarray) -> np.ndarray:
     return (index >= 0) & (flag.to_numpy()[np.clip(index, 0, None)] != 0)
 
 
+class NeverOperates(ValueError):
+    """The operating flag or the commands say the vehicle never operated."""
+
+
 def _note_operating(operating: np.ndarray, dt_s: float, notes: list[str]) -> None:
     if not operating.any():
-        raise ValueError("the vehicle never operates in this log (never armed, or its commands "
+        raise NeverOperates("the vehicle never operates in this log (never armed, or its commands "
                          "never leave neutral): there is nothing to judge")
     if not operating.all():
         stretches = int(operating[0]) + int((~operating[:-1] & operating[1:]).sum())

@@ -9,7 +9,7 @@ Faulty logs, when given, are diagnosed with the new thresholds to show the detec
 The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -25,6 +25,7 @@ from auvdiag_cli.engine.start_check import raise_thresholds, start_reading
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.files import write_json
 from auvdiag_cli.jobs.effort import learn_effort_entry, refit_effort
+from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
@@ -148,28 +149,26 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5, floor_at_profile: bool = False,
-              false_alarm_rate: float | None = None) -> CalibrationResult:
+              false_alarm_rate: float | None = None,
+              progress: Callable[[str], None] = lambda _: None) -> CalibrationResult:
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise)."""
+    trip on the next dive's noise). Logs in which the vehicle never operates are left out."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
+    kept = read_operating(normal_logs, lambda path: ingest(path, profile), progress,
+                          "calibrate with")
+    normal_logs, ingested = list(kept), list(kept.values())
     in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
-    ingested = [ingest(path, profile) for path in normal_logs]
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
     effort, effort_notes = _refit_effort(model, profile, ingested, false_alarm_rate)
     widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
                                  if p in in_sample], profile.sensor_names) if in_sample else {}
     factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
-    per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
-    for path, diagnosis in zip(normal_logs, diagnoses, strict=True):
-        label = f"{path.name} (in-sample, widened)" if path in in_sample else path.name
-        for mode, g in _g_by_mode(diagnosis).items():
-            per_mode.setdefault(mode, []).append(
-                (label, g * factor if path in in_sample else g))
+    per_mode = _g_per_mode(normal_logs, diagnoses, in_sample, factor)
     thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
     modes = []
     dt_h = profile.dt_s / 3600
@@ -206,6 +205,19 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes))
     model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
     return result
+
+
+def _g_per_mode(logs: Sequence[Path], diagnoses: Sequence[Diagnosis],
+                in_sample: Sequence[Path], factor: np.ndarray
+                ) -> dict[str, list[tuple[str, np.ndarray]]]:
+    """Each mode's g, per log (in-sample logs' widened by ``factor``)."""
+    per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
+    for path, diagnosis in zip(logs, diagnoses, strict=True):
+        label = f"{path.name} (in-sample, widened)" if path in in_sample else path.name
+        for mode, g in _g_by_mode(diagnosis).items():
+            per_mode.setdefault(mode, []).append(
+                (label, g * factor if path in in_sample else g))
+    return per_mode
 
 
 def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],

@@ -19,6 +19,7 @@ from auvdiag_cli.errors import UsageError
 from auvdiag_cli.jobs.candidates import fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_entry
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
+from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
 from models.command_relations import RelationLog
@@ -128,6 +129,20 @@ def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
     return head, tail
 
 
+def _read_and_split(logs: Sequence[Path], holdout: Sequence[Path], profile: Profile,
+                    progress: Callable[[str], None]
+                    ) -> tuple[list[Path], list[Path], dict[Path, _ReadLog]]:
+    """Training and held-out logs among those in which the vehicle operates, each read."""
+    progress(f"reading {len(logs)} training and {len(holdout)} held-out log(s)")
+    every = read_operating(list(dict.fromkeys([*logs, *holdout])),
+                           lambda path: _read(path, profile, progress), progress, "train on")
+    training_paths, heldout_paths = split_holdout([p for p in logs if p in every],
+                                                  [p for p in holdout if p in every])
+    if not training_paths:
+        raise UsageError("no training logs left after holding out")
+    return training_paths, heldout_paths, every
+
+
 def horizon_candidates(profile: Profile, horizon_s: float | None) -> list[float | None]:
     """Horizons to score: the one asked for (``inf``: free run), or every candidate (None:
     choose) not shorter than g's window."""
@@ -150,15 +165,12 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
-    training_paths, heldout_paths = split_holdout(logs, holdout)
-    if not training_paths:
-        raise UsageError("no training logs left after holding out")
-    progress(f"reading {len(training_paths)} training and {len(heldout_paths)} held-out logs")
-    read = [_read(p, profile, progress) for p in training_paths]
+    training_paths, heldout_paths, every = _read_and_split(logs, holdout, profile, progress)
+    read = [every[p] for p in training_paths]
     training = [r.scoring for r in read]
     rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,
                                                         *profile.sensor_names])
-    read_heldout = [_read(p, profile, progress) for p in heldout_paths]
+    read_heldout = [every[p] for p in heldout_paths]
     heldout = [r.scoring for r in read_heldout]
     split = f"{len(heldout)} held-out log(s)"
     if not heldout:
