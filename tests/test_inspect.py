@@ -28,6 +28,10 @@ def test_inspect_lists_topics_counts_rates_and_signals(make_log, fmt):
     assert "50.0 Hz" in out and "10.0 Hz" in out
     assert out.count("    ok       ") == 4
     assert "segment markers: ZA ZB ZC MISSION" in out
+    # How each signal reaches the model's step: the 50 Hz yaw rate averaged (anti-aliased),
+    # the commands held.
+    assert re.search(r"ok +yaw_rate .*averaged over each 0\.1 s step \(about 5 samples", out)
+    assert re.search(r"ok +thruster_0 .*held: the last command", out)
 
 
 def test_inspect_names_the_missing_signal_and_the_closest_topic(make_log, tmp_path):

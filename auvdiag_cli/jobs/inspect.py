@@ -18,6 +18,7 @@ class SignalResolution:
     rate_hz: float | None
     problem: str | None
     candidates: tuple[str, ...] = ()
+    on_grid: str = ""            # how the signal is put on the model's step
 
     @property
     def resolved(self) -> bool:
@@ -38,6 +39,21 @@ class Inspection:
     def usable(self) -> bool:
         """Every signal the diagnosis needs resolves in this log."""
         return self.mapped and all(s.resolved for s in self.signals)
+
+
+def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
+    """How resampling puts the signal on the model's step (see `engine.resample`)."""
+    step = f"{profile.dt_s:g} s step"
+    if name in profile.command_names:
+        return f"held: the last command at each {step}"
+    if name not in profile.sensor_names:
+        return "a flag: the last value holds"
+    per_step = (rate_hz or 0.0) * profile.dt_s
+    if per_step >= 1.5:
+        return f"averaged over each {step} (about {per_step:.0f} samples, anti-aliased)"
+    if per_step < 0.9:
+        return f"interpolated across {step}s without a sample"
+    return f"about one sample a {step}"
 
 
 def _closest(name: str, choices: list[str]) -> tuple[str, ...]:
@@ -70,9 +86,9 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
         if name in read:
             series = read[name].series[name]
             span_s = (int(series.index.max()) - int(series.index.min())) / 1e9
+            rate = (len(series) - 1) / span_s if span_s > 0 else None
             results.append(SignalResolution(name, source.topic, source.field, len(series),
-                                            (len(series) - 1) / span_s if span_s > 0 else None,
-                                            None))
+                                            rate, None, on_grid=on_grid(name, rate, profile)))
         elif name in problems:
             results.append(SignalResolution(name, source.topic, source.field, 0, None,
                                             problems[name]))

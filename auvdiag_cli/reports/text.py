@@ -184,7 +184,8 @@ def inspection_lines(inspection: Inspection) -> list[str]:
         where = f"{s.topic} {s.field}"
         if s.resolved:
             rate = f", {s.rate_hz:.1f} Hz" if s.rate_hz else ""
-            lines.append(f"    ok       {s.name:<12} {where}  ({s.count} samples{rate})")
+            lines.append(f"    ok       {s.name:<12} {where}  ({s.count} samples{rate}; "
+                         f"{s.on_grid})")
         else:
             hint = f"; closest: {', '.join(s.candidates)}" if s.candidates else ""
             lines.append(f"    MISSING  {s.name:<12} {where}  ({s.problem}{hint})")
