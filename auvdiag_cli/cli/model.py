@@ -172,9 +172,10 @@ def calibrate(
         "--floor-at-profile", help="Never set a threshold below the profile's for its mode "
                                    "(for few calibration logs, or signals a DMS hardly moves)."
     )] = False,
-    false_alarm_rate: Annotated[float | None, typer.Option(
-        "--false-alarm-rate", help="Effort shares: the share of normal logs allowed to alarm "
-                                   "(default: the model's, 0.01 when trained).")] = None,
+    false_alarm_rate: Annotated[str | None, typer.Option(
+        "--false-alarm-rate", metavar="RATE",
+        help="Set every threshold for this false-alarm rate instead of the margin rule: a "
+             "share of normal logs (0.05) or alarms per hour of operation (0.5/h).")] = None,
 ) -> None:
     """Set the model's thresholds from the g it reaches on normal logs.
 
@@ -183,9 +184,16 @@ def calibrate(
     as a 95 % upper bound). Modes with under 30 s of data keep the profile's
     thresholds, raised where these logs need it.
     With --faulty, those logs are diagnosed with the new thresholds to show the margin.
+    With --false-alarm-rate R, each judge (a judged signal's g in a mode, a sensor's start,
+    an actuator's commands against the motion) gets an equal share of R, and its threshold
+    is where a distribution fitted to its normal values reaches that share (an extreme-value
+    law for per-log peaks), so that it extrapolates beyond the largest value seen; each
+    log is then judged with the thresholds fitted on the others, and the count reported.
+    Judges with fewer than 5 logs keep the margin rule.
     Where the profile groups actuators that act alike ([[effort]]), the normal effort
     shares are refitted with these logs added (learnt from them if the model has none),
-    their thresholds set for --false-alarm-rate with each normal log judged by the others."""
+    their thresholds set for their share of R (default: the model's budget)."""
+    from auvdiag_cli.jobs.budget import FalseAlarmBudget
     from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
     from auvdiag_cli.jobs.calibrate import write_metadata
     from auvdiag_cli.reports.training import calibration_lines
@@ -193,10 +201,11 @@ def calibrate(
     from models.store import load_model
 
     with user_errors(model):
+        budget = None if false_alarm_rate is None else FalseAlarmBudget.parse(false_alarm_rate)
         loaded = load_model(model)
         result = run_calibration(loaded, load_profile(profile), log_paths(logs),
                                  log_paths(faulty or []), margin, floor_at_profile,
-                                 false_alarm_rate, progress=report_progress)
+                                 budget, progress=report_progress)
         write_metadata(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)

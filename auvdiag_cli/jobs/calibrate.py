@@ -18,12 +18,22 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
+from auvdiag_cli.engine.judging import not_judged_signals
 from auvdiag_cli.engine.results import Diagnosis
-from auvdiag_cli.engine.start_check import raise_thresholds, start_reading
+from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
 from auvdiag_cli.errors import UsageError
 from auvdiag_cli.files import write_json
+from auvdiag_cli.jobs.budget import (
+    BudgetThresholds,
+    FalseAlarmBudget,
+    budget_thresholds,
+    command_judges,
+    g_judges,
+    start_judges,
+)
 from auvdiag_cli.jobs.effort import learn_effort_entry, refit_effort
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
@@ -92,6 +102,7 @@ class CalibrationResult:
     start_thresholds_raised: list[str]             # sensors whose start allowance was raised
     effort: dict[str, Any] | None = None           # the refitted effort entry, if any
     effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
+    budget: BudgetThresholds | None = None         # --false-alarm-rate: the fitted judges
 
 
 def _mode_key(segment_name: str) -> str:
@@ -149,12 +160,14 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5, floor_at_profile: bool = False,
-              false_alarm_rate: float | None = None,
+              budget: FalseAlarmBudget | None = None,
               progress: Callable[[str], None] = lambda _: None) -> CalibrationResult:
     """Derive thresholds; the model object's metadata is updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise). Logs in which the vehicle never operates are left out."""
+    trip on the next dive's noise). ``budget``: thresholds to a false-alarm rate instead
+    of the margin rule wherever a judge has enough logs (`jobs.budget`). Logs in which the
+    vehicle never operates are left out."""
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
     kept = read_operating(normal_logs, lambda path: ingest(path, profile), progress,
@@ -164,60 +177,102 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
-    effort, effort_notes = _refit_effort(model, profile, ingested, false_alarm_rate)
     widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
                                  if p in in_sample], profile.sensor_names) if in_sample else {}
     factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
-    per_mode = _g_per_mode(normal_logs, diagnoses, in_sample, factor)
-    thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
+    per_log = [{mode: g * factor if path in in_sample else g
+                for mode, g in _g_by_mode(d).items()} for path, d in zip(normal_logs, diagnoses,
+                                                                        strict=True)]
+    labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name
+              for p in normal_logs]
+    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile)
+    hours = sum(m.hours for m in modes)
+    if hours == 0:
+        raise UsageError("no usable normal data in the calibration logs")
+    readings = [None if e.matching is None else start_reading(e.commands, e.matching.measured,
+                                                              profile.dt_s)
+                for e in (d.histories for d in diagnoses)]
+    checks = [d.command_check for d in diagnoses]
+    raised = widen_thresholds(model, checks, margin)
+    starts_raised = raise_thresholds(model.metadata.get("start_state") or {}, readings, margin)
+    fitted = None if budget is None else _apply_budget(
+        model, profile, budget, per_log, modes, readings, checks,
+        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested])
+    if fitted is not None:
+        modes = _with_budget(modes, fitted, profile, floor_at_profile)
+    model.metadata["thresholds"] = {**{m: dict(v) for m, v in profile.thresholds.items()},
+                                    **{m.mode: m.thresholds for m in modes}}
+    effort, effort_notes = _refit_effort(model, profile, ingested,
+                                         None if fitted is None else fitted.effort_rate)
+    checks_faulty = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
+                     for path in faulty_logs]
+    result = CalibrationResult(
+        margin, modes, model.metadata["thresholds"], hours, 3.0 / hours, checks_faulty,
+        [p.name for p in in_sample], widening,
+        _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
+        raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
+        fitted)
+    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
+    return result
+
+
+def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
+                  profile: Profile, margin: float, floor_at_profile: bool
+                  ) -> list[ModeCalibration]:
+    """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs."""
     modes = []
-    dt_h = profile.dt_s / 3600
-    for mode, per_log in sorted(per_mode.items()):
-        g = np.concatenate([part for _, part in per_log])
+    for mode in sorted({mode for g in per_log for mode in g}):
+        parts = [(label, g[mode]) for label, g in zip(labels, per_log, strict=True)
+                 if mode in g]
+        g = np.concatenate([part for _, part in parts])
         count = int(np.isfinite(g).all(axis=1).sum())
         peaks = {name: peak(g[:, i]) for i, name in enumerate(profile.sensor_names)}
         keep = count < MIN_SAMPLES_PER_MODE or mode not in (*profile.dms, MISSION_MODE)
         # Too little data cannot lower the profile's thresholds, but what it shows still
         # raises them: no calibration log may alarm.
         floor = profile.thresholds_for(mode) if floor_at_profile or keep else {}
-        thresholds[mode] = {name: round(max(margin * value, floor.get(name, 0.0)), 2)
-                            for name, value in peaks.items()}
-        evidence = {name: _evidence(per_log, i) for i, name in enumerate(profile.sensor_names)}
-        modes.append(ModeCalibration(mode, count, count * dt_h,
-                                     {k: round(v, 3) for k, v in peaks.items()},
-                                     thresholds.get(mode, profile.thresholds_for(mode)), keep,
-                                     evidence))
-    hours = sum(m.hours for m in modes)
-    if hours == 0:
-        raise UsageError("no usable normal data in the calibration logs")
-    model.metadata["thresholds"] = thresholds
-    raised = widen_thresholds(model, [d.command_check for d in diagnoses], margin)
-    starts_raised = raise_thresholds(
-        model.metadata.get("start_state") or {},
-        [None if e.matching is None else start_reading(e.commands, e.matching.measured,
-                                                       profile.dt_s)
-         for e in (d.histories for d in diagnoses)], margin)
-    checks = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
-              for path in faulty_logs]
-    result = CalibrationResult(
-        margin, modes, thresholds, hours, 3.0 / hours, checks, [p.name for p in in_sample],
-        widening, _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
-        raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes))
-    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
+        modes.append(ModeCalibration(
+            mode, count, count * profile.dt_s / 3600, {k: round(v, 3) for k, v in peaks.items()},
+            {name: round(max(margin * value, floor.get(name, 0.0)), 2)
+             for name, value in peaks.items()}, keep,
+            {name: _evidence(parts, i) for i, name in enumerate(profile.sensor_names)}))
+    return modes
+
+
+def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget,
+                  per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[ModeCalibration],
+                  readings: Sequence[StartReading | None],
+                  checks: Sequence[CommandCheck | None], log_hours: Sequence[float]
+                  ) -> BudgetThresholds:
+    """Fit the judges to the budget and set the start and command thresholds they give in
+    ``model.metadata`` (g's go into the modes, `_with_budget`)."""
+    judged = [n for n in profile.sensor_names if n not in not_judged_signals(model)]
+    start_entry = model.metadata.get("start_state") or {}
+    relations_entry = model.metadata.get("command_relations") or {}
+    judges = [*g_judges(per_log, [m.mode for m in modes if not m.kept_default], judged,
+                        profile.sensor_names),
+              *start_judges(start_entry, readings, profile.sensor_names),
+              *command_judges(relations_entry, checks, profile.command_names)]
+    actuators = sum(len(group.members) for group in profile.effort_groups)
+    fitted = budget_thresholds(judges, actuators, budget, log_hours)
+    for (_, name), value in fitted.thresholds("start").items():
+        start_entry["thresholds"][profile.sensor_names.index(name)] = value
+    for (_, name), value in fitted.thresholds("command").items():
+        relations_entry["thresholds"][profile.command_names.index(name)] = value
+    model.__dict__.pop("relations", None)        # the cached parse is stale
+    return fitted
+
+
+def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,
+                 profile: Profile, floor_at_profile: bool) -> list[ModeCalibration]:
+    g = fitted.thresholds("g")
+    result = []
+    for m in modes:
+        floor = profile.thresholds_for(m.mode) if floor_at_profile else {}
+        result.append(replace(m, thresholds={
+            name: round(max(g[(m.mode, name)], floor.get(name, 0.0)), 2)
+            if (m.mode, name) in g else value for name, value in m.thresholds.items()}))
     return result
-
-
-def _g_per_mode(logs: Sequence[Path], diagnoses: Sequence[Diagnosis],
-                in_sample: Sequence[Path], factor: np.ndarray
-                ) -> dict[str, list[tuple[str, np.ndarray]]]:
-    """Each mode's g, per log (in-sample logs' widened by ``factor``)."""
-    per_mode: dict[str, list[tuple[str, np.ndarray]]] = {}
-    for path, diagnosis in zip(logs, diagnoses, strict=True):
-        label = f"{path.name} (in-sample, widened)" if path in in_sample else path.name
-        for mode, g in _g_by_mode(diagnosis).items():
-            per_mode.setdefault(mode, []).append(
-                (label, g * factor if path in in_sample else g))
-    return per_mode
 
 
 def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],
@@ -225,9 +280,6 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
     """The effort model with these normal logs added (learnt from them where the model has
     none yet), written into ``model.metadata``; None where the profile has no groups.
     ``false_alarm_rate``: a new budget (a share of normal logs) for its thresholds."""
-    if false_alarm_rate is not None and not 0 < false_alarm_rate < 0.5:
-        raise UsageError("--false-alarm-rate must lie between 0 and 0.5 (a share of normal "
-                         f"logs), got {false_alarm_rate}")
     if not profile.effort_groups:
         return None, []
     relations = [relation_log(log, profile) for log in logs]
@@ -270,17 +322,24 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
 
 def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
             ) -> dict[str, Any]:
+    budget = result.budget
     return {
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "method": "threshold = margin x the largest g on the normal logs, per mode and "
-                  "signal; the g of logs the model was trained on multiplied by the widening",
+                  "signal; the g of logs the model was trained on multiplied by the widening"
+                  if budget is None else
+                  "thresholds to a false-alarm budget: each judge's statistic on the normal "
+                  "logs fitted (g and extra effort: Gumbel law of per-log peaks; starts: "
+                  "Student-t), the budget shared among the judges; margin rule where a judge "
+                  "has too few logs",
+        "false_alarm_budget": None if budget is None else budget.to_json(),
         "margin": result.margin,
         "floor_at_profile": floor_at_profile,
         "normal_logs": [p.name for p in normal_logs],
         "in_sample_logs": result.in_sample_logs,
         "widening": result.widening,
         "normal_hours": round(result.normal_hours, 4),
-        "false_alarms_on_normal_logs": 0,
+        "false_alarms_on_normal_logs": 0 if budget is None else budget.in_sample_alarmed,
         "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3),
         "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
                    "thresholds": m.thresholds, "kept_profile_default": m.kept_default,

@@ -6,6 +6,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibrate import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.fast import NETWORK
@@ -157,10 +158,34 @@ def effort_lines(entry: dict[str, Any]) -> list[str]:
     return lines
 
 
+def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
+    """What `calibrate --false-alarm-rate` set, and how it held up leaving each log out."""
+    per_log = ("" if not budget.budget.per_hour
+               else f" (a share of {budget.per_log_rate:.2%} of logs of the median length)")
+    lowered = ("" if budget.checked >= budget.share else
+               f", lowered to {budget.checked:.2%} because the logs left out alarmed more "
+               "often than the fitted laws promise")
+    lines = [f"calibrated on {hours:.2f} h of normal data ({budget.logs} logs) for a "
+             f"false-alarm rate of {budget.budget.describe()}{per_log}: each judge gets "
+             f"{budget.share:.2%} of logs{lowered}",
+             f"  leave one log out: {budget.loo_logs_alarmed} of {budget.logs} logs alarm "
+             f"with the thresholds fitted on the others (the budget expects "
+             f"{budget.per_log_rate * budget.logs:.1f}); {budget.in_sample_alarmed} reach the "
+             "final thresholds"]
+    for judge, fit in budget.fits:
+        lines.append(f"    {judge.label:<24} threshold {budget.threshold(fit):.4g}  ({fit.law} "
+                     f"fit to {fit.logs} logs; left out, {sum(fit.loo_alarms(budget.checked))} "
+                     "alarm)")
+    if budget.effort_rate is not None:
+        lines.append(f"    effort shares: a budget of {budget.effort_rate:.2%} of logs")
+    return lines
+
+
 def calibration_lines(result: CalibrationResult) -> list[str]:
-    lines = [f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
-             f"{result.margin:g}; false alarms on those logs: 0 (rate < "
-             f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
+    lines = ([f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
+              f"{result.margin:g}; false alarms on those logs: 0 (rate < "
+              f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
+             if result.budget is None else budget_lines(result.budget, result.normal_hours))
     for mode in result.modes:
         kept = ("  (too little data: the profile's thresholds, raised where these logs "
                 "need it)" if mode.kept_default else "")

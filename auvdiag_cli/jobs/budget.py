@@ -1,0 +1,177 @@
+"""`calibrate --false-alarm-rate`: every judge's threshold from the distribution of its
+statistic on the normal logs, the budget shared among the judges (`models.false_alarms`).
+
+The judges are each judged signal's g in each mode with enough data (statistic: the log's
+peak g), each sensor whose start is judged (the start's deviation from the normal start),
+each actuator whose commands are judged against the motion (the log's peak extra effort)
+and the actuators of the effort groups (their own budget, `models.effort`). A normal log
+alarms when any judge does: with k judges each gets 1 - (1 - R)^(1/k)."""
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.start_check import StartReading
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.numeric import peak
+from models.false_alarms import LawFit, checked_share, fit_law, judge_share
+
+RATE_PATTERN = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(/\s*h)?\s*$")
+
+
+@dataclass(frozen=True)
+class FalseAlarmBudget:
+    """How often a normal log may alarm: ``rate`` per log, or per hour of operation."""
+
+    rate: float
+    per_hour: bool = False
+
+    @classmethod
+    def parse(cls, text: str) -> "FalseAlarmBudget":
+        """'0.05' (a share of normal logs) or '0.5/h' (alarms per hour)."""
+        found = RATE_PATTERN.match(text)
+        if found is None:
+            raise UsageError(f"--false-alarm-rate: expected a share of logs such as 0.05 or a "
+                             f"rate per hour such as 0.5/h, got {text!r}")
+        budget = cls(float(found.group(1)), found.group(2) is not None)
+        if budget.rate <= 0 or (not budget.per_hour and budget.rate >= 0.5):
+            raise UsageError("--false-alarm-rate must lie between 0 and 0.5 (a share of "
+                             f"normal logs) or be a positive rate per hour, got {text!r}")
+        return budget
+
+    def per_log(self, log_hours: Sequence[float]) -> float:
+        """The share of logs: per hour, for a log of the calibration logs' median length."""
+        if not self.per_hour:
+            return self.rate
+        share = 1.0 - float(np.exp(-self.rate * float(np.median(log_hours))))
+        if share >= 0.5:
+            raise UsageError(f"--false-alarm-rate {self.rate:g}/h allows an alarm in most "
+                             f"logs of {float(np.median(log_hours)):.2f} h: choose a lower rate")
+        return share
+
+    def describe(self) -> str:
+        return (f"{self.rate:g} per hour" if self.per_hour
+                else f"{self.rate:.3g} of normal logs ({self.rate:.1%})")
+
+
+@dataclass(frozen=True)
+class Judge:
+    """One judge and its statistic per calibration log (NaN: none in that log)."""
+
+    kind: str                    # "g", "start" or "command"
+    name: str                    # the signal or the command
+    mode: str | None             # g's mode
+    values: tuple[float, ...]
+
+    @property
+    def label(self) -> str:
+        return f"{self.kind} {self.name}" + (f" ({self.mode})" if self.mode else "")
+
+    @property
+    def statistic(self) -> np.ndarray:
+        """What the threshold is compared with: |deviation| for a start, else the value."""
+        values = np.asarray(self.values, float)
+        return np.abs(values) if self.kind == "start" else values
+
+    @property
+    def law(self) -> str:
+        return "student-t" if self.kind == "start" else "gumbel"
+
+
+@dataclass(frozen=True)
+class BudgetThresholds:
+    budget: FalseAlarmBudget
+    per_log_rate: float
+    share: float                             # each judge's, by the budget
+    checked: float                           # each judge's, after leave-one-log-out
+    fits: tuple[tuple[Judge, LawFit], ...]
+    effort_rate: float | None                # the effort groups' budget (None: no groups)
+    logs: int
+
+    def threshold(self, fit: LawFit) -> float:
+        return round(fit.threshold(self.checked), 6)
+
+    def thresholds(self, kind: str) -> dict[tuple[str | None, str], float]:
+        """(mode, name) -> threshold for one kind of judge."""
+        return {(judge.mode, judge.name): self.threshold(fit) for judge, fit in self.fits
+                if judge.kind == kind}
+
+    def _flags(self, over: bool) -> np.ndarray:
+        flags = np.zeros(self.logs, bool)
+        for judge, fit in self.fits:
+            with np.errstate(invalid="ignore"):
+                flags |= (judge.statistic >= self.threshold(fit) if over
+                          else np.asarray(fit.loo_alarms(self.checked)))
+        return flags
+
+    @property
+    def loo_logs_alarmed(self) -> int:
+        """Logs that some judge, fitted on the other logs, flags."""
+        return int(self._flags(over=False).sum())
+
+    @property
+    def in_sample_alarmed(self) -> int:
+        """Logs over some judge's final threshold."""
+        return int(self._flags(over=True).sum())
+
+    def to_json(self) -> dict[str, Any]:
+        return {"rate": self.budget.rate, "per": "hour" if self.budget.per_hour else "log",
+                "per_log_rate": round(self.per_log_rate, 5), "share_per_judge":
+                round(self.share, 5), "share_after_leave_one_log_out": round(self.checked, 5),
+                "effort_rate": self.effort_rate,
+                "leave_one_log_out": {"logs": self.logs, "alarmed": self.loo_logs_alarmed},
+                "calibration_logs_over_thresholds": self.in_sample_alarmed,
+                "judges": [{"judge": judge.label, "threshold": self.threshold(fit),
+                            "law": fit.law, "logs": fit.logs,
+                            "loo_alarms": sum(fit.loo_alarms(self.checked))}
+                           for judge, fit in self.fits]}
+
+
+def g_judges(per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[str],
+             judged: Sequence[str], sensor_names: Sequence[str]) -> list[Judge]:
+    """Each judged signal's peak g per log in each mode (``per_log``: mode -> g, per log)."""
+    return [Judge("g", name, mode, tuple(
+        peak(g[mode][:, sensor_names.index(name)]) if mode in g else float("nan")
+        for g in per_log)) for mode in modes for name in judged]
+
+
+def start_judges(entry: dict[str, Any], readings: Sequence[StartReading | None],
+                 sensor_names: Sequence[str]) -> list[Judge]:
+    """Each judged sensor's start deviation per log (NaN: not recorded from rest)."""
+    if "thresholds" not in entry:
+        return []
+    reference = np.asarray(entry["reference"], float)
+    return [Judge("start", sensor_names[i], None, tuple(
+        float("nan") if r is None else float(r.sensors[i] - reference[i]) for r in readings))
+        for i, allowed in enumerate(entry["thresholds"]) if allowed is not None]
+
+
+def command_judges(entry: dict[str, Any], checks: Sequence[CommandCheck | None],
+                   command_names: Sequence[str]) -> list[Judge]:
+    """Each judged actuator's peak extra effort per log (NaN: not judged in that log)."""
+    judges = []
+    for k, allowed in enumerate(entry.get("thresholds") or []):
+        if allowed is None:
+            continue
+        ratios = [None if c is None else c.peak_ratio.get(command_names[k]) for c in checks]
+        judges.append(Judge("command", command_names[k], None, tuple(
+            float("nan") if r is None else r * allowed for r in ratios)))
+    return judges
+
+
+def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
+                      budget: FalseAlarmBudget, log_hours: Sequence[float]) -> BudgetThresholds:
+    """Fit every judge that has enough logs (the others keep calibrate's rule, and count
+    in the sharing all the same: they may alarm too)."""
+    per_log = budget.per_log(log_hours)
+    share = judge_share(per_log, len(judges) + effort_actuators)
+    fits = [(judge, fit_law(judge.values, judge.law)) for judge in judges]
+    kept = tuple((judge, fit) for judge, fit in fits if fit is not None)
+    checked = checked_share([fit for _, fit in kept], share)
+    effort_rate = (round(1.0 - (1.0 - checked) ** effort_actuators, 6)
+                   if effort_actuators else None)
+    return BudgetThresholds(budget, per_log, share, checked, kept, effort_rate, len(log_hours))
