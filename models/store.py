@@ -105,7 +105,9 @@ class LoadedModel:
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
                 "horizon_s": meta.get("horizon_s"), "skill": self.skill,
                 "predictors": self.predictors,
-                "thresholds_calibrated": "calibration" in meta}
+                "thresholds_calibrated": "calibration" in meta,
+                "false_alarm_rate": (meta.get("calibration") or {}).get("false_alarm_budget")
+                and {k: meta["calibration"]["false_alarm_budget"][k] for k in ("rate", "per")}}
 
     @property
     def horizon_steps(self) -> int | None:

@@ -34,8 +34,9 @@ def _model(document: dict[str, Any]) -> str:
     horizon = model.get("horizon_s")
     text += ("; free-running replay" if horizon is None
              else f"; replay re-started every {horizon:g} s")
-    calibrated = model.get("thresholds_calibrated")
-    text += ("; thresholds calibrated on normal logs" if calibrated
+    calibrated, budget = model.get("thresholds_calibrated"), model.get("false_alarm_rate")
+    text += (f"; thresholds set for {budget['rate']:g} false alarms per {budget['per']}" if budget
+             else "; thresholds calibrated on normal logs" if calibrated
              else "; thresholds: the profile's (the paper's for the Twin-Burger)")
     return text
 

@@ -1,0 +1,108 @@
+"""Thresholds to a false-alarm budget: the laws, the leave-one-log-out check, and
+`calibrate --false-alarm-rate` on simulated dives."""
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.errors import UsageError
+from auvdiag_cli.jobs.budget import FalseAlarmBudget
+from models.false_alarms import checked_share, fit_law, gumbel_fit, judge_share
+from models.store import default_model_dir
+
+runner = CliRunner()
+
+
+def test_the_gumbel_fit_recovers_its_law_and_its_threshold_holds_on_new_maxima():
+    rng = np.random.default_rng(3)
+    location, scale = gumbel_fit(rng.gumbel(4.0, 1.5, 4000))
+    assert abs(location - 4.0) < 0.1 and abs(scale - 1.5) < 0.08
+    # Thresholds from 40 logs' maxima, each tried on 20 000 new maxima of the same law.
+    rates = []
+    for _ in range(30):
+        fit = fit_law(list(rng.gumbel(4.0, 1.5, 40)), "gumbel")
+        assert fit is not None
+        rates.append(float((rng.gumbel(4.0, 1.5, 20000) >= fit.threshold(0.05)).mean()))
+    assert 0.035 < float(np.mean(rates)) < 0.075
+
+
+def test_a_start_level_is_judged_both_ways_and_missing_values_are_skipped():
+    rng = np.random.default_rng(4)
+    levels = [*rng.normal(0.0, 0.01, 30), float("nan")]
+    fit = fit_law(levels, "student-t")
+    assert fit is not None and fit.logs == 30 and np.isnan(fit.loo_tail[-1])
+    threshold = fit.threshold(0.05)
+    assert 0.015 < threshold < 0.03       # about 2 standard deviations from a mean near 0
+    assert fit_law([0.1, 0.2, float("nan")], "student-t") is None       # too few logs
+
+
+def test_the_share_is_lowered_only_where_the_left_out_logs_show_a_heavier_tail():
+    rng = np.random.default_rng(5)
+    share = judge_share(0.05, 2)
+    assert share == pytest.approx(1 - 0.95 ** 0.5)
+    light = [fit_law(list(rng.gumbel(1.0, 0.2, 40)), "gumbel") for _ in range(2)]
+    assert checked_share([f for f in light if f], share) == share
+    heavy = [fit_law(list(rng.pareto(1.2, 40) + 1.0), "gumbel") for _ in range(2)]
+    lowered = checked_share([f for f in heavy if f], share)
+    assert lowered < share
+    pooled = sum(sum(f.loo_alarms(lowered)) for f in heavy if f)
+    assert pooled <= round(share * 80)
+
+
+@pytest.mark.parametrize(("text", "rate", "per_hour"), [("0.05", 0.05, False),
+                                                        ("0.5/h", 0.5, True),
+                                                        (" 2 / h ", 2.0, True)])
+def test_a_budget_is_a_share_of_logs_or_a_rate_per_hour(text, rate, per_hour):
+    budget = FalseAlarmBudget.parse(text)
+    assert (budget.rate, budget.per_hour) == (rate, per_hour)
+    if per_hour:
+        assert budget.per_log([0.1, 0.2, 0.3]) == pytest.approx(1 - np.exp(-rate * 0.2))
+
+
+@pytest.mark.parametrize("text", ["abc", "0", "0.5", "-0.1", "1/s"])
+def test_a_budget_that_means_nothing_is_refused(text):
+    with pytest.raises(UsageError, match="--false-alarm-rate"):
+        FalseAlarmBudget.parse(text)
+
+
+def test_calibrate_sets_thresholds_for_a_budget_and_says_how_they_held(make_log, tmp_path):
+    model = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model)
+    normal = [make_log(name, seed) for name, seed in (
+        ("paper-normal", 61), ("paper-normal", 62), ("mission-ccw", 61),
+        ("mission-large-cw", 61), ("routine-and-mission", 61), ("routine-and-mission", 62))]
+    strict, loose = tmp_path / "strict", tmp_path / "loose"
+    for target, rate in ((strict, "0.01"), (loose, "0.3")):
+        result = runner.invoke(app, ["calibrate", *map(str, normal), "--model", str(model),
+                                     "--output", str(target), "--false-alarm-rate", rate])
+        assert result.exit_code == 0, result.output
+        assert "false-alarm rate of" in result.stdout and "leave one log out:" in result.stdout
+    meta = {t: json.loads((t / "model.json").read_text()) for t in (strict, loose)}
+    budget = meta[loose]["calibration"]["false_alarm_budget"]
+    assert budget["rate"] == 0.3 and budget["per"] == "log"
+    fitted = {j["judge"]: j["threshold"] for j in budget["judges"]}
+    assert meta[loose]["thresholds"]["mission"]["flow"] == pytest.approx(
+        fitted["g flow (mission)"], abs=0.005)
+    # A tighter budget never gives a lower threshold, and the mission's are fitted (six
+    # logs have it) while the DMS modes, with too little data, keep the margin rule.
+    for signal in ("flow", "yaw_rate"):
+        assert (meta[strict]["thresholds"]["mission"][signal]
+                > meta[loose]["thresholds"]["mission"][signal])
+    assert not any("(ZA)" in judge for judge in fitted)
+    shown = runner.invoke(app, ["diagnose", str(make_log("paper-flow-sensor-covered", 63)),
+                                "--model", str(loose), "--json", "-", "-q"])
+    report = json.loads(shown.stdout)
+    assert report["component"] == "flow_sensor"
+    assert report["model"]["false_alarm_rate"] == {"rate": 0.3, "per": "log"}
+
+
+def test_calibrate_refuses_a_budget_it_cannot_read_in_one_line(make_log, tmp_path):
+    result = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
+                                 str(default_model_dir()), "--output", str(tmp_path / "m"),
+                                 "--false-alarm-rate", "often"])
+    assert result.exit_code == 2
+    assert "--false-alarm-rate" in result.output and len(result.output.strip().splitlines()) == 1
