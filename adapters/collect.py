@@ -11,7 +11,7 @@ import pandas as pd
 from adapters.errors import LogError
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
-from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals
+from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals, fallback_name
 from adapters.timebase import MAX_TIME_NS, spikes
 
 # How far a container's recorded start or end may lie outside the data it holds.
@@ -85,11 +85,12 @@ class SignalCollector:
     def __init__(self, path: Path, sources: LogSources) -> None:
         self.path, self.sources = path, sources
         self.by_topic: dict[str, list[_Extractor]] = {}
-        for name, source in sources.signals.items():
+        self.wanted = sources.wanted
+        for name, source in self.wanted.items():
             self.by_topic.setdefault(source.topic, []).append(_Extractor(name, source))
         # Typed arrays: 8 bytes a sample, not a Python object, so long dives stay small.
-        self.times: dict[str, array[int]] = {name: array("q") for name in sources.signals}
-        self.values: dict[str, array[float]] = {name: array("d") for name in sources.signals}
+        self.times: dict[str, array[int]] = {name: array("q") for name in self.wanted}
+        self.values: dict[str, array[float]] = {name: array("d") for name in self.wanted}
         self.markers: list[SegmentMarker] = []
         self.segment_get = field_getter(sources.segment.field) if sources.segment else None
         self.count = 0
@@ -149,9 +150,11 @@ class SignalCollector:
                               if not _resolves(message, key)), extractor.source.field)
                 raise LogError(self.path, unresolved(
                     topic, wrong, extractor.name, object_field_paths(message))) from None
+            converted = float(extractor.source.convert(np.float64(value)))
+            if extractor.source.values and not np.isfinite(converted):
+                continue                  # a value the source's map does not list
             self.times[extractor.name].append(time_ns)
-            self.values[extractor.name].append(float(extractor.source.convert(
-                np.float64(value))))
+            self.values[extractor.name].append(converted)
 
     def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource,
                     fields: Sequence[str] = ()) -> None:
@@ -198,13 +201,18 @@ class SignalCollector:
                                f"{extractor.name} would merge: choose one with where = "
                                f"{{ {key} = {instances[0]} }} in the profile, or set "
                                "merge_instances = true")
-            values = extractor.source.convert(numbers)
-            self.times[extractor.name].frombytes(times_ns[keep].astype(np.int64).tobytes())
+            values, times = extractor.source.convert(numbers), times_ns[keep]
+            if extractor.source.values:       # values the source's map does not list
+                listed = np.isfinite(values)
+                values, times = values[listed], times[listed]
+            self.times[extractor.name].frombytes(times.astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())
 
     def missing_topics(self, available: set[str]) -> list[str]:
         """Signal topics the log does not have at all."""
-        return sorted({s.topic for s in self.sources.signals.values()} - available)
+        return sorted({s.topic for s in self.sources.signals.values()} - available
+                      - {s.topic for n, s in self.sources.signals.items()
+                         if n in self.sources.fallbacks})
 
     def finish(self, fmt: str, start_ns: int | None, end_ns: int | None,
                topics: dict[str, str], require_all: bool = True,
@@ -217,6 +225,7 @@ class SignalCollector:
         if self.impossible_times:
             self.notes.append(f"{self.impossible_times} message(s) with an impossible time "
                               "left out")
+        self._use_fallbacks()
         empty = sorted(name for name, times in self.times.items() if not times)
         if empty and require_all:
             where = ", ".join(self._why_empty(n) for n in empty)
@@ -235,7 +244,7 @@ class SignalCollector:
         first = min(firsts, default=None)
         last = max(lasts, default=first)
         for name, values in series.items():
-            if self.sources.signals[name].changes_only and first is not None:
+            if self.wanted[name].changes_only and first is not None:
                 series[name] = _with_state_before(values, first)
         return Signals(path=self.path, format=fmt,
                        start_ns=0 if first is None else first,
@@ -243,8 +252,22 @@ class SignalCollector:
                        series=series, markers=self.markers, topics=topics, notes=self.notes,
                        damage=self.damage, messages_read=self.count)
 
+    def _use_fallbacks(self) -> None:
+        """A signal without a message of its own source takes its fallback's samples."""
+        for name, source in self.sources.fallbacks.items():
+            alternate = fallback_name(name)
+            if alternate not in self.times:
+                continue
+            times, values = self.times.pop(alternate), self.values.pop(alternate)
+            if not self.times[name] and times:
+                self.times[name], self.values[name] = times, values
+                self.wanted[name] = source
+                own = self.sources.signals[name]
+                self.notes.append(f"{name} from {source.topic}.{source.field} (no {own.topic} "
+                                  "message in this log)")
+
     def _why_empty(self, name: str) -> str:
-        source = self.sources.signals[name]
+        source = self.wanted[name]
         offered = self.filtered_out.get(name)
         if offered is None:
             return f"{name} ({source.topic})"

@@ -29,6 +29,9 @@ class FieldSource:
     merge_instances: bool = False     # True: several sensor instances make one signal
     bits: int = 0                     # a flag field: 1 where value & bits, else 0
     changes_only: bool = False        # logged only when it changes (DataFlash ARM events)
+    # Raw (integer) values that count and what each means, e.g. DataFlash EV ids 10 (armed)
+    # -> 1 and 11 (disarmed) -> 0; messages with other values are no sample. Empty: all.
+    values: tuple[tuple[int, float], ...] = ()
 
     def convert(self, raw: Any) -> Any:
         """Raw field values (an array, or a NumPy scalar) to the signal's units, or to 0/1
@@ -38,7 +41,16 @@ class FieldSource:
         with np.errstate(invalid="ignore"):
             if self.bits:
                 return ((raw.astype(np.int64) & self.bits) != 0).astype(np.float64)
+            if self.values:
+                return self._mapped(np.asarray(raw))
             return raw.astype(np.float64) * self.scale + self.offset
+
+    def _mapped(self, raw: np.ndarray) -> np.ndarray:
+        """``values`` applied: NaN (no sample) for a raw value it does not list."""
+        out = np.full(raw.shape, np.nan)
+        for key, meaning in self.values:
+            out[raw == key] = meaning
+        return out
 
 
 @dataclass(frozen=True)
@@ -67,6 +79,10 @@ class TimeColumn:
     unit: str = "s"
 
 
+def fallback_name(signal: str) -> str:
+    return f"{signal} (fallback)"
+
+
 @dataclass(frozen=True)
 class LogSources:
     """What an adapter must extract: one source per signal, plus the segment markers (and for
@@ -75,11 +91,20 @@ class LogSources:
     signals: dict[str, FieldSource]
     segment: SegmentSource | None = None
     time: TimeColumn | None = None
+    # Where a signal may live instead when its own source has no message in a log (older
+    # ArduSub DataFlash logs keep arming in EV records, not ARM).
+    fallbacks: dict[str, FieldSource] = field(default_factory=dict)
+
+    @property
+    def wanted(self) -> dict[str, FieldSource]:
+        """Every source to read: the signals', and their fallbacks' under `fallback_name`."""
+        return {**self.signals, **{fallback_name(n): s for n, s in self.fallbacks.items()
+                                   if n in self.signals}}
 
     @property
     def topics(self) -> set[str]:
         """Every topic or message name the adapter has to read."""
-        names = {src.topic for src in self.signals.values()}
+        names = {src.topic for src in self.wanted.values()}
         return names | ({self.segment.topic} if self.segment else set())
 
 

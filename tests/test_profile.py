@@ -1,7 +1,9 @@
 """Profiles validate once, and a bad one names the offending key."""
 
 import re
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from auvdiag_cli.errors import ProfileError
@@ -70,3 +72,31 @@ def test_the_pattern_table_is_optional(make_log, profile_without):
     assert result.verdict == "fault" and result.b == {"flow": 1, "yaw_rate": 0}
     assert result.case is None and result.component == "flow_sensor"    # by the hypotheses
     assert any("the profile has no pattern table" in note for note in result.notes)
+
+
+@pytest.mark.parametrize(("replacement", "message"), [
+    ('values = { ten = 1, 11 = 0 }', "key 'sources.dataflash.operating[1].values' must map "
+                                     "integers"),
+    ('values = { 10 = "yes", 11 = 0 }', "key 'sources.dataflash.operating[1].values.10' must "
+                                        "be a number"),
+])
+def test_a_value_map_that_is_not_integers_to_numbers_names_its_key(tmp_path, replacement,
+                                                                   message):
+    from importlib import resources
+
+    text = (resources.files("auvdiag_cli.vehicle") / "profiles/bluerov2_standard.toml"
+            ).read_text()
+    assert "values = { 10 = 1, 11 = 0 }" in text
+    path = tmp_path / "p.toml"
+    path.write_text(text.replace("values = { 10 = 1, 11 = 0 }", replacement))
+    with pytest.raises(ProfileError, match=re.escape(message)):
+        load_profile(path)
+
+
+def test_the_operating_fallback_is_read_as_a_value_map():
+    sources = load_profile(Path("bluerov2_standard")).sources["dataflash"]
+    fallback = sources.fallbacks["operating"]
+    assert (fallback.topic, fallback.field, fallback.values) == ("EV", "Id", ((10, 1.0),
+                                                                               (11, 0.0)))
+    converted = fallback.convert(np.array([10, 7, 11]))
+    assert converted[0] == 1 and np.isnan(converted[1]) and converted[2] == 0

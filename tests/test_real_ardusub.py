@@ -74,3 +74,35 @@ def test_a_log_never_armed_is_not_judged(real_model):
     result = runner.invoke(app, ["diagnose", str(DATA / "pymavlink_bug.tlog"), "--profile",
                                  "bluerov2_standard", "--model", str(real_model)])
     assert result.exit_code == 2 and "never operates" in result.output
+
+
+def _without_records(log: Path, name: str, target: Path) -> Path:
+    """``log`` with every DataFlash record of message ``name`` cut out (an older firmware's
+    log, which keeps arming only in EV events). Record lengths come from the FMT records."""
+    data, kept, at, lengths = log.read_bytes(), bytearray(), 0, {128: (89, "FMT")}
+    while at + 3 <= len(data) and data[at:at + 2] == b"\xa3\x95":
+        kind = data[at + 2]
+        if kind == 128:
+            fmt_type, fmt_length = data[at + 3], data[at + 4]
+            lengths[fmt_type] = (fmt_length, data[at + 5:at + 9].rstrip(b"\0").decode())
+        length, message = lengths[kind]
+        if message != name:
+            kept += data[at:at + length]
+        at += length
+    assert at == len(data), "the test's record walk lost its way"
+    target.write_bytes(bytes(kept))
+    return target
+
+
+def test_arming_is_read_from_ev_events_where_a_log_has_no_arm_records(real_model, tmp_path):
+    older = _without_records(DATA / "small.BIN", "ARM", tmp_path / "no_arm.BIN")
+    result = runner.invoke(app, ["diagnose", str(older), "--profile", "bluerov2_standard",
+                                 "--model", str(real_model), "--json", "-", "--quiet"])
+    assert result.exit_code in (0, 1), result.output
+    report = json.loads(result.stdout)
+    assert report["duration_s"] - report["not_operating_s"] == pytest.approx(
+        _armed_seconds(DATA / "small.BIN"), abs=1.2)
+    assert any("operating from EV.Id (no ARM message" in note for note in report["notes"])
+    shown = runner.invoke(app, ["inspect", str(older), "--profile", "bluerov2_standard"])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout
+    assert "operating    EV Id" in shown.stdout

@@ -67,7 +67,10 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
     if sources is None:
         return Inspection(path, family, contents, [], [], mapped=False)
     available = {topic.name for topic in contents.topics}
-    present = {n: s for n, s in sources.signals.items() if s.topic in available}
+    # A signal whose own topic is absent is read from its fallback where the log has that.
+    shown = {n: s if s.topic in available or n not in sources.fallbacks
+             else sources.fallbacks[n] for n, s in sources.signals.items()}
+    present = {n: s for n, s in sources.signals.items() if shown[n].topic in available}
     read: dict[str, Signals] = {}
     problems: dict[str, str] = {}
     try:  # one pass for all signals; per signal only to pin down a failure
@@ -82,7 +85,7 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
             except LogError as error:
                 problems[name] = error.problem
     results = []
-    for name, source in sources.signals.items():
+    for name, source in shown.items():
         if name in read:
             series = read[name].series[name]
             span_s = (int(series.index.max()) - int(series.index.min())) / 1e9

@@ -7,14 +7,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from adapters.signals import (
-    OPERATING,
-    TIME_UNITS,
-    FieldSource,
-    LogSources,
-    SegmentSource,
-    TimeColumn,
-)
+from adapters.signals import OPERATING, LogSources
 from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.controller import (
     CONTROLLER_KINDS,
@@ -24,6 +17,7 @@ from auvdiag_cli.vehicle.controller import (
 )
 from auvdiag_cli.vehicle.effort_groups import parse_effort_group
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
+from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
 from models.effort import EffortGroup
 
@@ -197,7 +191,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
 
     sources_table = top.sub("sources")
-    sources = {family: _log_sources(sources_table.sub(family), signal_names)
+    sources = {family: log_sources(sources_table.sub(family), signal_names)
                for family in sources_table.table}
     navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
         else None
@@ -262,48 +256,6 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
                           mix, ControllerGains(**gains), reader.get("heave", str, None),
                           -1.0 if reader.get("heave_up", bool, False) else 1.0,
                           reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None))
-
-
-def _topic(reader: TableReader) -> str:
-    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key; a CSV
-    `column` is its own topic."""
-    if "column" in reader.table:
-        return str(reader.get("column", str))
-    if "topic" not in reader.table and "message" in reader.table:
-        return str(reader.get("message", str))
-    return str(reader.get("topic", str))
-
-
-def _field(reader: TableReader) -> str:
-    return str(reader.get("column" if "column" in reader.table else "field", str))
-
-
-def _field_source(entry: TableReader) -> FieldSource:
-    where = entry.sub("where").table if "where" in entry.table else {}
-    return FieldSource(
-        _topic(entry), _field(entry), entry.get("scale", float, 1.0),
-        entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
-        entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
-        entry.get("changes_only", bool, False))
-
-
-def _log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
-    signals_table = reader.sub("signals")
-    signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
-    if "operating" in reader.table:   # a flag: the vehicle is operating where it is not 0
-        signals[OPERATING] = _field_source(reader.sub("operating"))
-    segment = None
-    if "segment" in reader.table:
-        entry = reader.sub("segment")
-        segment = SegmentSource(_topic(entry), _field(entry), entry.get("prefix", str, ""))
-    time = None
-    if "time" in reader.table:
-        entry = reader.sub("time")
-        time = TimeColumn(entry.get("column", str), entry.get("unit", str, "s").lower())
-        if time.unit not in TIME_UNITS:
-            raise ProfileError(f"key '{entry.key('unit')}' must be one of "
-                               f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
-    return LogSources(signals, segment, time)
 
 
 def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]

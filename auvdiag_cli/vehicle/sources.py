@@ -1,0 +1,81 @@
+"""A profile's ``[sources.FAMILY]`` tables: where each signal lives in a log of that format
+family, the operating flag (and its fallback), segment markers and a CSV clock."""
+
+from adapters.signals import (
+    OPERATING,
+    TIME_UNITS,
+    FieldSource,
+    LogSources,
+    SegmentSource,
+    TimeColumn,
+)
+from auvdiag_cli.errors import ProfileError
+from auvdiag_cli.vehicle.toml_reader import TableReader
+
+
+def _topic(reader: TableReader) -> str:
+    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key; a CSV
+    `column` is its own topic."""
+    if "column" in reader.table:
+        return str(reader.get("column", str))
+    if "topic" not in reader.table and "message" in reader.table:
+        return str(reader.get("message", str))
+    return str(reader.get("topic", str))
+
+
+def _field(reader: TableReader) -> str:
+    return str(reader.get("column" if "column" in reader.table else "field", str))
+
+
+def _field_source(entry: TableReader) -> FieldSource:
+    where = entry.sub("where").table if "where" in entry.table else {}
+    return FieldSource(
+        _topic(entry), _field(entry), entry.get("scale", float, 1.0),
+        entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
+        entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
+        entry.get("changes_only", bool, False), _value_map(entry))
+
+
+def _value_map(entry: TableReader) -> tuple[tuple[int, float], ...]:
+    """``values = { 10 = 1, 11 = 0 }``: the raw integers that count, and their meaning."""
+    if "values" not in entry.table:
+        return ()
+    table = entry.sub("values")
+    try:
+        return tuple((int(raw), table.get(raw, float)) for raw in table.table)
+    except ValueError:
+        raise ProfileError(f"key '{entry.key('values')}' must map integers (as keys) to "
+                           "numbers, e.g. { 10 = 1, 11 = 0 }") from None
+
+
+def _operating(reader: TableReader) -> tuple[FieldSource, FieldSource | None]:
+    """``operating``: one source, or an array of two: the second read where a log has no
+    message of the first."""
+    if not isinstance(reader.table["operating"], list):
+        return _field_source(reader.sub("operating")), None
+    rows = reader.items("operating")
+    if len(rows) not in (1, 2):
+        raise ProfileError(f"key '{reader.key('operating')}' must be one source or an array "
+                           f"of two (the second a fallback), got {len(rows)}")
+    return _field_source(rows[0]), _field_source(rows[1]) if len(rows) == 2 else None
+
+
+def log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
+    signals_table = reader.sub("signals")
+    signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
+    fallbacks = {}
+    if "operating" in reader.table:   # a flag: the vehicle is operating where it is not 0
+        signals[OPERATING], fallback = _operating(reader)
+        fallbacks = {OPERATING: fallback} if fallback is not None else {}
+    segment = None
+    if "segment" in reader.table:
+        entry = reader.sub("segment")
+        segment = SegmentSource(_topic(entry), _field(entry), entry.get("prefix", str, ""))
+    time = None
+    if "time" in reader.table:
+        entry = reader.sub("time")
+        time = TimeColumn(entry.get("column", str), entry.get("unit", str, "s").lower())
+        if time.unit not in TIME_UNITS:
+            raise ProfileError(f"key '{entry.key('unit')}' must be one of "
+                               f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
+    return LogSources(signals, segment, time, fallbacks)
