@@ -7,6 +7,8 @@ Data (read from ../shared/data, or --data; skipped with a message when absent):
   held-out set for the skill figures) and judgement; the model is trained with `auvdiag
   train`'s defaults, calibrated, and the judged Normal runs and every run of each fault
   class are diagnosed.
+- CrazyPAD (Masalimov K. et al., Data 2024, 9, 79, doi 10.3390/data9060079; MIT), series
+  E8: skill per motion signal from the normal flights (four train, the rest held out).
 - Real ArduSub logs (clydemcqueen/ardusub_log_tools, MIT): a model is trained on the
   operating (armed) time of small.BIN alone (its last 20 % held out), kept even without
   skill, and all three logs are diagnosed with it.
@@ -21,6 +23,8 @@ import re
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -32,6 +36,7 @@ if TYPE_CHECKING:
     from auvdiag_cli.jobs.train import TrainingResult
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+FALSE_ALARM_RATE = 0.05       # calibrate's budget: a share of normal runs
 FAULT_CLASSES = ["AddWeight", "PressureGain_constant", "PropellerDamage_slight",
                  "PropellerDamage_bad"]
 
@@ -42,10 +47,11 @@ def _number(path: Path) -> int:
 
 
 def _skill_table(result: "TrainingResult") -> list[str]:
-    rows = ["| signal | skill | vs linear | model rms | hold rms | mean rms | judged |",
-            "|---|---|---|---|---|---|---|"]
+    rows = ["| signal | read from | skill | vs linear | model rms | hold rms | mean rms | judged |",
+            "|---|---|---|---|---|---|---|---|"]
     for name, s in result.chosen.signals.items():
-        rows.append(f"| {name} | {s.skill:.2f} | {s.versus_linear:.2f} | {s.model_rms:.4f} | "
+        rows.append(f"| {name} | {result.chosen.predictors.get(name, 'network')} | "
+                    f"{s.skill:.2f} | {s.versus_linear:.2f} | {s.model_rms:.4f} | "
                     f"{s.baseline_rms['hold']:.4f} | {s.baseline_rms['mean']:.4f} | "
                     f"{'yes' if s.judged else 'no'} |")
     return rows
@@ -82,24 +88,31 @@ def _auc(positives: list[float], negatives: list[float]) -> float:
     return float(((pos > neg) + 0.5 * (pos == neg)).mean())
 
 
-def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
-    """Cross-validated within train/: in fold f the Normal runs numbered i with i % folds == f
-    are judged, those with i % folds == f + 1 calibrate (and score the skill), the rest
-    train; every faulty run is diagnosed in every fold."""
+@dataclass
+class HaizheFolds:
+    """What the folds gave: per class, each run's score, alarms and the components named."""
+
+    scores: dict[str, list[float]]
+    alarms: Counter[str]
+    named: dict[str, Counter[str]]
+    results: list["TrainingResult"] = field(default_factory=list)
+    horizons: list[str] = field(default_factory=list)
+    loo: list[tuple[int, int]] = field(default_factory=list)     # alarmed, calibration runs
+    seconds: float = 0.0
+
+
+def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path, scale: float,
+                  folds: int) -> HaizheFolds:
     from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.jobs.budget import FalseAlarmBudget
     from auvdiag_cli.jobs.calibrate import calibrate
     from auvdiag_cli.jobs.train import train_from_logs
-    from auvdiag_cli.reports.training import relation_lines
     from auvdiag_cli.vehicle.profile import load_profile
     from models.store import load_model
 
     profile = load_profile(Path("haizhe"))
-    normal = sorted((folder / "Normal").glob("*.csv"), key=_number)
-    faulty = {c: sorted((folder / c).glob("*.csv"), key=_number) for c in FAULT_CLASSES}
-    scores: dict[str, list[float]] = {"Normal (held out)": [], **{c: [] for c in faulty}}
-    alarms: Counter[str] = Counter()
-    named: dict[str, Counter[str]] = {label: Counter() for label in scores}
-    horizons, first, seconds = [], None, 0.0
+    labels = ["Normal (held out)", *faulty]
+    out = HaizheFolds({c: [] for c in labels}, Counter(), {c: Counter() for c in labels})
     for fold in range(folds):
         judged = [p for i, p in enumerate(normal) if i % folds == fold]
         calibration = [p for i, p in enumerate(normal) if i % folds == (fold + 1) % folds]
@@ -107,41 +120,64 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
         started = time.perf_counter()
         result = train_from_logs(training, work / f"haizhe{fold}", profile, calibration,
                                  iterations_scale=scale, keep_unskilled=True)
-        seconds += time.perf_counter() - started
-        first = first or result
-        horizons.append(_horizon(result))
+        out.seconds += time.perf_counter() - started
+        out.results.append(result)
+        out.horizons.append(_horizon(result))
         model = load_model(work / f"haizhe{fold}")
-        calibrate(model, profile, calibration)
+        budget = calibrate(model, profile, calibration,
+                           budget=FalseAlarmBudget(FALSE_ALARM_RATE)).budget
+        assert budget is not None
+        out.loo.append((budget.loo_logs_alarmed, budget.logs))
         for label, runs in [("Normal (held out)", judged), *faulty.items()]:
             for run in runs:
                 d = diagnose(run, profile, model)
-                scores[label].append(_score(d))
+                out.scores[label].append(_score(d))
                 if d.verdict == "fault":
-                    alarms[label] += 1
-                    named[label][d.component or "/".join(d.candidates) or "unidentified"] += 1
-    assert first is not None
+                    out.alarms[label] += 1
+                    out.named[label][d.component or "/".join(d.candidates)
+                                     or "unidentified"] += 1
+    return out
+
+
+def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
+    """Cross-validated within train/: in fold f the Normal runs numbered i with i % folds == f
+    are judged, those with i % folds == f + 1 calibrate (and score the skill), the rest
+    train; every faulty run is diagnosed in every fold."""
+    from auvdiag_cli.reports.training import relation_lines
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    normal = sorted((folder / "Normal").glob("*.csv"), key=_number)
+    faulty = {c: sorted((folder / c).glob("*.csv"), key=_number) for c in FAULT_CLASSES}
+    run = _haizhe_folds(normal, faulty, work, scale, folds)
+    first = run.results[0]
+    depth = [r.chosen.signals["depth"] for r in run.results]
     lines = [f"**Haizhe AUV**, {folds}-fold cross-validation within train/ ({len(normal)} Normal "
              f"runs; per fold about {len(normal) * (folds - 2) // folds} to train, "
              f"{len(normal) // folds} to calibrate and score, {len(normal) // folds} judged; "
              f"{first.operating_hours * 60:.1f} min of operating time in fold 1; training "
-             f"{seconds / folds:.0f} s a fold). Horizon chosen per fold: "
-             f"{', '.join(horizons)}. Skill in fold 1:", "", *_skill_table(first), "",
+             f"{run.seconds / folds:.0f} s a fold). Horizon chosen per fold: "
+             f"{', '.join(run.horizons)}. Depth skill per fold: "
+             + ", ".join(f"{s.skill:.2f}" + ("" if s.judged else " (not judged)")
+                         for s in depth) + ". Skill in fold 1:", "", *_skill_table(first), "",
+             f"Thresholds set by `calibrate --false-alarm-rate {FALSE_ALARM_RATE}` on each "
+             "fold's calibration runs; leaving each calibration run out, "
+             + ", ".join(f"{a} of {n}" for a, n in run.loo) + " alarmed (per fold).", "",
              "| runs | diagnosed (all folds) | alarms | rate | AUC of the score against "
              "held-out Normal | component named (count) |", "|---|---|---|---|---|---|"]
-    normal_scores = scores["Normal (held out)"]
-    for label, values in scores.items():
+    normal_scores = run.scores["Normal (held out)"]
+    for label, values in run.scores.items():
         auc = "-" if label.startswith("Normal") else f"{_auc(values, normal_scores):.2f}"
-        lines.append(f"| {label} | {len(values)} | {alarms[label]} | "
-                     f"{alarms[label] / max(1, len(values)):.0%} | {auc} | "
-                     + (", ".join(f"{k} ({v})" for k, v in named[label].most_common(3)) or "-")
-                     + " |")
+        lines.append(f"| {label} | {len(values)} | {run.alarms[label]} | "
+                     f"{run.alarms[label] / max(1, len(values)):.0%} | {auc} | "
+                     + (", ".join(f"{k} ({v})" for k, v in run.named[label].most_common(3))
+                        or "-") + " |")
     lines += ["", "The score of a run is its largest ratio to a threshold: g over the judged "
               "signals, the start's deviation from the normal start, an actuator's extra "
               "effort; the AUC is the chance that a faulty run scores above a held-out Normal "
               "one.",
               "", "Commands against the motion, fold 1: "
               + "; ".join(" ".join(line.split()).rstrip(":") for line in relation_lines(
-                  first.command_relations, profile.command_names)), ""]
+                  first.command_relations, load_profile(Path("haizhe")).command_names)), ""]
     return lines + separability(folder, folds)
 
 
@@ -245,6 +281,53 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
     return lines
 
 
+# The crazyflie profile's motion signals, and two more the flights log: the vertical
+# acceleration (what the motor commands set directly) and the height.
+CRAZYPAD_EXTRA_SENSORS = {"az": ("stateEstimate_az", "m/s^2", 2.0),
+                          "z": ("stateEstimate_z", "m", 1.0)}
+
+
+def _crazypad_profile(work: Path) -> Path:
+    """The shipped crazyflie profile with the extra sensors (thresholds as vz's)."""
+    from auvdiag_cli.vehicle.profile import profile_text
+
+    text, _ = profile_text(Path("crazyflie"))
+    blocks = "".join(f'[[sensors]]\nname = "{name}"\ncomponent = "state_estimate"\n'
+                     f'unit = "{unit}"\nfull_scale = {scale}\n\n'
+                     for name, (_, unit, scale) in CRAZYPAD_EXTRA_SENSORS.items())
+    text = text.replace("[[effort]]", blocks + "[[effort]]", 1)
+    text = text.replace("vz = 15.0\n", "vz = 15.0\n" + "".join(
+        f"{name} = 15.0\n" for name in CRAZYPAD_EXTRA_SENSORS), 1)
+    text = text.replace("b = { vx = 0, vy = 0, vz = 0 }", "b = { vx = 0, vy = 0, vz = 0, "
+                        + ", ".join(f"{n} = 0" for n in CRAZYPAD_EXTRA_SENSORS) + " }")
+    text += "".join(f'{name} = {{ column = "{column}" }}\n'
+                    for name, (column, _, _) in CRAZYPAD_EXTRA_SENSORS.items())
+    path = work / "crazyflie_motion.toml"
+    path.write_text(text)
+    return path
+
+
+def crazypad(root: Path, work: Path, scale: float) -> list[str]:
+    """Skill per motion signal from the normal flights: the first four train, the rest are
+    held out; each signal read from the predictor that validates best."""
+    import csv
+
+    from auvdiag_cli.jobs.train import train_from_logs
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    with (root / "labels.csv").open() as stream:
+        normal = [root / row["file"] for row in csv.DictReader(stream)
+                  if row["kind"] == "normal"]
+    profile = load_profile(_crazypad_profile(work))
+    result = train_from_logs(normal[:4], work / "crazypad", profile, normal[4:],
+                             iterations_scale=scale, keep_unskilled=True)
+    return [f"**CrazyPAD E8** nano-quadrotor (Masalimov K. et al., Data 2024, 9, 79, doi "
+            f"10.3390/data9060079; MIT), normal flights: {len(normal[:4])} to train, "
+            f"{len(normal[4:])} held out; profile crazyflie with the vertical acceleration "
+            "`az` and the height `z` added. Horizon chosen: "
+            f"{_horizon(result)}.", "", *_skill_table(result)]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=DEFAULT_DATA)
@@ -260,14 +343,17 @@ def main() -> None:
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), "
           f"Python {platform.python_version()}; data from {args.data}.\n")
     with tempfile.TemporaryDirectory() as work:
-        for name, sub in (("Haizhe", "haizhe/train"), ("ArduSub", "ardusub")):
+        sections: list[tuple[str, str, Callable[[Path], list[str]]]] = [
+            ("Haizhe", "haizhe/train",
+             lambda f: haizhe(f, Path(work), args.iterations_scale, args.folds)),
+            ("CrazyPAD", "crazypad", lambda f: crazypad(f, Path(work), args.iterations_scale)),
+            ("ArduSub", "ardusub", lambda f: ardusub(f, Path(work), args.iterations_scale))]
+        for name, sub, section in sections:
             folder = args.data / sub
             if not folder.is_dir():
                 print(f"{name}: not found at {folder}: skipped.\n")
                 continue
-            lines = (haizhe(folder, Path(work), args.iterations_scale, args.folds)
-                     if name == "Haizhe" else ardusub(folder, Path(work), args.iterations_scale))
-            print("\n".join(lines) + "\n")
+            print("\n".join(section(folder)) + "\n")
 
 
 if __name__ == "__main__":
