@@ -14,6 +14,8 @@ from adapters.fieldpath import field_getter
 from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals, fallback_name
 from adapters.timebase import MAX_TIME_NS, spikes
 
+# How a log that lacks a signal the profile names is reported (callers match on it).
+MISSING_SIGNALS = "no messages for signal(s)"
 # How far a container's recorded start or end may lie outside the data it holds.
 MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
 # Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one; a
@@ -229,7 +231,7 @@ class SignalCollector:
         empty = sorted(name for name, times in self.times.items() if not times)
         if empty and require_all:
             where = ", ".join(self._why_empty(n) for n in empty)
-            raise LogError(self.path, f"no messages for signal(s) {where}")
+            raise LogError(self.path, f"{MISSING_SIGNALS} {where}")
         series = {name: self._series(name, time_ordered) for name in self.times
                   if name not in empty}
         firsts = [int(s.index.min()) for s in series.values() if s.size]

@@ -132,3 +132,20 @@ def test_real_haizhe_runs_are_read_directly():
     assert len(times) == rows and np.all(np.diff(times) > 0)
     assert 18 <= rows / ((times[-1] - times[0]) / 1e9) <= 22          # about 20 rows a second
     assert signals.series["yaw_rate"].abs().max() < 2.0               # deg/s read as rad/s
+
+
+def test_a_csv_log_of_another_vehicle_names_the_shipped_profile_that_reads_it(tmp_path):
+    """Columns named as the Haizhe AUV logs them: the default profile cannot read the file,
+    and the one-line error says which shipped profile can."""
+    from typer.testing import CliRunner
+
+    from auvdiag_cli.cli import app
+
+    log = tmp_path / "run.csv"
+    rows = ["time,pwm1,pwm2,pwm3,pwm4,depth,w_row,w_pitch,w_yaw"]
+    rows += [f"{120000 + k // 20},1500,1500,1500,1500,{0.01 * k},0.1,0.2,0.3" for k in range(60)]
+    log.write_text("\n".join(rows) + "\n")
+    result = CliRunner().invoke(app, ["diagnose", str(log)])
+    assert result.exit_code == 2
+    line, = result.output.strip().splitlines()
+    assert line.endswith("the shipped profiles that fit this log: haizhe (--profile NAME)")

@@ -106,3 +106,12 @@ def test_arming_is_read_from_ev_events_where_a_log_has_no_arm_records(real_model
     shown = runner.invoke(app, ["inspect", str(older), "--profile", "bluerov2_standard"])
     assert shown.exit_code == 0 and "MISSING" not in shown.stdout
     assert "operating    EV Id" in shown.stdout
+
+
+def test_a_log_the_default_profile_does_not_fit_names_the_profiles_that_do():
+    result = runner.invoke(app, ["diagnose", str(DATA / "small.BIN")])
+    assert result.exit_code == 2
+    line, = result.output.strip().splitlines()
+    assert "no messages for signal(s) flow" in line
+    fitting = line.split("the shipped profiles that fit this log: ")[1]
+    assert "bluerov2_standard" in fitting and "twin_burger" not in fitting
