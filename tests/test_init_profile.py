@@ -93,3 +93,31 @@ def test_like_bluerov2_on_real_logs(tmp_path):
                                  "--like", "bluerov2"])          # the DVL is not there
     assert result.exit_code == 2 and "surge" in result.output and "draft without --like" \
         in result.output
+
+
+def test_a_csv_whose_sensor_names_are_unknown_gets_every_varying_column_to_check(tmp_path):
+    """Columns named as a Crazyflie logs them (stateEstimate_vz, a clock in µs since boot):
+    no sensor is recognised by name, so every column that varies is proposed, marked CHECK;
+    the clock's unit comes from its name; inspect without a profile shows the span."""
+    from typer.testing import CliRunner
+
+    from auvdiag_cli.cli import app
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    log, draft = tmp_path / "flight.csv", tmp_path / "draft.toml"
+    rows = ["time_us,motor_m1,motor_m2,stateEstimate_vz,stateEstimate_az,constant"]
+    rows += [f"{9_000_000 + 10_000 * k},{30000 + 50 * (k % 7)},{30000 + 40 * (k % 5)},"
+             f"{0.01 * (k % 11)},{0.1 * (k % 3)},5" for k in range(400)]
+    log.write_text("\n".join(rows) + "\n")
+    runner = CliRunner()
+    result = runner.invoke(app, ["init-profile", str(log), "--output", str(draft)])
+    assert result.exit_code == 0, result.output
+    text = draft.read_text()
+    assert 'time = { column = "time_us", unit = "us" }' in text
+    assert text.count("CHECK: not recognised by its name") == 2
+    profile = load_profile(draft)
+    assert profile.sensor_names == ("stateestimate_vz", "stateestimate_az")
+    shown = runner.invoke(app, ["inspect", str(log)])      # the default profile: no fit
+    assert shown.exit_code == 2 and "MISSING" in shown.stdout
+    assert "span      9.000 s since boot … 12.990 s since boot  (4.0 s)" in shown.stdout
+    assert "clock: column time_us read in us (guessed" in shown.stdout

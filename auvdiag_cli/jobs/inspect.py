@@ -4,7 +4,7 @@ import difflib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from adapters import LogError, LogInventory, Signals, inventory, read_log
+from adapters import FieldSource, LogError, LogInventory, LogSources, Signals, inventory, read_log
 from auvdiag_cli.engine.resample import slow_command_note
 from auvdiag_cli.vehicle.profile import Profile
 
@@ -60,6 +60,24 @@ def _closest(name: str, choices: list[str]) -> tuple[str, ...]:
     return tuple(difflib.get_close_matches(name, choices, n=3, cutoff=0.3))
 
 
+def _guessed_span(path: Path, contents: LogInventory) -> tuple[LogInventory, str | None]:
+    """A CSV whose clock the profile does not map: the column named like a clock, read in
+    the unit its values suggest (as init-profile guesses it)."""
+    from auvdiag_cli.jobs.profile_draft import guess_time_column
+
+    try:
+        time = guess_time_column(contents, path)
+        if time is None:
+            return contents, "no column is named like a clock: the span is unknown"
+        clock = read_log(path, {"csv": LogSources({time.column: FieldSource(
+            time.column, time.column)}, time=time)})
+    except (LogError, ValueError):
+        return contents, None
+    return (replace(contents, start_ns=clock.start_ns, end_ns=clock.end_ns),
+            f"clock: column {time.column} read in {time.unit} (guessed; the profile does not "
+            "map this log's clock)")
+
+
 def inspect_log(path: Path, profile: Profile) -> Inspection:
     """Inventory the log, then read each of the profile's signals that its topics offer."""
     contents, family = inventory(path)
@@ -100,8 +118,13 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
                                             f"no {source.topic} in the log",
                                             _closest(source.topic, sorted(available))))
     first = next(iter(read.values()), None)
+    if contents.start_ns is None and first is not None:     # a CSV: its clock is a column
+        contents = replace(contents, start_ns=first.start_ns, end_ns=first.end_ns)
+    clock_note = None
+    if contents.start_ns is None and family == "csv":
+        contents, clock_note = _guessed_span(path, contents)
     markers = [m.label for m in first.markers] if first is not None else []
     slow = slow_command_note({s.name: s.rate_hz for s in results
                               if s.name in profile.command_names}, profile.dt_s)
-    warnings = [] if slow is None else [slow]
+    warnings = [note for note in (clock_note, slow) if note is not None]
     return Inspection(path, family, contents, results, markers, warnings=warnings)

@@ -72,8 +72,10 @@ def _signal_name(topic: str, field: str) -> str:
     return text.lower() or "signal"
 
 
-def _candidates(contents: LogInventory, family: str) -> list[tuple[str, FieldSource]]:
-    """(kind, source) for every field whose name or topic looks like a command or a sensor."""
+def _candidates(contents: LogInventory, family: str, every_field: bool = False
+                ) -> list[tuple[str, FieldSource]]:
+    """(kind, source) for every field whose name or topic looks like a command or a sensor;
+    ``every_field``: any other field is a sensor too (names this does not recognise)."""
     found: list[tuple[str, FieldSource]] = []
     for topic in contents.topics:
         if topic.count < 2:
@@ -90,13 +92,13 @@ def _candidates(contents: LogInventory, family: str) -> list[tuple[str, FieldSou
                     f"{field[:-3]}[{i}]" for i in range(MAX_ARRAY_COMMANDS)]
                 found += [("command", FieldSource(topic.name, path, where=where))
                           for path in elements]
-            elif SENSOR_NAME.search(field) and not TIME_NAME.match(field) and not (
+            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(field)) and not (
                     NOT_A_SENSOR.search(field) or NOT_A_SENSOR.search(topic.name)):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
 
 
-def _time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
+def guess_time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
     """For a CSV log: the column named like a clock, its unit guessed from its values."""
     named = [t.name for t in contents.topics if TIME_NAME.match(t.name)]
     if not named:
@@ -111,10 +113,26 @@ def _time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
     whole = numbers == np.floor(numbers)
     if whole.all() and numbers.max() <= 235959 and np.unique(numbers).size < numbers.size / 2:
         return TimeColumn(named[0], "hhmmss")
+    return TimeColumn(named[0], _clock_unit(named[0], numbers))
+
+
+UNIT_SUFFIX = re.compile(r"_(s|ms|us|ns)$", re.IGNORECASE)
+SECONDS_PER = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+
+
+def _clock_unit(name: str, numbers: np.ndarray) -> str:
+    """The unit the column's name says (time_us); else an epoch's by its size; else the one
+    that puts the median sample interval between 0.1 ms and 10 s (a clock since boot)."""
+    suffix = UNIT_SUFFIX.search(name)
+    if suffix:
+        return suffix.group(1).lower()
     largest = float(np.abs(numbers).max())
-    unit = "ns" if largest > 1e17 else "us" if largest > 1e14 else "ms" if largest > 1e11 \
-        else "s"
-    return TimeColumn(named[0], unit)
+    if largest > 1e11:
+        return "ns" if largest > 1e17 else "us" if largest > 1e14 else "ms"
+    steps = np.diff(numbers)
+    step = float(np.median(steps[steps > 0])) if (steps > 0).any() else 0.0
+    return next((unit for unit, seconds in SECONDS_PER.items()
+                 if 1e-4 <= step * seconds <= 10.0), "s")
 
 
 def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
@@ -137,10 +155,11 @@ def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
         return values
 
 
-def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None
+def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
+               every_field: bool = False
                ) -> tuple[list[Proposal], list[Proposal], list[list[str]]]:
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
-           for kind, source in _candidates(contents, family)}
+           for kind, source in _candidates(contents, family, every_field)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
     commands, sensors = [], []
     command_values: list[np.ndarray] = []
@@ -165,6 +184,10 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         else:
             unit = "rad/s" if re.search(r"speed$|^Gyr|angular|gyro", source.field) else "?"
             check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
+            if not SENSOR_NAME.search(source.field):
+                check = ("not recognised by its name: keep it only if it measures the "
+                         "vehicle's motion (remove battery, position fixes, bookkeeping); "
+                         + check)
             if source.field in ("climb", "CRt"):
                 factor = -0.01 if source.field == "CRt" else -1.0
                 source, unit = replace(source, scale=factor), "m/s"
@@ -244,11 +267,13 @@ def _entry(source: FieldSource, family: str) -> str:
 def draft_profile(path: Path, name: str) -> str:
     """The text of a starting profile for the vehicle that wrote the log at ``path``."""
     contents, family = inventory(path)
-    time = _time_column(contents, path) if family == "csv" else None
+    time = guess_time_column(contents, path) if family == "csv" else None
     if family == "csv" and time is None:
         raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
                          "write [sources.csv] time = { column, unit } by hand")
     commands, sensors, groups = _proposals(path, family, contents, time)
+    if commands and not sensors:      # names it does not know: every field that varies
+        commands, sensors, groups = _proposals(path, family, contents, time, every_field=True)
     if not commands or not sensors:
         what = "command (motor output, thrust, PWM)" if not commands else "sensor"
         raise UsageError(f"{path}: found no {what} field that varies in this log; write the "
