@@ -84,6 +84,7 @@ def test_calibrate_sets_thresholds_for_a_budget_and_says_how_they_held(make_log,
     meta = {t: json.loads((t / "model.json").read_text()) for t in (strict, loose)}
     budget = meta[loose]["calibration"]["false_alarm_budget"]
     assert budget["rate"] == 0.3 and budget["per"] == "log"
+    assert meta[loose]["calibration"]["false_alarm_rate_upper_95_per_hour"] is None
     fitted = {j["judge"]: j["threshold"] for j in budget["judges"]}
     assert meta[loose]["thresholds"]["mission"]["flow"] == pytest.approx(
         fitted["g flow (mission)"], abs=0.005)

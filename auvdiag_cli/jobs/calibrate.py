@@ -340,7 +340,9 @@ def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_pro
         "widening": result.widening,
         "normal_hours": round(result.normal_hours, 4),
         "false_alarms_on_normal_logs": 0 if budget is None else budget.in_sample_alarmed,
-        "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3),
+        # The rule-of-three bound holds only where no calibration log alarms (the margin rule).
+        "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3)
+        if budget is None else None,
         "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
                    "thresholds": m.thresholds, "kept_profile_default": m.kept_default,
                    "set_by": {k: {"log": e.set_by, "peak_g": e.peak, "next_log_peak_g":
