@@ -179,8 +179,8 @@ class FastDynamics:
 
 
 # The predictors a model can keep per signal, simplest first (kept on a tie).
-PREDICTOR_KINDS = ("linear", "network", "network-on-linear")
-NETWORK = "network"
+PREDICTOR_KINDS = ("linear", "linear-replay", "network", "network-on-linear")
+NETWORK, LINEAR_REPLAY = "network", "linear-replay"
 
 
 def linear_only(linear: np.ndarray, n_commands: int) -> FastDynamics:

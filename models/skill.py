@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from models.baselines import HoldLast, TrainingMean, fit_linear
-from models.rollouts import Rollouts, plan_rollouts, replay_plan
+from models.rollouts import Rollout, Rollouts, plan_rollouts, replay_plan
 
 MIN_SKILL = 1.0 / 3.0
 # Fewer held-out samples of a signal than this and its skill is not trusted (20 s at 10 Hz).
@@ -108,6 +108,18 @@ def _rms(residuals: list[np.ndarray]) -> np.ndarray:
     return np.where(diverged, np.inf, np.where(count > 0, rms, np.nan))
 
 
+def _residual(measured: np.ndarray, predicted: np.ndarray, plan: Sequence[Rollout]
+              ) -> np.ndarray:
+    """Measured minus predicted; infinite where a rollout predicts NaN for a measured
+    sample (a predictor that broke down must not score only where it still gave numbers)."""
+    residual = measured - predicted
+    replayed = np.zeros(len(measured), bool)
+    for r in plan:
+        replayed[r.start:r.end] = True
+    broken = replayed[:, None] & np.isfinite(measured) & np.isnan(predicted)
+    return np.where(broken, np.inf, residual)
+
+
 def score_horizon(predictors: dict[str, Rollouts], logs: Sequence[ScoringLog],
                   command_scale: np.ndarray, state_scale: np.ndarray,
                   sensor_names: Sequence[str], horizon_steps: int | None,
@@ -119,7 +131,7 @@ def score_horizon(predictors: dict[str, Rollouts], logs: Sequence[ScoringLog],
         for name, predictor in predictors.items():
             predicted = replay_plan(predictor, log.commands, log.sensors, plan,
                                     command_scale, state_scale)
-            residuals[name].append(log.sensors - predicted)
+            residuals[name].append(_residual(log.sensors, predicted, plan))
     rms = {name: _rms(parts) for name, parts in residuals.items()}
     samples = np.isfinite(np.concatenate(residuals["model"])).sum(axis=0)
     return HorizonScore(horizon_s, {

@@ -1,6 +1,7 @@
 """Model directories: ``weights.npz`` (the network's state dict as plain arrays, loaded with
 ``allow_pickle=False`` so no code runs; beside it, where training kept them, ``linear``, the
-least-squares linear model, and ``on_linear/…``, the network trained on top of it) and
+least-squares linear model, ``linear_replay``, the same refined against the replay's error,
+and ``on_linear/…``, the network trained on top of the least-squares one) and
 ``model.json`` (readable, versioned metadata; ``predictors`` says which predictor each
 signal is read from).
 Diagnosis runs on the NumPy path and never imports torch; the torch module is built only
@@ -20,7 +21,14 @@ import numpy as np
 from auvdiag_errors import ModelError
 from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
-from models.fast import NETWORK, PREDICTOR_KINDS, ChosenDynamics, FastDynamics, linear_only
+from models.fast import (
+    LINEAR_REPLAY,
+    NETWORK,
+    PREDICTOR_KINDS,
+    ChosenDynamics,
+    FastDynamics,
+    linear_only,
+)
 from models.normaliser import Normaliser
 
 if TYPE_CHECKING:
@@ -29,7 +37,7 @@ if TYPE_CHECKING:
 FORMAT_NAME = "auvdiag-model"
 FORMAT_VERSION = 2
 WEIGHTS_FILE, METADATA_FILE = "weights.npz", "model.json"
-LINEAR_KEY, ON_LINEAR_PREFIX = "linear", "on_linear/"
+LINEAR_KEY, LINEAR_REPLAY_KEY, ON_LINEAR_PREFIX = "linear", "linear_replay", "on_linear/"
 LEGACY_WEIGHTS_FILE = "weights.pt"          # format version 1
 
 
@@ -86,11 +94,12 @@ class LoadedModel:
         if kind == NETWORK:
             return self.fast
         n_commands = self.metadata["architecture"]["n_commands"]
-        if LINEAR_KEY not in self.extra:
+        key = LINEAR_REPLAY_KEY if kind == LINEAR_REPLAY else LINEAR_KEY
+        if key not in self.extra:
             raise ValueError(f"model.json reads signals from the {kind} predictor, but "
-                             f"{WEIGHTS_FILE} holds no linear model")
-        linear = self.extra[LINEAR_KEY]
-        if kind == "linear":
+                             f"{WEIGHTS_FILE} holds no {key} weights")
+        linear = self.extra[key]
+        if kind in ("linear", LINEAR_REPLAY):
             return linear_only(linear, n_commands)
         state = {k[len(ON_LINEAR_PREFIX):]: v for k, v in self.extra.items()
                  if k.startswith(ON_LINEAR_PREFIX)}
@@ -163,7 +172,7 @@ def default_model_dir(vehicle: str = "twin-burger") -> Path:
 def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normaliser,
                metadata: dict[str, Any], extra: dict[str, np.ndarray] | None = None) -> None:
     """Write weights and metadata; the metadata gains the architecture and weight digest.
-    ``extra``: the other predictors' arrays (``linear``, ``on_linear/…``)."""
+    ``extra``: the other predictors' arrays (``linear``, ``linear_replay``, ``on_linear/…``)."""
     directory.mkdir(parents=True, exist_ok=True)
     weights = directory / WEIGHTS_FILE
     arrays = {k: v.detach().numpy().copy() for k, v in network.state_dict().items()}
@@ -224,7 +233,8 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
                                 norm["delta_ratio"])
         arrays = _read_weights(directory, version)
         extra = {k: arrays.pop(k) for k in list(arrays)
-                 if k == LINEAR_KEY or k.startswith(ON_LINEAR_PREFIX)}
+                 if k in (LINEAR_KEY, LINEAR_REPLAY_KEY)
+                 or k.startswith(ON_LINEAR_PREFIX)}
         model = LoadedModel(arrays, normaliser, metadata, label, extra)
         fast = model.fast        # checks every weight is there with the architecture's shape
         _ = model.dynamics       # and every predictor a signal is read from

@@ -20,6 +20,11 @@ from auvdiag_cli.cli.app import (
 )
 from auvdiag_cli.errors import UsageError
 
+PredictorOption = Annotated[list[str] | None, typer.Option(
+    "--predictor", help="A predictor each signal may be read from: linear, linear-replay, "
+                        "network, network-on-linear (repeatable; default: all four, the best "
+                        "per signal on the held-out data).")]
+
 
 @app.command()
 def train(
@@ -39,18 +44,16 @@ def train(
     iterations_scale: Annotated[float, typer.Option(
         help="Multiply every stage's iteration count (e.g. 0.1 for a quick model).",
         min=0.001)] = 1.0,
-    predictor: Annotated[list[str] | None, typer.Option(
-        "--predictor", help="A predictor each signal may be read from: linear, network, "
-                            "network-on-linear (repeatable; default: all three, the best "
-                            "per signal on the held-out data).")] = None,
+    predictor: PredictorOption = None,
 ) -> None:
     """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
 
-    Three predictors are fitted: a least-squares linear model, the recurrent network
-    (trained in stages, short rollouts first and long free-running ones after), and the
-    network on top of the linear model. Each signal is read from the one with the best skill
-    on held-out normal data, against naive predictors (the last value holds, the mean): a
-    signal that none predicts better is never judged.
+    Four predictors are fitted: a least-squares linear model, the same linear model refined
+    against the error of free replays of the training logs (linear-replay), the recurrent
+    network (trained in stages, short rollouts first and long free-running ones after), and
+    the network on top of the least-squares model. Each signal is read from the one with the
+    best skill on held-out normal data, against naive predictors (the last value holds, the
+    mean): a signal that none predicts better is never judged.
     It also learns how the commands follow the motion (see 'auvdiag relate') and, for the
     profile's groups of actuators that act alike ([[effort]]), each actuator's normal share
     of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs

@@ -1,6 +1,7 @@
 """The predictors `train` fits, and keeps per signal by held-out skill: the least-squares
-linear model, the recurrent network, and the network on top of the linear model (it learns
-only what the linear model misses)."""
+linear model, the same linear model refined against the replay's error, the recurrent
+network, and the network on top of the least-squares model (it learns only what the linear
+model misses)."""
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -9,10 +10,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from models.baselines import fit_linear
-from models.fast import NETWORK, PREDICTOR_KINDS, FastDynamics, linear_only
+from models.fast import LINEAR_REPLAY, NETWORK, PREDICTOR_KINDS, FastDynamics, linear_only
+from models.linear_replay import WINDOW_STEPS_MAX, fit_linear_to_replay
 from models.normaliser import Normaliser
 from models.skill import HorizonScore, ScoringLog, assess, choose_predictors
-from models.store import LINEAR_KEY, ON_LINEAR_PREFIX
+from models.store import LINEAR_KEY, LINEAR_REPLAY_KEY, ON_LINEAR_PREFIX
 
 if TYPE_CHECKING:
     from models.dynamics import RecurrentDynamics
@@ -54,6 +56,15 @@ def fit_candidates(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog]
         linear, network.n_commands)}
     extra = {LINEAR_KEY: linear}
     notes = []
+    if LINEAR_REPLAY in kinds:
+        progress("refining the linear model against the replay's error")
+        replayed = _linear_to_replay(training, linear, command_scale, state_scale,
+                                     _window_steps(horizons, dt_s))
+        if isinstance(replayed, str):
+            notes.append(replayed)
+        else:
+            members[LINEAR_REPLAY] = linear_only(replayed, network.n_commands)
+            extra[LINEAR_REPLAY_KEY] = replayed
     if "network-on-linear" in kinds:
         progress("training the network on top of the linear model")
         try:
@@ -70,3 +81,26 @@ def fit_candidates(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog]
                for kind in PREDICTOR_KINDS if kind in kinds and kind in members}
     return Candidates(network, normaliser, extra, choose_predictors(by_kind), by_kind,
                       tuple(notes))
+
+
+def _window_steps(horizons: Sequence[float | None], dt_s: float) -> int:
+    """Replay windows as long as the longest horizon scored (a free run: as long as the
+    fit allows)."""
+    finite = [h for h in horizons if h is not None]
+    if len(finite) < len(horizons) or not finite:
+        return WINDOW_STEPS_MAX
+    return max(2, round(max(finite) / dt_s))
+
+
+def _linear_to_replay(training: Sequence[ScoringLog], linear: np.ndarray,
+                      command_scale: np.ndarray, state_scale: np.ndarray,
+                      window_steps: int) -> np.ndarray | str:
+    """The refined weights, or why there are none."""
+    why = "the linear model refined against the replay is not kept: "
+    try:
+        refined = fit_linear_to_replay([t.commands / command_scale for t in training],
+                                       [t.sensors / state_scale for t in training],
+                                       [t.cuts for t in training], linear, window_steps)
+    except ValueError as problem:
+        return why + str(problem)
+    return why + "it replays the training logs no better" if refined is None else refined

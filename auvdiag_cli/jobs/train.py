@@ -45,8 +45,9 @@ SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out nor
                 "replays re-starting every horizon from a median start state; versus_linear "
                 "= 1 - rms_model / rms_linear")
 PREDICTOR_METHOD = ("each signal is read from the predictor with the best held-out skill at "
-                    "the horizon chosen: linear (least squares), network, or "
-                    "network-on-linear; a more complex one must win by "
+                    "the horizon chosen: linear (least squares), linear-replay (the same "
+                    "refined against the replay's error), network, or network-on-linear; "
+                    "a later one must win by "
                     f"{SKILL_MARGIN} skill")
 SKILL_THRESHOLD_REASON = (
     "a stuck or dead sensor leaves a residual of about rms_hold; it clears a threshold of "
