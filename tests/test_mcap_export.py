@@ -88,7 +88,8 @@ def test_verdict_onset_and_detection_are_events_at_their_times(exported):
     assert segment["mode"] == "mission" and segment["thresholds"] == {"flow": 15.0,
                                                                       "yaw_rate": 10.0}
     assert segment_ns == first_ns + round(report["segments"][0]["start_s"] * 1e9)
-    assert metadata["verdict"] == "FAULT: flow_sensor"
+    assert metadata["verdict"] == "FAULT: flow sensor"
+    assert metadata["coverage"] == "2 of 2 signals and 2 of 2 actuators judged"
 
 
 def test_audit_writes_an_mcap_per_log_and_reuses_it(tmp_path):

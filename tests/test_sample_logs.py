@@ -31,7 +31,7 @@ def test_sample_log_report_matches_expected_and_truth(expected_path):
     assert result.exit_code == (1 if expected["verdict"] == "fault" else 0)
     assert set(report) == set(expected)                 # the schema did not drift
     for key in ("verdict", "component", "candidates", "case", "b", "format", "duration_s",
-                "segment_source", "not_judged", "completeness"):
+                "segment_source", "not_judged", "coverage", "completeness"):
         assert report[key] == expected[key], key
     assert [(s["name"], s["mode"], s["b"]) for s in report["segments"]] == [
         (s["name"], s["mode"], s["b"]) for s in expected["segments"]]

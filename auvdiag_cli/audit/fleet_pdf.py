@@ -17,19 +17,27 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-VERDICTS = ("normal", "fault", "undetermined", "error")
+VERDICTS = ("normal", "partial", "fault", "undetermined", "error")
+LABELS = {"partial": "normal, part judged"}
 WORST_SHOWN = 30
 
 
 def _verdict(row: dict[str, Any]) -> str:
-    return "error" if row["error"] else str(row["verdict"])
+    """The verdict, with "partial" for a NORMAL over less than the whole vehicle."""
+    if row["error"]:
+        return "error"
+    if row["verdict"] == "normal" and row.get("coverage_complete") is False:
+        return "partial"
+    return str(row["verdict"])
 
 
 def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, str]],
                   companions: int, interrupted: bool) -> list[Line]:
     counts = Counter(_verdict(r) for r in rows)
-    lines = [Line(f"{len(rows)} logs: {counts['normal']} normal, {counts['fault']} with a "
-                  f"fault, {counts['undetermined']} undetermined, {counts['error']} not "
+    partly = f" and {counts['partial']} normal on part of the vehicle" if counts["partial"] \
+        else ""
+    lines = [Line(f"{len(rows)} logs: {counts['normal']} normal{partly}, {counts['fault']} "
+                  f"with a fault, {counts['undetermined']} undetermined, {counts['error']} not "
                   "analysable", size=14, bold=True)]
     if companions:
         lines += paragraph(f"{companions} files named after a log beside it (truth, mission "
@@ -74,7 +82,8 @@ def _by_vehicle_and_date(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
     for verdict in VERDICTS:
         heights = [sum(1 for r in rows if _verdict(r) == verdict and _vehicle_and_date(r) == g)
                    for g in groups]
-        ax.bar(labels, heights, bottom=bottom, color=COLOURS[verdict], label=verdict)
+        ax.bar(labels, heights, bottom=bottom, color=COLOURS[verdict],
+               label=LABELS.get(verdict, verdict))
         bottom = [b + h for b, h in zip(bottom, heights, strict=True)]
     ax.set_title("Verdicts by vehicle and date", loc="left", fontweight="bold")
     ax.set_ylabel("logs")
@@ -114,7 +123,8 @@ def _timeline(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
         x = ([pd.Timestamp(r["start_time_utc"]).to_pydatetime() for _, r in chosen] if dated
              else [i for i, _ in chosen])
         y = [vehicles.index(_vehicle_and_date(r)[0]) for _, r in chosen]
-        ax.scatter(x, y, color=COLOURS[verdict], s=18, label=verdict, zorder=3)
+        ax.scatter(x, y, color=COLOURS[verdict], s=18, label=LABELS.get(verdict, verdict),
+                   zorder=3)
     ax.set_yticks(range(len(vehicles)), vehicles)
     ax.set_ylim(-0.5, len(vehicles) - 0.5)
     ax.set_title("Timeline", loc="left", fontweight="bold")

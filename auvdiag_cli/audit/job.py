@@ -45,7 +45,8 @@ class AuditResult:
 
     def summary(self, output: Path) -> str:
         """The line an audit ends with: what it found and where the results are."""
-        return (f"{len(self.records)} logs: {self.count('normal')} normal, "
+        partly = f" ({self.partly_judged} on part of the vehicle)" if self.partly_judged else ""
+        return (f"{len(self.records)} logs: {self.count('normal')} normal{partly}, "
                 f"{self.count('fault')} fault, {self.count('undetermined')} undetermined, "
                 f"{self.errors} not analysable, {self.damaged} partial (damaged); "
                 f"{len(self.skipped)} files skipped; "
@@ -54,6 +55,12 @@ class AuditResult:
     @property
     def errors(self) -> int:
         return sum(1 for r in self.records if r.get("error"))
+
+    @property
+    def partly_judged(self) -> int:
+        """NORMAL verdicts over less than every signal and actuator of the profile."""
+        return sum(1 for r in self.records if not r.get("error") and r.get("verdict") == "normal"
+                   and not (r.get("coverage") or {}).get("complete", True))
 
     @property
     def damaged(self) -> int:

@@ -9,7 +9,8 @@ if TYPE_CHECKING:
     import pandas as pd
 
 FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "not_operating_s",
-                 "verdict", "completeness", "not_judged", "component", "candidates", "case",
+                 "verdict", "completeness", "not_judged", "signals_judged",
+                 "actuators_judged", "coverage_complete", "component", "candidates", "case",
                  "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "driven_harder",
@@ -39,6 +40,19 @@ def _worst_effort(record: dict[str, Any]) -> tuple[float | None, str | None]:
     return max(judged, default=(None, None))
 
 
+def _coverage_columns(coverage: dict[str, Any] | None) -> dict[str, Any]:
+    """"judged/total" for the signals and the actuators, and whether that is everything."""
+    if not coverage:
+        return {"signals_judged": None, "actuators_judged": None, "coverage_complete": None}
+
+    def share(part: dict[str, list[str]]) -> str:
+        return f"{len(part['judged'])}/{len(part['judged']) + len(part['not_judged'])}"
+
+    return {"signals_judged": share(coverage["signals"]),
+            "actuators_judged": share(coverage["actuators"]),
+            "coverage_complete": bool(coverage["complete"])}
+
+
 def flatten(record: dict[str, Any]) -> dict[str, Any]:
     """One table row from a stored per-log record (a report, or an error)."""
     segments = record.get("segments") or []
@@ -55,6 +69,7 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
         "verdict": record.get("verdict", "error" if record.get("error") else None),
         "completeness": (record.get("completeness") or {}).get("status"),
         "not_judged": ";".join(record.get("not_judged") or {}),
+        **_coverage_columns(record.get("coverage")),
         "component": record.get("component"),
         "candidates": ";".join(record.get("candidates") or []),
         "case": record.get("case"), "onset_s": record.get("onset_s"),
@@ -87,6 +102,7 @@ def build_table(records: Sequence[dict[str, Any]]) -> "pd.DataFrame":
     frame = frame.reindex(columns=FIXED_COLUMNS + extra)
     for column in ("case", *extra):
         frame[column] = frame[column].astype("Int64")
+    frame["coverage_complete"] = frame["coverage_complete"].astype("boolean")
     return frame.sort_values("log", kind="stable").reset_index(drop=True)
 
 

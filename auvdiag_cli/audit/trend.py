@@ -20,6 +20,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from auvdiag_cli.audit.fleet_coverage import coverage_lines
+
 DEFAULT_LAST = 8
 DEFAULT_ALPHA = 0.05
 MIN_DIVES = 6          # fewer cannot make p < 0.05 with ties and noise
@@ -49,7 +51,7 @@ class SignalTrend:
     def describe(self) -> str:
         base = (f"{self.vehicle} {self.signal}: peak/threshold {self.ratios[0]:.2f} -> "
                 f"{self.ratios[-1]:.2f} over {self.dives} dives, Mann-Kendall p = "
-                f"{self.p_value:.3f}, +{self.sen_slope:.3f} a dive")
+                f"{self.p_value:.3f}, {self.sen_slope:+.3f} a dive")
         if self.alarmed:
             return base + " (already alarming)"
         if self.flagged:
@@ -66,6 +68,7 @@ class FleetTrend:
     alpha: float
     trends: list[SignalTrend] = field(default_factory=list)
     short: dict[str, int] = field(default_factory=dict)     # vehicle -> dives, too few
+    coverage: list[str] = field(default_factory=list)       # what was judged, per vehicle
 
     @property
     def flagged(self) -> list[SignalTrend]:
@@ -154,7 +157,8 @@ def _trend(vehicle: str, signal: str, ratios: list[float], alpha: float) -> Sign
 def fleet_trend(records: Sequence[dict[str, Any]], last: int = DEFAULT_LAST,
                 alpha: float = DEFAULT_ALPHA) -> FleetTrend:
     """The trend test over each vehicle's last ``last`` dives, per signal."""
-    result = FleetTrend(last, alpha)
+    result = FleetTrend(last, alpha, coverage=coverage_lines(
+        records, lambda record: vehicle_of(record["log"])))
     by_vehicle: dict[str, list[DiveMargin]] = {}
     for dive in margin_history(records):
         by_vehicle.setdefault(dive.vehicle, []).append(dive)
@@ -212,4 +216,8 @@ def trend_lines(trend: FleetTrend) -> list[str]:
     lines += [f"  {t.describe()}" for t in trend.trends if not t.flagged]
     lines += [f"  {vehicle}: only {count} dive(s), at least {MIN_DIVES} are needed"
               for vehicle, count in sorted(trend.short.items())]
+    if trend.coverage:
+        lines.append("what was judged, per vehicle (margins are over judged signals and "
+                     "actuators only):")
+        lines += [f"  {line}" for line in trend.coverage]
     return lines

@@ -171,6 +171,7 @@ class FailOn(StrEnum):
 
     ANY = "any"
     DAMAGED = "damaged"
+    PARTIAL = "partial"
     FAULT = "fault"
     ERROR = "error"
     NONE = "none"
@@ -178,12 +179,15 @@ class FailOn(StrEnum):
 
 def _audit_exit(result: "AuditResult", fail_on: FailOn) -> int:
     counted = {FailOn.ANY: ("fault", "error"), FailOn.DAMAGED: ("fault", "error", "damaged"),
-               FailOn.FAULT: ("fault",), FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
+               FailOn.PARTIAL: ("fault", "error", "partial"), FailOn.FAULT: ("fault",),
+               FailOn.ERROR: ("error",), FailOn.NONE: ()}[fail_on]
     if "error" in counted and result.errors:
         return EXIT_UNUSABLE
     if "damaged" in counted and result.damaged:
         return EXIT_UNUSABLE
     if "fault" in counted and result.count("fault"):
+        return EXIT_FAULT
+    if "partial" in counted and (result.partly_judged or result.count("undetermined")):
         return EXIT_FAULT
     return EXIT_NORMAL
 
@@ -210,7 +214,9 @@ def audit(
     fail_on: Annotated[FailOn, typer.Option(
         "--fail-on", help="What makes the exit status non-zero: any (faults: 1, logs not "
                           "analysable: 2), damaged (as any, and a log analysed only up to "
-                          "damage also gives 2), fault, error, or none.")] = FailOn.ANY,
+                          "damage also gives 2), partial (as any, and a NORMAL that judged "
+                          "less than every signal and actuator, or an UNDETERMINED, also "
+                          "gives 1), fault, error, or none.")] = FailOn.ANY,
     mcap: Annotated[bool, typer.Option(
         "--mcap", help="Also write each log's diagnosis as an MCAP (OUTPUT/logs/NAME.mcap) "
                        "to open beside the log in Foxglove or PlotJuggler.")] = False,

@@ -11,6 +11,7 @@ import numpy as np
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
+from auvdiag_cli.engine.coverage import Coverage, coverage_of
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.residuals import Matching
@@ -94,6 +95,13 @@ class Diagnosis:
     command_check: CommandCheck | None = None   # the commands judged against the motion
     start_check: StartCheck | None = None       # the log's start against normal starts
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
+
+    @property
+    def coverage(self) -> Coverage:
+        """What the verdict looked at: signals, actuators, the start."""
+        return coverage_of(self.histories.sensor_names or tuple(self.b), list(self.not_judged),
+                           self.histories.command_names, self.command_check,
+                           self.effort_check, self.start_check)
 
 
 def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:

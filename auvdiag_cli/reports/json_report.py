@@ -7,6 +7,7 @@ from typing import Any
 from auvdiag_cli import __version__
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.coverage import normal_verdict_text
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis
 from auvdiag_cli.engine.results import (
@@ -45,6 +46,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         else diagnosis.completeness.to_dict(),
         "not_operating_s": diagnosis.not_operating_s,
         "not_judged": diagnosis.not_judged,
+        "coverage": diagnosis.coverage.to_dict(),
         "segments": [_segment(r) for r in diagnosis.segments],
         "segment_source": diagnosis.segment_source,
         "degradation": None if diagnosis.degradation is None else {
@@ -66,6 +68,19 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         },
         "notes": diagnosis.notes,
     }
+
+
+def verdict_title(document: dict[str, Any]) -> str:
+    """The verdict in words, from a report: the component a fault names, and how much a
+    NORMAL covered when it did not cover everything."""
+    verdict = str(document["verdict"])
+    if verdict == "normal":
+        coverage = document.get("coverage") or {}
+        return normal_verdict_text(coverage.get("summary"), coverage.get("complete", True))
+    if verdict == "fault":
+        named = named_components(document).replace("_", " ")
+        return f"FAULT: {named or 'component not identified'}"
+    return verdict.upper()
 
 
 def named_components(document: dict[str, Any]) -> str:

@@ -26,7 +26,7 @@ import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.errors import UsageError
-from auvdiag_cli.reports.json_report import named_components
+from auvdiag_cli.reports.json_report import named_components, verdict_title
 from auvdiag_cli.reports.series import Series
 
 TOPIC_PREFIX = "/auvdiag"
@@ -106,12 +106,6 @@ def _events(document: dict[str, Any]) -> Iterator[tuple[float, int, str]]:
     yield from sorted(found)
 
 
-def verdict_text(document: dict[str, Any]) -> str:
-    verdict = str(document["verdict"])
-    named = named_components(document)
-    return verdict.upper() + (f": {named}" if verdict == "fault" and named else "")
-
-
 def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path) -> None:
     """Write the diagnosis at ``target`` (atomically: a viewer never opens half a file)."""
     from mcap.writer import Writer
@@ -131,7 +125,8 @@ def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path)
                           else start_ns)
             writer.add_metadata("auvdiag", {
                 "log": str(document["log"]), "format": str(document.get("format")),
-                "vehicle": str(document.get("vehicle")), "verdict": verdict_text(document),
+                "vehicle": str(document.get("vehicle")), "verdict": verdict_title(document),
+                "coverage": str((document.get("coverage") or {}).get("summary")),
                 "model": str((document.get("model") or {}).get("name")),
                 "log_start_ns": str(start_ns)})
             writer.finish()
@@ -202,7 +197,7 @@ def _write_events(channels: _Channels, document: dict[str, Any], start_ns: int,
                         "name": "auvdiag", "file": "", "line": 0}, time_ns)
     detected = document.get("detected_at_s")
     verdict_ns = end_ns if detected is None else start_ns + round(float(detected) * 1e9)
-    summary = verdict_text(document)
+    summary = verdict_title(document)
     channels.write(f"{TOPIC_PREFIX}/events", "foxglove.Log",
                    {"timestamp": _stamp(verdict_ns), "level": LOG_LEVEL_INFO,
                     "message": f"verdict: {summary}", "name": "auvdiag", "file": "",

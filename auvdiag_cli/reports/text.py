@@ -5,6 +5,7 @@ import textwrap
 
 from adapters import TopicInfo
 from auvdiag_cli.engine.active import ActiveDiagnosis
+from auvdiag_cli.engine.coverage import normal_verdict_text
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import HypothesisTest
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, Diagnosis, Verdict
@@ -25,8 +26,9 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
     if d.completeness is not None and not d.completeness.complete:
         lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
+    coverage = d.coverage
     if d.verdict == Verdict.NORMAL:
-        lines.append("verdict: NORMAL: no fault detected")
+        lines.append("verdict: " + normal_verdict_text(coverage.counts(), coverage.complete))
     elif d.verdict == Verdict.UNDETERMINED:
         lines.append("verdict: UNDETERMINED: no signal could be judged")
     else:
@@ -44,6 +46,7 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
             lines.append("  " + _hypotheses_line(d.hypotheses))
         lines += _active_lines(d.active)
         lines += _substitution_lines(d.substitution)
+    lines.append(f"  coverage: {coverage.describe()}")
     lines += [f"  {name}: {why}" for name, why in d.not_judged.items()]
     check = d.command_check
     if check is not None:
@@ -56,6 +59,7 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
     for result in d.segments:
         seg = result.segment
         peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"
+                          + (" (not judged)" if name in d.not_judged else "")
                           for name in result.max_g)
         case = f"  case {result.case}" if result.case else ""
         lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "

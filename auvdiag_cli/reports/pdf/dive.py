@@ -4,7 +4,7 @@ saved report can be drawn again without the log or the model)."""
 from pathlib import Path
 from typing import Any
 
-from auvdiag_cli.reports.json_report import named_components
+from auvdiag_cli.reports.json_report import verdict_title
 from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
 from auvdiag_cli.reports.pdf.plots import (
     commands_page,
@@ -17,17 +17,12 @@ from auvdiag_cli.reports.pdf.style import COLOURS, pdf_document
 from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
 from auvdiag_cli.reports.series import Series
 
-VERDICT_TITLES = {"normal": "NORMAL: no fault detected", "fault": "FAULT",
-                  "undetermined": "UNDETERMINED"}
-
 
 def _banner(document: dict[str, Any]) -> Line:
     verdict = document["verdict"]
-    text = VERDICT_TITLES.get(verdict, verdict.upper())
-    if verdict == "fault":
-        named = named_components(document)
-        text += f": {named.replace('_', ' ') or 'component not identified'}"
-    return Line(text, size=20, bold=True, banner=COLOURS.get(verdict, COLOURS["error"]))
+    partial = verdict == "normal" and not (document.get("coverage") or {}).get("complete", True)
+    colour = COLOURS["partial"] if partial else COLOURS.get(verdict, COLOURS["error"])
+    return Line(verdict_title(document), size=20, bold=True, banner=colour)
 
 
 def partial_log_text(document: dict[str, Any]) -> str | None:
@@ -64,8 +59,11 @@ def _cell(values: dict[str, Any], digits: int = 1) -> str:
 
 def detail_lines(document: dict[str, Any]) -> list[Line]:
     signals = list(document.get("b", {}))
+    unjudged = [name for name in signals if name in (document.get("not_judged") or {})]
     lines = paragraph(f"Columns per signal, in the order {', '.join(signals)}. Thresholds and "
-                      "g in percent of each signal's full scale.", colour=COLOURS["muted"])
+                      "g in percent of each signal's full scale."
+                      + (f" Not judged (their g raises no alarm): {', '.join(unjudged)}."
+                         if unjudged else ""), colour=COLOURS["muted"])
     header = f"{'segment':<10}{'mode':<9}{'start-end [s]':<17}{'thresholds':<22}" \
              f"{'max g':<24}{'b':<10}case"
     lines.append(Line(header, family="monospace", bold=True, size=8.5))

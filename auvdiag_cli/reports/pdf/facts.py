@@ -98,6 +98,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     hypotheses = document.get("hypotheses")
     if hypotheses:
         facts.append(("Hypotheses", _hypotheses(hypotheses)))
+    coverage = document.get("coverage")
+    if coverage:
+        facts.append(("Judged", coverage["summary"]))
     not_judged = document.get("not_judged") or {}
     if not_judged:
         facts.append(("Not judged", "; ".join(f"{k}: {v}" for k, v in not_judged.items())))
@@ -135,8 +138,12 @@ def _margin(document: dict[str, Any], series: Series | None) -> str:
     time_s, names = series["time_s"], [str(n) for n in series["sensor_names"]]
     onset = document.get("onset_s")
     healthy = time_s < onset if onset is not None else np.ones(time_s.shape, bool)
+    judged = np.array([name not in (document.get("not_judged") or {}) for name in names])
+    if not judged.any():
+        return "no signal is judged"
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = series["g_percent"][healthy] / series["thresholds"][healthy]
+    ratio[:, ~judged] = np.nan          # an unjudged signal's g is no margin to an alarm
     if not np.isfinite(ratio).any():
         return "no healthy stretch long enough to judge before the onset"
     row, column = np.unravel_index(np.nanargmax(ratio), ratio.shape)

@@ -72,7 +72,13 @@ def residual_page(document: dict[str, Any], series: Series) -> "Figure":
                             "Residual index g (percent of full scale) against its threshold; "
                             "red band: b = 1")
     t = series["time_s"]
+    not_judged = document.get("not_judged") or {}
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        if name in not_judged:      # drawn, greyed: it raises no alarm
+            ax.plot(t, series["g_percent"][:, i], color=COLOURS["dms"], lw=0.8)
+            ax.set_ylabel(f"g {name} [%]\n(not judged)", color=COLOURS["muted"])
+            ax.set_ylim(bottom=0)
+            continue
         ax.plot(t, series["g_percent"][:, i], color=COLOURS["measured"], lw=0.8, label="g")
         ax.step(t, series["thresholds"][:, i], where="post", color=COLOURS["threshold"],
                 lw=1.0, ls=":", label="threshold")

@@ -25,6 +25,7 @@ COLOURS = {
     "normal": "#2e7d32",
     "fault": "#c62828",
     "undetermined": "#ef6c00",
+    "partial": "#827717",            # NORMAL over part of the signals and actuators
     "error": "#616161",
     "text": "#212121",
     "muted": "#616161",
