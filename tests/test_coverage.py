@@ -92,3 +92,22 @@ def test_a_falling_margin_is_written_with_its_own_sign():
     falling = SignalTrend("auv1", "flow", 6, (0.5, 0.49, 0.48, 0.47, 0.46, 0.45), -15, 1.0,
                           -0.005, False, False, None)
     assert "-0.005 a dive" in falling.describe() and "+-" not in falling.describe()
+
+
+def test_calibrate_sets_thresholds_for_judged_signals_only_and_says_what_each_column_is(
+        make_log, half_model: Path, tmp_path: Path):
+    out = tmp_path / "calibrated"
+    result = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 12)),
+                                 "--model", str(half_model), "-o", str(out), "--faulty",
+                                 str(make_log("paper-flow-sensor-covered", 12))])
+    assert result.exit_code == 0, result.output
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("  per mode, its samples of normal data; per judged signal, "
+                               "max g (the largest residual index") for line in lines)
+    assert ("    flow         skipped: not judged (the model cannot predict it); the "
+            "profile's threshold 15 % stays") in lines
+    assert any(line.startswith("    yaw_rate     max g ") for line in lines)
+    faulty = next(line for line in lines if line.startswith("  faulty "))
+    assert "NORMAL (no component named); the largest g of a judged signal reached" in faulty
+    mission = json.loads((out / "model.json").read_text())["thresholds"]["mission"]
+    assert mission["flow"] == 15.0 and mission["yaw_rate"] != 10.0

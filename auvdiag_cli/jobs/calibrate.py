@@ -75,7 +75,8 @@ class ModeCalibration:
     max_g: dict[str, float]
     thresholds: dict[str, float]
     kept_default: bool
-    evidence: dict[str, SignalEvidence]
+    evidence: dict[str, SignalEvidence]     # the judged signals only
+    skipped: tuple[str, ...] = ()           # not judged: the profile's thresholds kept
 
 
 @dataclass(frozen=True)
@@ -84,7 +85,7 @@ class FaultyCheck:
     verdict: str
     component: str | None
     candidates: list[str]
-    peak_ratio: float     # the largest g / threshold anywhere in the log
+    peak_ratio: float     # the largest g / threshold of a judged signal anywhere in the log
 
 
 @dataclass(frozen=True)
@@ -154,7 +155,9 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
     """A log with a known fault, diagnosed with the new thresholds: is it still caught?"""
     d = diagnose_ingested(ingest(path, profile), profile, calibrated)
     histories = d.histories
-    ratio = peak(histories.matching.g_percent / histories.thresholds) if histories.matching else 0.0
+    judged = [i for i, name in enumerate(profile.sensor_names) if name not in d.not_judged]
+    ratio = (peak(histories.matching.g_percent[:, judged] / histories.thresholds[:, judged])
+             if histories.matching and judged else 0.0)
     return FaultyCheck(str(path), d.verdict, d.component, d.candidates, round(ratio, 2))
 
 
@@ -185,7 +188,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                                                                         strict=True)]
     labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name
               for p in normal_logs]
-    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile)
+    judged = [n for n in profile.sensor_names if n not in not_judged_signals(model)]
+    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, judged)
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
@@ -196,7 +200,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     raised = widen_thresholds(model, checks, margin)
     starts_raised = raise_thresholds(model.metadata.get("start_state") or {}, readings, margin)
     fitted = None if budget is None else _apply_budget(
-        model, profile, budget, per_log, modes, readings, checks,
+        model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested])
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
@@ -217,9 +221,10 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
 
 
 def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
-                  profile: Profile, margin: float, floor_at_profile: bool
-                  ) -> list[ModeCalibration]:
-    """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs."""
+                  profile: Profile, margin: float, floor_at_profile: bool,
+                  judged: Sequence[str]) -> list[ModeCalibration]:
+    """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs, for
+    the ``judged`` signals (the others raise no alarm: their profile thresholds stay)."""
     modes = []
     for mode in sorted({mode for g in per_log for mode in g}):
         parts = [(label, g[mode]) for label, g in zip(labels, per_log, strict=True)
@@ -231,22 +236,23 @@ def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]
         # Too little data cannot lower the profile's thresholds, but what it shows still
         # raises them: no calibration log may alarm.
         floor = profile.thresholds_for(mode) if floor_at_profile or keep else {}
+        default = profile.thresholds_for(mode)
         modes.append(ModeCalibration(
             mode, count, count * profile.dt_s / 3600, {k: round(v, 3) for k, v in peaks.items()},
-            {name: round(max(margin * value, floor.get(name, 0.0)), 2)
-             for name, value in peaks.items()}, keep,
-            {name: _evidence(parts, i) for i, name in enumerate(profile.sensor_names)}))
+            {name: round(max(margin * value, floor.get(name, 0.0)), 2) if name in judged
+             else default[name] for name, value in peaks.items()}, keep,
+            {name: _evidence(parts, i) for i, name in enumerate(profile.sensor_names)
+             if name in judged}, tuple(n for n in profile.sensor_names if n not in judged)))
     return modes
 
 
 def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget,
                   per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[ModeCalibration],
                   readings: Sequence[StartReading | None],
-                  checks: Sequence[CommandCheck | None], log_hours: Sequence[float]
-                  ) -> BudgetThresholds:
+                  checks: Sequence[CommandCheck | None], judged: Sequence[str],
+                  log_hours: Sequence[float]) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
     ``model.metadata`` (g's go into the modes, `_with_budget`)."""
-    judged = [n for n in profile.sensor_names if n not in not_judged_signals(model)]
     start_entry = model.metadata.get("start_state") or {}
     relations_entry = model.metadata.get("command_relations") or {}
     judges = [*g_judges(per_log, [m.mode for m in modes if not m.kept_default], judged,
@@ -345,6 +351,7 @@ def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_pro
         if budget is None else None,
         "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
                    "thresholds": m.thresholds, "kept_profile_default": m.kept_default,
+                   "not_judged_kept_profile_threshold": list(m.skipped),
                    "set_by": {k: {"log": e.set_by, "peak_g": e.peak, "next_log_peak_g":
                                   e.next_peak} for k, e in m.evidence.items()}}
                   for m in result.modes],

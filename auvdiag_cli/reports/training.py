@@ -186,6 +186,11 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
               f"{result.margin:g}; false alarms on those logs: 0 (rate < "
               f"{result.false_alarm_bound_per_hour:.2f} per hour, 95 % bound)"]
              if result.budget is None else budget_lines(result.budget, result.normal_hours))
+    if result.modes:
+        lines.append("  per mode, its samples of normal data; per judged signal, max g (the "
+                     "largest residual index on these logs, % of full scale) -> its threshold, "
+                     "set by the log whose peak it is (and how far that peak stands above the "
+                     "next log's)")
     for mode in result.modes:
         kept = ("  (too little data: the profile's thresholds, raised where these logs "
                 "need it)" if mode.kept_default else "")
@@ -196,10 +201,13 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
                       else f", {ratio:.2f}x the next log's {evidence.next_peak:g} %")
             lines.append(f"    {name:<12} max g {mode.max_g[name]:g} % -> threshold "
                          f"{mode.thresholds[name]:g} %  (set by {evidence.set_by}{beside})")
+        lines += [f"    {name:<12} skipped: not judged (the model cannot predict it); the "
+                  f"profile's threshold {mode.thresholds[name]:g} % stays" for name in mode.skipped]
     for check in result.faulty:
-        named = check.component or " or ".join(check.candidates) or "-"
-        lines.append(f"  faulty {check.log}: {check.verdict} {named}, peak g "
-                     f"{check.peak_ratio:.1f} x threshold")
+        named = check.component or " or ".join(check.candidates) or "no component named"
+        lines.append(f"  faulty {check.log}: {check.verdict.upper()} ({named}); the largest g "
+                     f"of a judged signal reached {check.peak_ratio:.2f}x its threshold "
+                     "(1 or more alarms)")
     if result.relation_thresholds_raised:
         lines.append("  commands vs motion: extra effort allowed raised so that no calibration "
                      "log alarms: " + ", ".join(f"{k} {v:.0%}" for k, v in
