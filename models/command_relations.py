@@ -28,6 +28,7 @@ import numpy as np
 from models.skill import MIN_SKILL
 
 WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
+MIN_WINDOW_S = 5.0        # logs too short for WINDOW_S: windows of half a log, this at least
 SMOOTHING_S = 1.0         # of the rates that stand for inertia
 MIN_DRIVE = 0.1           # an actuator must work at this rms command in a window to be judged
 MARGIN = 1.5              # thresholds: this many times the held-out normal peak of |α|
@@ -88,6 +89,14 @@ class CommandRelations:
     window_steps: int
     smoothing_steps: int
     fitted_on: dict[str, Any]
+
+    def too_little_heldout(self, k: int) -> str:
+        """Why actuator k has no threshold though its relation has skill: how long the
+        held-out logs drove it in whole windows, against one window's length."""
+        steps = (self.fitted_on.get("heldout_judged_steps") or [None] * (k + 1))[k]
+        had = "" if steps is None else f"{steps * self.dt_s:.1f} s, "
+        return (f"too little held-out data drove it to set a threshold ({had}needs "
+                f"{self.window_steps * self.dt_s:g} s: one window)")
 
     @property
     def projector(self) -> np.ndarray:
@@ -231,10 +240,21 @@ def _groups(commands: np.ndarray, basis: np.ndarray) -> tuple[tuple[int, ...], .
                  for root in sorted(set(parent)))
 
 
+def window_for(logs: Sequence[RelationLog], dt_s: float) -> float:
+    """WINDOW_S, or half the median log's usable time where logs are shorter than two
+    windows (short flights, short runs), never below MIN_WINDOW_S."""
+    usable_s = [float(log.usable.sum()) * dt_s for log in logs]
+    if not usable_s:
+        return WINDOW_S
+    return min(WINDOW_S, max(MIN_WINDOW_S, float(np.median(usable_s)) / 2))
+
+
 def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
                   sensor_scale: Sequence[float], dt_s: float,
-                  window_s: float = WINDOW_S) -> CommandRelations:
-    """Fit on ``training``; thresholds from ``heldout`` (normal logs not fitted on)."""
+                  window_s: float | None = None) -> CommandRelations:
+    """Fit on ``training``; thresholds from ``heldout`` (normal logs not fitted on).
+    ``window_s``: the extra effort's window (None: `window_for` the logs)."""
+    window_s = window_for([*training, *heldout], dt_s) if window_s is None else window_s
     scale = np.asarray(sensor_scale, float)
     smoothing = max(1, round(SMOOTHING_S / dt_s))
     rows = _rows(training, scale, dt_s, smoothing)
@@ -258,7 +278,9 @@ def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog
     finite = np.isfinite(stacked)
     peak = np.where(finite, np.abs(stacked), 0.0).max(axis=0, initial=0.0)
     judged = (finite.sum(axis=0) >= relations.window_steps) & (skill >= MIN_SKILL)
-    return replace(relations, thresholds=np.where(judged, MARGIN * peak, np.nan), skill=skill)
+    fitted_on = {**relations.fitted_on, "heldout_judged_steps": finite.sum(axis=0).tolist()}
+    return replace(relations, thresholds=np.where(judged, MARGIN * peak, np.nan), skill=skill,
+                   fitted_on=fitted_on)
 
 
 def _skill(relations: CommandRelations, heldout: Sequence[RelationLog], mean: np.ndarray

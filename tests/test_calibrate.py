@@ -24,7 +24,7 @@ def test_calibrated_thresholds_hold_on_held_out_logs_and_still_detect(make_log, 
                                  "--faulty", str(faulty)])
     assert result.exit_code == 0, result.output
     assert "false alarms on those logs: 0" in result.stdout
-    assert f"faulty {faulty}: fault flow_sensor" in result.stdout
+    assert f"faulty {faulty}: FAULT (flow_sensor); the largest g of a judged" in result.stdout
     meta = json.loads((model / "model.json").read_text())
     assert (model / "weights.npz").read_bytes() == weights
     calibration = meta["calibration"]

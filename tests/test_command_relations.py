@@ -15,7 +15,13 @@ from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
 from auvdiag_cli.vehicle.profile import load_profile
-from models.command_relations import CommandRelations
+from models.command_relations import (
+    WINDOW_S,
+    CommandRelations,
+    RelationLog,
+    fit_relations,
+    window_for,
+)
 from models.store import default_model_dir, load_model
 
 runner = CliRunner()
@@ -153,3 +159,25 @@ def test_a_manoeuvre_the_relation_has_not_seen_does_not_alarm_for_a_few_seconds(
     check = report["commands_check"]
     assert max(check["peak_over_threshold"].values()) > 1.0     # the windows did go over
     assert code == 0 and report["verdict"] == "normal" and check["alarm_s"] is None
+
+
+def _controlled(seconds: float, drive: float, seed: int) -> RelationLog:
+    """A log whose two commands follow its two-signal motion exactly (a controller), driven
+    at ``drive`` (rms, of full scale)."""
+    rng = np.random.default_rng(seed)
+    steps = round(seconds / 0.1)
+    motion = np.cumsum(rng.normal(0, 0.05, (steps, 2)), axis=0)
+    commands = drive * np.tanh(motion @ np.array([[1.0, 0.3], [-0.4, 1.0]]))
+    return RelationLog(f"log{seed}", commands, motion, np.ones(steps, bool))
+
+
+def test_short_logs_get_windows_that_fit_them_and_say_what_data_is_missing():
+    assert window_for([_controlled(3600.0, 0.5, 0)], 0.1) == WINDOW_S
+    short = [_controlled(20.0, 0.8, seed) for seed in range(6)]
+    assert window_for(short, 0.1) == 10.0            # half a 20 s flight
+    assert window_for([_controlled(4.0, 0.8, 0)], 0.1) == 5.0    # never below 5 s
+    relations = fit_relations(short[:5], [_controlled(20.0, 0.01, 9)], [1.0, 1.0], 0.1)
+    assert relations.window_steps == 100
+    assert np.isnan(relations.thresholds).all()       # the held-out flight barely drove them
+    assert relations.too_little_heldout(0) == (
+        "too little held-out data drove it to set a threshold (0.0 s, needs 10 s: one window)")

@@ -6,11 +6,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.vehicle.profile import Profile
-from models.command_relations import CommandRelations
+from models.command_relations import MIN_DRIVE, CommandRelations
 from models.skill import MIN_SKILL
 
-NO_THRESHOLD = "not judged (too little held-out data drove it to set a threshold)"
-NEVER_DRIVEN = "not judged (never driven enough in a window of this log)"
 # An actuator (or a group that acts alike) is named when its signature explains at least
 # this share of the departure and DOMINANCE times the share any other explains: a weak
 # thruster's explains most of it, while a sensor misreading the motion makes the controller
@@ -93,9 +91,11 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
                                 "than their mean" + ("" if np.isnan(skill) else
                                                      f": skill {skill:.2f}") + ")")
         elif np.isnan(thresholds[k]):
-            not_judged[name] = NO_THRESHOLD
+            not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
         elif not finite.size:
-            not_judged[name] = NEVER_DRIVEN
+            window_s = relations.window_steps * relations.dt_s
+            not_judged[name] = (f"not judged (never driven at {MIN_DRIVE:g} of full scale "
+                                f"rms or more through one {window_s:g} s window of this log)")
     alarm = _confirmed_alarm(ratio, relations.window_steps)
     named: tuple[str, ...] = ()
     extra = shares = None

@@ -9,6 +9,7 @@ from typing import Any
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibrate import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
+from models.command_relations import CommandRelations
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
 
@@ -106,12 +107,13 @@ def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[
              + (f" (left out as open loop: {_listed(left_out)})" if left_out else "")
              + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
     groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
-    for name, threshold, skill in zip(command_names, entry["thresholds"], entry["skill"],
-                                      strict=True):
+    relations = CommandRelations.from_json(entry)
+    for k, (name, threshold, skill) in enumerate(zip(command_names, entry["thresholds"],
+                                                     entry["skill"], strict=True)):
         if skill is None or skill < MIN_SKILL:
             allowed = "not judged (the relation does not predict its commands)"
         else:
-            allowed = ("not judged (too little held-out data drove it)" if threshold is None
+            allowed = (f"not judged ({relations.too_little_heldout(k)})" if threshold is None
                        else f"{threshold:.0%}")
         lines.append(f"  {name:<14}{allowed}" + ("" if skill is None else
                                                  f"   (skill {skill:.2f})"))
