@@ -145,30 +145,40 @@ def _message_names() -> dict[int, str]:
 
 def _inventory(fmt: str, scan: RecordIndex, kind: str) -> LogInventory:
     first_us, last_us = scan.span_us
-    topics = [_topic_info(scan, fmt, kind, name, count)
-              for name, count in sorted(scan.counts.items())]
+    described = [_topic_info(scan, fmt, kind, name, count)
+                 for name, count in sorted(scan.counts.items())]
+    notes = [scan.problem.reason] if scan.problem else []
+    failed = {topic.name: n for topic, n in described if n}
+    if failed:
+        notes.append(f"{sum(failed.values())} MAVLink frames fail their checksum in the "
+                     "dialect this tool reads (counted "
+                     "above; a diagnosis leaves them out): "
+                     + ", ".join(f"{name} {n}" for name, n in failed.items()))
     return LogInventory(fmt, None if first_us is None else first_us * 1000,
-                        None if last_us is None else last_us * 1000, topics,
-                        [scan.problem.reason] if scan.problem else [])
+                        None if last_us is None else last_us * 1000,
+                        [topic for topic, _ in described], notes)
 
 
-def _topic_info(scan: RecordIndex, fmt: str, kind: str, name: str, count: int) -> TopicInfo:
-    """A message type's fields, with the values of its instance key or NAMED_VALUE name."""
+def _topic_info(scan: RecordIndex, fmt: str, kind: str, name: str, count: int
+                ) -> tuple[TopicInfo, int]:
+    """A message type's fields, with the values of its instance key or NAMED_VALUE name,
+    and how many of its records fail their checksum."""
     try:
         if fmt == "tlog":
             message_class = _message_classes().get(name)
             if message_class is None:
-                return TopicInfo(name, kind, count)
-            _, rows, _ = decode_mavlink(scan, message_class)
+                return TopicInfo(name, kind, count), 0
+            _, rows, failed = decode_mavlink(scan, message_class)
         else:
             type_id = next(t for t, f in scan.formats.items() if f.name == name)
             _, rows, _ = decode_dataflash(scan, type_id)
+            failed = 0                # DataFlash records carry no checksum
     except (StopIteration, UnknownFormat, ValueError):   # a layout this reader cannot show
-        return TopicInfo(name, kind, count)
+        return TopicInfo(name, kind, count), 0
     fields = tuple(rows.dtype.names or ())
     instances = tuple((key, _distinct(rows[key])) for key in INSTANCE_FIELDS if key in fields)
     names = _distinct(rows["name"]) if name.startswith("NAMED_VALUE") else ()
-    return TopicInfo(name, kind, count, fields, instances, names)
+    return TopicInfo(name, kind, count, fields, instances, names), failed
 
 
 def _distinct(column: np.ndarray) -> tuple[str, ...]:

@@ -8,6 +8,7 @@ import pytest
 from pymavlink import DFReader, mavutil
 from pymavlink.dialects.v10 import ardupilotmega as mavlink1
 from pymavlink.dialects.v20 import ardupilotmega as mavlink2
+from typer.testing import CliRunner
 
 from adapters.mavlink import _message_classes, _message_names
 from adapters.mavlink_columns import decode_dataflash, decode_mavlink
@@ -148,3 +149,19 @@ def test_dataflash_types_and_multipliers_decode_as_pymavlink_does(tmp_path):
             assert [g.split(b"\0")[0].decode() for g in got.tolist()] == expected, column
         else:
             np.testing.assert_array_equal(got, np.array(expected), column)
+
+
+def test_inspect_counts_the_frames_that_fail_their_checksum(tmp_path, make_log):
+    from auvdiag_cli.cli import app
+
+    path = make_log("paper-normal", 21, "tlog")
+    index = index_file(path, "tlog", _message_names())
+    servo = index.offsets[index.of_type(_message_classes()["SERVO_OUTPUT_RAW"].id)]
+    source = bytearray(path.read_bytes())
+    for k in (100, 500):
+        source[servo[k] + 8 + 10 + 6] ^= 0xFF
+    damaged = tmp_path / "flipped.tlog"
+    damaged.write_bytes(bytes(source))
+    text = CliRunner().invoke(app, ["inspect", str(damaged)]).stdout
+    assert ("  note: 2 MAVLink frames fail their checksum in the dialect this tool reads "
+            "(counted above; a diagnosis leaves them out): SERVO_OUTPUT_RAW 2") in text

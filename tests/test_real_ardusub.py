@@ -115,3 +115,11 @@ def test_a_log_the_default_profile_does_not_fit_names_the_profiles_that_do():
     assert "no messages for signal(s) flow" in line
     fitting = line.split("the shipped profiles that fit this log: ")[1]
     assert "bluerov2_standard" in fitting and "twin_burger" not in fitting
+
+
+def test_inspect_gives_the_rate_between_samples_and_how_much_of_the_log_it_covers():
+    text = runner.invoke(app, ["inspect", str(DATA / "small.BIN"), "--profile",
+                               "bluerov2_standard"]).stdout
+    assert "count mean rate" in text
+    assert ("    ok       motor_1      RCOU C1  (237 samples, 10.0 Hz between samples: about "
+            "24 s of the log's 136 s;") in text

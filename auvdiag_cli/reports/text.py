@@ -167,6 +167,18 @@ def _topic_details(topic: TopicInfo) -> list[str]:
     return lines
 
 
+def _while_logged(count: int, rate_hz: float | None, duration_s: float | None) -> str:
+    """The rate between a signal's samples (the median interval), and how much of the log
+    that covers when it is logged in bursts (the table's mean rate is over the whole log)."""
+    if not rate_hz:
+        return ""
+    text = f", {rate_hz:.1f} Hz between samples"
+    covered_s = count / rate_hz
+    if duration_s and covered_s < 0.8 * duration_s:
+        text += f": about {covered_s:.0f} s of the log's {duration_s:.0f} s"
+    return text
+
+
 def inspection_lines(inspection: Inspection) -> list[str]:
     inv = inspection.inventory
     duration = inv.duration_s
@@ -174,7 +186,7 @@ def inspection_lines(inspection: Inspection) -> list[str]:
              f"[sources.{inspection.family}])",
              f"  span      {_utc(inv.start_ns)} … {_utc(inv.end_ns)}"
              + (f"  ({duration:.1f} s)" if duration is not None else "")]
-    lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'rate':>9}")
+    lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'mean rate':>9}")
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
         lines.append(f"  {topic.name:<32} {topic.type:<34} {topic.count:>8} {rate:>9}")
@@ -187,9 +199,8 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     for s in inspection.signals:
         where = f"{s.topic} {s.field}"
         if s.resolved:
-            rate = f", {s.rate_hz:.1f} Hz" if s.rate_hz else ""
-            lines.append(f"    ok       {s.name:<12} {where}  ({s.count} samples{rate}; "
-                         f"{s.on_grid})")
+            lines.append(f"    ok       {s.name:<12} {where}  ({s.count} samples"
+                         f"{_while_logged(s.count, s.rate_hz, duration)}; {s.on_grid})")
         else:
             hint = f"; closest: {', '.join(s.candidates)}" if s.candidates else ""
             lines.append(f"    MISSING  {s.name:<12} {where}  ({s.problem}{hint})")
