@@ -121,3 +121,28 @@ def test_a_csv_whose_sensor_names_are_unknown_gets_every_varying_column_to_check
     assert shown.exit_code == 2 and "MISSING" in shown.stdout
     assert "span      9.000 s since boot … 12.990 s since boot  (4.0 s)" in shown.stdout
     assert "clock: column time_us read in us (guessed" in shown.stdout
+
+
+def test_a_csv_whose_command_names_are_unknown_proposes_the_held_columns_as_commands(
+        tmp_path):
+    """No column is named like a command: the ones that hold their value between changes
+    (a set point stepped every two seconds) are proposed as commands, the noisy ones as
+    sensors, each marked CHECK; the draft loads and resolves on its log."""
+    import numpy as np
+
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    rng = np.random.default_rng(3)
+    steps = 600
+    level = np.repeat(rng.uniform(-1, 1, steps // 20 + 1), 20)[:steps]
+    speed = np.convolve(level, np.ones(15) / 15, "same") + rng.normal(0, 0.02, steps)
+    log, draft = tmp_path / "run.csv", tmp_path / "draft.toml"
+    rows = ["time,setpoint,speed_over_ground_xyz,heading_noise"]
+    rows += [f"{0.1 * k:.1f},{level[k]:.3f},{speed[k]:.4f},{rng.normal():.4f}"
+             for k in range(steps)]
+    log.write_text("\n".join(rows) + "\n")
+    text = _draft_and_inspect(log, draft)
+    assert text.count("proposed as a command because it holds its value") == 1
+    profile = load_profile(draft)
+    assert profile.command_names == ("setpoint",)
+    assert set(profile.sensor_names) == {"speed_over_ground_xyz", "heading_noise"}

@@ -31,6 +31,7 @@ NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNORECASE)
 MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
+HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
 
 
 @dataclass(frozen=True)
@@ -155,9 +156,18 @@ def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
         return values
 
 
+def _holds_its_value(series: np.ndarray) -> bool:
+    """Most consecutive samples equal: a command held between changes (set points, stick
+    positions, outputs logged faster than they change), rarely a measurement's noise."""
+    finite = series[np.isfinite(series)]
+    return finite.size > 2 and float(np.mean(np.diff(finite) == 0)) >= HELD_SHARE
+
+
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
-               every_field: bool = False
+               every_field: bool = False, guess_commands: bool = False
                ) -> tuple[list[Proposal], list[Proposal], list[list[str]]]:
+    """``every_field``: fields with unknown names are sensors; ``guess_commands``: those of
+    them that hold their value between changes are commands (marked CHECK)."""
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
            for kind, source in _candidates(contents, family, every_field)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
@@ -168,13 +178,17 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         if series is None or series.size < 2 or not np.nanstd(series) > 0:
             continue                                   # not in the log, or never moves
         name = _signal_name(source.topic, source.field)
-        if kind == "command":
+        guessed = guess_commands and kind != "command" and _holds_its_value(series)
+        if kind == "command" or guessed:
             pwm = 800 <= float(np.nanmedian(series)) <= 2200
             converted = replace(source, scale=PWM_SCALE, offset=-PWM_CENTRE_US * PWM_SCALE) \
                 if pwm else source
             check = ("PWM µs mapped as ArduPilot does, (pwm - 1500) / 400: check the neutral "
                      "and the direction; remove outputs that are no thruster (lights, camera "
                      "mount)" if pwm else "should run -1 … 1: set scale and offset")
+            if guessed:
+                check = ("not recognised by its name: proposed as a command because it holds "
+                         "its value between changes, as commands do; " + check)
             value = series * converted.scale + converted.offset
             moving = np.abs(value[np.isfinite(value) & (np.abs(value) > NEUTRAL)])
             commands.append(Proposal(name, converted, "1", check,
@@ -272,12 +286,16 @@ def draft_profile(path: Path, name: str) -> str:
         raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
                          "write [sources.csv] time = { column, unit } by hand")
     commands, sensors, groups = _proposals(path, family, contents, time)
-    if commands and not sensors:      # names it does not know: every field that varies
-        commands, sensors, groups = _proposals(path, family, contents, time, every_field=True)
+    if not commands or not sensors:   # names it does not know: every field that varies
+        commands, sensors, groups = _proposals(path, family, contents, time, every_field=True,
+                                               guess_commands=not commands)
     if not commands or not sensors:
-        what = "command (motor output, thrust, PWM)" if not commands else "sensor"
-        raise UsageError(f"{path}: found no {what} field that varies in this log; write the "
-                         "profile by hand (see `auvdiag inspect` for the fields)")
+        what = ("command (none is named like a motor output, thrust or PWM, and none holds "
+                "its value between changes as commands do)" if not commands else "sensor")
+        raise UsageError(f"{path}: found no {what} field that varies in this log; write its "
+                         "[[commands]] and [[sensors]] and their [sources] entries by hand "
+                         "(`auvdiag inspect LOG` lists the fields; the README has a complete "
+                         "minimal profile)")
     operating = _operating(path, family, contents)
     return _render(path, name, family, commands, sensors, operating, time, groups)
 
