@@ -146,3 +146,21 @@ def test_a_csv_whose_command_names_are_unknown_proposes_the_held_columns_as_comm
     profile = load_profile(draft)
     assert profile.command_names == ("setpoint",)
     assert set(profile.sensor_names) == {"speed_over_ground_xyz", "heading_noise"}
+
+
+def test_the_readme_minimal_profile_loads_and_reads_a_log(tmp_path):
+    """The README's complete minimal profile is a working profile, not a sketch."""
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    start = readme.index("A complete minimal profile")
+    block = readme[readme.index("```toml\n", start) + 8:readme.index("```\n", start + 30)]
+    profile_path = tmp_path / "minimal.toml"
+    profile_path.write_text(block)
+    profile = load_profile(profile_path)
+    assert (profile.command_names, profile.sensor_names) == (("thrust",), ("speed",))
+    log = tmp_path / "run.csv"
+    log.write_text("t,cmd,speed\n" + "".join(f"{0.1 * k:.1f},{0.5 * (k // 50 % 2)},"
+                                             f"{0.01 * k:.2f}\n" for k in range(300)))
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", str(profile_path)])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout, shown.stdout
