@@ -200,7 +200,7 @@ def test_too_little_held_out_data_judges_nothing(tmp_path):
     code, report = _diagnose_json(log, "--model", str(model))
     assert code == 0 and report["verdict"] == "undetermined"
     assert report["not_judged"]["flow"] == ("not judged (too little held-out data to measure "
-                                            f"the model's skill: {found[0]} samples)")
+                                            f"the model's skill: {found[0]} samples, needs 200)")
 
 
 def test_rollouts_restart_every_horizon_from_a_median_start():

@@ -67,7 +67,7 @@ def not_judged_signals(model: LoadedModel) -> dict[str, str]:
         record = signals[name]
         if record.get("samples", needed) < needed:
             reasons[name] = (f"not judged (too little held-out data to measure the model's "
-                             f"skill: {record['samples']} samples)")
+                             f"skill: {record['samples']} samples, needs {needed})")
         else:
             skill = record.get("skill")
             reasons[name] = NOT_JUDGED + ("" if skill is None else f" (skill {skill:.2f})")
