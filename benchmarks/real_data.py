@@ -34,6 +34,7 @@ import numpy as np
 if TYPE_CHECKING:
     from auvdiag_cli.engine.results import Diagnosis
     from auvdiag_cli.jobs.train import TrainingResult
+    from auvdiag_cli.vehicle.profile import Profile
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 FALSE_ALARM_RATE = 0.05       # calibrate's budget: a share of normal runs
@@ -316,8 +317,9 @@ def crazypad(root: Path, work: Path, scale: float) -> list[str]:
     from auvdiag_cli.vehicle.profile import load_profile
 
     with (root / "labels.csv").open() as stream:
-        normal = [root / row["file"] for row in csv.DictReader(stream)
-                  if row["kind"] == "normal"]
+        rows = list(csv.DictReader(stream))
+    normal = [root / row["file"] for row in rows if row["kind"] == "normal"]
+    defects = [root / row["file"] for row in rows if row["kind"] != "normal"]
     profile = load_profile(_crazypad_profile(work))
     result = train_from_logs(normal[:4], work / "crazypad", profile, normal[4:],
                              iterations_scale=scale, keep_unskilled=True)
@@ -325,7 +327,24 @@ def crazypad(root: Path, work: Path, scale: float) -> list[str]:
             f"10.3390/data9060079; MIT), normal flights: {len(normal[:4])} to train, "
             f"{len(normal[4:])} held out; profile crazyflie with the vertical acceleration "
             "`az` and the height `z` added. Horizon chosen: "
-            f"{_horizon(result)}.", "", *_skill_table(result)]
+            f"{_horizon(result)}.", "", *_skill_table(result), "",
+            *_defect_verdicts(defects, profile, work / "crazypad")]
+
+
+def _defect_verdicts(defects: list[Path], profile: "Profile", model_dir: Path) -> list[str]:
+    """Every defect flight diagnosed with the model (uncalibrated): its verdict as the
+    terminal writes it, with what was judged."""
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict, verdict_title
+    from models.store import load_model
+
+    model = load_model(model_dir)
+    verdicts = Counter(verdict_title(diagnosis_to_dict(diagnose(path, profile, model)))
+                       for path in defects)
+    return [f"The {len(defects)} flights with a defect (added weights, cut propellers), "
+            "diagnosed with this model before calibration:", "",
+            "| verdict | flights |", "|---|---|",
+            *(f"| {verdict} | {count} |" for verdict, count in verdicts.most_common())]
 
 
 def main() -> None:

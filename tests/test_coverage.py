@@ -111,3 +111,14 @@ def test_calibrate_sets_thresholds_for_judged_signals_only_and_says_what_each_co
     assert "NORMAL (no component named); the largest g of a judged signal reached" in faulty
     mission = json.loads((out / "model.json").read_text())["thresholds"]["mission"]
     assert mission["flow"] == 15.0 and mission["yaw_rate"] != 10.0
+
+
+def test_help_lists_every_built_in_profile():
+    """--help names each profile shipped in the package (px4_uuv was once left out)."""
+    from auvdiag_cli.vehicle.profile import builtin_profiles
+
+    text = " ".join(runner.invoke(app, ["diagnose", "--help"], terminal_width=200)
+                    .stdout.replace("│", " ").split())
+    assert "px4_uuv" in builtin_profiles()
+    for name in builtin_profiles():
+        assert name in text, name
