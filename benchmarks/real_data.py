@@ -328,23 +328,31 @@ def crazypad(root: Path, work: Path, scale: float) -> list[str]:
             f"{len(normal[4:])} held out; profile crazyflie with the vertical acceleration "
             "`az` and the height `z` added. Horizon chosen: "
             f"{_horizon(result)}.", "", *_skill_table(result), "",
-            *_defect_verdicts(defects, profile, work / "crazypad")]
+            *_defect_verdicts(defects, normal[4:], profile, work / "crazypad")]
 
 
-def _defect_verdicts(defects: list[Path], profile: "Profile", model_dir: Path) -> list[str]:
-    """Every defect flight diagnosed with the model (uncalibrated): its verdict as the
-    terminal writes it, with what was judged."""
+def _defect_verdicts(defects: list[Path], heldout: list[Path], profile: "Profile",
+                     model_dir: Path) -> list[str]:
+    """Every defect flight and every held-out normal one diagnosed with the model
+    (uncalibrated: the profile's thresholds): the verdicts as the terminal writes them,
+    with what was judged."""
     from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.reports.json_report import diagnosis_to_dict, verdict_title
     from models.store import load_model
 
     model = load_model(model_dir)
-    verdicts = Counter(verdict_title(diagnosis_to_dict(diagnose(path, profile, model)))
-                       for path in defects)
-    return [f"The {len(defects)} flights with a defect (added weights, cut propellers), "
-            "diagnosed with this model before calibration:", "",
-            "| verdict | flights |", "|---|---|",
-            *(f"| {verdict} | {count} |" for verdict, count in verdicts.most_common())]
+
+    def verdicts(paths: list[Path]) -> Counter[str]:
+        return Counter(verdict_title(diagnosis_to_dict(diagnose(path, profile, model)))
+                       for path in paths)
+
+    defect, normal = verdicts(defects), verdicts(heldout)
+    return [f"The {len(defects)} flights with a defect (added weights, cut propellers) and the "
+            f"{len(heldout)} held-out normal flights, diagnosed with this model before "
+            "calibration (the profile's thresholds):", "",
+            "| verdict | defect flights | held-out normal flights |", "|---|---|---|",
+            *(f"| {verdict} | {defect[verdict]} | {normal[verdict]} |"
+              for verdict, _ in (defect + normal).most_common())]
 
 
 def main() -> None:
