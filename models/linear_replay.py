@@ -23,8 +23,9 @@ if TYPE_CHECKING:
 # day of logs.
 WINDOW_STEPS_MAX = 600
 WINDOWS_MAX = 512
-ITERATIONS = 100            # per stage
+ITERATIONS = 100            # in the last stage; the earlier ones take half
 STAGE_FIRST_STEPS = 10
+STAGE_GROWTH = 4            # each stage's windows this many times the last's
 
 
 def _windows(commands: Sequence[np.ndarray], sensors: Sequence[np.ndarray],
@@ -76,14 +77,14 @@ def _replay_error(window_commands: np.ndarray, starts: np.ndarray, measured: np.
 
 
 def _descend(error: "Callable[[torch.Tensor], torch.Tensor]", start: np.ndarray,
-             scale: "torch.Tensor") -> np.ndarray:
+             scale: "torch.Tensor", iterations: int) -> np.ndarray:
     """L-BFGS from ``start``; the weights with the lowest finite error seen (a step that
     makes the recurrence unstable overflows, and must not end the fit there)."""
     import torch
 
     weights = torch.tensor(start, dtype=torch.float64, requires_grad=True)
     best: list[tuple[float, np.ndarray]] = [(float("inf"), start)]
-    optimiser = torch.optim.LBFGS([weights], max_iter=ITERATIONS,
+    optimiser = torch.optim.LBFGS([weights], max_iter=iterations,
                                   line_search_fn="strong_wolfe")
 
     def closure() -> torch.Tensor:
@@ -106,12 +107,12 @@ def fit_linear_to_replay(commands: Sequence[np.ndarray], sensors: Sequence[np.nd
     """W refined from ``least_squares`` against free-rollout error over windows of
     ``window_steps`` (normalised commands and sensors, one array per log); None where the
     refinement does not lower the replay error (there was nothing to gain). The windows
-    lengthen in stages from STAGE_FIRST_STEPS, each stage starting where the last ended:
+    lengthen in stages from STAGE_FIRST_STEPS by STAGE_GROWTH, each starting where the last ended:
     over long windows the error of a linear recurrence is too steep to start on."""
     import torch
 
     full = min(window_steps, WINDOW_STEPS_MAX)
-    lengths = [h for h in (STAGE_FIRST_STEPS * 2 ** k for k in range(16)) if h < full]
+    lengths = [h for h in (STAGE_FIRST_STEPS * STAGE_GROWTH ** k for k in range(16)) if h < full]
     weights = least_squares.astype(np.float64)
     reference: torch.Tensor | None = None
     for steps in [*lengths, full]:
@@ -121,7 +122,8 @@ def fit_linear_to_replay(commands: Sequence[np.ndarray], sensors: Sequence[np.nd
             reference = error(torch.from_numpy(least_squares.astype(np.float64)))
         finite = torch.isfinite(reference).all()
         scale = reference.clamp(min=1e-12) if finite else at_start.clamp(min=1e-12)
-        weights = _descend(error, weights, scale)
+        weights = _descend(error, weights, scale,
+                           ITERATIONS if steps == full else ITERATIONS // 2)
     assert reference is not None
     with torch.no_grad():
         refined = error(torch.from_numpy(weights))
