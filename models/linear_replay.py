@@ -62,13 +62,17 @@ def _replay_error(window_commands: np.ndarray, starts: np.ndarray, measured: np.
     c, x0 = torch.from_numpy(window_commands), torch.from_numpy(starts)
     seen = torch.from_numpy(np.isfinite(measured))
     target = torch.from_numpy(np.nan_to_num(measured))
-    ones = torch.ones(len(x0), 1, dtype=torch.float64)
     counts = seen.sum(dim=(0, 1)).clamp(min=1)
+    n_s = x0.shape[1]
 
     def error(weights: torch.Tensor) -> torch.Tensor:
+        # x(k+1) = x(k) A + d(k): the commands' part for every step at once, then one
+        # product and one sum a step (the loop is what costs).
+        transition = torch.eye(n_s, dtype=torch.float64) + weights[:n_s]
+        drive = c @ weights[n_s:-1] + weights[-1]
         state, predicted = x0, [x0]
         for k in range(c.shape[1] - 1):
-            state = state + torch.cat([state, c[:, k], ones], 1) @ weights
+            state = state @ transition + drive[:, k]
             predicted.append(state)
         residual = torch.where(seen, torch.stack(predicted, 1) - target, 0.0)
         return (residual ** 2).sum(dim=(0, 1)) / counts
