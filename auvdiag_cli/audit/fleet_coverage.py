@@ -6,15 +6,10 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 
-def _profile_vehicle(record: dict[str, Any]) -> str:
-    return str(record.get("vehicle"))
-
-
 def coverage_lines(records: Sequence[dict[str, Any]],
-                   vehicle_of: Callable[[dict[str, Any]], str] = _profile_vehicle
-                   ) -> list[str]:
-    """Per vehicle (by default the profile's vehicle name): the signals and actuators judged
-    in every log, in some, in none."""
+                   vehicle_of: Callable[[dict[str, Any]], str]) -> list[str]:
+    """Per vehicle (as ``vehicle_of`` a report says): the signals and actuators judged in
+    every log, in some, in none."""
     by_vehicle: dict[str, list[dict[str, Any]]] = {}
     for record in records:
         if record.get("coverage"):
