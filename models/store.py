@@ -113,7 +113,7 @@ class LoadedModel:
                 "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
                 "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
                 "horizon_s": meta.get("horizon_s"), "skill": self.skill,
-                "predictors": self.predictors,
+                "predictors": self.predictors, "inputs": list(self.input_names),
                 "thresholds_calibrated": "calibration" in meta,
                 "false_alarm_rate": (meta.get("calibration") or {}).get("false_alarm_budget")
                 and {k: meta["calibration"]["false_alarm_budget"][k] for k in ("rate", "per")}}
@@ -158,6 +158,22 @@ class LoadedModel:
     @property
     def command_names(self) -> tuple[str, ...]:
         return tuple(self.metadata["signals"]["commands"])
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        """The measured inputs that drive it beside the commands (none for most models)."""
+        return tuple(i["name"] for i in self.metadata["signals"].get("inputs", []))
+
+    def drive(self, commands: np.ndarray, inputs: np.ndarray | None = None) -> np.ndarray:
+        """The model's input rows for ``commands`` (steps, n_commands): with the measured
+        ``inputs`` of the same steps, or where there are none (a simulated mission) each
+        input at its typical value on the training logs."""
+        typical = [float(i["typical"]) for i in self.metadata["signals"].get("inputs", [])]
+        if not typical:
+            return commands
+        if inputs is None:
+            inputs = np.tile(typical, (len(commands), 1))
+        return np.hstack([commands, inputs])
 
     @property
     def sensor_names(self) -> tuple[str, ...]:

@@ -1,7 +1,9 @@
 """Substituting Control in closed loop: from the fault onset on, the vehicle's own controller
 (described by the profile) is fed the model's signals instead of the failed sensor, and the
 dynamics model stands in for the vehicle. The result is the commands it would have issued
-and the path it would have followed, up to the end of the mission leg."""
+and the path it would have followed, up to the end of the mission leg. A model driven by
+measured inputs (battery voltage, attitude) has them held at their typical values: the
+replay runs past what the log measured."""
 
 from dataclasses import dataclass
 from typing import Any
@@ -55,7 +57,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     for row in np.nan_to_num(measured[first:onset]):
         vehicle.step(row, dt_s)
     stepper = FastStepper(model.dynamics, model.normaliser)
-    state = stepper.warm_up(commands[first:onset],
+    state = stepper.warm_up(model.drive(commands[first:onset]),
                            np.nan_to_num(robust_state(measured, first, first, onset + 1)))
     path, issued = [(controller.x, controller.y)], []
     settle = round(SETTLE_AFTER_LAST_WAYPOINT_S / dt_s)
@@ -63,7 +65,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
     for step in range(round(MAX_REPLAY_S / dt_s)):
         command = vehicle.step(state, dt_s)
         issued.append(command)
-        state = stepper.step(command)
+        state = stepper.step(model.drive(command[None, :])[0])
         path.append((controller.x, controller.y))
         if controller.finished:
             finished_step = step if finished_step is None else finished_step

@@ -48,6 +48,11 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
             f"{log}: model {model.path} expects commands {list(model.command_names)} and sensors "
             f"{list(model.sensor_names)}, profile {profile.name!r} gives "
             f"{list(profile.command_names)} and {list(profile.sensor_names)}")
+    if model.input_names != profile.input_names:
+        raise ModelError(
+            f"{log}: model {model.path} is driven by the measured inputs "
+            f"{list(model.input_names) or 'none'}, profile {profile.name!r} gives "
+            f"{list(profile.input_names) or 'none'}")
     if abs(float(meta.get("dt_s", -1.0)) - profile.dt_s) > 1e-9:
         raise ModelError(f"{log}: model step {meta.get('dt_s')} s differs from the profile's "
                          f"{profile.dt_s} s")

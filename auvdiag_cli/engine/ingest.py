@@ -21,7 +21,7 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
     signals = read_log(path, profile.sources)
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
-                         max_gap_s, profile.idle_after_s)
+                         max_gap_s, profile.idle_after_s, profile.input_names)
     except NeverOperates as error:
         raise LogNotOperating(path, str(error)) from None
     except ValueError as error:

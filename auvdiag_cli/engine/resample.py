@@ -14,6 +14,8 @@ Method (documented for users in the README):
   (never interpolated across) and the gap is reported. A gap in a *command* means the
   actuators' history is unknown there: all sensors are NaN inside it and the model replay
   restarts from the measured state after it (``restarts``);
+- measured inputs (the profile's ``[[inputs]]``: battery voltage, attitude) are averaged
+  like sensors but drive the model like commands: a gap in one is treated as a command gap;
 - where the profile names an operating flag (armed, under way), time when it is clear is
   treated like a command gap: sensors NaN, never judged or trained on, and the replay
   restarts from the measured state when operation begins again;
@@ -67,9 +69,16 @@ class AlignedFrame:
     restarts: list[int] = field(default_factory=list)   # grid indices where replay restarts
     slow_commands: list[str] = field(default_factory=list)   # also in notes
     operating: np.ndarray = field(default_factory=lambda: np.ones(0, bool))
+    inputs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (steps, n_inputs)
+    input_names: tuple[str, ...] = ()
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
+
+    @property
+    def drive(self) -> np.ndarray:
+        """What the model is driven by: the commands, then the measured inputs."""
+        return np.hstack([self.commands, self.inputs]) if self.input_names else self.commands
 
 
 def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
@@ -226,13 +235,14 @@ def _operating_steps(signals: Signals, grid_ns: np.ndarray, commands: np.ndarray
 
 
 def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tuple[str, ...],
-             dt_s: float, max_gap_s: float = 1.0, idle_after_s: float | None = None
-             ) -> AlignedFrame:
+             dt_s: float, max_gap_s: float = 1.0, idle_after_s: float | None = None,
+             input_names: tuple[str, ...] = ()) -> AlignedFrame:
     """Align ``signals`` on a Δt grid as described in the module docstring."""
     notes: list[str] = []
     max_gap_ns = round(max_gap_s * NS_PER_S)
     cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
-               for name in command_names + sensor_names}
+               for name in command_names + sensor_names + input_names}
+    drives = command_names + input_names
     empty = [name for name, s in cleaned.items() if s.empty]
     if empty:
         raise ValueError(f"no usable samples for {', '.join(empty)}")
@@ -253,7 +263,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
             columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
         for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
             inside = (grid_ns > start_ns) & (grid_ns < end_ns)
-            if name in command_names:
+            if name in drives:
                 blind |= inside
                 restarts.add(int(np.searchsorted(grid_ns, end_ns)))
             else:
@@ -280,4 +290,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         slow_commands=slow_commands,
         restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
         operating=operating,
+        inputs=np.column_stack([columns[n] for n in input_names]) if input_names
+        else np.zeros((len(grid_ns), 0)),
+        input_names=input_names,
     )

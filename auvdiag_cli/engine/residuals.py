@@ -57,7 +57,7 @@ def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
     plan = [r for r in plan_rollouts(measured, [*frame.restarts, *restarts],
                                      model.horizon_steps) if r.end > since - window]
-    modelled = replay_plan(model.dynamics, frame.commands, measured, plan,
+    modelled = replay_plan(model.dynamics, frame.drive, measured, plan,
                            np.asarray(model.normaliser.command_scale),
                            np.asarray(model.normaliser.state_scale))
     g = np.full_like(measured, np.nan)

@@ -72,6 +72,7 @@ class OpenLoop:
     commands: np.ndarray
     start: np.ndarray          # the state it starts from
     fault_step: int = 0
+    inputs: np.ndarray | None = None   # measured inputs (None: each at its typical value)
 
 
 def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | None,
@@ -83,11 +84,13 @@ def _on_dms(model: LoadedModel, profile: Profile, name: str, actuator: int | Non
 
 def _open_loop(model: LoadedModel, profile: Profile, mode: str, history: OpenLoop,
                actuator: int | None, sensor: int | None) -> dict[str, int]:
-    modelled = fast_replay(model.dynamics, model.normaliser, history.commands, history.start)
+    modelled = fast_replay(model.dynamics, model.normaliser,
+                           model.drive(history.commands, history.inputs), history.start)
     executed = history.commands.copy()
     if actuator is not None:
         executed[history.fault_step:, actuator] = 0.0
-    measured = fast_replay(model.dynamics, model.normaliser, executed, history.start)
+    measured = fast_replay(model.dynamics, model.normaliser,
+                           model.drive(executed, history.inputs), history.start)
     if sensor is not None:
         measured[history.fault_step:, sensor] = 0.0
     return _bits(measured, modelled, profile, mode, model)
@@ -99,18 +102,20 @@ def log_mission(frame: AlignedFrame, profile: Profile) -> OpenLoop:
     from models.rollouts import robust_state
     from models.training import complete_stretches
 
-    usable = np.where(np.isfinite(frame.commands).all(axis=1, keepdims=True), frame.sensors,
+    usable = np.where(np.isfinite(frame.drive).all(axis=1, keepdims=True), frame.sensors,
                       np.nan)
     stretches = complete_stretches(usable)
     if not stretches:
         raise UsageError("the log has no stretch with every signal measured to replay")
     begin, end = max(stretches, key=lambda s: s[1] - s[0])
     return open_loop_mission(profile, frame.commands[begin:end],
-                             robust_state(frame.sensors, begin, begin, end))
+                             robust_state(frame.sensors, begin, begin, end),
+                             frame.inputs[begin:end] if frame.input_names else None)
 
 
 def open_loop_mission(profile: Profile, commands: np.ndarray | None = None,
-                      start: np.ndarray | None = None) -> OpenLoop:
+                      start: np.ndarray | None = None, inputs: np.ndarray | None = None
+                      ) -> OpenLoop:
     """The open-loop mission: a log's commands (from its state ``start``), or the DMSs one
     after another from rest."""
     if commands is None:
@@ -122,7 +127,7 @@ def open_loop_mission(profile: Profile, commands: np.ndarray | None = None,
     if start is None:
         start = np.zeros(len(profile.sensors))
     fault_step = min(round(FAULT_AT_S / profile.dt_s), len(commands) // 4)
-    return OpenLoop(commands, start, fault_step)
+    return OpenLoop(commands, start, fault_step, inputs)
 
 
 def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[float, float]],
@@ -134,7 +139,7 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
                                [depths[i % len(depths)] for i in range(len(waypoints))]
                                if depths else [])
     plant = FastStepper(model.dynamics, model.normaliser)
-    plant.warm_up(np.empty((0, len(profile.command_names))),
+    plant.warm_up(model.drive(np.empty((0, len(profile.command_names)))),
                   np.zeros(len(profile.sensor_names)))
     vehicle = VehicleController(spec, profile.sensor_names, profile.command_names, controller)
     fault_step = round(FAULT_AT_S / profile.dt_s)
@@ -149,8 +154,9 @@ def _on_mission(model: LoadedModel, profile: Profile, waypoints: list[tuple[floa
         executed = command.copy()
         if actuator is not None and step >= fault_step:
             executed[actuator] = 0.0
-        plant.step(executed)
-    modelled = fast_replay(model.dynamics, model.normaliser, np.asarray(commands), readings[0])
+        plant.step(model.drive(executed[None, :])[0])
+    modelled = fast_replay(model.dynamics, model.normaliser, model.drive(np.asarray(commands)),
+                           readings[0])
     return _bits(np.asarray(readings), modelled, profile, MISSION_MODE, model)
 
 

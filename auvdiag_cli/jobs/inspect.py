@@ -46,9 +46,11 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
     step = f"{profile.dt_s:g} s step"
     if name in profile.command_names:
         return f"held: the last command at each {step}"
-    if name not in profile.sensor_names:
+    if name not in profile.sensor_names + profile.input_names:
         return "a flag: the last value holds"
     per_step = (rate_hz or 0.0) * profile.dt_s
+    if name in profile.input_names:
+        return f"a measured input of the model, averaged over each {step}"
     if per_step >= 1.5:
         return f"averaged over each {step} (about {per_step:.0f} samples, anti-aliased)"
     if per_step < 0.9:

@@ -76,6 +76,7 @@ class TrainingResult:
     effort_notes: tuple[str, ...] = ()  # logs the effort model left out, and why
     by_predictor: dict[str, list[HorizonScore]] = field(default_factory=dict)
     predictor_notes: tuple[str, ...] = ()   # predictors left out, and why
+    input_names: tuple[str, ...] = ()       # measured inputs driving it beside the commands
 
     @property
     def judges_anything(self) -> bool:
@@ -105,7 +106,7 @@ def _read(path: Path, profile: Profile, progress: Callable[[str], None]) -> _Rea
         steps = np.diff(series.index.to_numpy(dtype=np.int64))
         if (steps > 0).any():
             rates[name] = 1e9 / float(np.median(steps[steps > 0]))
-    return _ReadLog(ScoringLog(path.name, frame.commands, frame.sensors, tuple(frame.restarts)),
+    return _ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts)),
                     relation_log(log, profile), rates)
 
 
@@ -201,7 +202,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                                               profile)
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
                             hours, rates, relations, start_state, effort, tuple(effort_notes),
-                            fitted.by_kind, fitted.notes)
+                            fitted.by_kind, fitted.notes, profile.input_names)
     result = replace(result, written=result.judges_anything or keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
@@ -219,9 +220,10 @@ def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_Re
     none). ``training`` is what the network trained on (a single log's first part)."""
     relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
                                 profile)
+    actuators = len(profile.commands)     # the logs' model drive ends with measured inputs
     start_state = learn_start_state(
-        [start_reading(t.commands, t.sensors, profile.dt_s) for t in training],
-        [start_reading(r.scoring.commands, r.scoring.sensors, profile.dt_s)
+        [start_reading(t.commands[:, :actuators], t.sensors, profile.dt_s) for t in training],
+        [start_reading(r.scoring.commands[:, :actuators], r.scoring.sensors, profile.dt_s)
          for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
     return relations, start_state
 
@@ -272,6 +274,15 @@ def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
     }
 
 
+def _input_entries(profile: Profile, training: Sequence[ScoringLog]) -> list[dict[str, Any]]:
+    """Each measured input, with its median on the training logs: what a simulated mission
+    (a DMS, the pattern table's faults) holds it at."""
+    actuators = len(profile.commands)
+    values = np.concatenate([t.commands[:, actuators:] for t in training])
+    return [{"name": i.name, "unit": i.unit, "typical": round(float(np.median(values[:, k])), 6)}
+            for k, i in enumerate(profile.inputs)]
+
+
 def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
               training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
               result: TrainingResult, stages: Sequence[Any], seed: int) -> dict[str, Any]:
@@ -285,6 +296,7 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
         "dt_s": profile.dt_s,
         "signals": {
             "commands": list(profile.command_names),
+            "inputs": _input_entries(profile, training),
             "sensors": [{"name": s.name, "unit": s.unit} for s in profile.sensors],
         },
         "full_scale": profile.full_scales,

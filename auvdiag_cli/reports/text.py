@@ -65,7 +65,9 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "
                      f"max g / threshold: {peaks}{case}")
     lines += [f"  note: {note}" for note in d.notes]
-    lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})")
+    inputs = d.model.get("inputs")
+    lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})"
+                 + (f", driven also by the measured {', '.join(inputs)}" if inputs else ""))
     return [line for line in lines if line]
 
 

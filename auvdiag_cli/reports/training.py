@@ -81,6 +81,9 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
              f"operating time; held out: {result.heldout_split})"]
+    if result.input_names:
+        lines.append("driven by the commands and the measured inputs "
+                     f"{', '.join(result.input_names)} (replayed as logged)")
     lines += skill_lines(result.scores, chosen) + predictor_lines(result)
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "

@@ -221,6 +221,9 @@ def simulate(scenario: Scenario, profile: Profile, seed: int = 0,
     if profile.simulation is None:
         raise ValueError(f"profile {profile.name!r} has no [simulation] table: nothing "
                          "describes how to fly it")
+    if profile.inputs:
+        raise ValueError(f"profile {profile.name!r} declares measured inputs "
+                         f"({', '.join(profile.input_names)}): the simulator does not model them")
     missing = [p.name for p in scenario.phases
                if p.mission is None and p.excitation is None and p.name not in profile.dms]
     if missing:

@@ -33,6 +33,17 @@ class Command:
 
 
 @dataclass(frozen=True)
+class Input:
+    """A measured quantity that drives the model beside the commands (the battery voltage: a
+    thruster's force grows with it; the attitude, for gravity and buoyancy). Replayed as
+    logged, like the commands: never predicted, never judged, no actuator."""
+
+    name: str
+    unit: str
+    description: str
+
+
+@dataclass(frozen=True)
 class Sensor:
     name: str
     component: str
@@ -93,10 +104,21 @@ class Profile:
     horizon_s: float | None = None
     # Actuators that act alike: each one's steady share of their effort is judged.
     effort_groups: tuple[EffortGroup, ...] = ()
+    # Measured inputs of the model beside the commands ([[inputs]]).
+    inputs: tuple[Input, ...] = ()
 
     @property
     def command_names(self) -> tuple[str, ...]:
         return tuple(c.name for c in self.commands)
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return tuple(i.name for i in self.inputs)
+
+    @property
+    def drive_names(self) -> tuple[str, ...]:
+        """What the model is driven by: the commands, then the measured inputs."""
+        return self.command_names + self.input_names
 
     @property
     def sensor_names(self) -> tuple[str, ...]:
@@ -133,7 +155,8 @@ def _horizon(matching: TableReader) -> float | None:
     return float(value)
 
 
-def _signals(top: TableReader) -> tuple[tuple[Command, ...], tuple[Sensor, ...]]:
+def _signals(top: TableReader
+             ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...]]:
     commands = tuple(
         Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
         for r in top.items("commands")
@@ -144,15 +167,18 @@ def _signals(top: TableReader) -> tuple[tuple[Command, ...], tuple[Sensor, ...]]
                r.get("truth_column", str, None))
         for r in top.items("sensors")
     )
+    inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
+                   for r in (top.items("inputs") if "inputs" in top.table else []))
     if not commands or not sensors:
         raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
-    signal_names = [c.name for c in commands] + [s.name for s in sensors]
+    signal_names = [c.name for c in commands] + [s.name for s in sensors] + [
+        i.name for i in inputs]
     if len(set(signal_names)) != len(signal_names):
-        raise ProfileError("signal names in 'commands' and 'sensors' must be unique")
+        raise ProfileError("signal names in 'commands', 'sensors' and 'inputs' must be unique")
     if OPERATING in signal_names:
         raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
                            "([sources.FAMILY] operating = {...})")
-    return commands, sensors
+    return commands, sensors, inputs
 
 
 def _thresholds(table: TableReader, sensor_names: list[str]) -> dict[str, dict[str, float]]:
@@ -175,9 +201,9 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     """Validate a parsed TOML document into a `Profile`."""
     top = TableReader(data, "")
     vehicle = top.sub("vehicle")
-    commands, sensors = _signals(top)
+    commands, sensors, inputs = _signals(top)
     sensor_names = [s.name for s in sensors]
-    signal_names = [c.name for c in commands] + sensor_names
+    signal_names = [c.name for c in commands] + sensor_names + [i.name for i in inputs]
     matching = top.sub("matching")
     window = matching.get("window_samples", int)
     if window < 1:
@@ -220,6 +246,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         effort_groups=tuple(parse_effort_group(r, [c.name for c in commands])
                             for r in top.items("effort"))
         if "effort" in data else (),
+        inputs=inputs,
     )
 
 

@@ -31,6 +31,8 @@ def _model(document: dict[str, Any]) -> str:
     if errors:
         text += "; held-out error " + ", ".join(
             f"{k} {v:.4f} {units.get(k, '')}".rstrip() for k, v in errors.items())
+    if model.get("inputs"):
+        text += "; driven by the commands and the measured " + ", ".join(model["inputs"])
     horizon = model.get("horizon_s")
     text += ("; free-running replay" if horizon is None
              else f"; replay re-started every {horizon:g} s")

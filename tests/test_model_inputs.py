@@ -1,0 +1,182 @@
+"""Measured inputs beside the commands (`[[inputs]]`): a glider-like vehicle whose depth
+follows its pitch, which no command sets. Without the pitch the model cannot predict the
+depth; with it declared as an input the depth is judged, the input is replayed as logged,
+recorded in the model and the reports, and a model that needs it refuses a profile
+without it."""
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+
+runner = CliRunner()
+DT = 0.1
+
+
+def write_pitched_vehicle(path: Path, seed: int, seconds: float = 240.0,
+                          depth_stuck_from_s: float | None = None) -> Path:
+    """Speed lags the thrust command; the depth changes at 0.5 m/s per radian of pitch (the
+    pitch wanders on its own: trim, waves); ``depth_stuck_from_s``: the depth sensor holds
+    its reading from then on."""
+    rng = np.random.default_rng(seed)
+    steps = round(seconds / DT)
+    thrust = np.repeat(rng.uniform(0.2, 1.0, steps // 40 + 1), 40)[:steps]
+    pitch = np.clip(np.cumsum(rng.normal(0, 0.01, steps)), -0.4, 0.4)
+    speed, depth = np.zeros(steps), np.full(steps, 2.0)
+    for k in range(1, steps):
+        speed[k] = speed[k - 1] + DT * (thrust[k - 1] - speed[k - 1]) / 2.0
+        depth[k] = depth[k - 1] + DT * 0.5 * np.sin(pitch[k - 1])
+    measured = depth + rng.normal(0, 0.005, steps)
+    if depth_stuck_from_s is not None:
+        stuck = round(depth_stuck_from_s / DT)
+        measured[stuck:] = measured[stuck]
+    with path.open("w", newline="") as stream:
+        writer = csv.writer(stream)
+        writer.writerow(["t", "thrust", "pitch", "speed", "depth"])
+        for k in range(steps):
+            writer.writerow([f"{k * DT:.3f}", f"{thrust[k]:.4f}", f"{pitch[k]:.5f}",
+                             f"{speed[k] + rng.normal(0, 0.005):.5f}", f"{measured[k]:.5f}"])
+    return path
+
+
+PROFILE = """
+[vehicle]
+name = "pitched"
+description = "a vehicle whose depth follows its pitch"
+dt_s = 0.1
+
+[[commands]]
+name = "thrust"
+component = "thruster"
+
+[[sensors]]
+name = "speed"
+component = "speed_sensor"
+unit = "m/s"
+full_scale = 1.0
+
+[[sensors]]
+name = "depth"
+component = "depth_sensor"
+unit = "m"
+full_scale = 1.0
+{inputs}
+[matching]
+window_samples = 20
+decision_window_s = 3.0
+
+[thresholds.mission]
+speed = 15.0
+depth = 15.0
+
+[sources.csv]
+time = { column = "t", unit = "s" }
+
+[sources.csv.signals]
+thrust = { column = "thrust" }
+speed = { column = "speed" }
+depth = { column = "depth" }
+{pitch_source}
+"""
+PITCH_INPUT = """
+[[inputs]]
+name = "pitch"
+unit = "rad"
+description = "measured pitch angle"
+"""
+
+
+def _profile_text(inputs: str, pitch_source: str) -> str:
+    return PROFILE.replace("{inputs}", inputs).replace("{pitch_source}", pitch_source)
+
+
+def _profile(folder: Path, with_pitch: bool) -> Path:
+    path = folder / ("with_pitch.toml" if with_pitch else "without_pitch.toml")
+    path.write_text(_profile_text(PITCH_INPUT if with_pitch else "",
+                                  'pitch = { column = "pitch" }' if with_pitch else ""))
+    return path
+
+
+def _train(folder: Path, logs: list[Path], profile: Path, name: str) -> tuple[Path, str]:
+    output = folder / name
+    result = runner.invoke(app, ["train", *map(str, logs[:3]), "--holdout", str(logs[3]),
+                                 "--profile", str(profile), "-o", str(output),
+                                 "--iterations-scale", "0.05", "--hidden", "8",
+                                 "--keep-unskilled"])
+    assert result.exit_code == 0, result.output
+    return output, result.stdout
+
+
+@pytest.fixture(scope="module")
+def pitched(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    folder = tmp_path_factory.mktemp("pitched")
+    logs = [write_pitched_vehicle(folder / f"run_{seed}.csv", seed) for seed in range(4)]
+    with_pitch, without_pitch = _profile(folder, True), _profile(folder, False)
+    model, stdout = _train(folder, logs, with_pitch, "with_pitch")
+    assert "driven by the commands and the measured inputs pitch" in stdout
+    return {"folder": folder, "with": with_pitch, "without": without_pitch, "model": model,
+            "blind_model": _train(folder, logs, without_pitch, "without_pitch")[0]}
+
+
+def _skill(model: Path, signal: str) -> float:
+    meta = json.loads((model / "model.json").read_text())
+    return float(meta["skill"]["signals"][signal]["skill"])
+
+
+def test_the_depth_is_judged_only_with_the_pitch_as_an_input(pitched: dict[str, Path]):
+    assert _skill(pitched["blind_model"], "depth") < 1 / 3
+    assert _skill(pitched["model"], "depth") > 0.6
+    meta = json.loads((pitched["model"] / "model.json").read_text())
+    (entry,) = meta["signals"]["inputs"]
+    assert entry["name"] == "pitch" and entry["unit"] == "rad"
+    assert -0.4 <= entry["typical"] <= 0.4
+    assert meta["architecture"]["n_commands"] == 2       # the thrust and the pitch
+
+
+def test_a_stuck_depth_sensor_is_found_and_the_report_names_the_input(
+        pitched: dict[str, Path]):
+    folder = pitched["folder"]
+    reports = {}
+    for name, stuck in (("normal", None), ("stuck", 60.0)):
+        log = write_pitched_vehicle(folder / f"{name}.csv", 20, 150.0, stuck)
+        result = runner.invoke(app, ["diagnose", str(log), "--profile", str(pitched["with"]),
+                                     "--model", str(pitched["model"]), "--json",
+                                     str(folder / f"{name}.json")])
+        assert result.exit_code == (0 if stuck is None else 1), result.output
+        assert "driven also by the measured pitch" in result.stdout
+        reports[name] = json.loads((folder / f"{name}.json").read_text())
+    assert reports["normal"]["verdict"] == "normal"
+    assert reports["stuck"]["component"] == "depth_sensor"
+    assert reports["stuck"]["onset_s"] == pytest.approx(60.0, abs=10.0)
+    assert reports["stuck"]["model"]["inputs"] == ["pitch"]
+
+
+def test_a_model_driven_by_an_input_refuses_a_profile_without_it(pitched: dict[str, Path]):
+    log = write_pitched_vehicle(pitched["folder"] / "other.csv", 21, 60.0)
+    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(pitched["without"]),
+                                 "--model", str(pitched["model"])])
+    assert result.exit_code == 2
+    assert "driven by the measured inputs ['pitch']" in result.output
+    assert str(log) in result.output
+
+
+def test_inspect_says_the_input_is_averaged_and_drives_the_model(pitched: dict[str, Path]):
+    log = pitched["folder"] / "run_0.csv"
+    result = runner.invoke(app, ["inspect", str(log), "--profile", str(pitched["with"])])
+    assert result.exit_code == 0, result.output
+    line = next(line for line in result.stdout.splitlines() if line.split()[:2] == ["ok", "pitch"])
+    assert "a measured input of the model" in line
+
+
+def test_an_input_named_like_a_sensor_is_refused(tmp_path: Path):
+    text = _profile_text(PITCH_INPUT.replace('"pitch"', '"depth"', 1), "")
+    (tmp_path / "p.toml").write_text(text)
+    result = runner.invoke(app, ["inspect", str(tmp_path / "none.csv"), "--profile",
+                                 str(tmp_path / "p.toml")])
+    assert result.exit_code == 2
+    assert "must be unique" in result.output
