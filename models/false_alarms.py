@@ -9,9 +9,9 @@ of the budget, so that it extrapolates beyond the largest value seen:
 - a reading taken once per log (where the log starts) is a level: a Student-t prediction
   interval around the normal logs' mean (two-sided: a zero may shift either way).
 Every fit is checked by leave-one-log-out: each log's value against the law fitted on the
-others gives its tail probability. Pooled over the judges, those say whether the laws
-promise fewer alarms than the logs show (a heavier tail than the law's): the share is then
-lowered until the left-out logs alarm no more often than the budget allows.
+others gives its tail probability. Those say whether the law promises fewer alarms than
+the logs show (a heavier tail than the law's): that judge's share is then lowered until
+its left-out logs alarm no more often than its share allows.
 """
 
 from collections.abc import Sequence
@@ -121,12 +121,11 @@ def fit_law(values: Sequence[float], law: str) -> LawFit | None:
     return LawFit(law, _fit(law, x), tuple(float(t) for t in tails))
 
 
-def checked_share(fits: Sequence[LawFit], share: float) -> float:
-    """``share``, lowered where the left-out logs, pooled over the judges, alarm more often
-    than it allows (more than round(share x values) of them): then just below the tail
-    probability of the first left-out value past that count."""
-    pooled = np.concatenate([np.asarray(f.loo_tail) for f in fits]) if fits else np.empty(0)
-    tails = np.sort(pooled[np.isfinite(pooled)])
+def checked_share(fit: LawFit, share: float) -> float:
+    """``share``, lowered where the judge's left-out logs alarm more often than it allows
+    (more than round(share x logs) of them): then just below the tail probability of the
+    first left-out value past that count."""
+    tails = np.sort(np.asarray(fit.loo_tail)[np.isfinite(fit.loo_tail)])
     allowed = round(share * len(tails))
     if len(tails) <= allowed or tails[allowed] > share:
         return share

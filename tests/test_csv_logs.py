@@ -142,8 +142,9 @@ def test_a_csv_log_of_another_vehicle_names_the_shipped_profile_that_reads_it(tm
     from auvdiag_cli.cli import app
 
     log = tmp_path / "run.csv"
-    rows = ["time,pwm1,pwm2,pwm3,pwm4,depth,w_row,w_pitch,w_yaw"]
-    rows += [f"{120000 + k // 20},1500,1500,1500,1500,{0.01 * k},0.1,0.2,0.3" for k in range(60)]
+    rows = ["time,pwm1,pwm2,pwm3,pwm4,depth,voltage,roll,pitch,w_row,w_pitch,w_yaw"]
+    rows += [f"{120000 + k // 20},1500,1500,1500,1500,{0.01 * k},12.1,1.5,-0.5,0.1,0.2,0.3"
+             for k in range(60)]
     log.write_text("\n".join(rows) + "\n")
     result = CliRunner().invoke(app, ["diagnose", str(log)])
     assert result.exit_code == 2

@@ -14,8 +14,9 @@ import numpy as np
 SPAN_S = 1.0                 # the start reading: median over this much of the log's start
 MARGIN = 1.5                 # thresholds: this many times the largest held-out deviation
 FLOOR = 0.05                 # of the full scale: a zero error below it is tolerated
-ALIKE = 0.05                 # of the full scale: the most the normal starts may spread (robust
-                             # sigma) for a sensor's start to be judged
+ALIKE = 0.05                 # of the full scale: the most the normal starts may spread
+                             # (standard deviation: a few starts far off, in a swell at the
+                             # surface, count) for a sensor's start to be judged
 MIN_HELDOUT = 3              # held-out starts from rest needed to set a threshold
 REST = 0.02                  # a command this close to zero is at rest
 
@@ -58,14 +59,17 @@ def learn_start_state(training: Sequence[StartReading | None],
     reference = np.median(starts, axis=0)
     scale = np.asarray(full_scale, float)
     # A sensor whose normal starts scatter (body rates in a swell) says nothing at the start.
-    spread = 1.4826 * np.median(np.abs(starts - reference), axis=0)
+    spread = np.sqrt(np.mean((starts - reference) ** 2, axis=0))
     deviation = np.abs(np.array([r.sensors for r in held]) - reference).max(axis=0)
     allowed = np.where(spread <= ALIKE * scale, np.maximum(MARGIN * deviation, FLOOR * scale),
                        np.nan)
     return {"span_s": SPAN_S, "reference": reference.round(6).tolist(),
             "thresholds": [None if np.isnan(a) else round(float(a), 6) for a in allowed],
             "spread": spread.round(6).tolist(),
-            "logs": len(train), "heldout_logs": len(held)}
+            "logs": len(train), "heldout_logs": len(held),
+            # calibrate --false-alarm-rate fits each start's law to these as well
+            "training_starts": [[round(float(v), 6) if np.isfinite(v) else None for v in row]
+                                for row in starts]}
 
 
 def raise_thresholds(entry: dict[str, Any], readings: Sequence[StartReading | None],

@@ -5,7 +5,9 @@ The judges are each judged signal's g in each mode with enough data (statistic: 
 peak g), each sensor whose start is judged (the start's deviation from the normal start),
 each actuator whose commands are judged against the motion (the log's peak extra effort)
 and the actuators of the effort groups (their own budget, `models.effort`). A normal log
-alarms when any judge does: with k judges each gets 1 - (1 - R)^(1/k)."""
+alarms when any judge does: with k judges each gets 1 - (1 - R)^(1/k). A start judge's law
+is fitted to the training logs' starts as well as the calibration logs': the start is not
+fitted by the model, so those are fair normal data, and more of them steady the law."""
 
 import re
 from collections.abc import Sequence
@@ -66,6 +68,9 @@ class Judge:
     name: str                    # the signal or the command
     mode: str | None             # g's mode
     values: tuple[float, ...]
+    # The same statistic on other normal logs (the training logs' starts): they inform the
+    # law, but are not among the calibration logs counted.
+    more: tuple[float, ...] = ()
 
     @property
     def label(self) -> str:
@@ -83,29 +88,47 @@ class Judge:
 
 
 @dataclass(frozen=True)
+class JudgeFit:
+    """A judge, its law, and its share of the budget after its own left-out logs."""
+
+    judge: Judge
+    fit: LawFit
+    share: float
+
+    @property
+    def threshold(self) -> float:
+        return round(self.fit.threshold(self.share), 6)
+
+    @property
+    def loo_alarms(self) -> int:
+        return sum(self.fit.loo_alarms(self.share))
+
+
+@dataclass(frozen=True)
 class BudgetThresholds:
     budget: FalseAlarmBudget
     per_log_rate: float
     share: float                             # each judge's, by the budget
-    checked: float                           # each judge's, after leave-one-log-out
-    fits: tuple[tuple[Judge, LawFit], ...]
+    fits: tuple[JudgeFit, ...]
     effort_rate: float | None                # the effort groups' budget (None: no groups)
     logs: int
 
-    def threshold(self, fit: LawFit) -> float:
-        return round(fit.threshold(self.checked), 6)
+    @property
+    def lowered(self) -> tuple[JudgeFit, ...]:
+        """The judges whose left-out logs alarmed more often than their law promised."""
+        return tuple(f for f in self.fits if f.share < self.share)
 
     def thresholds(self, kind: str) -> dict[tuple[str | None, str], float]:
         """(mode, name) -> threshold for one kind of judge."""
-        return {(judge.mode, judge.name): self.threshold(fit) for judge, fit in self.fits
-                if judge.kind == kind}
+        return {(f.judge.mode, f.judge.name): f.threshold for f in self.fits
+                if f.judge.kind == kind}
 
     def _flags(self, over: bool) -> np.ndarray:
         flags = np.zeros(self.logs, bool)
-        for judge, fit in self.fits:
+        for f in self.fits:
             with np.errstate(invalid="ignore"):
-                flags |= (judge.statistic >= self.threshold(fit) if over
-                          else np.asarray(fit.loo_alarms(self.checked)))
+                flags |= (f.judge.statistic >= f.threshold if over
+                          else np.asarray(f.fit.loo_alarms(f.share))[:self.logs])
         return flags
 
     @property
@@ -121,14 +144,13 @@ class BudgetThresholds:
     def to_json(self) -> dict[str, Any]:
         return {"rate": self.budget.rate, "per": "hour" if self.budget.per_hour else "log",
                 "per_log_rate": round(self.per_log_rate, 5), "share_per_judge":
-                round(self.share, 5), "share_after_leave_one_log_out": round(self.checked, 5),
-                "effort_rate": self.effort_rate,
+                round(self.share, 5), "effort_rate": self.effort_rate,
                 "leave_one_log_out": {"logs": self.logs, "alarmed": self.loo_logs_alarmed},
                 "calibration_logs_over_thresholds": self.in_sample_alarmed,
-                "judges": [{"judge": judge.label, "threshold": self.threshold(fit),
-                            "law": fit.law, "logs": fit.logs,
-                            "loo_alarms": sum(fit.loo_alarms(self.checked))}
-                           for judge, fit in self.fits]}
+                "judges": [{"judge": f.judge.label, "threshold": f.threshold,
+                            "law": f.fit.law, "logs": f.fit.logs,
+                            "share_after_leave_one_log_out": round(f.share, 5),
+                            "loo_alarms": f.loo_alarms} for f in self.fits]}
 
 
 def g_judges(per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[str],
@@ -145,8 +167,10 @@ def start_judges(entry: dict[str, Any], readings: Sequence[StartReading | None],
     if "thresholds" not in entry:
         return []
     reference = np.asarray(entry["reference"], float)
+    training = np.asarray(entry.get("training_starts") or np.empty((0, len(reference))), float)
     return [Judge("start", sensor_names[i], None, tuple(
-        float("nan") if r is None else float(r.sensors[i] - reference[i]) for r in readings))
+        float("nan") if r is None else float(r.sensors[i] - reference[i]) for r in readings),
+        tuple(float(v) for v in training[:, i] - reference[i] if np.isfinite(v)))
         for i, allowed in enumerate(entry["thresholds"]) if allowed is not None]
 
 
@@ -166,12 +190,13 @@ def command_judges(entry: dict[str, Any], checks: Sequence[CommandCheck | None],
 def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
                       budget: FalseAlarmBudget, log_hours: Sequence[float]) -> BudgetThresholds:
     """Fit every judge that has enough logs (the others keep calibrate's rule, and count
-    in the sharing all the same: they may alarm too)."""
+    in the sharing all the same: they may alarm too). Each judge's share is checked on its
+    own left-out logs: a heavy-tailed judge is held back without costing the others."""
     per_log = budget.per_log(log_hours)
     share = judge_share(per_log, len(judges) + effort_actuators)
-    fits = [(judge, fit_law(judge.values, judge.law)) for judge in judges]
-    kept = tuple((judge, fit) for judge, fit in fits if fit is not None)
-    checked = checked_share([fit for _, fit in kept], share)
-    effort_rate = (round(1.0 - (1.0 - checked) ** effort_actuators, 6)
+    fits = [(judge, fit_law([*judge.values, *judge.more], judge.law)) for judge in judges]
+    kept = tuple(JudgeFit(judge, fit, checked_share(fit, share)) for judge, fit in fits
+                 if fit is not None)
+    effort_rate = (round(1.0 - (1.0 - share) ** effort_actuators, 6)
                    if effort_actuators else None)
-    return BudgetThresholds(budget, per_log, share, checked, kept, effort_rate, len(log_hours))
+    return BudgetThresholds(budget, per_log, share, kept, effort_rate, len(log_hours))

@@ -167,9 +167,9 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
     """What `calibrate --false-alarm-rate` set, and how it held up leaving each log out."""
     per_log = ("" if not budget.budget.per_hour
                else f" (a share of {budget.per_log_rate:.2%} of logs of the median length)")
-    lowered = ("" if budget.checked >= budget.share else
-               f", lowered to {budget.checked:.2%} because the logs left out alarmed more "
-               "often than the fitted laws promise")
+    lowered = ("" if not budget.lowered else
+               f", lowered for {', '.join(f.judge.label for f in budget.lowered)} because "
+               "its logs left out alarmed more often than its fitted law promises")
     lines = [f"calibrated on {hours:.2f} h of normal data ({budget.logs} logs) for a "
              f"false-alarm rate of {budget.budget.describe()}{per_log}: each judge gets "
              f"{budget.share:.2%} of logs{lowered}",
@@ -177,10 +177,10 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
              f"with the thresholds fitted on the others (the budget expects "
              f"{budget.per_log_rate * budget.logs:.1f}); {budget.in_sample_alarmed} reach the "
              "final thresholds"]
-    for judge, fit in budget.fits:
-        lines.append(f"    {judge.label:<24} threshold {budget.threshold(fit):.4g}  ({fit.law} "
-                     f"fit to {fit.logs} logs; left out, {sum(fit.loo_alarms(budget.checked))} "
-                     "alarm)")
+    for f in budget.fits:
+        share = "" if f.share >= budget.share else f", share lowered to {f.share:.2%}"
+        lines.append(f"    {f.judge.label:<24} threshold {f.threshold:.4g}  ({f.fit.law} "
+                     f"fit to {f.fit.logs} logs; left out, {f.loo_alarms} alarm{share})")
     if budget.effort_rate is not None:
         lines.append(f"    effort shares: a budget of {budget.effort_rate:.2%} of logs")
     return lines
