@@ -5,7 +5,9 @@ alarms on a log when the log's statistic reaches its threshold. Given the statis
 normal logs, the threshold is the quantile of a law fitted to them at 1 - the judge's share
 of the budget, so that it extrapolates beyond the largest value seen:
 - the peak of a series over a log (g, extra effort) is a maximum: a Gumbel law (maximum
-  likelihood), the extreme-value law of maxima of light-tailed series;
+  likelihood), the extreme-value law of maxima of light-tailed series; its threshold is
+  predictive: it allows for the scatter of a fit to that many logs (found once per count
+  of logs by simulation: the law is location-scale, so that scatter is the same for any);
 - a reading taken once per log (where the log starts) is a level: a Student-t prediction
   interval around the normal logs' mean (two-sided: a zero may shift either way).
 Every fit is checked by leave-one-log-out: each log's value against the law fitted on the
@@ -16,6 +18,7 @@ its left-out logs alarm no more often than its share allows.
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -53,40 +56,81 @@ def judge_share(rate: float, judges: int) -> float:
 
 
 def gumbel_fit(maxima: np.ndarray) -> tuple[float, float]:
-    """Location and scale of the Gumbel law of ``maxima`` by maximum likelihood (the scale
-    solves β = mean - Σ x e^(-x/β) / Σ e^(-x/β); bisection on the standardised values)."""
-    x = np.asarray(maxima, float)
-    spread = float(x.std())
-    if spread <= 0:
-        return float(x.mean()), 0.0
-    z = (x - x.mean()) / spread
+    """Location and scale of the Gumbel law of ``maxima`` by maximum likelihood."""
+    location, scale = _gumbel_fits(np.asarray(maxima, float)[None, :])
+    return float(location[0]), float(scale[0])
 
-    def excess(beta: float) -> float:
-        w = np.exp(-(z - z.min()) / beta)      # at most 1: no overflow
-        return float(beta - z.mean() + (z * w).sum() / w.sum())
 
-    low, high = 1e-3, 10.0
-    if excess(low) > 0 or excess(high) < 0:      # no root inside: the method of moments
-        beta = np.sqrt(6.0) / np.pi
-    else:
-        for _ in range(60):
-            middle = 0.5 * (low + high)
-            low, high = (middle, high) if excess(middle) < 0 else (low, middle)
-        beta = 0.5 * (low + high)
-    location = z.min() - beta * np.log(np.mean(np.exp(-(z - z.min()) / beta)))
-    return float(x.mean() + spread * location), float(spread * beta)
+def _gumbel_fits(samples: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Maximum-likelihood location and scale of each row of ``samples``: the scale solves
+    β = mean - Σ x e^(-x/β) / Σ e^(-x/β), by bisection on the standardised values; a row
+    without a root inside the bracket takes the method of moments."""
+    x = np.asarray(samples, float)
+    mean, spread = x.mean(axis=1, keepdims=True), x.std(axis=1, keepdims=True)
+    flat = spread[:, 0] <= 0
+    z = (x - mean) / np.where(spread > 0, spread, 1.0)
+    low_z = z.min(axis=1, keepdims=True)
+
+    def excess(beta: np.ndarray) -> np.ndarray:
+        w = np.exp(-(z - low_z) / beta[:, None])      # at most 1: no overflow
+        return np.asarray(beta - z.mean(axis=1) + (z * w).sum(axis=1) / w.sum(axis=1))
+
+    rows = len(x)
+    low, high = np.full(rows, 1e-3), np.full(rows, 10.0)
+    bracketed = (excess(low) <= 0) & (excess(high) >= 0)
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        below = excess(middle) < 0
+        low, high = np.where(below, middle, low), np.where(below, high, middle)
+    beta = np.where(bracketed, 0.5 * (low + high), np.sqrt(6.0) / np.pi)
+    location = low_z[:, 0] - beta * np.log(np.mean(np.exp(-(z - low_z) / beta[:, None]),
+                                                   axis=1))
+    return (np.where(flat, mean[:, 0], mean[:, 0] + spread[:, 0] * location),
+            np.where(flat, 0.0, spread[:, 0] * beta))
+
+
+PREDICTIVE_DRAWS = 2000      # standard Gumbel samples behind a predictive threshold
+
+
+@lru_cache(maxsize=32)
+def _gumbel_pivots(logs: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted location and scale of PREDICTIVE_DRAWS standard Gumbel samples of
+    ``logs`` values: how a fit to that many logs scatters about its law. The Gumbel is a
+    location-scale law, so (x - location) / scale of a new maximum has one distribution
+    whatever the true law, and these give it."""
+    draws = np.random.default_rng(0).gumbel(size=(PREDICTIVE_DRAWS, logs))
+    return _gumbel_fits(draws)
+
+
+def _gumbel_tail(standardised: float, logs: int) -> float:
+    """The chance that a new maximum lies beyond location + ``standardised`` x scale of a
+    fit to ``logs`` maxima, the fit's own uncertainty included (a prediction, as the
+    Student-t interval is for levels)."""
+    location, scale = _gumbel_pivots(logs)
+    return float(np.mean(-np.expm1(-np.exp(-(location + standardised * scale)))))
+
+
+def _gumbel_quantile(share: float, logs: int) -> float:
+    """The standardised threshold whose predictive tail is ``share`` (bisection)."""
+    low, high = -10.0, 10.0
+    while _gumbel_tail(high, logs) > share:
+        high *= 2.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if _gumbel_tail(middle, logs) > share else (low, middle)
+    return 0.5 * (low + high)
 
 
 def _fit(law: str, x: np.ndarray) -> tuple[float, ...]:
     if law == "gumbel":
-        return gumbel_fit(x)
+        return (*gumbel_fit(x), float(len(x)))
     return float(x.mean()), float(x.std(ddof=1) * np.sqrt(1.0 + 1.0 / len(x))), len(x) - 1.0
 
 
 def _quantile(law: str, params: tuple[float, ...], share: float) -> float:
     if law == "gumbel":
-        location, scale = params
-        return location - scale * float(np.log(-np.log1p(-share)))
+        location, scale, logs = params
+        return location + scale * _gumbel_quantile(share, int(logs))
     mean, scale, dof = params
     return abs(mean) + quantile(1.0 - share / 2.0, dof) * scale
 
@@ -94,10 +138,10 @@ def _quantile(law: str, params: tuple[float, ...], share: float) -> float:
 def _tail(law: str, params: tuple[float, ...], value: float) -> float:
     """The share at which ``value`` would just reach the threshold."""
     if law == "gumbel":
-        location, scale = params
+        location, scale, logs = params
         if scale <= 0:
             return 1.0 if value <= location else 0.0
-        return float(-np.expm1(-np.exp(-(value - location) / scale)))
+        return _gumbel_tail((value - location) / scale, int(logs))
     mean, scale, dof = params
     excess = abs(value) - abs(mean)
     if excess <= 0:
