@@ -24,7 +24,7 @@ import tempfile
 import time
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -97,6 +97,8 @@ class HaizheFolds:
     alarms: Counter[str]
     named: dict[str, Counter[str]]
     results: list["TrainingResult"] = field(default_factory=list)
+    # The same folds without the profile's measured inputs (the linear predictors only).
+    without_inputs: list["TrainingResult"] = field(default_factory=list)
     horizons: list[str] = field(default_factory=list)
     loo: list[tuple[int, int]] = field(default_factory=list)     # alarmed, calibration runs
     seconds: float = 0.0
@@ -123,6 +125,10 @@ def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path,
                                  iterations_scale=scale, keep_unskilled=True)
         out.seconds += time.perf_counter() - started
         out.results.append(result)
+        if profile.inputs:
+            out.without_inputs.append(train_from_logs(
+                training, work / f"haizhe{fold}-without-inputs", replace(profile, inputs=()),
+                calibration, keep_unskilled=True, predictors=("linear", "linear-replay")))
         out.horizons.append(_horizon(result))
         model = load_model(work / f"haizhe{fold}")
         budget = calibrate(model, profile, calibration,
@@ -140,6 +146,11 @@ def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path,
     return out
 
 
+def _skills(results: list["TrainingResult"], signal: str) -> str:
+    return ", ".join(f"{s.skill:.2f}" + ("" if s.judged else " (not judged)")
+                     for s in (r.chosen.signals[signal] for r in results)) or "-"
+
+
 def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
     """Cross-validated within train/: in fold f the Normal runs numbered i with i % folds == f
     are judged, those with i % folds == f + 1 calibrate (and score the skill), the rest
@@ -151,15 +162,20 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
     faulty = {c: sorted((folder / c).glob("*.csv"), key=_number) for c in FAULT_CLASSES}
     run = _haizhe_folds(normal, faulty, work, scale, folds)
     first = run.results[0]
-    depth = [r.chosen.signals["depth"] for r in run.results]
+    profile = load_profile(Path("haizhe"))
     lines = [f"**Haizhe AUV**, {folds}-fold cross-validation within train/ ({len(normal)} Normal "
              f"runs; per fold about {len(normal) * (folds - 2) // folds} to train, "
              f"{len(normal) // folds} to calibrate and score, {len(normal) // folds} judged; "
              f"{first.operating_hours * 60:.1f} min of operating time in fold 1; training "
              f"{run.seconds / folds:.0f} s a fold). Horizon chosen per fold: "
              f"{', '.join(run.horizons)}. Depth skill per fold: "
-             + ", ".join(f"{s.skill:.2f}" + ("" if s.judged else " (not judged)")
-                         for s in depth) + ". Skill in fold 1:", "", *_skill_table(first), "",
+             + _skills(run.results, "depth") + ". The model is driven by the command and the "
+             "profile's measured inputs (" + ", ".join(profile.input_names) + "); without "
+             "them (the linear predictors, which win on depth here), depth skill per fold: "
+             + _skills(run.without_inputs, "depth") + "; yaw rate: "
+             + _skills(run.without_inputs, "yaw_rate") + " (with them: "
+             + _skills(run.results, "yaw_rate") + "). Skill in fold 1:", "",
+             *_skill_table(first), "",
              f"Thresholds set by `calibrate --false-alarm-rate {FALSE_ALARM_RATE}` on each "
              "fold's calibration runs; leaving each calibration run out, "
              + ", ".join(f"{a} of {n}" for a, n in run.loo) + " alarmed (per fold).", "",
@@ -178,7 +194,7 @@ def haizhe(folder: Path, work: Path, scale: float, folds: int) -> list[str]:
               "one.",
               "", "Commands against the motion, fold 1: "
               + "; ".join(" ".join(line.split()).rstrip(":") for line in relation_lines(
-                  first.command_relations, load_profile(Path("haizhe")).command_names)), ""]
+                  first.command_relations, profile.command_names)), ""]
     return lines + separability(folder, folds)
 
 
