@@ -4,6 +4,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from shared_data import SHARED_DATA
 
 from auvdiag_cli.simulator.run import SimulatedDive, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
@@ -66,15 +67,27 @@ def profile_without(tmp_path: Path) -> Callable[[str, str], Path]:
     return cut
 
 
-# Files that train models or simulate fleets, slowest first: run first, they let the two
-# workers finish together (longest job first) instead of one waiting on a late start.
-SLOWEST_FIRST = ("test_startup.py", "test_model.py", "test_fuzz.py", "test_trend.py",
-                 "test_calibrate.py", "test_audit.py", "test_skill.py")
-
-
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    def rank(item: pytest.Item) -> int:
-        name = item.path.name
-        return SLOWEST_FIRST.index(name) if name in SLOWEST_FIRST else len(SLOWEST_FIRST)
+    for item in items:
+        missing = [SHARED_DATA / mark.args[0] for mark in item.iter_markers("shared_data")
+                   if not (SHARED_DATA / mark.args[0]).exists()]
+        if missing:
+            item.add_marker(pytest.mark.skip(reason=f"real data not found at {missing[0]}"))
+    # The slow tests first: the two workers then finish together (longest job first)
+    # instead of one waiting on a late start.
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)   # stable
 
-    items.sort(key=rank)   # stable: the order inside a file is kept
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """Say whether the tests on real data ran: a skip is easy to miss."""
+    outcomes: dict[str, str] = {}
+    for outcome in ("passed", "failed", "skipped", "error"):
+        for report in terminalreporter.stats.get(outcome, []):
+            if "shared_data" in getattr(report, "keywords", {}):
+                outcomes[report.nodeid] = outcome
+    if not outcomes:
+        return
+    ran = sum(outcome != "skipped" for outcome in outcomes.values())
+    terminalreporter.write_line(
+        f"real data ({SHARED_DATA}): {ran} test(s) ran on it, "
+        f"{len(outcomes) - ran} skipped" + ("" if SHARED_DATA.is_dir() else " (not found)"))

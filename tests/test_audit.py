@@ -17,6 +17,8 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 from models.store import default_model_dir
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 # (scenario, format, expected verdict, expected component or candidates)
 FLEET = [

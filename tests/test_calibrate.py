@@ -4,6 +4,7 @@ import json
 import re
 import shutil
 
+import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -12,6 +13,7 @@ from models.store import default_model_dir
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_calibrated_thresholds_hold_on_held_out_logs_and_still_detect(make_log, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(default_model_dir(), model)

@@ -45,6 +45,7 @@ def _report(log: Path, *options: str) -> tuple[int, dict]:
     return result.exit_code, json.loads(result.stdout)
 
 
+@pytest.mark.slow
 def test_a_thruster_at_70_percent_is_found_in_the_commands_and_named(tmp_path):
     """Thruster 0 gives 70 % of its thrust from 60 s: the heading controller drives it
     harder and the motion stays within its thresholds; the commands name it."""
@@ -102,6 +103,7 @@ def test_the_relation_reads_back_from_json_and_takes_logs_of_any_length():
         assert effort.shape == (steps, 2) and np.isnan(effort).all()   # shorter than a window
 
 
+@pytest.mark.slow
 def test_relate_learns_the_relation_for_an_existing_model(make_log, tmp_path):
     model = tmp_path / "model"
     model.mkdir()
@@ -144,6 +146,7 @@ def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(
     assert model.relations is not None and model.relations.thresholds[0] == after[0]
 
 
+@pytest.mark.slow
 def test_a_manoeuvre_the_relation_has_not_seen_does_not_alarm_for_a_few_seconds(tmp_path):
     """A healthy dive flying the paper's sequences and mission three times over: where one
     mission ends and the next sequence begins, the commands depart from the relation for

@@ -9,13 +9,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
 runner = CliRunner()
 PROFILE = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml").read_text()
-HAIZHE = Path(__file__).resolve().parents[2] / "shared" / "data" / "haizhe" / "train"
+HAIZHE = SHARED_DATA / "haizhe" / "train"
 
 
 def diagnose(log, *options):
@@ -117,7 +118,7 @@ def test_hhmmss_rows_are_spread_evenly_over_each_second():
     assert "about 4 rows a second" in notes[0]
 
 
-@pytest.mark.skipif(not HAIZHE.is_dir(), reason=f"real Haizhe data not found at {HAIZHE}")
+@pytest.mark.shared_data("haizhe/train")
 def test_real_haizhe_runs_are_read_directly():
     from adapters import read_log
     from auvdiag_cli.vehicle.profile import load_profile

@@ -18,6 +18,8 @@ from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 distributed = pytest.importorskip("distributed")
 DASK = Path(sys.executable).parent / "dask"
 LOGS = [("paper-flow-sensor-covered", "bag"), ("paper-normal", "db3"),

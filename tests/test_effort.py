@@ -9,15 +9,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 from auvdiag_cli.errors import ProfileError
 from models.student_t import quantile
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 SHARES = np.array([1.07, 0.87, 1.13, 0.93])
-CRAZYPAD = Path(__file__).resolve().parents[2] / "shared" / "data" / "crazypad"
+CRAZYPAD = SHARED_DATA / "crazypad"
 RATE_HZ = 100
 
 
@@ -194,8 +197,7 @@ def test_init_profile_proposes_groups_of_alike_commands():
     assert effort_groups(rotors, {frozenset(["c0", "c1", "c2", "c3"])}) == []
 
 
-@pytest.mark.skipif(not (CRAZYPAD / "labels.csv").is_file(),
-                    reason="CrazyPAD data not found at ../shared/data/crazypad")
+@pytest.mark.shared_data("crazypad/labels.csv")
 def test_crazypad_cut_propeller_found_and_named_without_false_alarms():
     from auvdiag_cli.engine.effort_check import check_effort
     from auvdiag_cli.engine.ingest import ingest

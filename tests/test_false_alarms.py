@@ -17,6 +17,7 @@ from models.store import default_model_dir
 runner = CliRunner()
 
 
+@pytest.mark.slow
 def test_the_gumbel_fit_recovers_its_law_and_its_threshold_holds_on_new_maxima():
     rng = np.random.default_rng(3)
     location, scale = gumbel_fit(rng.gumbel(4.0, 1.5, 4000))
@@ -104,6 +105,7 @@ def test_a_budget_that_means_nothing_is_refused(text):
         FalseAlarmBudget.parse(text)
 
 
+@pytest.mark.slow
 def test_calibrate_sets_thresholds_for_a_budget_and_says_how_they_held(make_log, tmp_path):
     model = tmp_path / "model"
     shutil.copytree(default_model_dir(), model)

@@ -24,6 +24,7 @@ def test_mutations_are_reproducible_and_damage_the_bytes():
     assert len(kinds) >= len(MUTATIONS) - 1      # every kind of damage is drawn
 
 
+@pytest.mark.slow
 def test_seeded_campaign_over_every_format_has_no_defect(tmp_path):
     report_path = tmp_path / "fuzz.json"
     result = subprocess.run(
@@ -71,6 +72,7 @@ HARNESS_SCRIPT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow
 def test_harness_sorts_every_outcome(tmp_path):
     result = subprocess.run([sys.executable, "-c", HARNESS_SCRIPT, str(tmp_path)],
                             capture_output=True, text=True, timeout=120)

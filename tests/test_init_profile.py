@@ -4,12 +4,12 @@ proposes resolves on that log; what the log cannot tell is marked CHECK."""
 from pathlib import Path
 
 import pytest
+from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
 runner = CliRunner()
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data"
 # (format, a command the draft must propose, a sensor it must propose)
 EXPECTED = [("tlog", "servo1_raw", "yawspeed"), ("bin", "c1", "gyrz"),
             ("mcap", "data_0", "angular_velocity_z"), ("bag", "data_1", "angular_velocity_z"),
@@ -48,11 +48,12 @@ def test_a_log_with_nothing_that_moves_is_one_line(tmp_path):
     assert result.exit_code == 2 and "found no command" in result.output
 
 
-@pytest.mark.skipif(not SHARED.is_dir(), reason=f"real logs not found at {SHARED}")
+@pytest.mark.shared_data("ardusub")
+@pytest.mark.shared_data("haizhe/train")
 @pytest.mark.parametrize("relative", ["ardusub/small.tlog", "ardusub/small.BIN",
                                       "haizhe/train/Normal/Normal_0.csv"])
 def test_drafts_from_real_logs_resolve(tmp_path, relative):
-    text = _draft_and_inspect(SHARED / relative, tmp_path / "real.toml")
+    text = _draft_and_inspect(SHARED_DATA / relative, tmp_path / "real.toml")
     if relative.endswith(".tlog"):     # the autopilot's armed bit, not a companion's
         assert 'operating = { message = "HEARTBEAT", field = "base_mode", where = { type = ' \
                '"12" }, bits = 128 }' in text
@@ -84,12 +85,12 @@ def _draft_and_inspect_like(log, like, target):
     return target.read_text()
 
 
-@pytest.mark.skipif(not SHARED.is_dir(), reason=f"real logs not found at {SHARED}")
+@pytest.mark.shared_data("ardusub")
 def test_like_bluerov2_on_real_logs(tmp_path):
-    log = SHARED / "ardusub" / "small.BIN"
+    log = SHARED_DATA / "ardusub" / "small.BIN"
     draft = _draft_and_inspect_like(log, Path("bluerov2_standard"), tmp_path / "rov.toml")
     assert "# 11 of 11 signals read on the log as that profile maps them." in draft
-    result = runner.invoke(app, ["init-profile", str(SHARED / "ardusub" / "small.tlog"),
+    result = runner.invoke(app, ["init-profile", str(SHARED_DATA / "ardusub" / "small.tlog"),
                                  "--like", "bluerov2"])          # the DVL is not there
     assert result.exit_code == 2 and "surge" in result.output and "draft without --like" \
         in result.output

@@ -92,6 +92,7 @@ def test_verdict_onset_and_detection_are_events_at_their_times(exported):
     assert metadata["coverage"] == "2 of 2 signals and 2 of 2 actuators judged"
 
 
+@pytest.mark.slow
 def test_audit_writes_an_mcap_per_log_and_reuses_it(tmp_path):
     logs = tmp_path / "logs"
     logs.mkdir()

@@ -14,6 +14,8 @@ from auvdiag_cli.engine.ingest import ingest
 from models.dynamics import replay
 from models.store import ModelFileError, load_model
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 PAPER_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
 
 

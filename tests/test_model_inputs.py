@@ -14,6 +14,8 @@ from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 DT = 0.1
 

@@ -18,6 +18,8 @@ from models.fast import ChosenDynamics, FastDynamics, FastStepper, linear_only
 from models.normaliser import Normaliser
 from models.store import load_model
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 
 

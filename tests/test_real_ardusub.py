@@ -6,14 +6,15 @@ import json
 from pathlib import Path
 
 import pytest
+from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 
 runner = CliRunner()
-DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "ardusub"
+DATA = SHARED_DATA / "ardusub"
 LOGS = ["small.tlog", "small.BIN", "pymavlink_bug.tlog"]
-pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"real ArduSub logs not found at {DATA}")
+pytestmark = [pytest.mark.shared_data("ardusub"), pytest.mark.slow]
 
 
 def _armed_seconds(log: Path) -> float:

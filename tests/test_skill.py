@@ -53,6 +53,7 @@ def _noise_log(path: Path, seed: int, seconds: float = 240.0) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_a_model_trained_on_noise_has_no_skill_and_judges_nothing(tmp_path):
     logs = [str(_noise_log(tmp_path / f"noise{i}.csv", i)) for i in range(2)]
     model = tmp_path / "noise-model"
@@ -100,6 +101,7 @@ def _unskilled_copy(target: Path, signal: str, relations: bool = False) -> Path:
                          command_relations={"refused": "left out of this copy"})
 
 
+@pytest.mark.slow
 def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     log = make_log("paper-flow-sensor-covered", 12)
     code, report = _diagnose_json(log)
@@ -172,6 +174,7 @@ def test_a_one_sample_spike_at_the_start_changes_no_verdict(tmp_path, profile):
         assert peak < 1.2 * max(s["max_g"]["yaw_rate"] for s in before["segments"])
 
 
+@pytest.mark.slow
 def test_the_audit_table_names_the_signals_not_judged(make_log, tmp_path):
     fleet = tmp_path / "fleet"
     fleet.mkdir()
@@ -186,6 +189,7 @@ def test_the_audit_table_names_the_signals_not_judged(make_log, tmp_path):
     assert row["worst_g_signal"] == "yaw_rate"       # the worst g of a judged signal
 
 
+@pytest.mark.slow
 def test_too_little_held_out_data_judges_nothing(tmp_path):
     """A 30 s log leaves 6 s held out: about 60 samples cannot show skill, whatever the
     figure."""

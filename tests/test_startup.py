@@ -16,6 +16,8 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 from auvdiag_cli.vehicle.profile import profile_text
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 VARIANTS = {
     "heavy_twin": [("inertia = 80.0", "inertia = 130.0"),

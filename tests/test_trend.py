@@ -12,6 +12,8 @@ from auvdiag_cli.audit.trend import flag_history, fleet_trend, mann_kendall, sen
 from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.season import write_season
 
+pytestmark = pytest.mark.slow    # trains models or simulates fleets
+
 runner = CliRunner()
 WEEKS, LOSS_PER_WEEK = 10, 0.04
 
