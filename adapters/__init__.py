@@ -5,17 +5,16 @@ from pathlib import Path
 from typing import Protocol
 
 from adapters.csv_log import CsvAdapter
-from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mavlink import DataflashAdapter, TlogAdapter
 from adapters.mcap import McapAdapter
 from adapters.rosbag import RosbagAdapter
 from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSource, Signals
 from adapters.ulog import UlogAdapter
+from auvdiag_errors import LogError
 
 __all__ = [
     "FieldSource",
-    "LogError",
     "LogInventory",
     "LogSources",
     "SegmentMarker",

@@ -8,11 +8,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from adapters.errors import LogError
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
 from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals, fallback_name
 from adapters.timebase import MAX_TIME_NS, spikes
+from auvdiag_errors import LogError
 
 # How a log that lacks a signal the profile names is reported (callers match on it).
 MISSING_SIGNALS = "no messages for signal(s)"

@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 
 from adapters.collect import ColumnSource, SignalCollector
-from adapters.errors import LogError
 from adapters.fieldnames import closest_first
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals, TimeColumn
+from auvdiag_errors import LogError
 
 DELIMITERS = (",", ";", "\t")
 SNIFF_BYTES = 8192

@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from adapters.collect import INSTANCE_FIELDS, ColumnSource, SignalCollector
-from adapters.errors import LogError
 from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mavlink_columns import (
@@ -25,6 +24,7 @@ from adapters.mavlink_columns import (
 )
 from adapters.mavlink_scan import NO_TIME, RecordIndex, index_file
 from adapters.signals import LogSources, Signals
+from auvdiag_errors import LogError
 
 MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
 PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100

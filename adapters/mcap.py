@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any, BinaryIO
 
 from adapters.collect import SignalCollector
-from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap_index import RECORD_HEAD, IndexUnusable, chunk_data, locate, read_index_entries
 from adapters.mcap_records import (
@@ -21,6 +20,7 @@ from adapters.mcap_records import (
     walk_records,
 )
 from adapters.signals import LogSources, Signals
+from auvdiag_errors import LogError
 
 __all__ = ["MCAP_MAGIC", "McapAdapter", "read_mcap", "read_sequential"]
 

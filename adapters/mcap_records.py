@@ -14,10 +14,10 @@ from typing import Any, BinaryIO
 import numpy as np
 
 from adapters.collect import SignalCollector
-from adapters.errors import LogError
 from adapters.limits import MAX_CHUNK_BYTES
 from adapters.mcap_index import LocatedMessages, chunk_data
 from adapters.ros_columns import TopicBatches
+from auvdiag_errors import LogError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 _READ_STEP = 1 << 20

@@ -9,13 +9,13 @@ from pathlib import Path
 from typing import Any
 
 from adapters.collect import SignalCollector
-from adapters.errors import LogError
 from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, read_mcap, read_sequential
 from adapters.ros_columns import TopicBatches
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
+from auvdiag_errors import LogError
 
 ROS1_MAGIC = b"#ROSBAG V2.0"
 SQLITE_MAGIC = b"SQLite format 3\x00"

@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from adapters.collect import ColumnSource, SignalCollector
-from adapters.errors import LogError
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
+from auvdiag_errors import LogError
 
 MAGIC = b"ULog\x01\x12\x35"
 INSTANCE = "instance"

@@ -5,13 +5,14 @@ the report, audit a fleet. Everything else inside auvdiag_cli may move between r
     from auvdiag_cli import api
 
     profile = api.load_profile("bluerov2_standard")    # a built-in name, a TOML path, or None
-    model = api.load_model(Path("my_model"))            # None: the shipped Twin-Burger model
+    model = api.load_model(Path("my_model"))            # None: the profile's shipped model
     diagnosis = api.diagnose(Path("dive.tlog"), profile, model)
     print(diagnosis.verdict, diagnosis.component, diagnosis.detected_at_s)
     report = api.to_json(diagnosis)                      # the JSON report, as a dict
 
-Every failure is an `AuvdiagError` (`LogError`, `ProfileError`, `ModelError`, `UsageError`)
-whose message names the file and the problem."""
+Every failure is an `auvdiag_errors.AuvdiagError` (`LogError`, `ProfileError`, `ModelError`,
+`UsageError`, …; import them from `auvdiag_errors`, their one home) whose message names the
+file and the problem."""
 
 from collections.abc import Sequence
 from pathlib import Path
@@ -25,14 +26,12 @@ from auvdiag_cli.engine.results import Diagnosis, Verdict
 from auvdiag_cli.reports.json_report import diagnosis_to_dict
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_cli.vehicle.profile import load_profile as _load_profile
-from auvdiag_errors import AuvdiagError, LogError, ModelError, ProfileError, UsageError
 from models.store import LoadedModel
 from models.store import load_model as _load_model
 
 __all__ = [
-    "AuditResult", "AuvdiagError", "Diagnosis", "LoadedModel", "LogError", "ModelError",
-    "Profile", "ProfileError", "Signals", "UsageError", "Verdict", "audit", "diagnose",
-    "load_model", "load_profile", "read_log", "to_json",
+    "AuditResult", "Diagnosis", "LoadedModel", "Profile", "Signals", "Verdict", "audit",
+    "diagnose", "load_model", "load_profile", "read_log", "to_json",
 ]
 
 
@@ -42,9 +41,10 @@ def load_profile(profile: str | Path | None = None) -> Profile:
     return _load_profile(None if profile is None else Path(profile))
 
 
-def load_model(directory: Path | None = None) -> LoadedModel:
-    """A model directory (never runs code from it); None is the shipped Twin-Burger model."""
-    return _load_model(directory)
+def load_model(directory: Path | None = None, profile: Profile | None = None) -> LoadedModel:
+    """A model directory (never runs code from it); None is the model shipped for the
+    profile's vehicle (the Twin-Burger's without a profile), as the CLI picks it."""
+    return _load_model(directory, profile.name if profile is not None else "twin-burger")
 
 
 def read_log(path: Path, profile: Profile) -> Signals:

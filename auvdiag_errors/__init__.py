@@ -42,9 +42,20 @@ class ModelError(AuvdiagError):
     """A model directory is missing, unreadable, or does not fit the log."""
 
 
+class CompanionError(AuvdiagError):
+    """A file that goes with a log (its mission plan) is missing or unreadable; the message
+    names it."""
+
+
+class DerivationError(AuvdiagError):
+    """The pattern table cannot be derived from what was given: no mission to fly the
+    faults on, or a log with nothing to replay."""
+
+
 class UsageError(AuvdiagError):
     """The options given do not make sense together, or a file given is not what the
     command expects (e.g. a JSON that is not an auvdiag report)."""
 
 
-__all__ = ["AuvdiagError", "LogError", "ModelError", "ProfileError", "UsageError", "one_line"]
+__all__ = ["AuvdiagError", "CompanionError", "DerivationError", "LogError", "LogNotOperating",
+           "ModelError", "ProfileError", "UsageError", "one_line"]

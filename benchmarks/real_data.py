@@ -265,9 +265,9 @@ def separability(folder: Path, folds: int) -> list[str]:
 
 def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
     from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.errors import AuvdiagError
     from auvdiag_cli.jobs.train import train_from_logs
     from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_errors import AuvdiagError
     from models.store import load_model
 
     profile = load_profile(Path("bluerov2_standard"))

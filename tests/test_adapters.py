@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from adapters import LogError, detect_format, read_log
+from adapters import detect_format, read_log
 from adapters.fieldpath import field_getter, parse_field_path
+from auvdiag_errors import LogError
 
 FORMATS = ["bag", "db3", "ros2-mcap"]
 

@@ -6,6 +6,7 @@ from pathlib import Path
 import pytest
 
 from auvdiag_cli import api
+from auvdiag_errors import AuvdiagError
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_logs"
 
@@ -24,8 +25,16 @@ def test_a_program_reads_diagnoses_and_reports_a_log():
 
 def test_a_built_in_profile_by_name_and_errors_of_one_type():
     assert api.load_profile("bluerov2_standard").name == "bluerov2_standard"
-    with pytest.raises(api.AuvdiagError, match="no-such-dive"):
+    with pytest.raises(AuvdiagError, match="no-such-dive"):
         api.diagnose(Path("no-such-dive.bag"), api.load_profile(), api.load_model())
+
+
+def test_the_shipped_model_is_the_profiles_vehicles_as_the_cli_picks_it():
+    bluerov2 = api.load_profile("bluerov2")
+    assert api.load_model(profile=bluerov2).metadata["vehicle"] == "bluerov2"
+    assert api.load_model().metadata["vehicle"] == "twin-burger"
+    with pytest.raises(AuvdiagError, match="no model is shipped for vehicle 'haizhe'"):
+        api.load_model(profile=api.load_profile("haizhe"))
 
 
 def test_a_program_audits_a_folder(tmp_path):

@@ -154,3 +154,23 @@ def test_modules_and_functions_stay_small():
                          if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
                          and node.end_lineno - node.lineno + 1 > FUNCTION_LINES]
     assert too_long == []
+
+
+def test_the_errors_have_one_home_that_every_module_imports_them_from():
+    """No module re-exports one of `auvdiag_errors`' errors (in its ``__all__``), and the
+    engine raises no command-line usage error (its own are LogError, ModelError,
+    CompanionError, DerivationError)."""
+    import auvdiag_errors
+
+    errors = set(auvdiag_errors.__all__) - {"one_line"}
+    for name, path in _modules().items():
+        if name == "auvdiag_errors":
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Assign) and any(
+                    isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets):
+                exported = {e.value for e in ast.walk(node.value) if isinstance(e, ast.Constant)}
+                assert not exported & errors, f"{name} re-exports {exported & errors}"
+        if name.startswith("auvdiag_cli.engine"):
+            assert "UsageError" not in path.read_text(encoding="utf-8"), name

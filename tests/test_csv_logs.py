@@ -92,7 +92,7 @@ def test_a_missing_column_names_it_and_the_closest(make_log, tmp_path):
 
 def test_csv_is_recognised_by_content_not_by_name(make_log, tmp_path):
     from adapters import detect_format
-    from auvdiag_cli.errors import LogError
+    from auvdiag_errors import LogError
 
     text = make_log("paper-normal", 11, "csv").read_text()
     (tmp_path / "dive.txt").write_text(text)

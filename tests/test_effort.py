@@ -13,7 +13,7 @@ from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.errors import ProfileError
+from auvdiag_errors import ProfileError
 from models.student_t import quantile
 
 pytestmark = pytest.mark.slow    # trains models or simulates fleets

@@ -28,8 +28,7 @@ def run(*args):
 
 
 def test_every_layer_raises_the_one_root():
-    from adapters.errors import LogError
-    from auvdiag_cli.errors import AuvdiagError, ModelError, ProfileError, UsageError
+    from auvdiag_errors import AuvdiagError, LogError, ModelError, ProfileError, UsageError
     from models.store import ModelFileError
 
     for error in (LogError, ModelFileError, ModelError, ProfileError, UsageError):

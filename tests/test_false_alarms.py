@@ -9,8 +9,8 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.jobs.budget import FalseAlarmBudget, Judge, budget_thresholds
+from auvdiag_errors import UsageError
 from models.false_alarms import checked_share, fit_law, gumbel_fit, judge_share
 from models.store import default_model_dir
 

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from adapters import LogError, detect_format, read_log
+from adapters import detect_format, read_log
 from auvdiag_cli.engine.diagnosis import diagnose
+from auvdiag_errors import LogError
 from models.store import load_model
 
 ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]

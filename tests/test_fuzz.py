@@ -92,9 +92,9 @@ def test_harness_sorts_every_outcome(tmp_path):
 ])
 def test_an_error_must_be_one_line_naming_the_file(monkeypatch, tmp_path, profile, message,
                                                    verdict):
-    from auvdiag_cli.errors import UsageError
     from auvdiag_cli.fuzz.harness import exercise
     from auvdiag_cli.jobs import inspect as inspection
+    from auvdiag_errors import UsageError
     from models.store import load_model
 
     log = tmp_path / "log.bin"

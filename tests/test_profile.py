@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.profile import load_profile
+from auvdiag_errors import ProfileError
 
 
 def test_builtin_profile_has_the_papers_figures(profile):

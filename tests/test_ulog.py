@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from adapters import LogError, detect_format, inventory, read_log
+from adapters import detect_format, inventory, read_log
 from adapters.ulog import walk_framing
 from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.writers.ulog import BOOT_BEFORE_LOG_US, UlogTopic, write_ulog_file
 from auvdiag_cli.vehicle.profile import load_profile, profile_text
+from auvdiag_errors import LogError
 
 runner = CliRunner()
 RATE_HZ, SECONDS = 10, 30.0

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from adapters import detect_format
-from adapters.errors import LogError
+from auvdiag_errors import LogError
 
 LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin"}
 ROS2_METADATA = "metadata.yaml"

@@ -7,7 +7,7 @@ from collections.abc import Iterator, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
 
 from auvdiag_cli.audit.worker import AuditOutcome, AuditTask, analyse
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import UsageError
 
 
 def run_serial(tasks: Sequence[AuditTask]) -> Iterator[AuditOutcome]:

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from auvdiag_cli.errors import AuvdiagError
+from auvdiag_errors import AuvdiagError
 
 
 @dataclass(frozen=True)

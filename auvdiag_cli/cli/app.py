@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING, Annotated, NoReturn
 import typer
 
 from auvdiag_cli import __version__
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.vehicle.profile import builtin_profiles
+from auvdiag_errors import UsageError
 
 if TYPE_CHECKING:
     pass
@@ -66,7 +66,7 @@ def fail(message: str) -> NoReturn:
 @contextmanager
 def user_errors(subject: Path | str) -> Iterator[None]:
     """Turn every failure into one line on stderr and exit status 2 (never a traceback)."""
-    from auvdiag_cli.errors import AuvdiagError
+    from auvdiag_errors import AuvdiagError
 
     try:
         yield

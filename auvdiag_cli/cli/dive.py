@@ -18,7 +18,7 @@ from auvdiag_cli.cli.app import (
     fail,
     user_errors,
 )
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import UsageError
 
 if TYPE_CHECKING:
     from auvdiag_cli.audit.job import AuditResult
@@ -60,7 +60,7 @@ def diagnose(
     Segments come from the log's markers, or are recognised from the commands; each
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
-    from adapters import LogError, detect_format
+    from adapters import detect_format
     from auvdiag_cli.engine.diagnosis import diagnose as run_diagnosis
     from auvdiag_cli.engine.results import Verdict
     from auvdiag_cli.jobs.profile_fit import with_profile_hint
@@ -68,6 +68,7 @@ def diagnose(
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import summary_lines
     from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_errors import LogError
     from models.store import load_model
 
     with user_errors(log):

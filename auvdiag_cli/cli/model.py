@@ -18,7 +18,7 @@ from auvdiag_cli.cli.app import (
     report_progress,
     user_errors,
 )
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import UsageError
 
 PredictorOption = Annotated[list[str] | None, typer.Option(
     "--predictor", help="A predictor each signal may be read from: linear, linear-replay, "

@@ -16,7 +16,7 @@ from auvdiag_cli.cli.app import (
     fail,
     user_errors,
 )
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import UsageError
 
 
 @app.command()

@@ -34,9 +34,9 @@ from auvdiag_cli.engine.segments import (
 )
 from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.engine.truth import mission_path, read_missions
-from auvdiag_cli.errors import ModelError, UsageError
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_errors import CompanionError, ModelError
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
@@ -88,12 +88,12 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
 def _mission_legs(path: Path, explicit: bool) -> list[dict[str, Any]]:
     if not path.is_file():
         if explicit:
-            raise UsageError(f"{path}: no such mission plan")
+            raise CompanionError(f"{path}: no such mission plan")
         return []
     try:
         return read_missions(path)
     except (OSError, ValueError) as error:
-        raise UsageError(f"{path}: unreadable mission plan: {error}") from None
+        raise CompanionError(f"{path}: unreadable mission plan: {error}") from None
 
 
 def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:

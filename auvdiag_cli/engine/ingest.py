@@ -3,11 +3,11 @@
 from dataclasses import dataclass
 from pathlib import Path
 
-from adapters import LogError, Signals, read_log
+from adapters import Signals, read_log
 from auvdiag_cli.engine.outliers import remove_spikes
 from auvdiag_cli.engine.resample import AlignedFrame, NeverOperates, resample
 from auvdiag_cli.vehicle.profile import Profile
-from auvdiag_errors import LogNotOperating
+from auvdiag_errors import LogError, LogNotOperating
 
 
 @dataclass

@@ -17,10 +17,10 @@ import numpy as np
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.segments import dms_template
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.vehicle.controller import VehicleController
 from auvdiag_cli.vehicle.followers import make_follower
 from auvdiag_cli.vehicle.profile import MISSION_MODE, PatternRow, Profile
+from auvdiag_errors import DerivationError
 from models.fast import FastStepper, fast_replay
 from models.store import LoadedModel
 
@@ -106,7 +106,7 @@ def log_mission(frame: AlignedFrame, profile: Profile) -> OpenLoop:
                       np.nan)
     stretches = complete_stretches(usable)
     if not stretches:
-        raise UsageError("the log has no stretch with every signal measured to replay")
+        raise DerivationError("the log has no stretch with every signal measured to replay")
     begin, end = max(stretches, key=lambda s: s[1] - s[0])
     return open_loop_mission(profile, frame.commands[begin:end],
                              robust_state(frame.sensors, begin, begin, end),
@@ -120,7 +120,7 @@ def open_loop_mission(profile: Profile, commands: np.ndarray | None = None,
     after another from rest."""
     if commands is None:
         if not profile.dms:
-            raise UsageError(f"profile {profile.name!r} describes neither a [controller] nor "
+            raise DerivationError(f"profile {profile.name!r} describes neither a [controller] nor "
                              "DMSs: give a normal log of the vehicle (--log) whose commands "
                              "the faults are replayed on")
         commands = np.vstack([dms_template(d, profile.dt_s) for d in profile.dms.values()])

@@ -36,11 +36,11 @@ def main(argv: list[str] | None = None) -> int:
         os.environ.setdefault(variable, "1")   # forked children must not share BLAS pools
     import tempfile
 
-    from auvdiag_cli.errors import AuvdiagError
     from auvdiag_cli.fuzz.harness import Case, Limits, exercise, run_cases, summarise
     from auvdiag_cli.fuzz.seeds import real_seed, simulated_seeds
     from auvdiag_cli.simulator.writers import LOG_FORMATS
     from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_errors import AuvdiagError
     from models.store import load_model
 
     options = _arguments(argv)

@@ -68,11 +68,11 @@ def exercise(path: Path, profile: Profile, model: LoadedModel) -> tuple[str, str
     """What `auvdiag inspect` and `auvdiag diagnose --json -` do with ``path``, without the
     terminal: (outcome, detail). Raises nothing the CLI would not turn into one line."""
     from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.errors import AuvdiagError
     from auvdiag_cli.jobs.inspect import inspect_log
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import inspection_lines, summary_lines
+    from auvdiag_errors import AuvdiagError
 
     outcomes, details = [], []
     for command in ("inspect", "diagnose"):

@@ -18,8 +18,8 @@ import numpy as np
 
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.start_check import StartReading
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.numeric import peak
+from auvdiag_errors import UsageError
 from models.false_alarms import LawFit, checked_share, fit_law, judge_share
 
 RATE_PATTERN = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(/\s*h)?\s*$")

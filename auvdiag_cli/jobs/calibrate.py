@@ -24,7 +24,6 @@ from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.judging import not_judged_signals
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.files import write_json
 from auvdiag_cli.jobs.budget import (
     BudgetThresholds,
@@ -39,6 +38,7 @@ from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
+from auvdiag_errors import UsageError
 from models.effort import DEFAULT_FALSE_ALARM_RATE
 from models.store import METADATA_FILE, LoadedModel
 

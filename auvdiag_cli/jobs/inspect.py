@@ -4,9 +4,10 @@ import difflib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from adapters import FieldSource, LogError, LogInventory, LogSources, Signals, inventory, read_log
+from adapters import FieldSource, LogInventory, LogSources, Signals, inventory, read_log
 from auvdiag_cli.engine.resample import slow_command_note
 from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_errors import LogError
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TypeVar
 
-from auvdiag_cli.errors import UsageError
-from auvdiag_errors import LogNotOperating
+from auvdiag_errors import LogNotOperating, UsageError
 
 Read = TypeVar("Read")
 

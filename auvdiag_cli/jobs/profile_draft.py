@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
-from adapters import LogError, LogInventory, inventory, read_log
+from adapters import LogInventory, inventory, read_log
 from adapters.csv_log import csv_rows, is_number
 from adapters.signals import OPERATING, FieldSource, LogSources, TimeColumn
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
 COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|command)",

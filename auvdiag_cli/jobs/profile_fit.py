@@ -7,9 +7,8 @@ from adapters import inventory
 from adapters.collect import MISSING_SIGNALS
 from adapters.inventory import TopicInfo
 from adapters.signals import FieldSource
-from auvdiag_cli.errors import AuvdiagError
 from auvdiag_cli.vehicle.profile import builtin_profiles, load_profile
-from auvdiag_errors import LogError
+from auvdiag_errors import AuvdiagError, LogError
 
 # How the readers say that a log lacks what a profile names.
 MISSING = (MISSING_SIGNALS, "missing topic(s)", "no column(s)")

@@ -6,11 +6,11 @@ import re
 from dataclasses import replace
 from pathlib import Path
 
-from adapters import LogError, read_log
+from adapters import read_log
 from adapters.fieldnames import closest_first
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.jobs.inspect import SignalResolution, inspect_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile, profile_text
+from auvdiag_errors import LogError, UsageError
 
 CANDIDATES_TRIED = 3
 

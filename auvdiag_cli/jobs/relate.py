@@ -10,9 +10,9 @@ import numpy as np
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.segments import mission_steps, segments_of
 from auvdiag_cli.engine.start_check import StartReading, learn_start_state, start_reading
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_errors import UsageError
 from models.command_relations import RelationLog, RelationsRefused, fit_relations
 
 if TYPE_CHECKING:

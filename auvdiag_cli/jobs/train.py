@@ -15,13 +15,13 @@ from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.jobs.candidates import fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_entry
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_errors import UsageError
 from models.command_relations import RelationLog
 from models.fast import PREDICTOR_KINDS
 from models.skill import (

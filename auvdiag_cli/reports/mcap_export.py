@@ -25,9 +25,9 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli import __version__
-from auvdiag_cli.errors import UsageError
 from auvdiag_cli.reports.json_report import named_components, verdict_title
 from auvdiag_cli.reports.series import Series
+from auvdiag_errors import UsageError
 
 TOPIC_PREFIX = "/auvdiag"
 SIGNAL_FIELDS = ("sensor", "model", "g_percent", "threshold_percent", "b", "substituted")

@@ -9,7 +9,7 @@ import numpy as np
 
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.results import Diagnosis
-from auvdiag_cli.errors import UsageError
+from auvdiag_errors import UsageError
 
 Series = dict[str, np.ndarray]
 SERIES_SUFFIX = ".series.npz"

@@ -1,8 +1,8 @@
 """``[[effort]]`` in a profile: actuators that act alike, whose shares of their effort are
 judged (`models.effort`)."""
 
-from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.toml_reader import TableReader
+from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
 
 

@@ -8,7 +8,6 @@ from pathlib import Path
 from typing import Any
 
 from adapters.signals import OPERATING, LogSources
-from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.controller import (
     CONTROLLER_KINDS,
     EFFORTS,
@@ -19,6 +18,7 @@ from auvdiag_cli.vehicle.effort_groups import parse_effort_group
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
+from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
 
 MISSION_MODE = "mission"

@@ -3,8 +3,8 @@ vehicle with. Only the simulator reads it; diagnosis never does (it learns the v
 
 from dataclasses import dataclass, field
 
-from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
+from auvdiag_errors import ProfileError
 
 # Body-frame degrees of freedom the simulator knows; heave is positive down. Roll and pitch
 # are rates only: the attitude they integrate to does not feed back (a multirotor's

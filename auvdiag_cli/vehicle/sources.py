@@ -9,8 +9,8 @@ from adapters.signals import (
     SegmentSource,
     TimeColumn,
 )
-from auvdiag_cli.errors import ProfileError
 from auvdiag_cli.vehicle.toml_reader import TableReader
+from auvdiag_errors import ProfileError
 
 
 def _topic(reader: TableReader) -> str:

@@ -2,7 +2,7 @@
 
 from typing import Any
 
-from auvdiag_cli.errors import ProfileError
+from auvdiag_errors import ProfileError
 
 
 class TableReader:
