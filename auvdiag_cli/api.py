@@ -21,8 +21,8 @@ from typing import Any
 from adapters import read_log as _read_signals
 from adapters.signals import Signals
 from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
-from auvdiag_cli.engine.diagnosis import diagnose as _diagnose
 from auvdiag_cli.engine.results import Diagnosis, Verdict
+from auvdiag_cli.jobs.truth import diagnose_with_truth
 from auvdiag_cli.reports.json_report import diagnosis_to_dict
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_cli.vehicle.profile import load_profile as _load_profile
@@ -57,7 +57,7 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
     """Diagnose one log. ``companions``: other logs of the same vehicle and day whose test
     sequences may decide between candidates; ``mission``: the mission plan for the
     closed-loop replay (default: NAME.mission.json beside the log)."""
-    return _diagnose(path, profile, model, companions, mission)
+    return diagnose_with_truth(path, profile, model, companions, mission)
 
 
 def to_json(diagnosis: Diagnosis) -> dict[str, Any]:

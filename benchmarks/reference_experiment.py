@@ -15,10 +15,9 @@ from datetime import date
 from pathlib import Path
 
 from auvdiag_cli.engine.diagnosis import diagnose
-from auvdiag_cli.engine.truth import truth_paths
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.simulator.writers import truth_paths, write_log
 from auvdiag_cli.vehicle.profile import load_profile
 from models.store import load_model
 

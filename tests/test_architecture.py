@@ -174,3 +174,12 @@ def test_the_errors_have_one_home_that_every_module_imports_them_from():
                 assert not exported & errors, f"{name} re-exports {exported & errors}"
         if name.startswith("auvdiag_cli.engine"):
             assert "UsageError" not in path.read_text(encoding="utf-8"), name
+
+
+def test_the_diagnosis_never_reads_the_ground_truth():
+    """The simulator's truth beside a log is laid against a diagnosis afterwards
+    (`jobs.truth`); no engine module reads it."""
+    for name, path in _modules().items():
+        if name.startswith("auvdiag_cli.engine"):
+            text = path.read_text(encoding="utf-8")
+            assert "truth_paths" not in text and "truth_series" not in text, name

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.engine.truth import truth_paths
+from auvdiag_cli.simulator.writers import truth_paths
 
 runner = CliRunner()
 

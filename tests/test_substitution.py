@@ -60,7 +60,7 @@ def test_no_truth_no_truth_figures(make_log, tmp_path):
 def test_mission_plan_given_explicitly(make_log, tmp_path):
     import shutil
 
-    from auvdiag_cli.engine.truth import mission_path
+    from auvdiag_cli.engine.missions import mission_path
 
     source = make_log("paper-flow-sensor-covered", 71, "bag")
     log = tmp_path / "alone.bag"

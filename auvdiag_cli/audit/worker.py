@@ -49,7 +49,7 @@ def _peak_rss_mb() -> float:
 
 def analyse(task: AuditTask) -> AuditOutcome:
     """Diagnose one log; never raises (a failure is the outcome's ``error``)."""
-    from auvdiag_cli.engine.diagnosis import diagnose
+    from auvdiag_cli.jobs.truth import diagnose_with_truth
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
 
@@ -57,7 +57,7 @@ def analyse(task: AuditTask) -> AuditOutcome:
     outcome = AuditOutcome(task.log, None)
     try:
         profile, model = _profile_and_model(task.profile, task.model)
-        result = diagnose(Path(task.log), profile, model)
+        result = diagnose_with_truth(Path(task.log), profile, model)
         outcome.document = diagnosis_to_dict(result)
         outcome.series = series_from_diagnosis(result)
     except AuvdiagError as error:

@@ -61,9 +61,9 @@ def diagnose(
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from adapters import detect_format
-    from auvdiag_cli.engine.diagnosis import diagnose as run_diagnosis
     from auvdiag_cli.engine.results import Verdict
     from auvdiag_cli.jobs.profile_fit import with_profile_hint
+    from auvdiag_cli.jobs.truth import diagnose_with_truth
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import summary_lines
@@ -75,8 +75,8 @@ def diagnose(
         detect_format(log)  # a bad path is reported before the model is even loaded
         vehicle = load_profile(profile)
         try:
-            result = run_diagnosis(log, vehicle, load_model(model, vehicle.name),
-                                   companions or (), mission)
+            result = diagnose_with_truth(log, vehicle, load_model(model, vehicle.name),
+                                         companions or (), mission)
         except LogError as error:
             raise with_profile_hint(error, vehicle.name) from None
         _write_reports(diagnosis_to_dict(result), series_from_diagnosis(result), json_path,

@@ -16,6 +16,7 @@ from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import apply_other_evidence, isolate
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.missions import mission_path, read_missions
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
     EPOCH_CLOCK_NS,
@@ -33,7 +34,6 @@ from auvdiag_cli.engine.segments import (
     threshold_matrix,
 )
 from auvdiag_cli.engine.start_check import check_start
-from auvdiag_cli.engine.truth import mission_path, read_missions
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import CompanionError, ModelError

@@ -285,7 +285,7 @@ def _name_component(diagnosis: Diagnosis, component: str, profile: Profile,
     if sensor is not None and diagnosis.onset_s is not None and matching is not None:
         errors = model.metadata.get("heldout_error", {}).get("rms", {})
         diagnosis.substitution = substitute(
-            diagnosis.log, sensor, histories.sensor_names, histories.time_s, matching.measured,
+            sensor, histories.sensor_names, histories.time_s, matching.measured,
             matching.modelled, diagnosis.onset_s, profile.navigation, errors.get(sensor.name))
         if profile.controller is not None and diagnosis.mission_legs:
             diagnosis.substitution.closed_loop = replay_closed_loop(

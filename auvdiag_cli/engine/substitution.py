@@ -1,18 +1,15 @@
 """Substituting Control: once a sensor is found defective, the model's output SM_i takes the
 place of its reading SS_i from the onset on. This module measures what that substitution is
-worth: SM_i against the truth (when the log has ground truth beside it), and the track
-dead-reckoned with the substituted signal against the track with the failed one."""
+worth: the track dead-reckoned with the substituted signal against the track with the
+failed one (against the truth too where the log has one: `jobs.truth`, after the
+diagnosis)."""
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
-from auvdiag_cli.engine.truth import truth_series
 from auvdiag_cli.vehicle.profile import Navigation, Sensor
-
-TRUE_TRACK_COLUMNS = ["x_m", "y_m"]
 
 
 @dataclass
@@ -53,12 +50,12 @@ def dead_reckon(time_s: np.ndarray, speed: np.ndarray, yaw_rate: np.ndarray) -> 
     return Track(np.cumsum(speed * np.cos(heading) * dt), np.cumsum(speed * np.sin(heading) * dt))
 
 
-def _rms(values: np.ndarray) -> float | None:
+def rms(values: np.ndarray) -> float | None:
     finite = values[np.isfinite(values)]
     return float(np.sqrt(np.mean(finite**2))) if finite.size else None
 
 
-def substitute(log: Path, sensor: Sensor, sensor_names: tuple[str, ...], time_s: np.ndarray,
+def substitute(sensor: Sensor, sensor_names: tuple[str, ...], time_s: np.ndarray,
                measured: np.ndarray, modelled: np.ndarray, onset_s: float,
                navigation: Navigation | None, expected_error_rms: float | None
                ) -> Substitution:
@@ -68,18 +65,9 @@ def substitute(log: Path, sensor: Sensor, sensor_names: tuple[str, ...], time_s:
     substituted[after, column] = modelled[after, column]
     result = Substitution(sensor.name, round(onset_s, 3), sensor.unit, expected_error_rms,
                           substituted[:, column])
-    truth_columns = [s for s in (sensor.truth_column,) if s] + TRUE_TRACK_COLUMNS
-    truth = truth_series(log, truth_columns, time_s) if sensor.truth_column else None
-    if truth is not None and sensor.truth_column is not None:
-        true_signal = truth[sensor.truth_column]
-        result.truth = true_signal
-        result.truth_error_rms = _rms(modelled[after, column] - true_signal[after])
-        result.failed_error_rms = _rms(measured[after, column] - true_signal[after])
     if navigation is not None:
         speed, rate = sensor_names.index(navigation.speed), sensor_names.index(navigation.yaw_rate)
         result.tracks["substituted"] = dead_reckon(time_s, substituted[:, speed],
                                                    substituted[:, rate])
         result.tracks["failed"] = dead_reckon(time_s, measured[:, speed], measured[:, rate])
-        if truth is not None:
-            result.tracks["truth"] = Track(truth["x_m"], truth["y_m"])
     return result

@@ -1,0 +1,23 @@
+"""The mission plan beside a log, ``NAME.mission.json`` (as the simulator writes it, and a
+mission planner may too): the legs the closed-loop replay of Substituting Control flies."""
+
+import json
+from pathlib import Path
+from typing import Any
+
+
+def mission_path(log_path: Path) -> Path:
+    return log_path.with_name(log_path.name.split(".")[0] + ".mission.json")
+
+
+def read_missions(path: Path) -> list[dict[str, Any]]:
+    """Mission legs: ``start_s`` (from the log's first message), ``waypoints`` [[x, y], …]
+    in metres in the vehicle's navigation frame (origin and heading at the leg's start),
+    and optionally ``cruise_speed_mps``."""
+    data = json.loads(path.read_text(encoding="utf-8"))
+    legs = data.get("missions") if isinstance(data, dict) else None
+    if not isinstance(legs, list) or not all(
+            isinstance(leg, dict) and "start_s" in leg and "waypoints" in leg for leg in legs):
+        raise ValueError(f"{path}: expected {{\"missions\": [{{\"start_s\": …, "
+                         "\"waypoints\": [[x, y], …]}, …]}")
+    return legs
