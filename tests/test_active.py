@@ -1,9 +1,9 @@
 """Routine diagnosis on DMS segments and active diagnosis between thruster candidates."""
 
 import copy
-import json
 
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -14,9 +14,7 @@ runner = CliRunner()
 
 
 def report_of(log, *extra):
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *extra])
-    assert result.exit_code in (0, 1), result.output
-    return json.loads(result.stdout)
+    return diagnose_json(log, *extra)[1]
 
 
 @pytest.mark.parametrize(("thruster", "other"), [("thruster_0", "thruster_1"),

@@ -6,17 +6,13 @@ import sys
 from pathlib import Path
 
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.writers import truth_paths
 
 runner = CliRunner()
-
-
-def run_json(log: Path, *extra: str) -> tuple[int, dict]:
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *extra])
-    return result.exit_code, json.loads(result.stdout)
 
 
 def truth(log: Path) -> dict:
@@ -26,7 +22,7 @@ def truth(log: Path) -> dict:
 @pytest.mark.parametrize("seed", [11, 12])
 def test_paper_scenario_flow_sensor_found_fast(make_log, seed):
     log = make_log("paper-flow-sensor-covered", seed)
-    code, report = run_json(log)
+    code, report = diagnose_json(log)
     onset = truth(log)["fault"]["onset_s"]
     assert abs(onset - 115.0) < 0.01
     assert code == 1
@@ -43,7 +39,7 @@ def test_paper_scenario_flow_sensor_found_fast(make_log, seed):
 
 
 def test_same_mission_without_fault_is_normal(make_log):
-    code, report = run_json(make_log("paper-normal", 11))
+    code, report = diagnose_json(make_log("paper-normal", 11))
     assert code == 0
     assert report["verdict"] == "normal"
     assert report["component"] is None and report["candidates"] == []
@@ -60,7 +56,7 @@ def test_dead_thruster_is_case_1_and_the_hypotheses_name_it(make_log, thruster):
     """The table's case 1 names both thrusters; replayed from the onset, only the one that
     died explains the log."""
     log = make_log(f"mission-{thruster.replace('_', '-')}-dead", 11)
-    code, report = run_json(log)
+    code, report = diagnose_json(log)
     assert code == 1
     assert report["case"] == 1
     assert report["component"] == thruster and report["candidates"] == [thruster]
@@ -72,14 +68,14 @@ def test_dead_thruster_is_case_1_and_the_hypotheses_name_it(make_log, thruster):
 
 def test_dead_yaw_rate_sensor_is_named(make_log):
     log = make_log("mission-yaw-rate-sensor-dead", 11)
-    code, report = run_json(log)
+    code, report = diagnose_json(log)
     assert code == 1
     assert report["component"] == "yaw_rate_sensor" and report["case"] == 3
     assert abs(report["onset_s"] - truth(log)["fault"]["onset_s"]) <= 2.0
 
 
 def test_routine_segments_get_routine_thresholds(make_log):
-    code, report = run_json(make_log("routine-and-mission", 11))
+    code, report = diagnose_json(make_log("routine-and-mission", 11))
     assert code == 0
     names = [(s["name"], s["mode"], s["thresholds"]["flow"]) for s in report["segments"]]
     assert names == [("ZA", "routine", 8.0), ("ZB", "routine", 8.0), ("ZC", "routine", 8.0),
@@ -158,7 +154,7 @@ def test_truncated_log_is_analysed_up_to_the_cut(make_log, tmp_path):
     source = make_log("paper-normal", 11, "bag")
     cut = tmp_path / "cut.bag"
     cut.write_bytes(source.read_bytes()[: source.stat().st_size // 2])
-    code, report = run_json(cut)
+    code, report = diagnose_json(cut)
     assert code == 0
     assert report["duration_s"] < 80.0
     assert any("up to the damage" in note for note in report["notes"])

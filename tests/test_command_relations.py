@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pypdf
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -39,19 +40,13 @@ def _dive(target: Path, profile_name: str, scenario: str, seed: int, fmt: str,
     return target
 
 
-def _report(log: Path, *options: str) -> tuple[int, dict]:
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
-    assert result.exit_code in (0, 1), result.output
-    return result.exit_code, json.loads(result.stdout)
-
-
 @pytest.mark.slow
 def test_a_thruster_at_70_percent_is_found_in_the_commands_and_named(tmp_path):
     """Thruster 0 gives 70 % of its thrust from 60 s: the heading controller drives it
     harder and the motion stays within its thresholds; the commands name it."""
     log = _dive(tmp_path / "weak", "twin_burger", "mission-thruster-0-weak", 7, "ros2-mcap",
                 0.7)
-    code, report = _report(log)
+    code, report = diagnose_json(log)
     check = report["commands_check"]
     assert code == 1 and report["verdict"] == "fault" and report["component"] == "thruster_0"
     assert not any(report["b"].values())                   # the motion alone says normal
@@ -70,7 +65,7 @@ def test_a_thruster_at_70_percent_is_found_in_the_commands_and_named(tmp_path):
 
 @pytest.mark.parametrize("scenario", ["paper-normal", "mission-large-ccw", "mission-sprint-cw"])
 def test_normal_missions_keep_every_command_within_its_relation(tmp_path, scenario):
-    code, report = _report(_dive(tmp_path / scenario, "twin_burger", scenario, 23,
+    code, report = diagnose_json(_dive(tmp_path / scenario, "twin_burger", scenario, 23,
                                  "ros2-mcap"))
     check = report["commands_check"]
     assert code == 0 and check["alarm_s"] is None and not check["not_judged"]
@@ -84,7 +79,7 @@ def test_thrusters_that_act_alike_are_named_together(tmp_path):
     relations = load_model(default_model_dir("bluerov2")).relations
     assert relations is not None and relations.groups == ((0, 2), (1, 3), (4, 5))
     log = _dive(tmp_path / "weak.tlog", "bluerov2", "mission-thruster-1-weak", 7, "tlog")
-    code, report = _report(log, "--profile", "bluerov2")
+    code, report = diagnose_json(log, "--profile", "bluerov2")
     assert code == 1 and report["verdict"] == "fault" and report["component"] is None
     assert report["candidates"] == ["thruster_1", "thruster_3"]
     assert any("act alike on the vehicle" in note for note in report["notes"])
@@ -158,7 +153,7 @@ def test_a_manoeuvre_the_relation_has_not_seen_does_not_alarm_for_a_few_seconds(
     scenario = Scenario("repeated", "three missions", (DMS_ALL + PAPER_MISSION) * 3, None)
     log = tmp_path / "repeated.mcap"
     write_log(simulate(scenario, profile, 100), profile, log, "mcap")
-    code, report = _report(log)
+    code, report = diagnose_json(log)
     check = report["commands_check"]
     assert max(check["peak_over_threshold"].values()) > 1.0     # the windows did go over
     assert code == 0 and report["verdict"] == "normal" and check["alarm_s"] is None

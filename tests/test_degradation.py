@@ -3,6 +3,7 @@
 import json
 
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -11,9 +12,8 @@ from auvdiag_cli.cli import app
 @pytest.mark.parametrize("thruster", ["thruster_0", "thruster_1"])
 def test_half_power_thruster_is_named_with_its_fraction(make_log, thruster):
     log = make_log(f"mission-{thruster.replace('_', '-')}-weak", 81, "bag")
-    result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "-q"])
-    report = json.loads(result.stdout)
-    assert result.exit_code == 1
+    exit_code, report = diagnose_json(log)
+    assert exit_code == 1
     assert report["component"] == thruster and report["candidates"] == [thruster]
     assert report["degradation"]["kind"] == "weakened"
     assert report["degradation"]["thrust_fraction"] == 0.5
@@ -46,8 +46,7 @@ def test_thruster_dying_in_a_turn_is_not_read_as_the_yaw_sensor(tmp_path, onset_
                         Fault("thruster_0", "dead", onset_s))
     log = tmp_path / "turn.mcap"
     write_log(simulate(scenario, profile, 2002), profile, log, "mcap")
-    report = json.loads(CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "-q"]
-                                           ).stdout)
+    _, report = diagnose_json(log)
     assert report["component"] == "thruster_0" and report["case"] == 1
     assert report["degradation"] is None and report["substitution"] is None
     assert any("reads b as yaw_rate_sensor" in note and "dead from the onset" in note

@@ -3,10 +3,10 @@ summary need not repeat Channel and Schema records, chunks need not be in time o
 topic may have several channels, unknown opcodes must be skipped. Every layout, written with
 the mcap library's own writer options, gives the diagnosis the canonical layout gives."""
 
-import json
 import struct
 
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -59,9 +59,7 @@ def _with_unknown_records(path):
 
 
 def _diagnosis(log):
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
-    assert result.exit_code in (0, 1), result.output
-    report = json.loads(result.stdout)
+    _, report = diagnose_json(log)
     return {key: report[key] for key in ("verdict", "component", "case", "b", "onset_s",
                                          "detected_at_s", "duration_s")} | {
         "max_g": [s["max_g"] for s in report["segments"]],

@@ -3,13 +3,13 @@ HEARTBEAT), time when the vehicle is disarmed is neither judged nor trained on, 
 is placed in it. Logs: simulated dives as tlogs, their heartbeats re-encoded by pymavlink to
 say disarmed over a stretch in which the vehicle is carried about by hand."""
 
-import json
 import math
 import struct
 from importlib import resources
 
 import numpy as np
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -65,10 +65,7 @@ def _disarmed_between(source, target, start_s, end_s):
 
 
 def _report(log, profile=None):
-    options = ["--profile", str(profile)] if profile else []
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
-    assert result.exit_code in (0, 1), result.output
-    return json.loads(result.stdout)
+    return diagnose_json(log, *(["--profile", str(profile)] if profile else []))[1]
 
 
 def test_disarmed_time_is_not_judged(make_log, tmp_path, armed_profile):

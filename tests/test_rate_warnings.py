@@ -1,9 +1,9 @@
 """A command logged more slowly than the model steps (QGroundControl's 2 Hz
 SERVO_OUTPUT_RAW) is said, with what it costs, by `inspect` and `diagnose`."""
 
-import json
 
 import numpy as np
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -38,8 +38,7 @@ def test_slow_commands_are_reported_by_inspect_and_diagnose(make_log, tmp_path):
     warnings = [line for line in shown.stdout.splitlines() if "warning:" in line]
     assert len(warnings) == 1 and "thruster_0, thruster_1 are logged at 2.0 Hz" in warnings[0]
     assert "below the model's 10 Hz step" in warnings[0]
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
-    notes = json.loads(result.stdout)["notes"]
+    notes = diagnose_json(log)[1]["notes"]
     assert sum("are logged at 2.0 Hz" in note for note in notes) == 1
 
 

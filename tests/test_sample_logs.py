@@ -4,9 +4,7 @@ import json
 from pathlib import Path
 
 import pytest
-from typer.testing import CliRunner
-
-from auvdiag_cli.cli import app
+from helpers import diagnose_json
 
 SAMPLES = Path(__file__).parents[1] / "sample_logs"
 EXPECTED = sorted(SAMPLES.glob("*.expected.json"))
@@ -26,9 +24,8 @@ def test_sample_log_report_matches_expected_and_truth(expected_path):
     truth = json.loads(expected_path.with_name(
         expected_path.name.replace(".expected.json", ".truth.json")).read_text())
     log = SAMPLES.parent / expected["log"]
-    result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
-    report = json.loads(result.stdout)
-    assert result.exit_code == (1 if expected["verdict"] == "fault" else 0)
+    exit_code, report = diagnose_json(log)
+    assert exit_code == (1 if expected["verdict"] == "fault" else 0)
     assert set(report) == set(expected)                 # the schema did not drift
     for key in ("verdict", "component", "candidates", "case", "b", "format", "duration_s",
                 "segment_source", "not_judged", "coverage", "completeness"):

@@ -11,6 +11,7 @@ import numpy as np
 import pandas as pd
 import pypdf
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -21,12 +22,6 @@ from models.skill import MIN_SKILL, SignalSkill
 from models.store import default_model_dir
 
 runner = CliRunner()
-
-
-def _diagnose_json(log: Path, *options: str) -> tuple[int, dict]:
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
-    assert result.exit_code in (0, 1), result.output
-    return result.exit_code, json.loads(result.stdout)
 
 
 def test_skill_is_measured_against_the_better_naive_predictor():
@@ -71,7 +66,7 @@ def test_a_model_trained_on_noise_has_no_skill_and_judges_nothing(tmp_path):
     assert meta["heldout_error"]["logs"] == ["noise0.csv (last 20%)"]    # one log is enough
     assert not any(s["judged"] for s in meta["skill"]["signals"].values())
 
-    code, report = _diagnose_json(Path(logs[1]), "--model", str(model))
+    code, report = diagnose_json(Path(logs[1]), "--model", str(model))
     assert code == 0 and report["verdict"] == "undetermined"
     assert set(report["not_judged"]) == {"flow", "yaw_rate"}
     assert report["detected_at_s"] is None and not any(report["b"].values())
@@ -104,10 +99,10 @@ def _unskilled_copy(target: Path, signal: str, relations: bool = False) -> Path:
 @pytest.mark.slow
 def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
     log = make_log("paper-flow-sensor-covered", 12)
-    code, report = _diagnose_json(log)
+    code, report = diagnose_json(log)
     assert code == 1 and report["component"] == "flow_sensor"
     model = _unskilled_copy(tmp_path / "m", "flow")
-    code, report = _diagnose_json(log, "--model", str(model))
+    code, report = diagnose_json(log, "--model", str(model))
     assert code == 0 and report["verdict"] == "normal" and report["b"]["flow"] == 0
     assert report["not_judged"] == {"flow": "not judged (the model cannot predict it) "
                                             "(skill 0.05)"}
@@ -127,7 +122,7 @@ def test_commands_reveal_what_an_unjudged_sensor_hides_without_blaming_a_thruste
     show the fault, and since both thrusters share the departure, neither is named."""
     log = make_log("paper-flow-sensor-covered", 12)
     model = _unskilled_copy(tmp_path / "m", "flow", relations=True)
-    code, report = _diagnose_json(log, "--model", str(model))
+    code, report = diagnose_json(log, "--model", str(model))
     check = report["commands_check"]
     assert code == 1 and report["verdict"] == "fault" and not any(report["b"].values())
     assert report["component"] is None and report["candidates"] == [] and check["named"] == []
@@ -145,7 +140,7 @@ def test_a_finite_horizon_still_finds_and_names_a_failed_sensor(make_log, tmp_pa
     """Re-started from the stuck reading every 8 s, the model departs from it again inside
     every stretch while the vehicle moves."""
     model = _shipped_copy(tmp_path / "h8", horizon_s=8.0)
-    code, report = _diagnose_json(make_log(scenario, 13), "--model", str(model))
+    code, report = diagnose_json(make_log(scenario, 13), "--model", str(model))
     assert report["model"]["horizon_s"] == 8.0
     assert report["component"] == component and code == (0 if component is None else 1)
 
@@ -160,13 +155,13 @@ def test_a_one_sample_spike_at_the_start_changes_no_verdict(tmp_path, profile):
     for scenario, verdict in (("paper-normal", "normal"), ("paper-flow-sensor-covered",
                                                            "fault")):
         clean = _csv_dive(tmp_path, scenario, 21, profile)
-        _, before = _diagnose_json(clean)
+        _, before = diagnose_json(clean)
         table = pd.read_csv(clean)
         first = table["yaw_rate_rps"].first_valid_index()
         table.loc[first, "yaw_rate_rps"] = 3.84          # 220 deg/s for one sample
         spiked = tmp_path / f"spiked-{clean.name}"
         table.to_csv(spiked, index=False)
-        _, after = _diagnose_json(spiked)
+        _, after = diagnose_json(spiked)
         assert before["verdict"] == after["verdict"] == verdict
         assert after["component"] == before["component"]
         assert any("isolated spike(s) in yaw_rate" in note for note in after["notes"])
@@ -201,7 +196,7 @@ def test_too_little_held_out_data_judges_nothing(tmp_path):
     found = re.findall(r"NO: too little held-out data to measure it \((\d+) samples, needs "
                        r"200\)", result.stdout)
     assert len(found) == 2 and 50 <= int(found[0]) < 200, result.stdout
-    code, report = _diagnose_json(log, "--model", str(model))
+    code, report = diagnose_json(log, "--model", str(model))
     assert code == 0 and report["verdict"] == "undetermined"
     assert report["not_judged"]["flow"] == ("not judged (too little held-out data to measure "
                                             f"the model's skill: {found[0]} samples, needs 200)")

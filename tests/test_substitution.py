@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -48,8 +49,7 @@ def test_no_truth_no_truth_figures(make_log, tmp_path):
 
     log = tmp_path / "alone.bag"
     shutil.copy(make_log("paper-flow-sensor-covered", 71, "bag"), log)
-    report = json.loads(CliRunner().invoke(app, ["diagnose", str(log), "--json", "-",
-                                                 "-q"]).stdout)
+    _, report = diagnose_json(log)
     substitution = report["substitution"]
     assert substitution["truth_error_rms"] is None
     assert set(substitution["track_end_m"]) == {"substituted", "failed"}
@@ -66,9 +66,8 @@ def test_mission_plan_given_explicitly(make_log, tmp_path):
     log = tmp_path / "alone.bag"
     shutil.copy(source, log)
     runner = CliRunner()
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "-q", "--mission",
-                                 str(mission_path(source))])
-    assert json.loads(result.stdout)["substitution"]["closed_loop"]["reached_last_waypoint"]
+    _, report = diagnose_json(log, "--mission", str(mission_path(source)))
+    assert report["substitution"]["closed_loop"]["reached_last_waypoint"]
     missing = runner.invoke(app, ["diagnose", str(log), "--mission", str(tmp_path / "x.json")])
     assert missing.exit_code == 2 and "no such mission plan" in missing.stderr
     broken = tmp_path / "broken.json"
