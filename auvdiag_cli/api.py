@@ -61,7 +61,7 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
 
 
 def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
-    """The JSON report (the README's JSON report section) as a dict."""
+    """The JSON report (docs/reports.md, the JSON report) as a dict."""
     return diagnosis_to_dict(diagnosis)
 
 

@@ -1,4 +1,4 @@
-"""Fuzzing campaign: every format's readers against damaged logs, as Markdown for the README.
+"""Fuzzing campaign: every format's readers against damaged logs, as Markdown for the docs.
 
 Writes one short simulated dive in every format (bag, db3, ros2-mcap, mcap, tlog, bin), damages
 each --cases times (bit flips, random runs, 2/4/8-byte length or count fields set to huge, zero

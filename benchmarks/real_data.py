@@ -381,7 +381,7 @@ def main() -> None:
         parser.error("--folds must be at least 3 (one to judge, one to calibrate, the rest "
                      "to train)")
     if not args.data.is_dir():
-        print(f"Real data not found at {args.data}: skipped (see the README for the data sets).")
+        print(f"Real data not found at {args.data}: skipped (docs/results.md names the data sets).")
         return
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), "
           f"Python {platform.python_version()}; data from {args.data}.\n")

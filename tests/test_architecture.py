@@ -1,7 +1,6 @@
 """The import graph of the project's packages: no cycles (type-only and function-local
 imports count too), and no layer importing from one above it: between the packages, and
-inside auvdiag_cli from the vehicle up to the command line (see the README's
-architecture section)."""
+inside auvdiag_cli from the vehicle up to the command line (see docs/architecture.md)."""
 
 import ast
 from pathlib import Path

@@ -50,7 +50,7 @@ def test_truncated_logs(make_log, tmp_path, fmt, fraction):
     storage.write_bytes(data[:cut])
     while fmt == "ulog" and walk_framing(storage).cut_at is None:
         # A ULog has no footer or index: one cut exactly between two messages reads as a
-        # complete log (see the README's limits), so the cut is moved off the boundary.
+        # complete log (see docs/limits.md), so the cut is moved off the boundary.
         cut += 1
         storage.write_bytes(data[:cut])
     code, report = outcome(log)

@@ -149,11 +149,11 @@ def test_a_csv_whose_command_names_are_unknown_proposes_the_held_columns_as_comm
     assert set(profile.sensor_names) == {"speed_over_ground_xyz", "heading_noise"}
 
 
-def test_the_readme_minimal_profile_loads_and_reads_a_log(tmp_path):
-    """The README's complete minimal profile is a working profile, not a sketch."""
+def test_the_documented_minimal_profile_loads_and_reads_a_log(tmp_path):
+    """The tutorial's complete minimal profile is a working profile, not a sketch."""
     from auvdiag_cli.vehicle.profile import load_profile
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[1] / "docs" / "vehicles.md").read_text()
     start = readme.index("A complete minimal profile")
     block = readme[readme.index("```toml\n", start) + 8:readme.index("```\n", start + 30)]
     profile_path = tmp_path / "minimal.toml"

@@ -1,6 +1,6 @@
 """Put every signal on the model's Δt grid.
 
-Method (documented for users in the README):
+Method (documented for users in docs/method.md):
 - the grid starts at the first instant every signal has been heard and ends at the last
   instant all of them are still heard, in steps of Δt;
 - commands are held (zero-order hold): the value at grid time t is the last command

@@ -294,7 +294,7 @@ def draft_profile(path: Path, name: str) -> str:
                 "its value between changes as commands do)" if not commands else "sensor")
         raise UsageError(f"{path}: found no {what} field that varies in this log; write its "
                          "[[commands]] and [[sensors]] and their [sources] entries by hand "
-                         "(`auvdiag inspect LOG` lists the fields; the README has a complete "
+                         "(`auvdiag inspect LOG` lists the fields; docs/vehicles.md has a complete "
                          "minimal profile)")
     operating = _operating(path, family, contents)
     return _render(path, name, family, commands, sensors, operating, time, groups)

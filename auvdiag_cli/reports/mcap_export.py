@@ -2,7 +2,7 @@
 
 Drawn, like the PDF, from the JSON report and its time histories only, on the log's own
 clock (every time is the log's first message plus the report's seconds). Messages are JSON
-with a JSON schema, which both viewers plot without plugins. Topics (see the README):
+with a JSON schema, which both viewers plot without plugins. Topics (see docs/reports.md):
 
 - ``/auvdiag/signals/NAME``: per judged quantity, each model step: ``sensor`` (SS),
   ``model`` (SM), ``g_percent``, ``threshold_percent``, ``b`` (0/1), and ``substituted``
