@@ -21,6 +21,7 @@ from typing import Any
 from adapters import read_log as _read_signals
 from adapters.signals import Signals
 from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
+from auvdiag_cli.audit.progress import SilentReporter
 from auvdiag_cli.engine.results import Diagnosis, Verdict
 from auvdiag_cli.jobs.truth import diagnose_with_truth
 from auvdiag_cli.reports.json_report import diagnosis_to_dict
@@ -65,21 +66,10 @@ def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
     return diagnosis_to_dict(diagnosis)
 
 
-class _Silent:
-    def start(self, total: int, reused: int) -> None:
-        pass
-
-    def done(self, record: dict[str, Any]) -> None:
-        pass
-
-    def stop(self) -> None:
-        pass
-
-
 def audit(paths: Sequence[Path | str], output: Path, profile: Path | None = None,
           model: Path | None = None, jobs: int = 1) -> AuditResult:
     """Diagnose every log under ``paths`` (folders and globs) into ``output`` (one JSON
     report per log, audit.csv, fleet.pdf), resuming a finished part; no output while it
     runs. The result holds one record per log (``records``) and the counts."""
     return run_audit(AuditOptions([str(p) for p in paths], output, profile, model, jobs),
-                     _Silent())
+                     SilentReporter())

@@ -182,3 +182,15 @@ def test_the_diagnosis_never_reads_the_ground_truth():
         if name.startswith("auvdiag_cli.engine"):
             text = path.read_text(encoding="utf-8")
             assert "truth_paths" not in text and "truth_series" not in text, name
+
+
+def test_the_public_module_imports_no_terminal_library():
+    """A program using `auvdiag_cli.api` gets no terminal library (rich, typer, click)."""
+    import subprocess
+    import sys
+
+    loaded = subprocess.run(
+        [sys.executable, "-c", "import sys, auvdiag_cli.api; print(' '.join(sorted({m.split('.')"
+         "[0] for m in sys.modules} & {'rich', 'typer', 'click', 'tqdm'})))"],
+        capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
+    assert loaded == []

@@ -1,18 +1,8 @@
-"""Audit progress: a live bar on a terminal (logs done, failed, time left), one plain line per
-log otherwise (CI logs, files)."""
+"""Audit progress: one plain line per log (CI logs, files), or nothing (a program using the
+library). The live bar for a terminal is the command line's (`cli.progress_bar`)."""
 
 import sys
 from typing import Any, Protocol
-
-from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 
 
 class Reporter(Protocol):
@@ -47,28 +37,13 @@ class PlainReporter:
         pass
 
 
-class BarReporter:
-    def __init__(self, console: Console) -> None:
-        self.failed = 0
-        self.progress = Progress(
-            TextColumn("[bold]auditing"), BarColumn(), MofNCompleteColumn(),
-            TextColumn("logs, [red]{task.fields[failed]} failed"), TimeElapsedColumn(),
-            TextColumn("left"), TimeRemainingColumn(), console=console, transient=False)
-        self.task = self.progress.add_task("audit", total=0, failed=0)
-
+class SilentReporter:
     def start(self, total: int, reused: int) -> None:
-        self.progress.start()
-        self.progress.update(self.task, total=total, completed=reused)
+        pass
 
     def done(self, record: dict[str, Any]) -> None:
-        self.failed += bool(record.get("error"))
-        self.progress.update(self.task, advance=1, failed=self.failed)
+        pass
 
     def stop(self) -> None:
-        self.progress.stop()
-
-
-def reporter_for_stderr() -> Reporter:
-    console = Console(stderr=True)
-    return BarReporter(console) if console.is_terminal else PlainReporter()
+        pass
 

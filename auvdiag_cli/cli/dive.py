@@ -233,7 +233,7 @@ def audit(
 
     from auvdiag_cli.audit.fleet_pdf import render_fleet_report
     from auvdiag_cli.audit.job import AuditOptions, run_audit
-    from auvdiag_cli.audit.progress import reporter_for_stderr
+    from auvdiag_cli.cli.progress_bar import reporter_for_stderr
 
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     options = AuditOptions(paths, output, profile, model, jobs, scheduler, mcap)
