@@ -40,3 +40,18 @@ def test_the_readme_is_short_and_lists_every_page():
     assert len(readme.splitlines()) <= 250
     pages = sorted(p.name for p in (ROOT / "docs").glob("*.md") if p.name != "index.md")
     assert all(f"docs/{name}" in readme for name in pages), pages
+
+
+def test_the_json_table_names_every_key_of_a_report():
+    """The documented keys are a report's keys: a new key without its row (or
+    a row for a key gone) fails."""
+    import json
+    import re
+
+    page = (ROOT / "docs" / "reports.md").read_text()
+    table = page[page.index("| key | what it holds |"):page.index("## Reports and fleet audits")]
+    documented = [key for row in table.splitlines()[2:] if row.startswith("| `")
+                  for key in re.findall(r"`(\w+)`", row.split("|")[1])]
+    report = json.loads((ROOT / "sample_logs" / "mission-thruster-1-dead.expected.json")
+                        .read_text())
+    assert sorted(documented) == sorted(report)
