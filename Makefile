@@ -5,7 +5,7 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort test
+	bench-train bench-train-busy bench-real bench-hidden bench-effort test model samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
 	bench-train bench-train-busy bench-real bench-hidden bench-effort
@@ -67,3 +67,13 @@ bench-effort:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/effort.py > $(OUT)/effort.md
 	$(PYTHON) benchmarks/readme.py effort $(OUT)/effort.md
+
+# What the project ships, rebuilt from simulated dives (scripts/shipped.py):
+# `make model PROFILE=three_thruster` (twin_burger by default), `make samples`.
+PROFILE ?= twin_burger
+
+model:
+	$(PYTHON) scripts/shipped.py model $(PROFILE)
+
+samples:
+	$(PYTHON) scripts/shipped.py samples
