@@ -33,6 +33,9 @@ MIN_SKILL = 1.0 / 3.0
 MIN_SCORED_SAMPLES = 200
 # Candidate horizons, longest first; None is the paper's free run.
 HORIZON_CANDIDATES_S: tuple[float | None, ...] = (None, 120.0, 60.0, 30.0, 15.0, 8.0, 4.0, 2.0)
+# The noise in held-out skill figures: a predictor kept over a simpler one must beat it by
+# this much, and a horizon is not preferred for a signal that clears MIN_SKILL by less.
+SKILL_MARGIN = 0.02
 
 
 @dataclass(frozen=True)
@@ -143,9 +146,16 @@ def score_horizon(predictors: dict[str, Rollouts], logs: Sequence[ScoringLog],
 
 def choose_horizon(scores: Sequence[HorizonScore]) -> HorizonScore:
     """The longest horizon at which the most signals are judged (longer horizons let slow
-    faults, drifts and weakening thrusters, grow in the residual)."""
-    most = max(len(s.judged) for s in scores)
-    return next(s for s in scores if len(s.judged) == most)
+    faults, drifts and weakening thrusters, grow in the residual). Signals that clear the
+    bar by SKILL_MARGIN, the noise in held-out skill figures, count first: a horizon must
+    not win on a signal that only just scrapes past MIN_SKILL there."""
+    def rank(score: HorizonScore) -> tuple[int, int]:
+        clear = sum(score.signals[name].skill >= MIN_SKILL + SKILL_MARGIN
+                    for name in score.judged)
+        return clear, len(score.judged)
+
+    best = max(rank(s) for s in scores)
+    return next(s for s in scores if rank(s) == best)
 
 
 def assess(dynamics: Rollouts, command_scale: np.ndarray, state_scale: np.ndarray,
@@ -165,11 +175,6 @@ def assess(dynamics: Rollouts, command_scale: np.ndarray, state_scale: np.ndarra
     return [score_horizon(predictors, heldout, command_scale, state_scale, sensor_names,
                           None if h is None else max(1, round(h / dt_s)), h)
             for h in horizons_s]
-
-
-# A predictor kept over a simpler one must beat it by this much skill (noise in the
-# held-out figures should not buy complexity).
-SKILL_MARGIN = 0.02
 
 
 def choose_predictors(scores: Mapping[str, Sequence[HorizonScore]]) -> list[HorizonScore]:

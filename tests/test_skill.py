@@ -18,7 +18,7 @@ from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
-from models.skill import MIN_SKILL, SignalSkill
+from models.skill import MIN_SKILL, HorizonScore, SignalSkill, choose_horizon
 from models.store import default_model_dir
 
 runner = CliRunner()
@@ -32,6 +32,24 @@ def test_skill_is_measured_against_the_better_naive_predictor():
     flat = SignalSkill(0.01, {"hold": 0.0, "mean": 0.0, "linear": 0.0})
     assert flat.skill == -math.inf and not flat.judged        # a signal that never moves
     assert pytest.approx(1 - 1 / 1.5) == MIN_SKILL
+
+
+def _horizon(horizon_s: float | None, **skills: float) -> HorizonScore:
+    return HorizonScore(horizon_s, {name: SignalSkill(1.0 - skill, {
+        "hold": 1.0, "mean": 1.0, "linear": 1.0}) for name, skill in skills.items()})
+
+
+def test_the_longest_horizon_that_judges_the_most_signals_with_a_margin_is_chosen():
+    # The free run judges both signals, but yaw only just: 8 s judges both clearly.
+    scores = [_horizon(None, depth=0.49, yaw=0.34), _horizon(8.0, depth=0.61, yaw=0.36),
+              _horizon(4.0, depth=0.60, yaw=0.42), _horizon(2.0, depth=0.45, yaw=0.25)]
+    assert choose_horizon(scores).horizon_s == 8.0
+    # Both clear the bar well at the free run: the longest horizon is kept.
+    scores[0] = _horizon(None, depth=0.49, yaw=0.40)
+    assert choose_horizon(scores).horizon_s is None
+    # A signal judged only at a short horizon still wins that horizon.
+    assert choose_horizon([_horizon(None, depth=0.5, yaw=0.2),
+                           _horizon(4.0, depth=0.6, yaw=0.34)]).horizon_s == 4.0
 
 
 def _noise_log(path: Path, seed: int, seconds: float = 240.0) -> Path:
