@@ -50,16 +50,16 @@ MISSIONS = {"4x2-cw": {}, "4x2-ccw": {"clockwise": False},
 
 
 def baseline_model(learned: "LoadedModel", frames: list["AlignedFrame"]) -> "LoadedModel":
-    """A model directory's worth of baseline: the learned model's signals and metadata (deep
-    copied: calibration writes into it) with every signal read from the linear model."""
-    import copy
+    """A model directory's worth of baseline: the learned model's signals and entries (a
+    copy: calibration writes into it) with every signal read from the linear model."""
+    from dataclasses import replace
 
-    from models.store import LINEAR_KEY, LoadedModel
+    from models.store import LINEAR_KEY
 
-    metadata = copy.deepcopy(learned.metadata)
-    metadata["predictors"] = {"per_signal": dict.fromkeys(learned.sensor_names, "linear")}
-    return LoadedModel(learned.state, learned.normaliser, metadata, "linear baseline",
-                       {LINEAR_KEY: fit_linear(frames, learned.normaliser).weights})
+    baseline = learned.with_entries(
+        predictors={"per_signal": dict.fromkeys(learned.sensor_names, "linear")})
+    return replace(baseline, path="linear baseline",
+                   extra={LINEAR_KEY: fit_linear(frames, learned.normaliser).weights})
 
 
 def fit_linear(frames: list["AlignedFrame"], normaliser: "Normaliser") -> LinearDynamics:

@@ -8,9 +8,11 @@ Diagnosis runs on the NumPy path and never imports torch; the torch module is bu
 when asked for (training, comparisons). Version 1 directories (``weights.pt``, a torch state
 dict read with ``weights_only=True``) still load."""
 
+import copy
 import hashlib
 import json
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from importlib import resources
 from pathlib import Path
@@ -19,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auvdiag_errors import ModelError
+from models.card import ModelCard, ModelIdentity
 from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
 from models.fast import (
@@ -49,9 +52,33 @@ class ModelFileError(ModelError):
 class LoadedModel:
     state: dict[str, np.ndarray]     # the network's state dict, as arrays
     normaliser: Normaliser
-    metadata: dict[str, Any]
+    # model.json as read; only the writers (train, calibrate, relate, score) go through it,
+    # with `entry` and `update_entries`: everything else reads `card`.
+    document: dict[str, Any]
     path: str
     extra: dict[str, np.ndarray] = field(default_factory=dict)   # linear, on_linear/…
+    directory: Path | None = None    # where it was read from
+
+    @cached_property
+    def card(self) -> ModelCard:
+        """model.json, parsed into typed values."""
+        return ModelCard.from_document(self.document)
+
+    def entry(self, key: str) -> dict[str, Any]:
+        """A copy of one model.json entry, for a writer to edit and put back."""
+        return copy.deepcopy(self.document.get(key) or {})
+
+    def update_entries(self, **entries: object) -> None:
+        """Replace model.json entries (not yet written): the parsed card, relations and
+        effort are read afresh."""
+        self.document.update(copy.deepcopy(entries))
+        for parsed in ("card", "relations", "effort"):
+            self.__dict__.pop(parsed, None)
+
+    def with_entries(self, **entries: object) -> "LoadedModel":
+        """The same model with these model.json entries replaced; this one is unchanged."""
+        return replace(self, document={**copy.deepcopy(self.document),
+                                       **copy.deepcopy(entries)})
 
     @cached_property
     def network(self) -> "RecurrentDynamics":
@@ -60,7 +87,7 @@ class LoadedModel:
 
         from models.dynamics import RecurrentDynamics
 
-        arch = self.metadata["architecture"]
+        arch = self.document["architecture"]
         network = RecurrentDynamics(arch["n_commands"], arch["n_states"], arch["hidden"],
                                     self.normaliser.delta_ratio)
         network.load_state_dict({k: torch.from_numpy(v) for k, v in self.state.items()})
@@ -70,15 +97,14 @@ class LoadedModel:
     @cached_property
     def fast(self) -> FastDynamics:
         """The NumPy replay path of the same network (the diagnosis hot path)."""
-        return FastDynamics.from_state(self.state, self.metadata["architecture"]["n_commands"],
+        return FastDynamics.from_state(self.state, self.card.drive_width,
                                        self.normaliser.delta_ratio)
 
     @property
     def predictors(self) -> dict[str, str]:
         """Which predictor each signal is read from (the network alone for a model trained
         before the choice was made)."""
-        chosen = self.metadata.get("predictors", {}).get("per_signal", {})
-        return {name: chosen.get(name, NETWORK) for name in self.sensor_names}
+        return dict(self.card.predictors)
 
     @cached_property
     def dynamics(self) -> ChosenDynamics:
@@ -93,7 +119,7 @@ class LoadedModel:
             raise ValueError(f"unknown predictor {kind!r}")
         if kind == NETWORK:
             return self.fast
-        n_commands = self.metadata["architecture"]["n_commands"]
+        n_commands = self.card.drive_width
         key = LINEAR_REPLAY_KEY if kind == LINEAR_REPLAY else LINEAR_KEY
         if key not in self.extra:
             raise ValueError(f"model.json reads signals from the {kind} predictor, but "
@@ -106,69 +132,57 @@ class LoadedModel:
         return FastDynamics.from_state(state, n_commands, self.normaliser.delta_ratio, linear)
 
     @property
-    def identity(self) -> dict[str, Any]:
+    def identity(self) -> ModelIdentity:
         """What a report needs to say which model judged the log."""
-        meta = self.metadata
-        return {"name": meta.get("name"), "vehicle": meta.get("vehicle"), "path": self.path,
-                "weights_sha256": meta.get("weights_sha256"), "created": meta.get("created"),
-                "heldout_error_rms": meta.get("heldout_error", {}).get("rms"),
-                "horizon_s": meta.get("horizon_s"), "skill": self.skill,
-                "predictors": self.predictors, "inputs": list(self.input_names),
-                "thresholds_calibrated": "calibration" in meta,
-                "false_alarm_rate": (meta.get("calibration") or {}).get("false_alarm_budget")
-                and {k: meta["calibration"]["false_alarm_budget"][k] for k in ("rate", "per")}}
+        return self.card.identity(self.path)
 
     @property
     def horizon_steps(self) -> int | None:
         """How many steps the model predicts before the replay re-starts from the measured
         state; None: the paper's free run (also every model from before horizons)."""
-        horizon = self.metadata.get("horizon_s")
-        if horizon is None:
-            return None
-        return max(1, round(float(horizon) / float(self.metadata["dt_s"])))
+        horizon = self.card.horizon_s
+        return None if horizon is None else max(1, round(horizon / self.card.dt_s))
 
     @property
     def skill(self) -> dict[str, float | None] | None:
         """Each signal's skill against the naive predictors; None for a model trained
         before skill was measured."""
-        signals = self.metadata.get("skill", {}).get("signals")
-        return None if signals is None else {k: v.get("skill") for k, v in signals.items()}
+        skill = self.card.skill
+        return None if skill is None else {k: v.skill for k, v in skill.items()}
 
     @property
     def unskilled(self) -> tuple[str, ...]:
         """The signals the model cannot predict: never judged."""
-        signals = self.metadata.get("skill", {}).get("signals", {})
-        return tuple(name for name in self.sensor_names
-                     if name in signals and not signals[name].get("judged", False))
+        return self.card.unskilled
 
     @cached_property
     def relations(self) -> CommandRelations | None:
         """How the commands follow the motion on normal logs; None where the model has none
         (trained before they were learned, or the logs could not teach them)."""
-        entry = self.metadata.get("command_relations")
+        entry = self.document.get("command_relations")
         return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
 
     @cached_property
     def effort(self) -> EffortModel | None:
         """Each actuator's normal share of its group's effort; None where the model has none
         (trained before effort was learnt, or the logs could not teach it)."""
-        entry = self.metadata.get("effort")
+        entry = self.document.get("effort")
         return None if not entry or "groups" not in entry else EffortModel.from_json(entry)
 
     @property
     def command_names(self) -> tuple[str, ...]:
-        return tuple(self.metadata["signals"]["commands"])
+        return self.card.command_names
 
     @property
     def input_names(self) -> tuple[str, ...]:
         """The measured inputs that drive it beside the commands (none for most models)."""
-        return tuple(i["name"] for i in self.metadata["signals"].get("inputs", []))
+        return self.card.input_names
 
     def drive(self, commands: np.ndarray, inputs: np.ndarray | None = None) -> np.ndarray:
         """The model's input rows for ``commands`` (steps, n_commands): with the measured
         ``inputs`` of the same steps, or where there are none (a simulated mission) each
         input at its typical value on the training logs."""
-        typical = [float(i["typical"]) for i in self.metadata["signals"].get("inputs", [])]
+        typical = [i.typical for i in self.card.inputs]
         if not typical:
             return commands
         if inputs is None:
@@ -177,7 +191,7 @@ class LoadedModel:
 
     @property
     def sensor_names(self) -> tuple[str, ...]:
-        return tuple(s["name"] for s in self.metadata["signals"]["sensors"])
+        return self.card.sensor_names
 
 
 def default_model_dir(vehicle: str = "twin-burger") -> Path:
@@ -205,7 +219,30 @@ def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normal
                           "delta_ratio": normaliser.delta_ratio},
         "weights_sha256": hashlib.sha256(weights.read_bytes()).hexdigest(),
     }
-    (directory / METADATA_FILE).write_text(json.dumps(full, indent=2) + "\n", encoding="utf-8")
+    _write_document(full, directory)
+
+
+def _write_document(document: dict[str, Any], directory: Path) -> None:
+    """The one writer of model.json, atomic: a reader never sees half of it."""
+    target = directory / METADATA_FILE
+    temporary = target.with_name(f".{target.name}.tmp")
+    temporary.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    os.replace(temporary, target)
+
+
+def write_model(model: LoadedModel, directory: Path) -> None:
+    """Write ``model``'s (updated) model.json into ``directory``; a directory other than
+    the one it was read from gets its weights too."""
+    source = model.directory
+    if source is None or directory.resolve() != source.resolve():
+        if source is None:
+            raise ModelFileError(f"{model.path}: the model's weights are not in a directory "
+                                 "to copy from")
+        directory.mkdir(parents=True, exist_ok=True)
+        for file in source.iterdir():
+            if file.is_file() and file.name != METADATA_FILE and not file.name.startswith("."):
+                (directory / file.name).write_bytes(file.read_bytes())
+    _write_document(model.document, directory)
 
 
 def _read_weights(directory: Path, version: int) -> dict[str, np.ndarray]:
@@ -251,7 +288,8 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         extra = {k: arrays.pop(k) for k in list(arrays)
                  if k in (LINEAR_KEY, LINEAR_REPLAY_KEY)
                  or k.startswith(ON_LINEAR_PREFIX)}
-        model = LoadedModel(arrays, normaliser, metadata, label, extra)
+        model = LoadedModel(arrays, normaliser, metadata, label, extra, directory)
+        _ = model.card           # model.json holds what the card needs
         fast = model.fast        # checks every weight is there with the architecture's shape
         _ = model.dynamics       # and every predictor a signal is read from
         _ = model.effort         # and that an effort entry refits

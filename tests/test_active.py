@@ -91,6 +91,6 @@ def test_moved_components_and_conflicting_evidence(profile):
     faulty = {"flow": 1, "yaw_rate": 1}
     runs = [(DmsRun("a", "ZB", 100, 200, faulty), 0), (DmsRun("a", "ZC", 200, 300, faulty), 0)]
     result = decide(["thruster_0", "thruster_1"], 50, runs, profile)
-    assert result.conflict and result.candidates == ["thruster_0", "thruster_1"]
+    assert result.conflict and result.candidates == ("thruster_0", "thruster_1")
     healthy_before = [(DmsRun("a", "ZB", 0, 40, {"flow": 0, "yaw_rate": 0}), 0)]
-    assert decide(["thruster_0", "thruster_1"], 50, healthy_before, profile).evidence == []
+    assert decide(["thruster_0", "thruster_1"], 50, healthy_before, profile).evidence == ()

@@ -31,8 +31,8 @@ def test_a_built_in_profile_by_name_and_errors_of_one_type():
 
 def test_the_shipped_model_is_the_profiles_vehicles_as_the_cli_picks_it():
     bluerov2 = api.load_profile("bluerov2")
-    assert api.load_model(profile=bluerov2).metadata["vehicle"] == "bluerov2"
-    assert api.load_model().metadata["vehicle"] == "twin-burger"
+    assert api.load_model(profile=bluerov2).card.vehicle == "bluerov2"
+    assert api.load_model().card.vehicle == "twin-burger"
     with pytest.raises(AuvdiagError, match="no model is shipped for vehicle 'haizhe'"):
         api.load_model(profile=api.load_profile("haizhe"))
 

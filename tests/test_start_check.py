@@ -21,6 +21,7 @@ from auvdiag_cli.engine.start_check import (
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
 from auvdiag_cli.simulator.writers import write_log
+from models.card import StartReference
 from models.store import default_model_dir
 
 runner = CliRunner()
@@ -100,6 +101,6 @@ def test_a_flow_sensor_reading_high_from_the_first_sample_is_named(tmp_path, pro
 
 
 def test_a_log_and_a_model_without_a_start_state_are_not_judged():
-    check = check_start(None, np.zeros((5, 2)), np.zeros((5, 2)), np.arange(5) * 0.1,
+    check = check_start(StartReference(), np.zeros((5, 2)), np.zeros((5, 2)), np.arange(5) * 0.1,
                         ["flow", "yaw_rate"], 0.1)
     assert not check.judged and "train learns it" in check.describe({})

@@ -99,18 +99,17 @@ def score(
     For models trained before skill was measured, or to re-check a model on new dives: the
     skill and prediction horizon found replace those in model.json, and signals without
     skill are no longer judged. Exit status 1 when no signal has skill."""
-    from auvdiag_cli.jobs.calibrate import write_metadata
     from auvdiag_cli.jobs.train import score_model
     from auvdiag_cli.reports.training import skill_lines
     from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
+    from models.store import load_model, write_model
 
     with user_errors(model):
         vehicle = load_profile(profile)
         loaded = load_model(model)
         scores, chosen = score_model(loaded, vehicle, logs,
                                      horizon_option(horizon, vehicle.horizon_s), report_progress)
-        write_metadata(loaded, output or model)
+        write_model(loaded, output or model)
     for line in skill_lines(scores, chosen):
         typer.echo(line)
     typer.echo(f"skill written to {(output or model) / 'model.json'}")
@@ -135,18 +134,17 @@ def relate(
     normal logs recorded from rest start, so that a sensor wrong from the first sample is
     found. 'auvdiag train' does both itself; use this command for a model trained before,
     or to learn from other dives. What cannot be learned keeps what the model had."""
-    from auvdiag_cli.jobs.calibrate import write_metadata
     from auvdiag_cli.jobs.relate import relate_model
     from auvdiag_cli.reports.training import relation_lines, start_lines
     from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
+    from models.store import load_model, write_model
 
     with user_errors(model):
         vehicle = load_profile(profile)
         loaded = load_model(model)
         relations, start = relate_model(loaded, vehicle, logs, holdout or (), report_progress)
         if "refused" not in relations or "refused" not in start:
-            write_metadata(loaded, output or model)
+            write_model(loaded, output or model)
     for line in [*relation_lines(relations, vehicle.command_names),
                  *start_lines(start, vehicle.sensor_names)]:
         typer.echo(line)
@@ -198,10 +196,9 @@ def calibrate(
     their thresholds set for their share of R (default: the model's budget)."""
     from auvdiag_cli.jobs.budget import FalseAlarmBudget
     from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
-    from auvdiag_cli.jobs.calibrate import write_metadata
     from auvdiag_cli.reports.training import calibration_lines
     from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
+    from models.store import load_model, write_model
 
     with user_errors(model):
         budget = None if false_alarm_rate is None else FalseAlarmBudget.parse(false_alarm_rate)
@@ -209,7 +206,7 @@ def calibrate(
         result = run_calibration(loaded, load_profile(profile), log_paths(logs),
                                  log_paths(faulty or []), margin, floor_at_profile,
                                  budget, progress=report_progress)
-        write_metadata(loaded, output or model)
+        write_model(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)
     typer.echo(f"thresholds written to {(output or model) / 'model.json'}")

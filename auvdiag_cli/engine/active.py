@@ -6,7 +6,8 @@ moves Thruster 0 only, means Thruster 0; ZC repeats the test for Thruster 1). A 
 candidate whose own bit is set stays a candidate either way: a DMS cannot clear a sensor that
 misreads the very motion it excites."""
 
-from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 from auvdiag_cli.vehicle.profile import DiagnosisSequence, Profile
 
@@ -21,7 +22,7 @@ class DmsRun:
     name: str
     start_ns: int
     end_ns: int
-    b: dict[str, int]
+    b: Mapping[str, int]
 
 
 @dataclass(frozen=True)
@@ -29,17 +30,17 @@ class Evidence:
     log: str
     segment: str
     start_s: float            # seconds from the start of *its* log
-    b: dict[str, int]
+    b: Mapping[str, int]
     tested: tuple[str, ...]   # candidates it tests: the actuators it moved, the sensors it flags
     faulty: bool              # b ≠ 0: the fault is among ``tested``; else they are cleared
 
 
-@dataclass
+@dataclass(frozen=True)
 class ActiveDiagnosis:
-    candidates_before: list[str]
-    candidates: list[str]
-    evidence: list[Evidence] = field(default_factory=list)
-    recommended_dms: list[str] = field(default_factory=list)
+    candidates_before: tuple[str, ...]
+    candidates: tuple[str, ...]
+    evidence: tuple[Evidence, ...] = ()
+    recommended_dms: tuple[str, ...] = ()
     conflict: bool = False
 
 
@@ -55,11 +56,11 @@ def shows_fault_period(run: DmsRun, onset_ns: int) -> bool:
     return run.end_ns > onset_ns and (run.start_ns >= onset_ns or any(run.b.values()))
 
 
-def decide(candidates: list[str], onset_ns: int, runs: list[tuple[DmsRun, int]],
+def decide(candidates: Sequence[str], onset_ns: int, runs: Sequence[tuple[DmsRun, int]],
            profile: Profile) -> ActiveDiagnosis:
     """Narrow ``candidates`` with the DMS runs (each with its log's start time, ns) that
     happened while the fault was present (assumption 4: once defective, always defective)."""
-    result = ActiveDiagnosis(list(candidates), list(candidates))
+    evidence: list[Evidence] = []
     remaining = set(candidates)
     for run, log_start_ns in sorted(runs, key=lambda item: item[0].start_ns):
         tested = tuple(c for c in moved_components(profile.dms[run.name], profile)
@@ -69,19 +70,18 @@ def decide(candidates: list[str], onset_ns: int, runs: list[tuple[DmsRun, int]],
                            if run.b.get(s.name) and s.component in candidates}
         if not (tested or flagged_sensors) or not shows_fault_period(run, onset_ns):
             continue   # it tests no candidate, or does not show the faulty vehicle
-        result.evidence.append(Evidence(run.log, run.name,
+        evidence.append(Evidence(run.log, run.name,
                                         round((run.start_ns - log_start_ns) / NS_PER_S, 3),
                                         run.b, tested + tuple(sorted(flagged_sensors)), faulty))
         remaining = (remaining & (set(tested) | flagged_sensors) if faulty
                      else remaining - set(tested))
-    if not remaining:
-        result.conflict = True
+    conflict = not remaining
+    if conflict:
         remaining = set(candidates)
-    result.candidates = [c for c in candidates if c in remaining]
+    kept = tuple(c for c in candidates if c in remaining)
     actuators = remaining & {c.component for c in profile.commands}
-    if len(result.candidates) > 1:
-        # Only a DMS that moves some but not all remaining actuators can split them.
-        result.recommended_dms = [
-            name for name, dms in profile.dms.items()
-            if 0 < len(set(moved_components(dms, profile)) & actuators) < len(actuators)]
-    return result
+    # Only a DMS that moves some but not all remaining actuators can split them.
+    recommended = () if len(kept) < 2 else tuple(
+        name for name, dms in profile.dms.items()
+        if 0 < len(set(moved_components(dms, profile)) & actuators) < len(actuators))
+    return ActiveDiagnosis(tuple(candidates), kept, tuple(evidence), recommended, conflict)

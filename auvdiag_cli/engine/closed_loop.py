@@ -5,11 +5,12 @@ and the path it would have followed, up to the end of the mission leg. A model d
 measured inputs (battery voltage, attitude) has them held at their typical values: the
 replay runs past what the log measured."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
+from auvdiag_cli.engine.missions import MissionLeg
 from auvdiag_cli.vehicle.controller import ControllerSpec, VehicleController
 from auvdiag_cli.vehicle.followers import make_follower
 from models.fast import FastStepper
@@ -33,25 +34,23 @@ class ClosedLoopReplay:
     commands: np.ndarray
 
 
-def _leg_at(legs: list[dict[str, Any]], time_s: float) -> dict[str, Any] | None:
-    started = [leg for leg in legs if float(leg["start_s"]) <= time_s]
-    return max(started, key=lambda leg: float(leg["start_s"])) if started else None
+def _leg_at(legs: Sequence[MissionLeg], time_s: float) -> MissionLeg | None:
+    started = [leg for leg in legs if leg.start_s <= time_s]
+    return max(started, key=lambda leg: leg.start_s) if started else None
 
 
 def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: tuple[str, ...],
                        command_names: tuple[str, ...], time_s: np.ndarray, commands: np.ndarray,
-                       measured: np.ndarray, onset_s: float, legs: list[dict[str, Any]],
+                       measured: np.ndarray, onset_s: float, legs: Sequence[MissionLeg],
                        dt_s: float) -> ClosedLoopReplay | None:
     """None when no mission leg was under way at the onset."""
     leg = _leg_at(legs, onset_s)
     if leg is None:
         return None
-    waypoints = [(float(x), float(y)) for x, y in leg["waypoints"]]
-    gains = spec.gains_for(float(leg["cruise_speed_mps"]) if "cruise_speed_mps" in leg
-                           else None)
-    controller = make_follower(spec, waypoints, gains, [float(d) for d in leg.get("depths_m", [])])
+    gains = spec.gains_for(leg.cruise_speed_mps)
+    controller = make_follower(spec, list(leg.waypoints), gains, list(leg.depths_m))
     vehicle = VehicleController(spec, sensor_names, command_names, controller)
-    first = int(np.searchsorted(time_s, float(leg["start_s"])))
+    first = int(np.searchsorted(time_s, leg.start_s))
     onset = int(np.searchsorted(time_s, onset_s))
     # Before the onset the sensors were sound: they bring the controller to its state then.
     for row in np.nan_to_num(measured[first:onset]):
@@ -73,7 +72,7 @@ def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: t
             if settle <= 0:
                 break
     xy = np.asarray(path)
-    last = waypoints[-1]
+    last = leg.waypoints[-1]
     return ClosedLoopReplay(
         start_s=round(float(time_s[min(onset, len(time_s) - 1)]), 3),
         reached=finished_step is not None,

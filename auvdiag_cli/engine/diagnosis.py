@@ -1,27 +1,36 @@
 """The diagnosis engine: one log in, one `Diagnosis` out. Rendering never recomputes."""
 
 from collections.abc import Sequence
+from dataclasses import replace
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
-from auvdiag_cli.engine.detection import binary_vector, decided_b, detect, first_alarm, look_up
+from auvdiag_cli.engine.detection import (
+    Detection,
+    binary_vector,
+    decided_b,
+    detect,
+    first_alarm,
+    look_up,
+)
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import apply_other_evidence, isolate
 from auvdiag_cli.engine.judging import Judging
-from auvdiag_cli.engine.missions import mission_path, read_missions
+from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
     EPOCH_CLOCK_NS,
     Diagnosis,
+    Finding,
     Histories,
+    Observations,
     SegmentResult,
     Verdict,
     dms_runs,
@@ -42,7 +51,6 @@ from models.store import LoadedModel
 ONSET_LOOKBACK_S = 300.0
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
     """Refuse a model trained for other signals or another step than the profile's."""
-    meta = model.metadata
     if model.command_names != profile.command_names or model.sensor_names != profile.sensor_names:
         raise ModelError(
             f"{log}: model {model.path} expects commands {list(model.command_names)} and sensors "
@@ -53,8 +61,8 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
             f"{log}: model {model.path} is driven by the measured inputs "
             f"{list(model.input_names) or 'none'}, profile {profile.name!r} gives "
             f"{list(profile.input_names) or 'none'}")
-    if abs(float(meta.get("dt_s", -1.0)) - profile.dt_s) > 1e-9:
-        raise ModelError(f"{log}: model step {meta.get('dt_s')} s differs from the profile's "
+    if abs(model.card.dt_s - profile.dt_s) > 1e-9:
+        raise ModelError(f"{log}: model step {model.card.dt_s} s differs from the profile's "
                          f"{profile.dt_s} s")
 
 
@@ -81,18 +89,17 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
         runs += [(run, result.start_ns) for run in dms_runs(result)]
         notes.append(f"companion log {companion}: {len(dms_runs(result))} DMS run(s)")
     diagnosis = diagnose_ingested(main, profile, model, runs, legs)
-    diagnosis.notes += notes
-    return diagnosis
+    return replace(diagnosis, notes=(*diagnosis.notes, *notes))
 
 
-def _mission_legs(path: Path, explicit: bool) -> list[dict[str, Any]]:
+def _mission_legs(path: Path, explicit: bool) -> tuple[MissionLeg, ...]:
     if not path.is_file():
         if explicit:
             raise CompanionError(f"{path}: no such mission plan")
-        return []
+        return ()
     try:
         return read_missions(path)
-    except (OSError, ValueError) as error:
+    except (OSError, ValueError, TypeError) as error:
         raise CompanionError(f"{path}: unreadable mission plan: {error}") from None
 
 
@@ -111,7 +118,7 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
 
 def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                       companion_runs: Sequence[tuple[DmsRun, int]] = (),
-                      mission_legs: Sequence[dict[str, Any]] = ()) -> Diagnosis:
+                      mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
     frame, signals = log.frame, log.signals
     judging = Judging.of(model, profile)
     not_judged, decision = judging.not_judged, judging.decision_steps
@@ -129,46 +136,52 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     notes = list(signals.notes) + frame.notes + [
         f"gap in {gap.signal} from {gap.start_s:.1f} s to {gap.end_s:.1f} s (not "
         "interpolated)" for gap in frame.gaps]
-    diagnosis = Diagnosis(
-        log=signals.path, format=signals.format, vehicle=profile.name, verdict=Verdict.NORMAL,
-        component=None, candidates=[], case=_normal_case(profile),
-        b={name: 0 for name in frame.sensor_names}, detected_at_s=None, onset_s=None,
-        segments=_segment_results(segments, frame.time_s, matching, b_series,
-                                  frame.sensor_names, profile, decision),
+    if model.skill is None:
+        notes.append("the model has no skill scores (trained before they were measured): "
+                     "every signal is judged; 'auvdiag score' measures them")
+    seen = Observations(
+        log=signals.path, format=signals.format, vehicle=profile.name,
+        segments=tuple(_segment_results(segments, frame.time_s, matching, b_series,
+                                        frame.sensor_names, profile, decision)),
         segment_source="markers" if signals.markers else "commands",
-        substitution=None, model=model.identity, window_samples=judging.window,
+        model=model.identity, window_samples=judging.window,
         decision_window_s=profile.decision_window_s,
-        sensor_units={s.name: s.unit for s in profile.sensors}, notes=notes,
+        sensor_units={s.name: s.unit for s in profile.sensors},
         histories=Histories(frame.time_s, frame.commands, frame.command_names,
-                          frame.sensor_names, matching, thresholds, b_series),
-        start_ns=signals.start_ns, mission_legs=list(mission_legs),
+                            frame.sensor_names, matching, thresholds, b_series),
+        start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(float((~frame.operating).sum()) * frame.dt_s, 3),
-        not_judged=not_judged)
-    if model.skill is None:
-        diagnosis.notes.append("the model has no skill scores (trained before they were "
-                               "measured): every signal is judged; 'auvdiag score' measures them")
-    diagnosis.command_check = _check_commands(log, segments, profile, model, diagnosis.notes)
-    diagnosis.start_check = check_start(model.metadata.get("start_state"), frame.commands,
-                                        frame.sensors, frame.time_s, frame.sensor_names,
-                                        frame.dt_s)
-    diagnosis.effort_check = _check_effort(log, segments, profile, model, diagnosis.notes)
-    check, start, effort = diagnosis.command_check, diagnosis.start_check, diagnosis.effort_check
-    if len(not_judged) == len(frame.sensor_names):
-        diagnosis.notes.append("no signal is judged: the model cannot predict any of them")
-        if any(other is not None and other.judged for other in (check, start, effort)):
-            apply_other_evidence(diagnosis, check, start, effort, profile, model)
-            return diagnosis
-        diagnosis.verdict, diagnosis.case = Verdict.UNDETERMINED, None
-        return diagnosis
+        not_judged=not_judged,
+        command_check=_check_commands(log, segments, profile, model, notes),
+        start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
+                                frame.time_s, frame.sensor_names, frame.dt_s),
+        effort_check=_check_effort(log, segments, profile, model, notes))
+    normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
+                     case=_normal_case(profile), notes=tuple(notes))
+    return Diagnosis.of(seen, _conclude(seen, normal, detection, judging, log, matching,
+                                        thresholds, dms_starts, companion_runs, profile,
+                                        model))
+
+
+def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
+              judging: Judging, log: IngestedLog, matching: Matching, thresholds: np.ndarray,
+              dms_starts: list[int], companion_runs: Sequence[tuple[DmsRun, int]],
+              profile: Profile, model: LoadedModel) -> Finding:
+    """The finding: from the replay's alarm where it raised one, else from the checks."""
+    others = (seen.command_check, seen.start_check, seen.effort_check)
+    if len(judging.not_judged) == len(seen.histories.sensor_names):
+        normal = normal.noted("no signal is judged: the model cannot predict any of them")
+        if any(other is not None and other.judged for other in others):
+            return apply_other_evidence(seen, normal, profile, model)
+        return replace(normal, verdict=Verdict.UNDETERMINED, case=None)
     if detection is None:
-        apply_other_evidence(diagnosis, check, start, effort, profile, model)
-        return diagnosis
+        return apply_other_evidence(seen, normal, profile, model)
+    frame = log.frame
     test = weigh_hypotheses(model, judging, frame, matching, thresholds,
                             detection.onset_index, dms_starts)
-    isolate(diagnosis, detection.b, frame.time_s[detection.alarm_index],
-            frame.time_s[detection.onset_index], test, companion_runs, profile, model)
-    return diagnosis
+    return isolate(seen, normal, detection.b, frame.time_s[detection.alarm_index],
+                   frame.time_s[detection.onset_index], test, companion_runs, profile, model)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
@@ -177,7 +190,7 @@ def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
     (not the DMS runs, whose commands are fixed)."""
     relations = model.relations
     if relations is None:
-        why = (model.metadata.get("command_relations") or {}).get("refused")
+        why = model.card.relations_refused
         notes.append("commands not judged against the motion: " + (
             why or "the model has no command relations ('auvdiag relate' learns them)"))
         return None
@@ -193,7 +206,7 @@ def _check_effort(log: IngestedLog, segments: list[Segment], profile: Profile,
     effort = model.effort
     if effort is None:
         if profile.effort_groups:
-            why = (model.metadata.get("effort") or {}).get("refused")
+            why = model.card.effort_refused
             notes.append("effort shares not judged: " + (
                 why or "the model has no effort model (train it again to learn one)"))
         return None

@@ -26,12 +26,13 @@ class Judging:
 
     @classmethod
     def of(cls, model: LoadedModel, profile: Profile) -> "Judging":
-        calibrated = model.metadata.get("thresholds")
-        judged = (profile if not calibrated else
-                  replace(profile, thresholds={**profile.thresholds, **calibrated}))
+        card = model.card
+        judged = (profile if not card.thresholds else replace(profile, thresholds={
+            **profile.thresholds, **{m: dict(v) for m, v in card.thresholds.items()}}))
         return cls(profile.sensor_names,
-                   dict(model.metadata.get("full_scale", profile.full_scales)),
-                   int(model.metadata.get("window_samples", profile.window_samples)),
+                   dict(profile.full_scales if card.full_scale is None else card.full_scale),
+                   profile.window_samples if card.window_samples is None
+                   else card.window_samples,
                    round(profile.decision_window_s / profile.dt_s), judged,
                    not_judged_signals(model))
 
@@ -60,15 +61,14 @@ class Judging:
 
 def not_judged_signals(model: LoadedModel) -> dict[str, str]:
     """The signals the model has no skill for, with the reason reports print."""
-    signals = model.metadata.get("skill", {}).get("signals", {})
-    needed = model.metadata.get("skill", {}).get("judged_from_samples", 0)
+    signals, needed = model.card.skill or {}, model.card.judged_from_samples
     reasons = {}
     for name in model.unskilled:
         record = signals[name]
-        if record.get("samples", needed) < needed:
+        if record.samples is not None and record.samples < needed:
             reasons[name] = (f"not judged (too little held-out data to measure the model's "
-                             f"skill: {record['samples']} samples, needs {needed})")
+                             f"skill: {record.samples} samples, needs {needed})")
         else:
-            skill = record.get("skill")
+            skill = record.skill
             reasons[name] = NOT_JUDGED + ("" if skill is None else f" (skill {skill:.2f})")
     return reasons

@@ -1,10 +1,10 @@
 """What a diagnosis is: the verdict, the component, the evidence beside them and the time
 histories the reports draw. Rendering reads these values and never recomputes them."""
 
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, replace
 from enum import StrEnum
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -14,10 +14,12 @@ from auvdiag_cli.engine.completeness import Completeness
 from auvdiag_cli.engine.coverage import Coverage, coverage_of
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
+from auvdiag_cli.engine.missions import MissionLeg
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.segments import ROUTINE_MODE, Segment
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import Substitution
+from models.card import ModelIdentity
 
 EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
 PAPER_ASSUMPTIONS = (
@@ -36,11 +38,11 @@ class Verdict(StrEnum):
     UNDETERMINED = "undetermined"      # nothing could be judged
 
 
-@dataclass
+@dataclass(frozen=True)
 class SegmentResult:
     segment: Segment
-    max_g: dict[str, float]
-    b: dict[str, int]
+    max_g: Mapping[str, float]
+    b: Mapping[str, int]
     case: int | None
     components: tuple[str, ...]
 
@@ -63,38 +65,60 @@ class Histories:
         return float(self.time_s[-1]) if self.time_s.size else None
 
 
-@dataclass
-class Diagnosis:
+@dataclass(frozen=True, kw_only=True)
+class Observations:
+    """What a diagnosis measured before concluding anything: the log, the replay's
+    histories and the checks beside it."""
+
     log: Path
     format: str
     vehicle: str
-    verdict: Verdict
-    component: str | None
-    candidates: list[str]
-    case: int | None
-    b: dict[str, int]
-    detected_at_s: float | None
-    onset_s: float | None
-    segments: list[SegmentResult]
+    segments: tuple[SegmentResult, ...]
     segment_source: str               # "markers" or "commands"
-    substitution: Substitution | None
-    model: dict[str, Any]
+    model: ModelIdentity
     window_samples: int
     decision_window_s: float
-    sensor_units: dict[str, str]
-    notes: list[str] = field(default_factory=list)
-    active: ActiveDiagnosis | None = None
+    sensor_units: Mapping[str, str]
     start_ns: int = 0
-    mission_legs: list[dict[str, Any]] = field(default_factory=list)
-    degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
-    hypotheses: HypothesisTest | None = None
-    histories: "Histories" = field(default_factory=lambda: Histories())
+    mission_legs: tuple[MissionLeg, ...] = ()
+    histories: Histories = field(default_factory=Histories)
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
-    not_judged: dict[str, str] = field(default_factory=dict)   # signal -> why not
+    not_judged: Mapping[str, str] = field(default_factory=dict)   # signal -> why not
     command_check: CommandCheck | None = None   # the commands judged against the motion
     start_check: StartCheck | None = None       # the log's start against normal starts
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
+
+
+@dataclass(frozen=True, kw_only=True)
+class Finding:
+    """What the evidence concludes; each stage of isolation returns a new one."""
+
+    verdict: Verdict
+    b: Mapping[str, int]
+    component: str | None = None
+    candidates: tuple[str, ...] = ()
+    case: int | None = None
+    detected_at_s: float | None = None
+    onset_s: float | None = None
+    substitution: Substitution | None = None
+    active: ActiveDiagnosis | None = None
+    degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
+    hypotheses: HypothesisTest | None = None
+    notes: tuple[str, ...] = ()
+
+    def noted(self, *notes: str) -> "Finding":
+        return replace(self, notes=(*self.notes, *notes))
+
+
+@dataclass(frozen=True, kw_only=True)
+class Diagnosis(Observations, Finding):
+    """One log's diagnosis: its observations and its finding, built once."""
+
+    @classmethod
+    def of(cls, observed: Observations, finding: Finding) -> "Diagnosis":
+        return cls(**{f.name: getattr(observed, f.name) for f in fields(Observations)},
+                   **{f.name: getattr(finding, f.name) for f in fields(Finding)})
 
     @property
     def coverage(self) -> Coverage:
@@ -104,7 +128,7 @@ class Diagnosis:
                            self.effort_check, self.start_check)
 
 
-def dms_runs(diagnosis: Diagnosis) -> list[DmsRun]:
+def dms_runs(diagnosis: Observations) -> list[DmsRun]:
     """The log's DMS segments with their outcome, in absolute time."""
     return [DmsRun(str(diagnosis.log), r.segment.name,
                    diagnosis.start_ns + round(r.segment.start_s * 1e9),

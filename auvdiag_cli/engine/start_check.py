@@ -5,11 +5,13 @@ rest (every command at zero on its first step) is compared with the normal logs 
 from rest: at the surface, still, their sensors read alike. A log that begins mid-dive
 (its commands already working) is not judged: its start says nothing."""
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from models.card import StartReference
 
 SPAN_S = 1.0                 # the start reading: median over this much of the log's start
 MARGIN = 1.5                 # thresholds: this many times the largest held-out deviation
@@ -99,7 +101,7 @@ class StartCheck:
     off: tuple[str, ...]                 # sensors whose start lies beyond their threshold
     at_s: float | None                   # end of the start span
 
-    def describe(self, units: dict[str, str]) -> str:
+    def describe(self, units: Mapping[str, str]) -> str:
         if not self.judged:
             return f"not judged ({self.why_not})"
         if not self.off:
@@ -109,20 +111,19 @@ class StartCheck:
                          for name in self.off)
 
 
-def check_start(entry: dict[str, Any] | None, commands: np.ndarray, sensors: np.ndarray,
+def check_start(start: StartReference, commands: np.ndarray, sensors: np.ndarray,
                 time_s: np.ndarray, sensor_names: Sequence[str], dt_s: float) -> StartCheck:
     def not_judged(why: str) -> StartCheck:
         return StartCheck(False, why, {}, {}, (), None)
 
-    if not entry or "reference" not in entry:
-        return not_judged((entry or {}).get("refused",
-                                            "the model has no start state: train learns it"))
+    if not start.usable:
+        return not_judged(start.refused or "the model has no start state: train learns it")
     reading = start_reading(commands, sensors, dt_s)
     if reading is None:
         return not_judged("the log is not recorded from rest (its commands already work on "
                           "its first complete step: it may begin mid-dive)")
-    deviation = reading.sensors - np.asarray(entry["reference"])
-    thresholds = np.asarray([np.nan if t is None else t for t in entry["thresholds"]], float)
+    deviation = reading.sensors - np.asarray(start.reference)
+    thresholds = np.asarray([np.nan if t is None else t for t in start.thresholds], float)
     if np.isnan(thresholds).all():
         return not_judged("the normal logs' starts spread too much for any sensor")
     off = tuple(name for i, name in enumerate(sensor_names)

@@ -4,6 +4,7 @@ worth: the track dead-reckoned with the substituted signal against the track wit
 failed one (against the truth too where the log has one: `jobs.truth`, after the
 diagnosis)."""
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,7 +26,7 @@ class Track:
         return float(np.hypot(self.x_m[-1] - other.x_m[-1], self.y_m[-1] - other.y_m[-1]))
 
 
-@dataclass
+@dataclass(frozen=True)
 class Substitution:
     """SM_i replaces SS_i from ``from_s`` on."""
 
@@ -37,7 +38,7 @@ class Substitution:
     truth: np.ndarray | None = None           # the true signal, when the log has it
     truth_error_rms: float | None = None      # SM_i − truth after the onset
     failed_error_rms: float | None = None     # SS_i − truth after the onset
-    tracks: dict[str, Track] = field(default_factory=dict)   # substituted, failed, truth
+    tracks: Mapping[str, Track] = field(default_factory=dict)   # substituted, failed, truth
     closed_loop: ClosedLoopReplay | None = None
 
 
@@ -63,11 +64,10 @@ def substitute(sensor: Sensor, sensor_names: tuple[str, ...], time_s: np.ndarray
     after = time_s >= onset_s
     substituted = measured.copy()
     substituted[after, column] = modelled[after, column]
-    result = Substitution(sensor.name, round(onset_s, 3), sensor.unit, expected_error_rms,
-                          substituted[:, column])
+    tracks = {}
     if navigation is not None:
         speed, rate = sensor_names.index(navigation.speed), sensor_names.index(navigation.yaw_rate)
-        result.tracks["substituted"] = dead_reckon(time_s, substituted[:, speed],
-                                                   substituted[:, rate])
-        result.tracks["failed"] = dead_reckon(time_s, measured[:, speed], measured[:, rate])
-    return result
+        tracks["substituted"] = dead_reckon(time_s, substituted[:, speed], substituted[:, rate])
+        tracks["failed"] = dead_reckon(time_s, measured[:, speed], measured[:, rate])
+    return Substitution(sensor.name, round(onset_s, 3), sensor.unit, expected_error_rms,
+                        substituted[:, column], tracks=tracks)

@@ -24,7 +24,6 @@ from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.judging import not_judged_signals
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
-from auvdiag_cli.files import write_json
 from auvdiag_cli.jobs.budget import (
     BudgetThresholds,
     FalseAlarmBudget,
@@ -40,7 +39,7 @@ from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
 from models.effort import DEFAULT_FALSE_ALARM_RATE
-from models.store import METADATA_FILE, LoadedModel
+from models.store import LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
 # One log's peak g this many times the next log's: that log alone sets the threshold.
@@ -84,7 +83,7 @@ class FaultyCheck:
     log: str
     verdict: str
     component: str | None
-    candidates: list[str]
+    candidates: tuple[str, ...]
     peak_ratio: float     # the largest g / threshold of a judged signal anywhere in the log
 
 
@@ -123,9 +122,7 @@ def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
 
 def _in_sample(model: LoadedModel, logs: Sequence[Path]) -> list[Path]:
     """The logs the model was trained on, recognised by their content digests."""
-    trained = {entry.get("sha256") for entry in
-               model.metadata.get("training", {}).get("logs", [])}
-    return [p for p in logs if log_digest(p) in trained]
+    return [p for p in logs if log_digest(p) in model.card.training_digests]
 
 
 def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
@@ -134,13 +131,13 @@ def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
     IN_SAMPLE_MIN_WIDENING."""
     residuals = np.concatenate([d.histories.matching.measured - d.histories.matching.modelled
                                 for d in diagnoses if d.histories.matching is not None])
-    heldout = model.metadata.get("heldout_error", {}).get("rms", {})
+    heldout = model.card.heldout_error_rms
     widening = {}
     for i, name in enumerate(sensor_names):
         values = residuals[:, i][np.isfinite(residuals[:, i])]
         in_sample = float(np.sqrt(np.mean(values ** 2))) if values.size else 0.0
-        ratio = (heldout[name] / in_sample if in_sample > 0 and heldout.get(name)
-                 else IN_SAMPLE_MIN_WIDENING)
+        error = heldout.get(name)
+        ratio = error / in_sample if in_sample > 0 and error else IN_SAMPLE_MIN_WIDENING
         widening[name] = round(max(IN_SAMPLE_MIN_WIDENING, ratio), 3)
     return widening
 
@@ -165,7 +162,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
               faulty_logs: Sequence[Path] = (), margin: float = 1.5, floor_at_profile: bool = False,
               budget: FalseAlarmBudget | None = None,
               progress: Callable[[str], None] = lambda _: None) -> CalibrationResult:
-    """Derive thresholds; the model object's metadata is updated (not yet written).
+    """Derive thresholds; the model's entries are updated (not yet written).
     ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
     sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
     trip on the next dive's noise). ``budget``: thresholds to a false-alarm rate instead
@@ -178,7 +175,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     normal_logs, ingested = list(kept), list(kept.values())
     in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
-    base = replace(model, metadata={**model.metadata, "thresholds": profile.thresholds})
+    base = model.with_entries(thresholds=profile.thresholds)
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
     widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
                                  if p in in_sample], profile.sensor_names) if in_sample else {}
@@ -198,25 +195,27 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                 for e in (d.histories for d in diagnoses)]
     checks = [d.command_check for d in diagnoses]
     raised = widen_thresholds(model, checks, margin)
-    starts_raised = raise_thresholds(model.metadata.get("start_state") or {}, readings, margin)
+    start_entry = model.entry("start_state")
+    starts_raised = raise_thresholds(start_entry, readings, margin)
+    model.update_entries(**{"start_state": start_entry} if start_entry else {})
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested])
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
-    model.metadata["thresholds"] = {**{m: dict(v) for m, v in profile.thresholds.items()},
-                                    **{m.mode: m.thresholds for m in modes}}
+    thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
+                  **{m.mode: m.thresholds for m in modes}}
+    model.update_entries(thresholds=thresholds)
     effort, effort_notes = _refit_effort(model, profile, ingested,
                                          None if fitted is None else fitted.effort_rate)
-    checks_faulty = [_check_faulty(path, profile, replace(model, metadata=model.metadata))
-                     for path in faulty_logs]
+    checks_faulty = [_check_faulty(path, profile, model) for path in faulty_logs]
     result = CalibrationResult(
-        margin, modes, model.metadata["thresholds"], hours, 3.0 / hours, checks_faulty,
+        margin, modes, thresholds, hours, 3.0 / hours, checks_faulty,
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
         fitted)
-    model.metadata["calibration"] = _record(result, normal_logs, floor_at_profile)
+    model.update_entries(calibration=_record(result, normal_logs, floor_at_profile))
     return result
 
 
@@ -252,9 +251,8 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                   checks: Sequence[CommandCheck | None], judged: Sequence[str],
                   log_hours: Sequence[float]) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
-    ``model.metadata`` (g's go into the modes, `_with_budget`)."""
-    start_entry = model.metadata.get("start_state") or {}
-    relations_entry = model.metadata.get("command_relations") or {}
+    model's entries (g's go into the modes, `_with_budget`)."""
+    start_entry, relations_entry = model.entry("start_state"), model.entry("command_relations")
     judges = [*g_judges(per_log, [m.mode for m in modes if not m.kept_default], judged,
                         profile.sensor_names),
               *start_judges(start_entry, readings, profile.sensor_names),
@@ -265,7 +263,8 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
         start_entry["thresholds"][profile.sensor_names.index(name)] = value
     for (_, name), value in fitted.thresholds("command").items():
         relations_entry["thresholds"][profile.command_names.index(name)] = value
-    model.__dict__.pop("relations", None)        # the cached parse is stale
+    model.update_entries(**{key: entry for key, entry in (
+        ("start_state", start_entry), ("command_relations", relations_entry)) if entry})
     return fitted
 
 
@@ -284,7 +283,7 @@ def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,
 def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],
                   false_alarm_rate: float | None) -> tuple[dict[str, Any] | None, list[str]]:
     """The effort model with these normal logs added (learnt from them where the model has
-    none yet), written into ``model.metadata``; None where the profile has no groups.
+    none yet), written into the model's entries; None where the profile has no groups.
     ``false_alarm_rate``: a new budget (a share of normal logs) for its thresholds."""
     if not profile.effort_groups:
         return None, []
@@ -297,7 +296,7 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
         refit, notes = refit_effort(model.effort, relations, profile, false_alarm_rate)
         entry = refit.to_json()
     if "groups" in entry:
-        model.metadata["effort"] = entry
+        model.update_entries(effort=entry)
         model.__dict__.pop("effort", None)        # the cached parse is stale
     return entry, notes
 
@@ -361,13 +360,3 @@ def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_pro
         "faulty_logs": [c.__dict__ for c in result.faulty],
     }
 
-
-def write_metadata(model: LoadedModel, directory: Path) -> None:
-    """Write the (re)calibrated metadata; a copy target gets the weights too."""
-    source = Path(model.path)
-    if directory.resolve() != source.resolve():
-        directory.mkdir(parents=True, exist_ok=True)
-        for file in source.iterdir():
-            if file.name != METADATA_FILE:
-                (directory / file.name).write_bytes(file.read_bytes())
-    write_json(model.metadata, directory / METADATA_FILE)

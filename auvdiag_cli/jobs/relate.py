@@ -56,7 +56,7 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                  holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
                  ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Learn, for an existing model, how the commands follow the motion and where normal
-    logs recorded from rest start, and record both in ``model.metadata`` (not yet
+    logs recorded from rest start, and record both in the model's entries (not yet
     written); a refusal (the entry says why) keeps what the model had."""
     from auvdiag_cli.engine.diagnosis import check_model_fits
 
@@ -77,19 +77,17 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
 
     start = learn_start_state(readings(training), readings(heldout),
                               [profile.full_scales[n] for n in profile.sensor_names])
-    for key, entry in (("command_relations", relations), ("start_state", start)):
-        if "refused" not in entry:
-            model.metadata[key] = entry
-    model.__dict__.pop("relations", None)        # the cached parse is stale
+    model.update_entries(**{key: entry for key, entry in (
+        ("command_relations", relations), ("start_state", start)) if "refused" not in entry})
     return relations, start
 
 
 def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None"],
                      margin: float) -> dict[str, float]:
-    """Raise, in ``model.metadata``, each actuator's allowed extra effort to ``margin``
+    """Raise, in the model's command relations, each actuator's allowed extra effort to ``margin``
     times the most these normal logs reached where that is more (never lower: the held-out
     logs set it): no calibration log may alarm. Returns the raised thresholds by command."""
-    entry = model.metadata.get("command_relations") or {}
+    entry = model.entry("command_relations")
     if "thresholds" not in entry:
         return {}
     raised = {}
@@ -102,5 +100,5 @@ def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None
             if threshold is not None and ratio is not None and margin * ratio > 1.0:
                 entry["thresholds"][k] = round(margin * ratio * threshold, 6)
                 raised[name] = entry["thresholds"][k]
-    model.__dict__.pop("relations", None)
+    model.update_entries(command_relations=entry)
     return raised

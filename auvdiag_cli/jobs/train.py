@@ -328,15 +328,14 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                 horizon_s: float | None, progress: Callable[[str], None] = lambda _: None
                 ) -> tuple[list[HorizonScore], HorizonScore]:
     """Measure an existing model's skill on normal ``logs`` it was not trained on and record
-    it (with the horizon chosen) in ``model.metadata`` (not yet written). Without the
+    it (with the horizon chosen) in the model's entries (not yet written). Without the
     training data, the mean and linear yardsticks are fitted on these logs themselves,
     which favours them: the skill found is, if anything, too low."""
     from auvdiag_cli.engine.diagnosis import check_model_fits
 
     for log in logs:
         check_model_fits(model, profile, log)
-    trained = {e.get("sha256") for e in model.metadata.get("training", {}).get("logs", [])}
-    seen = [p.name for p in logs if log_digest(p) in trained]
+    seen = [p.name for p in logs if log_digest(p) in model.card.training_digests]
     if seen:
         raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
                          "it has not seen")
@@ -346,5 +345,5 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
         np.asarray(model.normaliser.state_scale), scoring, scoring, profile.sensor_names,
         profile.dt_s, horizon_candidates(profile, horizon_s))]
     chosen = choose_horizon(scores)
-    model.metadata.update(skill_metadata(scores, chosen, [p.name for p in logs], profile))
+    model.update_entries(**skill_metadata(scores, chosen, [p.name for p in logs], profile))
     return scores, chosen

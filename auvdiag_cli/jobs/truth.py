@@ -4,6 +4,7 @@ done: how far the substituted signal and the failed sensor lie from the true sig
 true track. The diagnosis itself never reads it."""
 
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -33,26 +34,29 @@ def truth_series(log_path: Path, columns: list[str], time_s: np.ndarray
     return {c: np.interp(time_s, t, table[c].to_numpy(dtype=float)) for c in columns}
 
 
-def compare_with_truth(diagnosis: Diagnosis, profile: Profile) -> None:
-    """Fill the substitution's truth figures where the log has ground truth beside it."""
+def compare_with_truth(diagnosis: Diagnosis, profile: Profile) -> Diagnosis:
+    """The diagnosis with its substitution's truth figures, where the log has ground truth
+    beside it."""
     substitution, matching = diagnosis.substitution, diagnosis.histories.matching
     if substitution is None or matching is None:
-        return
+        return diagnosis
     sensor = profile.sensor(substitution.signal)
     if sensor.truth_column is None:
-        return
+        return diagnosis
     time_s = diagnosis.histories.time_s
     truth = truth_series(diagnosis.log, [sensor.truth_column, *TRUE_TRACK_COLUMNS], time_s)
     if truth is None:
-        return
+        return diagnosis
     column = diagnosis.histories.sensor_names.index(sensor.name)
     after = time_s >= substitution.from_s
     true_signal = truth[sensor.truth_column]
-    substitution.truth = true_signal
-    substitution.truth_error_rms = rms(matching.modelled[after, column] - true_signal[after])
-    substitution.failed_error_rms = rms(matching.measured[after, column] - true_signal[after])
-    if substitution.tracks:
-        substitution.tracks["truth"] = Track(truth["x_m"], truth["y_m"])
+    tracks = dict(substitution.tracks)
+    if tracks:
+        tracks["truth"] = Track(truth["x_m"], truth["y_m"])
+    return replace(diagnosis, substitution=replace(
+        substitution, truth=true_signal, tracks=tracks,
+        truth_error_rms=rms(matching.modelled[after, column] - true_signal[after]),
+        failed_error_rms=rms(matching.measured[after, column] - true_signal[after])))
 
 
 def diagnose_with_truth(path: Path, profile: Profile, model: LoadedModel,
@@ -60,6 +64,4 @@ def diagnose_with_truth(path: Path, profile: Profile, model: LoadedModel,
                         ) -> Diagnosis:
     """The diagnosis of ``path``, and where the log has ground truth beside it, the
     substitution laid against it (what the CLI, an audit and the library report)."""
-    diagnosis = diagnose(path, profile, model, companions, mission)
-    compare_with_truth(diagnosis, profile)
-    return diagnosis
+    return compare_with_truth(diagnose(path, profile, model, companions, mission), profile)

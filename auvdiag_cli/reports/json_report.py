@@ -59,7 +59,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "actuators": _actuators(diagnosis.effort_check),
         "active_diagnosis": _active(diagnosis),
         "substitution": _substitution(diagnosis.substitution),
-        "model": diagnosis.model,
+        "model": diagnosis.model.as_dict(),
         "method": {
             "g": "g_i(k) = 100/(K R_i) * sum_{j=k-K+1..k} |SS_i(j) - SM_i(j)| (mean of K samples)",
             "window_samples": diagnosis.window_samples,

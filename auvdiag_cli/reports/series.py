@@ -33,7 +33,7 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
         series["g_percent"] = d.histories.matching.g_percent.astype(np.float32)
     if d.effort_check is not None:
         series.update(effort_series(d.effort_check))
-    waypoints = [point for leg in d.mission_legs for point in leg.get("waypoints", [])]
+    waypoints = [point for leg in d.mission_legs for point in leg.waypoints]
     if waypoints:
         series["waypoints_m"] = np.asarray(waypoints, dtype=np.float64)
     substitution = d.substitution

@@ -2,6 +2,7 @@
 
 import math
 import textwrap
+from collections.abc import Sequence
 
 from adapters import TopicInfo
 from auvdiag_cli.engine.active import ActiveDiagnosis
@@ -16,7 +17,7 @@ from auvdiag_cli.reports.json_report import utc_text
 DETAIL_WIDTH = 100
 
 
-def _components(names: list[str]) -> str:
+def _components(names: Sequence[str]) -> str:
     return " or ".join(name.replace("_", " ") for name in names)
 
 
@@ -65,8 +66,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "
                      f"max g / threshold: {peaks}{case}")
     lines += [f"  note: {note}" for note in d.notes]
-    inputs = d.model.get("inputs")
-    lines.append(f"  model: {d.model.get('name')} ({d.model.get('path')})"
+    inputs = d.model.inputs
+    lines.append(f"  model: {d.model.name} ({d.model.path})"
                  + (f", driven also by the measured {', '.join(inputs)}" if inputs else ""))
     return [line for line in lines if line]
 

@@ -1,0 +1,190 @@
+"""The model card: what ``model.json`` says about a model, parsed once when it loads into
+typed, read-only values. Everything outside ``models`` reads a model through its card (and
+the parsed relations and effort beside it), never through the JSON document; a missing key
+takes the value a model from before that key existed means."""
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+from models.fast import NETWORK
+
+
+@dataclass(frozen=True)
+class ModelInput:
+    """A measured input that drives the model beside the commands."""
+
+    name: str
+    unit: str
+    typical: float            # its median on the training logs (held there in simulations)
+
+
+@dataclass(frozen=True)
+class SignalSkillRecord:
+    skill: float | None       # None: not measured (a diverged predictor)
+    judged: bool
+    samples: int | None       # held-out samples the figure comes from
+
+
+@dataclass(frozen=True)
+class FalseAlarmSetting:
+    """The false-alarm budget calibrate set the thresholds for."""
+
+    rate: float
+    per: str                  # "log" or "hour"
+
+    def as_dict(self) -> dict[str, float | str]:
+        return {"rate": self.rate, "per": self.per}
+
+
+@dataclass(frozen=True)
+class StartReference:
+    """Where normal logs recorded from rest start, and how far a start may lie from it
+    (None: that sensor's normal starts scatter too much to judge); or why there is none."""
+
+    reference: tuple[float, ...] = ()
+    thresholds: tuple[float | None, ...] = ()
+    training_starts: tuple[tuple[float | None, ...], ...] = ()
+    refused: str | None = None
+
+    @property
+    def usable(self) -> bool:
+        return bool(self.reference)
+
+
+@dataclass(frozen=True)
+class ModelIdentity:
+    """What a report says about the model that judged a log."""
+
+    name: str | None
+    vehicle: str | None
+    path: str
+    weights_sha256: str | None
+    created: str | None
+    heldout_error_rms: Mapping[str, float | None] | None
+    horizon_s: float | None
+    skill: Mapping[str, float | None] | None
+    predictors: Mapping[str, str]
+    inputs: tuple[str, ...]
+    thresholds_calibrated: bool
+    false_alarm_rate: FalseAlarmSetting | None
+
+    def as_dict(self) -> dict[str, object]:
+        """The JSON report's ``model`` object."""
+        return {"name": self.name, "vehicle": self.vehicle, "path": self.path,
+                "weights_sha256": self.weights_sha256, "created": self.created,
+                "heldout_error_rms": _plain(self.heldout_error_rms),
+                "horizon_s": self.horizon_s, "skill": _plain(self.skill),
+                "predictors": dict(self.predictors), "inputs": list(self.inputs),
+                "thresholds_calibrated": self.thresholds_calibrated,
+                "false_alarm_rate": None if self.false_alarm_rate is None
+                else self.false_alarm_rate.as_dict()}
+
+
+def _plain(mapping: Mapping[str, float | None] | None) -> dict[str, float | None] | None:
+    return None if mapping is None else dict(mapping)
+
+
+def _frozen(mapping: Mapping[str, Any]) -> Mapping[str, Any]:
+    return MappingProxyType(dict(mapping))
+
+
+def _optional_float(value: object) -> float | None:
+    return None if value is None else float(value)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class ModelCard:
+    name: str | None
+    vehicle: str | None
+    created: str | None
+    dt_s: float
+    command_names: tuple[str, ...]
+    sensor_names: tuple[str, ...]
+    inputs: tuple[ModelInput, ...]
+    hidden: int
+    drive_width: int                  # the network's inputs: the commands, then the inputs
+    weights_sha256: str | None
+    horizon_s: float | None                               # None: the paper's free run
+    predictors: Mapping[str, str]                          # signal -> predictor it is read from
+    skill: Mapping[str, SignalSkillRecord] | None          # None: trained before skill
+    judged_from_samples: int
+    heldout_error_rms: Mapping[str, float | None]
+    full_scale: Mapping[str, float] | None                 # None: the profile's
+    window_samples: int | None                             # None: the profile's
+    thresholds: Mapping[str, Mapping[str, float]] | None   # mode -> signal -> g; None: profile's
+    calibrated: bool
+    false_alarm_rate: FalseAlarmSetting | None
+    training_digests: frozenset[str]                       # sha256 of each training log
+    start_state: StartReference
+    relations_refused: str | None                          # why no command relations
+    effort_refused: str | None                             # why no effort model
+
+    @property
+    def input_names(self) -> tuple[str, ...]:
+        return tuple(i.name for i in self.inputs)
+
+    @property
+    def unskilled(self) -> tuple[str, ...]:
+        """The signals the model cannot predict: never judged."""
+        skill = self.skill or {}
+        return tuple(n for n in self.sensor_names if n in skill and not skill[n].judged)
+
+    def identity(self, path: str) -> ModelIdentity:
+        return ModelIdentity(
+            self.name, self.vehicle, path, self.weights_sha256, self.created,
+            _frozen(self.heldout_error_rms) if self.heldout_error_rms else None,
+            self.horizon_s,
+            None if self.skill is None else _frozen({k: v.skill for k, v in self.skill.items()}),
+            self.predictors, self.input_names, self.calibrated, self.false_alarm_rate)
+
+    @classmethod
+    def from_document(cls, meta: Mapping[str, Any]) -> "ModelCard":
+        """Parse model.json (raises KeyError, TypeError or ValueError where it is malformed:
+        the loader names the file)."""
+        signals = meta["signals"]
+        sensors = tuple(str(s["name"]) for s in signals["sensors"])
+        skill = meta.get("skill", {}).get("signals")
+        chosen = meta.get("predictors", {}).get("per_signal", {})
+        calibration = meta.get("calibration") or {}
+        budget = calibration.get("false_alarm_budget")
+        start = meta.get("start_state") or {}
+        return cls(
+            name=meta.get("name"), vehicle=meta.get("vehicle"), created=meta.get("created"),
+            dt_s=float(meta["dt_s"]),
+            command_names=tuple(str(c) for c in signals["commands"]),
+            sensor_names=sensors,
+            inputs=tuple(ModelInput(str(i["name"]), str(i.get("unit", "")), float(i["typical"]))
+                         for i in signals.get("inputs", [])),
+            hidden=int(meta["architecture"]["hidden"]),
+            drive_width=int(meta["architecture"]["n_commands"]),
+            weights_sha256=meta.get("weights_sha256"),
+            horizon_s=_optional_float(meta.get("horizon_s")),
+            predictors=_frozen({n: str(chosen.get(n, NETWORK)) for n in sensors}),
+            skill=None if skill is None else _frozen({
+                name: SignalSkillRecord(_optional_float(r.get("skill")),
+                                        bool(r.get("judged", False)), r.get("samples"))
+                for name, r in skill.items()}),
+            judged_from_samples=int(meta.get("skill", {}).get("judged_from_samples", 0)),
+            heldout_error_rms=_frozen({k: _optional_float(v) for k, v in
+                                       meta.get("heldout_error", {}).get("rms", {}).items()}),
+            full_scale=None if "full_scale" not in meta else _frozen(
+                {k: float(v) for k, v in meta["full_scale"].items()}),
+            window_samples=None if "window_samples" not in meta else int(meta["window_samples"]),
+            thresholds=None if not meta.get("thresholds") else _frozen({
+                mode: _frozen({k: float(v) for k, v in values.items()})
+                for mode, values in meta["thresholds"].items()}),
+            calibrated="calibration" in meta,
+            false_alarm_rate=None if not budget else FalseAlarmSetting(float(budget["rate"]),
+                                                                       str(budget["per"])),
+            training_digests=frozenset(str(e.get("sha256")) for e in
+                                       meta.get("training", {}).get("logs", [])),
+            start_state=StartReference(
+                tuple(float(v) for v in start.get("reference", [])),
+                tuple(_optional_float(t) for t in start.get("thresholds", [])),
+                tuple(tuple(_optional_float(v) for v in row)
+                      for row in start.get("training_starts", [])),
+                start.get("refused")),
+            relations_refused=(meta.get("command_relations") or {}).get("refused"),
+            effort_refused=(meta.get("effort") or {}).get("refused"))
