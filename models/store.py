@@ -54,7 +54,7 @@ class LoadedModel:
     normaliser: Normaliser
     # model.json as read; only the writers (train, calibrate, relate, score) go through it,
     # with `entry` and `update_entries`: everything else reads `card`.
-    document: dict[str, Any]
+    model_json: dict[str, Any]
     path: str
     extra: dict[str, np.ndarray] = field(default_factory=dict)   # linear, on_linear/…
     directory: Path | None = None    # where it was read from
@@ -62,22 +62,22 @@ class LoadedModel:
     @cached_property
     def card(self) -> ModelCard:
         """model.json, parsed into typed values."""
-        return ModelCard.from_document(self.document)
+        return ModelCard.from_document(self.model_json)
 
     def entry(self, key: str) -> dict[str, Any]:
         """A copy of one model.json entry, for a writer to edit and put back."""
-        return copy.deepcopy(self.document.get(key) or {})
+        return copy.deepcopy(self.model_json.get(key) or {})
 
     def update_entries(self, **entries: object) -> None:
         """Replace model.json entries (not yet written): the parsed card, relations and
         effort are read afresh."""
-        self.document.update(copy.deepcopy(entries))
+        self.model_json.update(copy.deepcopy(entries))
         for parsed in ("card", "relations", "effort"):
             self.__dict__.pop(parsed, None)
 
     def with_entries(self, **entries: object) -> "LoadedModel":
         """The same model with these model.json entries replaced; this one is unchanged."""
-        return replace(self, document={**copy.deepcopy(self.document),
+        return replace(self, model_json={**copy.deepcopy(self.model_json),
                                        **copy.deepcopy(entries)})
 
     @cached_property
@@ -87,7 +87,7 @@ class LoadedModel:
 
         from models.dynamics import RecurrentDynamics
 
-        arch = self.document["architecture"]
+        arch = self.model_json["architecture"]
         network = RecurrentDynamics(arch["n_commands"], arch["n_states"], arch["hidden"],
                                     self.normaliser.delta_ratio)
         network.load_state_dict({k: torch.from_numpy(v) for k, v in self.state.items()})
@@ -159,14 +159,14 @@ class LoadedModel:
     def relations(self) -> CommandRelations | None:
         """How the commands follow the motion on normal logs; None where the model has none
         (trained before they were learned, or the logs could not teach them)."""
-        entry = self.document.get("command_relations")
+        entry = self.model_json.get("command_relations")
         return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
 
     @cached_property
     def effort(self) -> EffortModel | None:
         """Each actuator's normal share of its group's effort; None where the model has none
         (trained before effort was learnt, or the logs could not teach it)."""
-        entry = self.document.get("effort")
+        entry = self.model_json.get("effort")
         return None if not entry or "groups" not in entry else EffortModel.from_json(entry)
 
     @property
@@ -242,7 +242,7 @@ def write_model(model: LoadedModel, directory: Path) -> None:
         for file in source.iterdir():
             if file.is_file() and file.name != METADATA_FILE and not file.name.startswith("."):
                 (directory / file.name).write_bytes(file.read_bytes())
-    _write_document(model.document, directory)
+    _write_document(model.model_json, directory)
 
 
 def _read_weights(directory: Path, version: int) -> dict[str, np.ndarray]:

@@ -194,3 +194,52 @@ def test_the_public_module_imports_no_terminal_library():
          "[0] for m in sys.modules} & {'rich', 'typer', 'click', 'tqdm'})))"],
         capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
     assert loaded == []
+
+
+def _untyped_fields(root: type) -> list[str]:
+    """Fields under the dataclass ``root`` (and every dataclass its fields hold) whose type
+    is or contains Any."""
+    import dataclasses
+    import typing
+
+    found, seen = [], set()
+
+    def walk(annotation: object, where: str) -> None:
+        if annotation is typing.Any:
+            found.append(where)
+        elif isinstance(annotation, type) and dataclasses.is_dataclass(annotation):
+            if annotation in seen:
+                return
+            seen.add(annotation)
+            hints = typing.get_type_hints(annotation)
+            for f in dataclasses.fields(annotation):
+                walk(hints[f.name], f"{annotation.__name__}.{f.name}")
+        for argument in typing.get_args(annotation):
+            walk(argument, where)
+
+    walk(root, root.__name__)
+    return found
+
+
+def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
+    """The diagnosis and the model card are typed all the way down, and only the writers
+    of model.json (train, calibrate, relate, score) touch the JSON document itself."""
+    from dataclasses import dataclass
+    from typing import Any
+
+    from auvdiag_cli.engine.results import Diagnosis
+    from models.card import ModelCard
+
+    @dataclass
+    class Loose:
+        inner: dict[str, Any]
+
+    assert _untyped_fields(Loose) == ["Loose.inner"]        # the check sees one
+    assert _untyped_fields(Diagnosis) == [] and _untyped_fields(ModelCard) == []
+    writers = {"auvdiag_cli.jobs.calibrate", "auvdiag_cli.jobs.relate", "auvdiag_cli.jobs.train"}
+    for name, path in _modules().items():
+        if name.startswith("models") or name in writers:
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        touched = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+        assert not touched & {"model_json", "entry", "update_entries"}, name
