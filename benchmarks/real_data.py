@@ -106,14 +106,9 @@ class HaizheFolds:
 
 def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path, scale: float,
                   folds: int) -> HaizheFolds:
-    from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.jobs.budget import FalseAlarmBudget
-    from auvdiag_cli.jobs.calibrate import calibrate
-    from auvdiag_cli.jobs.train import train_from_logs
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
+    from auvdiag_cli import api
 
-    profile = load_profile(Path("haizhe"))
+    profile = api.load_profile("haizhe")
     labels = ["Normal (held out)", *faulty]
     out = HaizheFolds({c: [] for c in labels}, Counter(), {c: Counter() for c in labels})
     for fold in range(folds):
@@ -121,23 +116,24 @@ def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path,
         calibration = [p for i, p in enumerate(normal) if i % folds == (fold + 1) % folds]
         training = [p for p in normal if p not in judged and p not in calibration]
         started = time.perf_counter()
-        result = train_from_logs(training, work / f"haizhe{fold}", profile, calibration,
-                                 iterations_scale=scale, keep_unskilled=True)
+        result = api.train(training, work / f"haizhe{fold}", profile, api.TrainOptions(
+            tuple(calibration), iterations_scale=scale, keep_unskilled=True))
         out.seconds += time.perf_counter() - started
         out.results.append(result)
         if profile.inputs:
-            out.without_inputs.append(train_from_logs(
+            out.without_inputs.append(api.train(
                 training, work / f"haizhe{fold}-without-inputs", replace(profile, inputs=()),
-                calibration, keep_unskilled=True, predictors=("linear", "linear-replay")))
+                api.TrainOptions(tuple(calibration), keep_unskilled=True,
+                                 predictors=("linear", "linear-replay"))))
         out.horizons.append(_horizon(result))
-        model = load_model(work / f"haizhe{fold}")
-        budget = calibrate(model, profile, calibration,
-                           budget=FalseAlarmBudget(FALSE_ALARM_RATE)).budget
+        model = api.load_model(work / f"haizhe{fold}", profile)
+        budget = api.calibrate(model, profile, calibration,
+                               budget=api.FalseAlarmBudget(FALSE_ALARM_RATE)).budget
         assert budget is not None
         out.loo.append((budget.loo_logs_alarmed, budget.logs))
         for label, runs in [("Normal (held out)", judged), *faulty.items()]:
             for run in runs:
-                d = diagnose(run, profile, model)
+                d = api.diagnose(run, profile, model)
                 out.scores[label].append(_score(d))
                 if d.verdict == "fault":
                     out.alarms[label] += 1
@@ -264,16 +260,13 @@ def separability(folder: Path, folds: int) -> list[str]:
 
 
 def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
-    from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.jobs.train import train_from_logs
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
     from auvdiag_errors import AuvdiagError
-    from models.store import load_model
 
-    profile = load_profile(Path("bluerov2_standard"))
-    result = train_from_logs([folder / "small.BIN"], work / "rov", profile,
-                             iterations_scale=scale, keep_unskilled=True)
-    model = load_model(work / "rov")
+    profile = api.load_profile("bluerov2_standard")
+    result = api.train([folder / "small.BIN"], work / "rov", profile,
+                       api.TrainOptions(iterations_scale=scale, keep_unskilled=True))
+    model = api.load_model(work / "rov", profile)
     lines = [f"**ArduSub** (profile bluerov2_standard; trained on the armed time of small.BIN "
              f"alone, {result.operating_hours * 3600:.0f} s, held out: {result.heldout_split}). "
              f"Horizon chosen: {_horizon(result)}.", "", *_skill_table(result), "",
@@ -281,7 +274,7 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
              "|---|---|---|---|---|"]
     for name in ("small.BIN", "small.tlog", "pymavlink_bug.tlog"):
         try:
-            d = diagnose(folder / name, profile, model)
+            d = api.diagnose(folder / name, profile, model)
         except AuvdiagError as error:
             lines.append(f"| {name} | not analysable: {str(error).split(': ')[-1]} | - | - | - |")
             continue
@@ -329,16 +322,15 @@ def crazypad(root: Path, work: Path, scale: float) -> list[str]:
     held out; each signal read from the predictor that validates best."""
     import csv
 
-    from auvdiag_cli.jobs.train import train_from_logs
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
 
     with (root / "labels.csv").open() as stream:
         rows = list(csv.DictReader(stream))
     normal = [root / row["file"] for row in rows if row["kind"] == "normal"]
     defects = [root / row["file"] for row in rows if row["kind"] != "normal"]
-    profile = load_profile(_crazypad_profile(work))
-    result = train_from_logs(normal[:4], work / "crazypad", profile, normal[4:],
-                             iterations_scale=scale, keep_unskilled=True)
+    profile = api.load_profile(_crazypad_profile(work))
+    result = api.train(normal[:4], work / "crazypad", profile, api.TrainOptions(
+        tuple(normal[4:]), iterations_scale=scale, keep_unskilled=True))
     return [f"**CrazyPAD E8** nano-quadrotor (Masalimov K. et al., Data 2024, 9, 79, doi "
             f"10.3390/data9060079; MIT), normal flights: {len(normal[:4])} to train, "
             f"{len(normal[4:])} held out; profile crazyflie with the vertical acceleration "
@@ -352,14 +344,13 @@ def _defect_verdicts(defects: list[Path], heldout: list[Path], profile: "Profile
     """Every defect flight and every held-out normal one diagnosed with the model
     (uncalibrated: the profile's thresholds): the verdicts as the terminal writes them,
     with what was judged."""
-    from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.reports.json_report import diagnosis_to_dict, verdict_title
-    from models.store import load_model
+    from auvdiag_cli import api
+    from auvdiag_cli.reports.json_report import verdict_title
 
-    model = load_model(model_dir)
+    model = api.load_model(model_dir, profile)
 
     def verdicts(paths: list[Path]) -> Counter[str]:
-        return Counter(verdict_title(diagnosis_to_dict(diagnose(path, profile, model)))
+        return Counter(verdict_title(api.to_json(api.diagnose(path, profile, model)))
                        for path in paths)
 
     defect, normal = verdicts(defects), verdicts(heldout)

@@ -61,13 +61,12 @@ def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
 
 def run(label: str, train_function: Callable[..., object], logs: list[Path],
         heldout: list[Path], output: Path, scale: float) -> dict:
+    from auvdiag_cli.api import TrainOptions, load_profile
     from auvdiag_cli.jobs.train import train_from_logs
-    from auvdiag_cli.vehicle.profile import load_profile
 
     started = time.perf_counter()
-    result = train_from_logs(logs, output, load_profile(), heldout, iterations_scale=scale,
-                             keep_unskilled=True, progress=lambda _: None,
-                             trainer=train_function)
+    result = train_from_logs(logs, output, load_profile(), TrainOptions(
+        tuple(heldout), iterations_scale=scale, keep_unskilled=True), trainer=train_function)
     seconds = time.perf_counter() - started
     return {"label": label, "seconds": seconds, "hours": result.operating_hours,
             "signals": {k: (s.model_rms, s.skill, s.versus_linear)

@@ -1,5 +1,6 @@
 """The public Python face: everything a program needs, from one module."""
 
+import json
 import shutil
 from pathlib import Path
 
@@ -51,8 +52,44 @@ def test_a_program_audits_a_folder(tmp_path):
     assert (tmp_path / "out" / "audit.csv").is_file()
 
 
+def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log, tmp_path):
+    """The CLI's path from normal logs to a fleet audit, on objects, with nothing printed."""
+    profile = api.load_profile()
+    logs = [make_log(name, 11) for name in ("dms-za", "dms-zb", "paper-normal",
+                                             "mission-large-ccw")]
+    options = api.TrainOptions((make_log("mission-ccw", 12),), iterations_scale=0.05,
+                               predictors=("linear",), keep_unskilled=True)
+    trained = api.train(logs, tmp_path / "model", profile, options)
+    assert trained.written and dict(trained.chosen.predictors) == {"flow": "linear",
+                                                                   "yaw_rate": "linear"}
+    model = api.load_model(tmp_path / "model", profile)
+    assert model.card.predictors == trained.chosen.predictors and not model.card.calibrated
+    calibration = api.calibrate(model, profile, [make_log("paper-normal", 13),
+                                                 make_log("mission-ccw", 14)])
+    api.save_model(model, tmp_path / "calibrated")
+    saved = api.load_model(tmp_path / "calibrated", profile)
+    assert saved.card.calibrated and saved.card.thresholds is not None
+    assert dict(saved.card.thresholds["mission"]) == calibration.thresholds["mission"]
+    assert not api.load_model(tmp_path / "model", profile).card.calibrated   # untouched
+    diagnosis = api.diagnose(make_log("paper-flow-sensor-covered", 11), profile, saved)
+    api.write_reports(diagnosis, json=tmp_path / "d.json", pdf=tmp_path / "d.pdf",
+                      mcap=tmp_path / "d.mcap")
+    assert (tmp_path / "d.pdf").read_bytes().startswith(b"%PDF")
+    assert json.loads((tmp_path / "d.json").read_text())["verdict"] == diagnosis.verdict
+    assert (tmp_path / "d.mcap").stat().st_size > 0
+    fleet = api.audit([make_log("paper-normal", 13), make_log("paper-flow-sensor-covered", 11)],
+                      tmp_path / "audit", profile, saved)
+    assert len(fleet.records) == 2 and all(r["model"]["path"] == str(tmp_path / "calibrated")
+                                           for r in fleet.records)
+    assert api.trend(tmp_path / "audit").short         # two dives: too few for a trend
+    with pytest.raises(AuvdiagError, match="not an audit folder"):
+        api.trend(tmp_path)
+
+
 def test_everything_public_is_named_in_one_place():
     defined = {name for name, value in vars(api).items() if not name.startswith("_")
                and getattr(value, "__module__", None) == api.__name__}
-    assert defined == {"audit", "diagnose", "load_model", "load_profile", "read_log", "to_json"}
+    assert defined == {"audit", "calibrate", "diagnose", "draft_profile", "inspect",
+                       "load_model", "load_profile", "read_log", "relate", "save_model",
+                       "score", "to_json", "train", "trend", "write_reports"}
     assert defined <= set(api.__all__) and all(hasattr(api, name) for name in api.__all__)

@@ -16,7 +16,7 @@ ALLOWED = {"auvdiag_errors": set(), "adapters": {"auvdiag_errors"},
 # Inside auvdiag_cli, bottom to top; a module may import from its own folder and from lower
 # ranks. Modules at the package's top (errors, numeric, digest, files) are rank 0.
 APPLICATION_RANKS = {"vehicle": 1, "engine": 2, "simulator": 3, "jobs": 4, "reports": 5,
-                     "audit": 6, "fuzz": 6, "cli": 7, "__main__": 7, "api": 7}
+                     "audit": 6, "fuzz": 6, "api": 7, "cli": 8, "__main__": 8}
 
 
 def _application_layer(module: str) -> tuple[str, int]:

@@ -4,12 +4,12 @@ one is kept (it becomes an error row: most likely a damaged log), anything else 
 and listed."""
 
 import glob
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from adapters import detect_format
-from auvdiag_errors import LogError
+from auvdiag_errors import LogError, UsageError
 
 LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin"}
 ROS2_METADATA = "metadata.yaml"
@@ -105,3 +105,20 @@ def discover(paths: Sequence[str], exclude: Sequence[Path] = ()) -> Discovery:
     found.logs = list(unique.values())
     _set_companions_apart(found)
     return found
+
+
+def expand_logs(paths: Sequence[Path], progress: Callable[[str], None]) -> list[Path]:
+    """The logs given, a folder standing for every log under it (a ROS 2 bag folder is
+    one log); what a folder holds that is not a log is reported through ``progress``."""
+    expanded: list[Path] = []
+    for path in paths:
+        if not path.is_dir() or (path / ROS2_METADATA).is_file():
+            expanded.append(path)
+            continue
+        found = discover([str(path)])
+        for skipped, why in found.skipped:
+            progress(f"left out {skipped}: {why}")
+        if not found.logs:
+            raise UsageError(f"{path}: the folder holds no log this tool reads")
+        expanded += found.logs
+    return expanded

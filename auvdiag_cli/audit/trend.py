@@ -14,6 +14,7 @@ vehicle of a log is the folder that holds it (``fleet/VEHICLE/dive.tlog``); its 
 log's own start time (Unix clock), else the order of the file names."""
 
 import dataclasses
+import json
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -21,6 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from auvdiag_cli.audit.fleet_coverage import coverage_lines
+from auvdiag_cli.audit.store import RESULTS_FOLDER
+from auvdiag_errors import UsageError
 
 DEFAULT_LAST = 8
 DEFAULT_ALPHA = 0.05
@@ -221,3 +224,19 @@ def trend_lines(trend: FleetTrend) -> list[str]:
                      "actuators only):")
         lines += [f"  {line}" for line in trend.coverage]
     return lines
+
+
+def trend_of_audit(audit_dir: Path, last: int = DEFAULT_LAST,
+                   alpha: float = DEFAULT_ALPHA) -> FleetTrend:
+    """The trend over the reports an audit wrote into ``audit_dir``."""
+    folder = audit_dir / RESULTS_FOLDER
+    if not folder.is_dir():
+        raise UsageError(f"{audit_dir}: not an audit folder (no {RESULTS_FOLDER}/ in it); "
+                         "run 'auvdiag audit ... --output DIR' first")
+    records = []
+    for path in sorted(folder.glob("*.json")):
+        try:
+            records.append(json.loads(path.read_text(encoding="utf-8")))
+        except (OSError, ValueError) as error:
+            raise UsageError(f"{path}: not a readable report: {error}") from None
+    return fleet_trend([r for r in records if isinstance(r, dict) and "log" in r], last, alpha)

@@ -104,20 +104,9 @@ def report_progress(message: str) -> None:
 def log_paths(paths: list[Path]) -> list[Path]:
     """The logs given, a folder standing for every log under it (a ROS 2 bag folder is
     one log); what a folder holds that is not a log is named on stderr."""
-    from auvdiag_cli.audit.discovery import ROS2_METADATA, discover
+    from auvdiag_cli.audit.discovery import expand_logs
 
-    expanded: list[Path] = []
-    for path in paths:
-        if not path.is_dir() or (path / ROS2_METADATA).is_file():
-            expanded.append(path)
-            continue
-        found = discover([str(path)])
-        for skipped, why in found.skipped:
-            report_progress(f"left out {skipped}: {why}")
-        if not found.logs:
-            raise UsageError(f"{path}: the folder holds no log this tool reads")
-        expanded += found.logs
-    return expanded
+    return expand_logs(paths, report_progress)
 
 
 def horizon_option(text: str | None, profile_default: float | None) -> float | None:

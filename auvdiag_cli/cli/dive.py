@@ -265,22 +265,11 @@ def trend(
     threshold of each dive, in the dives' date order; Mann-Kendall's rank test over the last
     dives flags a rising ratio that has not alarmed yet. Exit status 1 when a vehicle is
     flagged, 0 otherwise."""
-    from auvdiag_cli.audit.store import RESULTS_FOLDER
-    from auvdiag_cli.audit.trend import fleet_trend, trend_lines
+    from auvdiag_cli.api import trend as audit_trend
+    from auvdiag_cli.audit.trend import trend_lines
 
     with user_errors(audit_dir):
-        folder = audit_dir / RESULTS_FOLDER
-        if not folder.is_dir():
-            raise UsageError(f"{audit_dir}: not an audit folder (no {RESULTS_FOLDER}/ in it); "
-                             "run 'auvdiag audit ... --output DIR' first")
-        records = []
-        for path in sorted(folder.glob("*.json")):
-            try:
-                records.append(json.loads(path.read_text(encoding="utf-8")))
-            except (OSError, ValueError) as error:
-                raise UsageError(f"{path}: not a readable report: {error}") from None
-        result = fleet_trend([r for r in records if isinstance(r, dict) and "log" in r],
-                             last, alpha)
+        result = audit_trend(audit_dir, last, alpha)
     for line in trend_lines(result):
         typer.echo(line)
     raise typer.Exit(EXIT_FAULT if result.flagged else EXIT_NORMAL)

@@ -59,7 +59,7 @@ def train(
     of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs
     (needs three normal logs with steady operation). Exit status 1 when nothing can be
     judged (no model is written unless --keep-unskilled)."""
-    from auvdiag_cli.jobs.train import paper_model_error, train_from_logs
+    from auvdiag_cli.jobs.train import TrainOptions, paper_model_error, train_from_logs
     from auvdiag_cli.reports.training import training_lines
     from auvdiag_cli.vehicle.profile import load_profile
     from models.fast import PREDICTOR_KINDS
@@ -70,11 +70,11 @@ def train(
             raise UsageError(f"unknown predictor {', '.join(unknown)} (known: "
                              f"{', '.join(PREDICTOR_KINDS)})")
         vehicle = load_profile(profile)
-        result = train_from_logs(log_paths(logs), output, vehicle,
-                                 log_paths(holdout or []), hidden, seed,
-                                 iterations_scale, horizon_option(horizon, vehicle.horizon_s),
-                                 keep_unskilled, progress=report_progress,
-                                 predictors=predictor or PREDICTOR_KINDS)
+        options = TrainOptions(tuple(log_paths(holdout or [])), hidden, seed, iterations_scale,
+                               horizon_option(horizon, vehicle.horizon_s), keep_unskilled,
+                               tuple(predictor or PREDICTOR_KINDS))
+        result = train_from_logs(log_paths(logs), output, vehicle, options,
+                                 progress=report_progress)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
                                vehicle.sensor_names):
         typer.echo(line)

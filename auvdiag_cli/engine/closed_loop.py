@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.missions import MissionLeg
 from auvdiag_cli.vehicle.controller import ControllerSpec, VehicleController
 from auvdiag_cli.vehicle.followers import make_follower
@@ -39,14 +40,15 @@ def _leg_at(legs: Sequence[MissionLeg], time_s: float) -> MissionLeg | None:
     return max(started, key=lambda leg: leg.start_s) if started else None
 
 
-def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, sensor_names: tuple[str, ...],
-                       command_names: tuple[str, ...], time_s: np.ndarray, commands: np.ndarray,
-                       measured: np.ndarray, onset_s: float, legs: Sequence[MissionLeg],
-                       dt_s: float) -> ClosedLoopReplay | None:
-    """None when no mission leg was under way at the onset."""
+def replay_closed_loop(model: LoadedModel, spec: ControllerSpec, histories: Histories,
+                       onset_s: float, legs: Sequence[MissionLeg], dt_s: float
+                       ) -> ClosedLoopReplay | None:
+    """None when no mission leg was under way at the onset (or nothing was replayed)."""
     leg = _leg_at(legs, onset_s)
-    if leg is None:
+    if leg is None or histories.matching is None:
         return None
+    time_s, commands, measured = histories.time_s, histories.commands, histories.matching.measured
+    sensor_names, command_names = histories.sensor_names, histories.command_names
     gains = spec.gains_for(leg.cruise_speed_mps)
     controller = make_follower(spec, list(leg.waypoints), gains, list(leg.depths_m))
     vehicle = VehicleController(spec, sensor_names, command_names, controller)

@@ -19,6 +19,7 @@ from auvdiag_cli.engine.detection import (
     look_up,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
+from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import apply_other_evidence, isolate
@@ -29,7 +30,6 @@ from auvdiag_cli.engine.results import (
     EPOCH_CLOCK_NS,
     Diagnosis,
     Finding,
-    Histories,
     Observations,
     SegmentResult,
     Verdict,

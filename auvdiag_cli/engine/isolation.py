@@ -296,7 +296,6 @@ def _name_component(seen: Observations, finding: Finding, component: str, profil
         finding.onset_s, profile.navigation, model.card.heldout_error_rms.get(sensor.name))
     if profile.controller is not None and seen.mission_legs:
         substitution = replace(substitution, closed_loop=replay_closed_loop(
-            model, profile.controller, histories.sensor_names, histories.command_names,
-            histories.time_s, histories.commands, matching.measured, finding.onset_s,
-            seen.mission_legs, profile.dt_s))
+            model, profile.controller, histories, finding.onset_s, seen.mission_legs,
+            profile.dt_s))
     return replace(finding, substitution=substitution)

@@ -6,16 +6,14 @@ from dataclasses import dataclass, field, fields, replace
 from enum import StrEnum
 from pathlib import Path
 
-import numpy as np
-
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
 from auvdiag_cli.engine.coverage import Coverage, coverage_of
 from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.missions import MissionLeg
-from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.segments import ROUTINE_MODE, Segment
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import Substitution
@@ -45,24 +43,6 @@ class SegmentResult:
     b: Mapping[str, int]
     case: int | None
     components: tuple[str, ...]
-
-
-@dataclass(frozen=True)
-class Histories:
-    """The time histories behind a verdict, on the model grid: what the reports plot and
-    calibration measures; the verdict itself never needs them."""
-
-    time_s: np.ndarray = field(default_factory=lambda: np.empty(0))
-    commands: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-    command_names: tuple[str, ...] = ()
-    sensor_names: tuple[str, ...] = ()
-    matching: Matching | None = None          # SS, SM and g
-    thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-    b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
-
-    @property
-    def duration_s(self) -> float | None:
-        return float(self.time_s[-1]) if self.time_s.size else None
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -60,6 +60,22 @@ def paper_model_error(profile: Profile) -> dict[str, float]:
 
 
 @dataclass(frozen=True)
+class TrainOptions:
+    """How `train_from_logs` trains; the defaults are `auvdiag train`'s."""
+
+    holdout: tuple[Path, ...] = ()     # held-out logs (none: the training logs' last part)
+    hidden: int = 32                   # size of the recurrent context
+    seed: int = 0
+    iterations_scale: float = 1.0      # every stage's iterations times this
+    horizon_s: float | None = None     # None: chosen by validation; inf: the free run
+    keep_unskilled: bool = False       # write the model even when nothing can be judged
+    predictors: tuple[str, ...] = PREDICTOR_KINDS   # the kinds a signal may be read from
+
+
+DEFAULT_TRAINING = TrainOptions()
+
+
+@dataclass(frozen=True)
 class TrainingResult:
     output: Path
     written: bool                 # False: no signal has skill and the model was not kept
@@ -155,19 +171,17 @@ def horizon_candidates(profile: Profile, horizon_s: float | None) -> list[float 
 
 
 def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
-                    holdout: Sequence[Path] = (), hidden: int = 32, seed: int = 0,
-                    iterations_scale: float = 1.0, horizon_s: float | None = None,
-                    keep_unskilled: bool = False,
+                    options: TrainOptions = DEFAULT_TRAINING,
                     progress: Callable[[str], None] = lambda _: None,
-                    trainer: Callable[..., Any] | None = None,
-                    predictors: Sequence[str] = PREDICTOR_KINDS) -> TrainingResult:
-    """``horizon_s``: None chooses by validation, ``inf`` is the paper's free run.
-    ``trainer``: `models.training.train` unless another is given (benchmarks compare).
-    ``predictors``: the kinds each signal may be read from (chosen by held-out skill)."""
+                    trainer: Callable[..., Any] | None = None) -> TrainingResult:
+    """Train on normal ``logs`` and write the model to ``output`` (where it judges
+    anything, or ``options.keep_unskilled``). ``trainer``: `models.training.train` unless
+    another is given (benchmarks compare)."""
     from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
-    training_paths, heldout_paths, every = _read_and_split(logs, holdout, profile, progress)
+    training_paths, heldout_paths, every = _read_and_split(logs, options.holdout, profile,
+                                                           progress)
     read = [every[p] for p in training_paths]
     training = [r.scoring for r in read]
     rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,
@@ -178,17 +192,19 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if not heldout:
         training[0], tail = _split_in_time(training[0])
         heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
-    stages = [Stage(s.horizon_steps, max(1, round(s.iterations * iterations_scale)),
+    stages = [Stage(s.horizon_steps, max(1, round(s.iterations * options.iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
     sequences = [TrainingLog(t.name, t.commands, t.sensors) for t in training]
 
     def fit_network(linear: np.ndarray | None) -> Any:
-        return (trainer or train)(sequences, hidden=hidden, stages=stages, seed=seed,
+        return (trainer or train)(sequences, hidden=options.hidden, stages=stages,
+                                  seed=options.seed,
                                   progress=progress, linear=linear)
 
     try:
         fitted = fit_candidates(training, heldout, profile.sensor_names, profile.dt_s,
-                                horizon_candidates(profile, horizon_s), predictors,
+                                horizon_candidates(profile, options.horizon_s),
+                                options.predictors,
                                 fit_network, progress)
     except ValueError as problem:   # the logs hold too little complete, operating data
         raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
@@ -203,10 +219,10 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
                             hours, rates, relations, start_state, effort, tuple(effort_notes),
                             fitted.by_kind, fitted.notes, profile.input_names)
-    result = replace(result, written=result.judges_anything or keep_unskilled)
+    result = replace(result, written=result.judges_anything or options.keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
-                             stages, seed)
+                             stages, options.seed)
         metadata |= {"command_relations": relations, "start_state": start_state,
                      "effort": effort}
         save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
