@@ -5,10 +5,11 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort test model samples
+	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped test model \
+	samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort
+	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -49,6 +50,11 @@ bench-train-busy:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/train.py --busy --iterations-scale 0.1 > $(OUT)/train_busy.md
 	$(PYTHON) benchmarks/readme.py train_busy $(OUT)/train_busy.md
+
+bench-shipped:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/shipped_models.py > $(OUT)/shipped_models.md
+	$(PYTHON) benchmarks/readme.py shipped_models $(OUT)/shipped_models.md
 
 bench-real:
 	@mkdir -p $(OUT)

@@ -25,6 +25,7 @@ class SignalSkillRecord:
     skill: float | None       # None: not measured (a diverged predictor)
     judged: bool
     samples: int | None       # held-out samples the figure comes from
+    versus_linear: float | None = None   # the same against the least-squares linear model
 
 
 @dataclass(frozen=True)
@@ -111,6 +112,7 @@ class ModelCard:
     skill: Mapping[str, SignalSkillRecord] | None          # None: trained before skill
     judged_from_samples: int
     heldout_error_rms: Mapping[str, float | None]
+    heldout_logs: tuple[str, ...]                          # the logs skill was measured on
     full_scale: Mapping[str, float] | None                 # None: the profile's
     window_samples: int | None                             # None: the profile's
     thresholds: Mapping[str, Mapping[str, float]] | None   # mode -> signal -> g; None: profile's
@@ -164,11 +166,13 @@ class ModelCard:
             predictors=_frozen({n: str(chosen.get(n, NETWORK)) for n in sensors}),
             skill=None if skill is None else _frozen({
                 name: SignalSkillRecord(_optional_float(r.get("skill")),
-                                        bool(r.get("judged", False)), r.get("samples"))
+                                        bool(r.get("judged", False)), r.get("samples"),
+                                        _optional_float(r.get("versus_linear")))
                 for name, r in skill.items()}),
             judged_from_samples=int(meta.get("skill", {}).get("judged_from_samples", 0)),
             heldout_error_rms=_frozen({k: _optional_float(v) for k, v in
                                        meta.get("heldout_error", {}).get("rms", {}).items()}),
+            heldout_logs=tuple(str(n) for n in meta.get("heldout_error", {}).get("logs", [])),
             full_scale=None if "full_scale" not in meta else _frozen(
                 {k: float(v) for k, v in meta["full_scale"].items()}),
             window_samples=None if "window_samples" not in meta else int(meta["window_samples"]),
