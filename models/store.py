@@ -69,10 +69,10 @@ class LoadedModel:
         return copy.deepcopy(self.model_json.get(key) or {})
 
     def update_entries(self, **entries: object) -> None:
-        """Replace model.json entries (not yet written): the parsed card, relations and
-        effort are read afresh."""
+        """Replace model.json entries (not yet written): the parsed card, the replay (which
+        predictor each signal is read from), relations and effort are read afresh."""
         self.model_json.update(copy.deepcopy(entries))
-        for parsed in ("card", "relations", "effort"):
+        for parsed in ("card", "dynamics", "relations", "effort"):
             self.__dict__.pop(parsed, None)
 
     def with_entries(self, **entries: object) -> "LoadedModel":

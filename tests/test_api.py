@@ -64,6 +64,9 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
                                                                    "yaw_rate": "linear"}
     model = api.load_model(tmp_path / "model", profile)
     assert model.card.predictors == trained.chosen.predictors and not model.card.calibrated
+    before = model.dynamics
+    model.update_entries(predictors={"per_signal": {"flow": "linear", "yaw_rate": "linear"}})
+    assert model.dynamics is not before            # the replay follows the entries
     calibration = api.calibrate(model, profile, [make_log("paper-normal", 13),
                                                  make_log("mission-ccw", 14)])
     api.save_model(model, tmp_path / "calibrated")
