@@ -13,7 +13,8 @@ inside auvdiag_cli may move between releases.
 
     result = api.train([Path("day1")], Path("my_model"), profile)    # a folder of dives
     model = api.load_model(Path("my_model"), profile)
-    api.calibrate(model, profile, [Path("day2")], budget=api.FalseAlarmBudget(0.05))
+    budget = api.CalibrateOptions(budget=api.FalseAlarmBudget(0.05))
+    api.calibrate(model, profile, [Path("day2")], options=budget)
     api.save_model(model, Path("my_model"))
 
 Every failure is an `auvdiag_errors.AuvdiagError` (`LogError`, `ProfileError`, `ModelError`,
@@ -25,19 +26,21 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from adapters import detect_format
 from adapters import read_log as _read_signals
 from adapters.signals import Signals
 from auvdiag_cli.audit.discovery import expand_logs
 from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
-from auvdiag_cli.audit.progress import SilentReporter
+from auvdiag_cli.audit.progress import Reporter, SilentReporter
 from auvdiag_cli.audit.trend import FleetTrend, trend_of_audit
 from auvdiag_cli.engine.results import Diagnosis, Verdict
-from auvdiag_cli.files import write_json
+from auvdiag_cli.engine.signatures import DerivedTable
 from auvdiag_cli.jobs.budget import FalseAlarmBudget
-from auvdiag_cli.jobs.calibrate import CalibrationResult
+from auvdiag_cli.jobs.calibrate import DEFAULT_CALIBRATION, CalibrateOptions, CalibrationResult
 from auvdiag_cli.jobs.calibrate import calibrate as _calibrate
 from auvdiag_cli.jobs.inspect import Inspection, inspect_log
 from auvdiag_cli.jobs.profile_draft import draft_profile as _draft_profile
+from auvdiag_cli.jobs.profile_like import draft_like
 from auvdiag_cli.jobs.relate import relate_model
 from auvdiag_cli.jobs.train import (
     DEFAULT_TRAINING,
@@ -48,21 +51,28 @@ from auvdiag_cli.jobs.train import (
 )
 from auvdiag_cli.jobs.truth import diagnose_with_truth
 from auvdiag_cli.reports.json_report import diagnosis_to_dict
-from auvdiag_cli.reports.series import save_series, series_from_diagnosis, series_path
+from auvdiag_cli.reports.saved import redraw_report, write_diagnosis_files
+from auvdiag_cli.simulator.run import LOG_EPOCH_NS, SimulatedDive
+from auvdiag_cli.simulator.scenarios import Scenario
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_cli.vehicle.profile import load_profile as _load_profile
+from auvdiag_errors import UsageError
 from models.card import ModelCard
 from models.skill import HorizonScore
 from models.store import LoadedModel, write_model
 from models.store import load_model as _load_model
 
 __all__ = [
-    "AuditResult", "CalibrationResult", "Diagnosis", "FalseAlarmBudget", "FleetTrend",
-    "HorizonScore", "Inspection", "LoadedModel", "ModelCard", "Profile", "Signals",
-    "TrainOptions", "TrainingResult", "Verdict", "audit", "calibrate", "diagnose",
-    "draft_profile", "inspect", "load_model", "load_profile", "read_log", "relate",
-    "save_model", "score", "to_json", "train", "trend", "write_reports",
+    "AuditProgress", "AuditResult", "CalibrateOptions", "CalibrationResult", "DerivedTable",
+    "Diagnosis", "FalseAlarmBudget", "FleetTrend", "HorizonScore", "Inspection",
+    "LoadedModel", "ModelCard", "Profile", "Scenario", "Signals", "SimulatedDive",
+    "TrainOptions", "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
+    "diagnose", "draft_profile", "inspect", "load_model", "load_profile", "log_format",
+    "read_log", "redraw_report", "relate", "save_model", "scenarios", "score", "simulate",
+    "to_json", "train", "trend", "write_reports",
 ]
+
+AuditProgress = Reporter    # start(total, reused), done(record), stop(): an audit's progress
 
 Progress = Callable[[str], None]
 
@@ -90,6 +100,12 @@ def save_model(model: LoadedModel, directory: Path) -> None:
     write_model(model, directory)
 
 
+def log_format(path: Path) -> str:
+    """The format of the log at ``path`` by its content (bag, db3, mcap, tlog, bin, ulog,
+    csv, …); a `LogError` naming the file where it is not a log this tool reads."""
+    return detect_format(path)
+
+
 def read_log(path: Path, profile: Profile) -> Signals:
     """The profile's signals as the log holds them (each at its own rate, not resampled)."""
     return _read_signals(path, profile.sources)
@@ -101,10 +117,14 @@ def inspect(path: Path, profile: Profile) -> Inspection:
     return inspect_log(path, profile)
 
 
-def draft_profile(path: Path, name: str) -> str:
+def draft_profile(path: Path, name: str | None = None, like: str | Path | None = None) -> str:
     """The TOML text of a starting profile for the vehicle that wrote the log at ``path``
-    (fields it cannot place are marked CHECK): `auvdiag init-profile`."""
-    return _draft_profile(path, name)
+    (fields it cannot place are marked CHECK; ``name`` defaults to the log's), or with
+    ``like`` that profile (a file or a built-in name) with its mapping fitted to the log:
+    `auvdiag init-profile`."""
+    if like is not None:
+        return draft_like(path, Path(like))
+    return _draft_profile(path, name or path.stem)
 
 
 def train(logs: Sequence[Path], output: Path, profile: Profile,
@@ -117,29 +137,33 @@ def train(logs: Sequence[Path], output: Path, profile: Profile,
 
 
 def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
-          horizon_s: float | None = None, progress: Progress = _quiet) -> HorizonScore:
+          horizon_s: float | None = None, progress: Progress = _quiet
+          ) -> tuple[list[HorizonScore], HorizonScore]:
     """Measure the model's skill on normal logs it was not trained on, and record it in the
-    model (write it with `save_model`); returns the horizon chosen, with every signal's
-    skill: `auvdiag score`."""
-    return score_model(model, profile, logs, horizon_s, progress)[1]
+    model (write it with `save_model`); returns every horizon tried, with every signal's
+    skill, and the one chosen: `auvdiag score`."""
+    return score_model(model, profile, logs, horizon_s, progress)
 
 
 def relate(model: LoadedModel, profile: Profile, logs: Sequence[Path],
-           holdout: Sequence[Path] = (), progress: Progress = _quiet) -> None:
+           holdout: Sequence[Path] = (), progress: Progress = _quiet
+           ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Learn how the commands follow the motion and where normal logs start, into the model
-    (write it with `save_model`): `auvdiag relate`."""
-    relate_model(model, profile, logs, holdout, progress)
+    (write it with `save_model`): `auvdiag relate`. Returns the two entries as model.json
+    holds them (``command_relations``, ``start_state``); one with a ``refused`` key says
+    why nothing was learned, and the model keeps what it had there."""
+    return relate_model(model, profile, logs, holdout, progress)
 
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
-              faulty_logs: Sequence[Path] = (), margin: float = 1.5,
-              budget: FalseAlarmBudget | None = None, floor_at_profile: bool = False,
+              faulty_logs: Sequence[Path] = (), options: CalibrateOptions = DEFAULT_CALIBRATION,
               progress: Progress = _quiet) -> CalibrationResult:
-    """Set the model's thresholds from normal logs, by ``margin`` x the largest g or to a
-    false-alarm ``budget``; the model is updated (write it with `save_model`): `auvdiag
-    calibrate`."""
-    return _calibrate(model, profile, normal_logs, faulty_logs, margin, floor_at_profile,
-                      budget, progress)
+    """Set the model's thresholds from normal logs (files or folders of them), by
+    ``options.margin`` x the largest g or to a false-alarm ``options.budget``; the model is
+    updated (write it with `save_model`). ``faulty_logs`` are diagnosed with the new
+    thresholds to show the margin: `auvdiag calibrate`."""
+    return _calibrate(model, profile, expand_logs(normal_logs, progress),
+                      expand_logs(faulty_logs, progress), options, progress)
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
@@ -158,20 +182,8 @@ def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
 def write_reports(diagnosis: Diagnosis, json: Path | None = None, pdf: Path | None = None,
                   mcap: Path | None = None) -> None:
     """Write the diagnosis as a JSON report (with its time histories beside it, which
-    `auvdiag report` redraws from), a PDF and an MCAP for Foxglove, as many as are asked."""
-    document, series = diagnosis_to_dict(diagnosis), series_from_diagnosis(diagnosis)
-    if json is not None:
-        sidecar = series_path(json)
-        save_series(series, sidecar)
-        write_json({**document, "series_file": sidecar.name}, json)
-    if pdf is not None:
-        from auvdiag_cli.reports.pdf.dive import render_dive_report
-
-        render_dive_report(document, series, pdf)
-    if mcap is not None:
-        from auvdiag_cli.reports.mcap_export import write_diagnosis_mcap
-
-        write_diagnosis_mcap(document, series, mcap)
+    `redraw_report` draws from), a PDF and an MCAP for Foxglove, as many as are asked."""
+    write_diagnosis_files(diagnosis, json, pdf, mcap)
 
 
 def _reference(profile: Profile) -> Path:
@@ -181,17 +193,72 @@ def _reference(profile: Profile) -> Path:
 
 
 def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = None,
-          model: LoadedModel | None = None, jobs: int = 1, mcap: bool = False) -> AuditResult:
+          model: LoadedModel | None = None, jobs: int = 1, mcap: bool = False,
+          scheduler: str | None = None, progress: AuditProgress | None = None) -> AuditResult:
     """Diagnose every log under ``paths`` (folders and globs) into ``output`` (one JSON
-    report per log, audit.csv, fleet.pdf), resuming a finished part; nothing is printed.
-    ``model``: a model read from a directory (None: the profile's shipped model). The
-    result holds one record per log (``records``) and the counts."""
+    report per log under logs/, audit.csv, audit.parquet and the fleet PDF audit.pdf),
+    resuming a finished part. ``model``: a model read from a directory (None: the profile's
+    shipped model); ``scheduler``: a Dask scheduler's address instead of ``jobs`` local
+    processes. The result holds one record per log (``records``) and the counts; it is
+    marked ``interrupted`` (with what finished saved) when the work is interrupted."""
+    from auvdiag_cli.audit.fleet_pdf import render_fleet_report
+
     if model is not None and model.directory is None:
-        raise ValueError("audit needs a model read from a directory (api.load_model)")
-    return run_audit(AuditOptions([str(p) for p in paths], output,
-                                  None if profile is None else _reference(profile),
-                                  None if model is None else model.directory, jobs, mcap=mcap),
-                     SilentReporter())
+        raise UsageError("audit needs a model read from a directory (api.load_model)")
+    options = AuditOptions([str(p) for p in paths], output,
+                           None if profile is None else _reference(profile),
+                           None if model is None or model.shipped else model.directory,
+                           jobs, scheduler, mcap)
+    result = run_audit(options, progress or SilentReporter())
+    render_fleet_report(result.records, result.skipped, output / "audit.pdf",
+                        result.companions, result.interrupted)
+    return result
+
+
+def simulate(scenario: str | Scenario, profile: Profile, output: Path,
+             log_format: str = "ros2-mcap", seed: int = 0, fault_at_s: float | None = None,
+             start_ns: int = LOG_EPOCH_NS) -> SimulatedDive:
+    """Fly one of the profile's ``scenarios`` (by name, or a `Scenario` built from the
+    simulator's steps) with its [simulation] physics and write it to
+    ``output`` in ``log_format`` (bag, db3, ros2-mcap, mcap, tlog, bin, ulog, csv) with
+    its ground truth beside it (NAME.truth.json, NAME.truth.csv); an existing ``output``
+    is never overwritten: `auvdiag simulate`."""
+    from auvdiag_cli.simulator.run import simulate as fly
+    from auvdiag_cli.simulator.scenarios import get_scenario
+    from auvdiag_cli.simulator.writers import LOG_FORMATS, write_log
+
+    if log_format not in LOG_FORMATS:
+        raise UsageError(f"unknown log format {log_format!r} (choose from "
+                         f"{', '.join(LOG_FORMATS)})")
+    try:
+        chosen = (get_scenario(scenario, profile, fault_at_s) if isinstance(scenario, str)
+                  else scenario)
+    except (KeyError, ValueError) as error:
+        raise UsageError(str(error).strip("'\"")) from None
+    if output.exists():
+        raise UsageError(f"{output}: exists already, not overwriting")
+    dive = fly(chosen, profile, seed, start_ns)
+    write_log(dive, profile, output, log_format)
+    return dive
+
+
+def scenarios(profile: Profile) -> dict[str, Scenario]:
+    """The simulator's named scenarios for the profile's vehicle: `auvdiag scenarios`."""
+    from auvdiag_cli.simulator.scenarios import scenarios_for
+
+    return scenarios_for(profile)
+
+
+def derive_table(model: LoadedModel, profile: Profile, log: Path | None = None) -> DerivedTable:
+    """Every single-component fault simulated on the model, its b signatures and the pattern
+    table they imply, compared with the profile's; with ``log`` (a normal log) the faults
+    are replayed open loop on its commands: `auvdiag derive-table`."""
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.engine.signatures import derive_table as derive
+    from auvdiag_cli.engine.signatures import log_mission
+
+    open_loop = None if log is None else log_mission(ingest(log, profile).frame, profile)
+    return derive(model, profile, open_loop=open_loop)
 
 
 def trend(audit_dir: Path, last: int = 8, alpha: float = 0.05) -> FleetTrend:

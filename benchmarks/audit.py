@@ -29,23 +29,21 @@ FAULTS = [("thruster_0", "dead"), ("flow_sensor", "covered"), ("thruster_1", "de
 
 
 def make_fleet(folder: Path, logs: int, distinct: int) -> None:
+    from auvdiag_cli import api
     from auvdiag_cli.simulator.faults import Fault
-    from auvdiag_cli.simulator.run import LOG_EPOCH_NS, simulate
+    from auvdiag_cli.simulator.run import LOG_EPOCH_NS
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario
-    from auvdiag_cli.simulator.writers import write_log
-    from auvdiag_cli.vehicle.profile import load_profile
 
-    profile = load_profile()
+    profile = api.load_profile()
     steps = (DMS_ALL + PAPER_MISSION) * HOUR_REPEATS
     sources = []
     for index in range(distinct):
         fault = Fault(*FAULTS[(index // 2) % len(FAULTS)], 1800.0) if index % 2 else None
         scenario = Scenario(f"hour-{index}", "one-hour dive", steps, fault,
                             run_after_fault_s=3600.0)
-        dive = simulate(scenario, profile, seed=100 + index,
-                        start_ns=LOG_EPOCH_NS + index * 86_400 * 10**9)
         path = folder / f"source-{index}.mcap"
-        write_log(dive, profile, path, "mcap")
+        dive = api.simulate(scenario, profile, path, "mcap", seed=100 + index,
+                            start_ns=LOG_EPOCH_NS + index * 86_400 * 10**9)
         sources.append(path)
         print(f"  simulated {path.name} ({dive.duration_s / 60:.0f} min, fault: "
               f"{fault.component if fault else 'none'})", file=sys.stderr, flush=True)

@@ -95,17 +95,16 @@ class Case:
 
 def build_cases(profile: "Profile", seeds: int, normal_seeds: int, workdir: Path
                 ) -> list[Case]:
+    from auvdiag_cli import api
     from auvdiag_cli.simulator.faults import Fault
-    from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import DMS_ALL, PAPER_MISSION, Scenario, _mission
-    from auvdiag_cli.simulator.writers import write_log
 
     cases = []
     for mission, spec in MISSIONS.items():
         phases = _mission(**spec)  # type: ignore[arg-type]
         healthy = Scenario(f"{mission}", "normal", phases)
         probe = workdir / f"probe-{mission}.mcap"
-        write_log(simulate(healthy, profile, 0), profile, probe, "mcap")
+        api.simulate(healthy, profile, probe, "mcap", seed=0)
         times = phase_times(probe.with_name(f"probe-{mission}.truth.csv"))
         for seed in range(1, normal_seeds + 1):
             cases.append(Case(f"{mission} normal", healthy, 1000 + seed, None, None, False))
@@ -128,20 +127,15 @@ def build_cases(profile: "Profile", seeds: int, normal_seeds: int, workdir: Path
 
 def diagnose_case(case: Case, profile: "Profile", models: dict[str, "LoadedModel"],
                   workdir: Path) -> dict[str, Any]:
-    from auvdiag_cli.engine.diagnosis import diagnose_ingested
-    from auvdiag_cli.engine.ingest import ingest
-    from auvdiag_cli.simulator.run import simulate
-    from auvdiag_cli.simulator.writers import write_log
+    from auvdiag_cli import api
 
     path = workdir / "case.mcap"
     path.unlink(missing_ok=True)
-    dive = simulate(case.scenario, profile, case.seed)
-    write_log(dive, profile, path, "mcap")
-    log = ingest(path, profile)
+    dive = api.simulate(case.scenario, profile, path, "mcap", seed=case.seed)
     result: dict[str, Any] = {"case": case.name, "truth": case.truth,
                               "hours": dive.duration_s / 3600}
     for name, model in models.items():
-        d = diagnose_ingested(log, profile, model)
+        d = api.diagnose(path, profile, model)
         named = d.component or (d.degradation.component if d.degradation else None)
         result[name] = {"fault": d.verdict == "fault", "component": named,
                         "candidates": d.candidates,
@@ -197,29 +191,24 @@ def main() -> None:
         print(render(saved["scores"], saved["seconds"]))
         return
 
+    from auvdiag_cli import api
     from auvdiag_cli.engine.ingest import ingest
-    from auvdiag_cli.jobs.calibrate import calibrate
-    from auvdiag_cli.simulator.run import simulate
-    from auvdiag_cli.simulator.scenarios import get_scenario
-    from auvdiag_cli.simulator.writers import write_log
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
 
     started = time.perf_counter()
-    profile = load_profile()
-    learned = load_model()
+    profile = api.load_profile()
+    learned = api.load_model()
     workdir = Path(tempfile.mkdtemp(prefix="auvdiag-detection-"))
     training, training_paths = [], []
     for scenario in ("paper-normal", "mission-ccw", "mission-large-cw", "all-dms-and-mission",
                      "excitation"):
         path = workdir / f"train-{scenario}.mcap"
-        write_log(simulate(get_scenario(scenario, profile), profile, 7), profile, path, "mcap")
+        api.simulate(scenario, profile, path, "mcap", seed=7)
         training.append(ingest(path, profile).frame)
         training_paths.append(path)
     baseline = baseline_model(learned, training)
     # Its residuals are larger than the learned model's: give it thresholds of its own,
     # calibrated (margin 1.5) on the normal dives it was fitted on, as a user would.
-    calibrate(baseline, profile, training_paths[:4], margin=1.5)
+    api.calibrate(baseline, profile, training_paths[:4], options=api.CalibrateOptions(1.5))
     models = {"learned": learned, "baseline": baseline}
     cases = build_cases(profile, args.seeds, args.normal_seeds, workdir)
     results = []

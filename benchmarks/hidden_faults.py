@@ -32,23 +32,19 @@ FIRST_SEED = 401
 
 
 def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
-    from auvdiag_cli.engine.diagnosis import diagnose
-    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli import api
     from auvdiag_cli.simulator.scenarios import get_scenario
-    from auvdiag_cli.simulator.writers import write_log
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import default_model_dir, load_model
 
     vehicle, scenario_name, truth, seed, fraction = job
-    profile = load_profile(Path(vehicle))
+    profile = api.load_profile(vehicle)
     scenario = get_scenario(scenario_name, profile)
     if fraction is not None and scenario.fault is not None:
         scenario = dataclasses.replace(scenario, fault=dataclasses.replace(
             scenario.fault, severity=fraction))
     with tempfile.TemporaryDirectory() as work:
         log = Path(work) / "dive"
-        write_log(simulate(scenario, profile, seed), profile, log, VEHICLES[vehicle])
-        d = diagnose(log, profile, load_model(default_model_dir(vehicle)))
+        api.simulate(scenario, profile, log, VEHICLES[vehicle], seed)
+        d = api.diagnose(log, profile, api.load_model(profile=profile))
     check = d.command_check
     return {"vehicle": vehicle, "truth": truth, "fraction": fraction, "fault": d.verdict == "fault",
             "by_motion": any(d.b.values()),
@@ -58,11 +54,11 @@ def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
 
 
 def _jobs(seeds: int) -> list[tuple[str, str, str, int, float | None]]:
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
 
     jobs: list[tuple[str, str, str, int, float | None]] = []
     for vehicle in VEHICLES:
-        for command in load_profile(Path(vehicle)).commands:
+        for command in api.load_profile(vehicle).commands:
             thruster = command.component
             jobs += [(vehicle, f"mission-{thruster.replace('_', '-')}-weak", thruster, seed,
                       fraction) for fraction in FRACTIONS

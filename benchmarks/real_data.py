@@ -127,8 +127,8 @@ def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path,
                                  predictors=("linear", "linear-replay"))))
         out.horizons.append(_horizon(result))
         model = api.load_model(work / f"haizhe{fold}", profile)
-        budget = api.calibrate(model, profile, calibration,
-                               budget=api.FalseAlarmBudget(FALSE_ALARM_RATE)).budget
+        budget = api.calibrate(model, profile, calibration, options=api.CalibrateOptions(
+            budget=api.FalseAlarmBudget(FALSE_ALARM_RATE))).budget
         assert budget is not None
         out.loo.append((budget.loo_logs_alarmed, budget.logs))
         for label, runs in [("Normal (held out)", judged), *faulty.items()]:

@@ -14,12 +14,7 @@ import time
 from datetime import date
 from pathlib import Path
 
-from auvdiag_cli.engine.diagnosis import diagnose
-from auvdiag_cli.simulator.run import simulate
-from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import truth_paths, write_log
-from auvdiag_cli.vehicle.profile import load_profile
-from models.store import load_model
+from auvdiag_cli import api
 
 SCENARIOS = ["paper-flow-sensor-covered", "paper-normal", "mission-ccw", "mission-large-cw",
              "mission-fast-ccw", "routine-and-mission", "mission-thruster-0-dead",
@@ -32,17 +27,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seeds", type=int, default=10)
     args = parser.parse_args()
-    profile, model = load_profile(), load_model()
+    profile, model = api.load_profile(), api.load_model()
     rows = []
     with tempfile.TemporaryDirectory() as work:
         for name in SCENARIOS:
             delays, onset_errors, outcomes, max_g = [], [], [], []
             for seed in range(1000, 1000 + args.seeds):
                 path = Path(work) / f"{name}-{seed}"
-                write_log(simulate(get_scenario(name, profile), profile, seed), profile, path,
-                          "ros2-mcap")
-                truth = json.loads(truth_paths(path)[0].read_text())
-                result = diagnose(path, profile, model)
+                api.simulate(name, profile, path, "ros2-mcap", seed)
+                truth = json.loads(path.with_name(f"{path.name}.truth.json").read_text())
+                result = api.diagnose(path, profile, model)
                 outcomes.append((result.verdict, result.component or "/".join(result.candidates),
                                  result.case))
                 # Peak g as a fraction of its threshold: how close a normal log came to alarm.

@@ -33,19 +33,15 @@ def _spin() -> None:
 
 
 def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
-    from auvdiag_cli.simulator.run import simulate
-    from auvdiag_cli.simulator.scenarios import get_scenario
-    from auvdiag_cli.simulator.writers import write_log
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
 
-    profile = load_profile()
+    profile = api.load_profile()
     training: list[Path] = []
     total_s, seed = 0.0, 1
     while total_s < minutes * 60:
         for name in SCENARIOS:
-            dive = simulate(get_scenario(name, profile), profile, seed)
             path = work / f"{name}-s{seed}"
-            write_log(dive, profile, path, "ros2-mcap")
+            dive = api.simulate(name, profile, path, "ros2-mcap", seed)
             training.append(path)
             total_s += dive.duration_s
             if total_s >= minutes * 60:
@@ -54,7 +50,7 @@ def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
     heldout = []
     for name in SCENARIOS:
         path = work / f"heldout-{name}"
-        write_log(simulate(get_scenario(name, profile), profile, 901), profile, path, "ros2-mcap")
+        api.simulate(name, profile, path, "ros2-mcap", 901)
         heldout.append(path)
     return training, heldout
 

@@ -64,6 +64,12 @@ class LoadedModel:
         """model.json, parsed into typed values."""
         return ModelCard.from_document(self.model_json)
 
+    @property
+    def shipped(self) -> bool:
+        """The model shipped with the tool for a vehicle (not one read from a directory
+        given by the user)."""
+        return self.path.startswith("builtin:")
+
     def entry(self, key: str) -> dict[str, Any]:
         """A copy of one model.json entry, for a writer to edit and put back."""
         return copy.deepcopy(self.model_json.get(key) or {})

@@ -50,6 +50,7 @@ def test_a_program_audits_a_folder(tmp_path):
     result = api.audit([fleet], tmp_path / "out")
     assert len(result.records) == 2 and result.count("fault") == 1
     assert (tmp_path / "out" / "audit.csv").is_file()
+    assert (tmp_path / "out" / "audit.pdf").read_bytes().startswith(b"%PDF")
 
 
 def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log, tmp_path):
@@ -92,7 +93,39 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
 def test_everything_public_is_named_in_one_place():
     defined = {name for name, value in vars(api).items() if not name.startswith("_")
                and getattr(value, "__module__", None) == api.__name__}
-    assert defined == {"audit", "calibrate", "diagnose", "draft_profile", "inspect",
-                       "load_model", "load_profile", "read_log", "relate", "save_model",
-                       "score", "to_json", "train", "trend", "write_reports"}
+    assert defined == {"audit", "calibrate", "derive_table", "diagnose", "draft_profile",
+                       "inspect", "load_model", "load_profile", "log_format", "read_log",
+                       "relate", "save_model", "scenarios", "score", "simulate", "to_json",
+                       "train", "trend", "write_reports"}
     assert defined <= set(api.__all__) and all(hasattr(api, name) for name in api.__all__)
+
+
+def test_every_command_of_the_cli_has_its_function():
+    from auvdiag_cli.cli import app
+
+    renamed = {"init-profile": "draft_profile", "report": "redraw_report"}
+    commands = {c.name or c.callback.__name__ for c in app.registered_commands}
+    assert len(commands) >= 13
+    for command in commands:
+        assert callable(getattr(api, renamed.get(command, command.replace("-", "_")))), command
+
+
+def test_a_program_simulates_its_own_scenario_and_redraws_a_saved_report(tmp_path):
+    from dataclasses import replace
+
+    profile = api.load_profile()
+    scenario = replace(api.scenarios(profile)["paper-flow-sensor-covered"], name="mine")
+    log = tmp_path / "mine.mcap"
+    dive = api.simulate(scenario, profile, log, "mcap", seed=3)
+    assert dive.scenario.name == "mine" and api.log_format(log) == "mcap"
+    with pytest.raises(AuvdiagError, match="exists already"):
+        api.simulate(scenario, profile, log, "mcap")
+    with pytest.raises(AuvdiagError, match="no-such-scenario"):
+        api.simulate("no-such-scenario", profile, tmp_path / "x.mcap")
+    api.write_reports(api.diagnose(log, profile, api.load_model()), json=tmp_path / "d.json")
+    assert api.redraw_report(tmp_path / "d.json", tmp_path / "d.pdf")
+    assert (tmp_path / "d.pdf").read_bytes().startswith(b"%PDF")
+    (tmp_path / "d.series.npz").unlink()
+    assert not api.redraw_report(tmp_path / "d.json", tmp_path / "summary-only.pdf")
+    with pytest.raises(AuvdiagError, match="not an auvdiag JSON report"):
+        api.redraw_report(log.with_suffix(".truth.json"), tmp_path / "t.pdf")

@@ -4,7 +4,7 @@ import json
 import os
 from enum import StrEnum
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -18,11 +18,9 @@ from auvdiag_cli.cli.app import (
     fail,
     user_errors,
 )
-from auvdiag_errors import UsageError
 
 if TYPE_CHECKING:
     from auvdiag_cli.audit.job import AuditResult
-    from auvdiag_cli.reports.series import Series
 
 
 @app.command()
@@ -60,65 +58,27 @@ def diagnose(
     Segments come from the log's markers, or are recognised from the commands; each
     Diagnosis Motion Sequence is judged with its own thresholds, and when the pattern table
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
-    from adapters import detect_format
-    from auvdiag_cli.engine.results import Verdict
+    from auvdiag_cli import api
     from auvdiag_cli.jobs.profile_fit import with_profile_hint
-    from auvdiag_cli.jobs.truth import diagnose_with_truth
-    from auvdiag_cli.reports.json_report import diagnosis_to_dict
-    from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import summary_lines
-    from auvdiag_cli.vehicle.profile import load_profile
     from auvdiag_errors import LogError
-    from models.store import load_model
 
     with user_errors(log):
-        detect_format(log)  # a bad path is reported before the model is even loaded
-        vehicle = load_profile(profile)
+        api.log_format(log)   # a bad path is reported before the model is even loaded
+        vehicle = api.load_profile(profile)
         try:
-            result = diagnose_with_truth(log, vehicle, load_model(model, vehicle.name),
-                                         companions or (), mission)
+            result = api.diagnose(log, vehicle, api.load_model(model, vehicle),
+                                  companions or (), mission)
         except LogError as error:
             raise with_profile_hint(error, vehicle.name) from None
-        _write_reports(diagnosis_to_dict(result), series_from_diagnosis(result), json_path,
-                       pdf_path, mcap_path)
+        if json_path == "-":
+            typer.echo(json.dumps(api.to_json(result), indent=2))
+        api.write_reports(result, None if json_path in (None, "-") else Path(json_path),
+                          pdf_path, mcap_path)
         if not quiet:
             for line in summary_lines(result):
                 typer.echo(line, err=json_path == "-")
-    raise typer.Exit(EXIT_FAULT if result.verdict == Verdict.FAULT else EXIT_NORMAL)
-
-
-def _write_reports(document: dict[str, Any], series: "Series", json_path: str | None,
-                   pdf_path: Path | None, mcap_path: Path | None) -> None:
-    """The JSON (to a file or standard output), the PDF and the MCAP asked for."""
-    if json_path == "-":
-        typer.echo(json.dumps(document, indent=2))
-    elif json_path is not None:
-        _save_report(document, series, Path(json_path))
-    if pdf_path is not None:
-        _render_pdf(document, series, pdf_path)
-    if mcap_path is not None:
-        from auvdiag_cli.reports.mcap_export import write_diagnosis_mcap
-
-        write_diagnosis_mcap(document, series, mcap_path)
-
-
-def _save_report(document: dict[str, Any], series: "Series", target: Path) -> None:
-    """The JSON report and, beside it, the time histories it refers to."""
-    from auvdiag_cli.files import write_json
-    from auvdiag_cli.reports.series import save_series, series_path
-
-    sidecar = series_path(target)
-    save_series(series, sidecar)
-    write_json({**document, "series_file": sidecar.name}, target)
-
-
-def _render_pdf(document: dict[str, Any], series: "Series | None", target: Path) -> None:
-    from auvdiag_cli.reports.pdf.dive import render_dive_report
-
-    try:
-        render_dive_report(document, series, target)
-    except OSError as error:
-        raise UsageError(f"{target}: cannot write the PDF: {error.strerror or error}") from None
+    raise typer.Exit(EXIT_FAULT if result.verdict == api.Verdict.FAULT else EXIT_NORMAL)
 
 
 @app.command()
@@ -134,37 +94,14 @@ def report(
 
     The time histories come from the NAME.series.npz file written beside the JSON; without
     it the report has its summary pages only."""
-    from auvdiag_cli.reports.series import load_series
+    from auvdiag_cli import api
 
+    target = output or json_report.with_suffix(".pdf")
     with user_errors(json_report):
-        document = _read_report(json_report)
-        named = document.get("series_file")
-        sidecar = json_report.with_name(named) if isinstance(named, str) and named else None
-        series = load_series(sidecar) if sidecar is not None and sidecar.is_file() else None
-        if series is None:
+        if not api.redraw_report(json_report, target):
             typer.echo(f"auvdiag: note: {json_report}: no time histories beside it; the PDF "
                        "has its summary pages only", err=True)
-        target = output or json_report.with_suffix(".pdf")
-        try:
-            _render_pdf(document, series, target)
-        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
-            # The document came from a file: a field missing or of the wrong kind is the
-            # file's problem, not a bug (reports this version writes are drawn in tests).
-            raise UsageError(f"{json_report}: not a complete auvdiag report "
-                             f"({type(error).__name__}: {error})") from None
-        typer.echo(f"report written to {target}")
-
-
-def _read_report(path: Path) -> dict[str, Any]:
-    try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise UsageError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise UsageError(f"{path}: not a readable JSON report: {error}") from None
-    if not isinstance(document, dict) or "verdict" not in document or "log" not in document:
-        raise UsageError(f"{path}: not an auvdiag JSON report (no 'verdict' or 'log')")
-    return document
+    typer.echo(f"report written to {target}")
 
 
 class FailOn(StrEnum):
@@ -231,22 +168,18 @@ def audit(
     changed. Exit status: 0 all normal, 1 a fault found, 2 a log not analysable."""
     import signal
 
-    from auvdiag_cli.audit.fleet_pdf import render_fleet_report
-    from auvdiag_cli.audit.job import AuditOptions, run_audit
+    from auvdiag_cli import api
     from auvdiag_cli.cli.progress_bar import reporter_for_stderr
 
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
-    options = AuditOptions(paths, output, profile, model, jobs, scheduler, mcap)
     with user_errors(output):
-        result = run_audit(options, reporter_for_stderr())
-        render_fleet_report(result.records, result.skipped, output / "audit.pdf",
-                            result.companions, result.interrupted)
+        vehicle = api.load_profile(profile)
+        result = api.audit(paths, output, vehicle, api.load_model(model, vehicle), jobs, mcap,
+                           scheduler, reporter_for_stderr())
     typer.echo(result.summary(output))
     if result.interrupted:
         fail(f"audit interrupted after {result.computed} logs; run it again to finish")
     raise typer.Exit(_audit_exit(result, fail_on))
-
-
 
 
 @app.command()
@@ -265,11 +198,11 @@ def trend(
     threshold of each dive, in the dives' date order; Mann-Kendall's rank test over the last
     dives flags a rising ratio that has not alarmed yet. Exit status 1 when a vehicle is
     flagged, 0 otherwise."""
-    from auvdiag_cli.api import trend as audit_trend
+    from auvdiag_cli import api
     from auvdiag_cli.audit.trend import trend_lines
 
     with user_errors(audit_dir):
-        result = audit_trend(audit_dir, last, alpha)
+        result = api.trend(audit_dir, last, alpha)
     for line in trend_lines(result):
         typer.echo(line)
     raise typer.Exit(EXIT_FAULT if result.flagged else EXIT_NORMAL)

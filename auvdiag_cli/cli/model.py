@@ -59,9 +59,9 @@ def train(
     of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs
     (needs three normal logs with steady operation). Exit status 1 when nothing can be
     judged (no model is written unless --keep-unskilled)."""
-    from auvdiag_cli.jobs.train import TrainOptions, paper_model_error, train_from_logs
+    from auvdiag_cli import api
+    from auvdiag_cli.jobs.train import paper_model_error
     from auvdiag_cli.reports.training import training_lines
-    from auvdiag_cli.vehicle.profile import load_profile
     from models.fast import PREDICTOR_KINDS
 
     with user_errors(output):
@@ -69,12 +69,11 @@ def train(
         if unknown:
             raise UsageError(f"unknown predictor {', '.join(unknown)} (known: "
                              f"{', '.join(PREDICTOR_KINDS)})")
-        vehicle = load_profile(profile)
-        options = TrainOptions(tuple(log_paths(holdout or [])), hidden, seed, iterations_scale,
-                               horizon_option(horizon, vehicle.horizon_s), keep_unskilled,
-                               tuple(predictor or PREDICTOR_KINDS))
-        result = train_from_logs(log_paths(logs), output, vehicle, options,
-                                 progress=report_progress)
+        vehicle = api.load_profile(profile)
+        options = api.TrainOptions(tuple(log_paths(holdout or [])), hidden, seed,
+                                   iterations_scale, horizon_option(horizon, vehicle.horizon_s),
+                                   keep_unskilled, tuple(predictor or PREDICTOR_KINDS))
+        result = api.train(logs, output, vehicle, options, report_progress)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
                                vehicle.sensor_names):
         typer.echo(line)
@@ -99,17 +98,15 @@ def score(
     For models trained before skill was measured, or to re-check a model on new dives: the
     skill and prediction horizon found replace those in model.json, and signals without
     skill are no longer judged. Exit status 1 when no signal has skill."""
-    from auvdiag_cli.jobs.train import score_model
+    from auvdiag_cli import api
     from auvdiag_cli.reports.training import skill_lines
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model, write_model
 
     with user_errors(model):
-        vehicle = load_profile(profile)
-        loaded = load_model(model)
-        scores, chosen = score_model(loaded, vehicle, logs,
-                                     horizon_option(horizon, vehicle.horizon_s), report_progress)
-        write_model(loaded, output or model)
+        vehicle = api.load_profile(profile)
+        loaded = api.load_model(model, vehicle)
+        scores, chosen = api.score(loaded, vehicle, logs,
+                                   horizon_option(horizon, vehicle.horizon_s), report_progress)
+        api.save_model(loaded, output or model)
     for line in skill_lines(scores, chosen):
         typer.echo(line)
     typer.echo(f"skill written to {(output or model) / 'model.json'}")
@@ -134,17 +131,15 @@ def relate(
     normal logs recorded from rest start, so that a sensor wrong from the first sample is
     found. 'auvdiag train' does both itself; use this command for a model trained before,
     or to learn from other dives. What cannot be learned keeps what the model had."""
-    from auvdiag_cli.jobs.relate import relate_model
+    from auvdiag_cli import api
     from auvdiag_cli.reports.training import relation_lines, start_lines
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model, write_model
 
     with user_errors(model):
-        vehicle = load_profile(profile)
-        loaded = load_model(model)
-        relations, start = relate_model(loaded, vehicle, logs, holdout or (), report_progress)
+        vehicle = api.load_profile(profile)
+        loaded = api.load_model(model, vehicle)
+        relations, start = api.relate(loaded, vehicle, logs, holdout or (), report_progress)
         if "refused" not in relations or "refused" not in start:
-            write_model(loaded, output or model)
+            api.save_model(loaded, output or model)
     for line in [*relation_lines(relations, vehicle.command_names),
                  *start_lines(start, vehicle.sensor_names)]:
         typer.echo(line)
@@ -194,19 +189,18 @@ def calibrate(
     Where the profile groups actuators that act alike ([[effort]]), the normal effort
     shares are refitted with these logs added (learnt from them if the model has none),
     their thresholds set for their share of R (default: the model's budget)."""
-    from auvdiag_cli.jobs.budget import FalseAlarmBudget
-    from auvdiag_cli.jobs.calibrate import calibrate as run_calibration
+    from auvdiag_cli import api
     from auvdiag_cli.reports.training import calibration_lines
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model, write_model
 
     with user_errors(model):
-        budget = None if false_alarm_rate is None else FalseAlarmBudget.parse(false_alarm_rate)
-        loaded = load_model(model)
-        result = run_calibration(loaded, load_profile(profile), log_paths(logs),
-                                 log_paths(faulty or []), margin, floor_at_profile,
-                                 budget, progress=report_progress)
-        write_model(loaded, output or model)
+        budget = (None if false_alarm_rate is None
+                  else api.FalseAlarmBudget.parse(false_alarm_rate))
+        vehicle = api.load_profile(profile)
+        loaded = api.load_model(model, vehicle)
+        result = api.calibrate(loaded, vehicle, logs, faulty or (),
+                               api.CalibrateOptions(margin, budget, floor_at_profile),
+                               report_progress)
+        api.save_model(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)
     typer.echo(f"thresholds written to {(output or model) / 'model.json'}")

@@ -42,23 +42,14 @@ def simulate(
     way its [sources] tables describe. The truth goes to NAME.truth.json (scenario, fault,
     onset) and NAME.truth.csv (true velocities, heading, position and depth at 10 Hz); a
     mission's plan to NAME.mission.json."""
-    from auvdiag_cli.simulator.run import simulate as run_simulation
-    from auvdiag_cli.simulator.scenarios import get_scenario
-    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths, write_log
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
+    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths
 
     if log_format not in LOG_FORMATS:
         fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
     with user_errors(output):
-        vehicle = load_profile(profile)
-        try:
-            chosen = get_scenario(scenario, vehicle, fault_at)
-            if output.exists():
-                fail(f"{output}: exists already, not overwriting")
-            dive = run_simulation(chosen, vehicle, seed, _unix_ns(start))
-            write_log(dive, vehicle, output, log_format)
-        except (KeyError, ValueError) as error:
-            fail(str(error).strip("'\""))
+        dive = api.simulate(scenario, api.load_profile(profile), output, log_format, seed,
+                            fault_at, _unix_ns(start))
     typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
                f"{truth_paths(output)[0].name}")
 
@@ -75,12 +66,11 @@ def inspect(
     Exit status 0 when every signal resolves, 2 otherwise (also when the log holds none of
     them, or the profile has no mapping for its format: the listing still shows what the
     log holds)."""
-    from auvdiag_cli.jobs.inspect import inspect_log
+    from auvdiag_cli import api
     from auvdiag_cli.reports.text import inspection_lines
-    from auvdiag_cli.vehicle.profile import load_profile
 
     with user_errors(log):
-        result = inspect_log(log, load_profile(profile))
+        result = api.inspect(log, api.load_profile(profile))
     for line in inspection_lines(result):
         typer.echo(line)
     if not result.usable:
@@ -121,13 +111,11 @@ def init_profile(
     With --like, the draft is that profile with each signal that does not read on the log
     moved to the closest field that does (each move listed at the top). The draft loads and
     resolves on the log it came from: `auvdiag inspect LOG --profile FILE` shows it."""
-    from adapters import detect_format
-    from auvdiag_cli.jobs.profile_draft import draft_profile
-    from auvdiag_cli.jobs.profile_like import draft_like
+    from auvdiag_cli import api
 
     with user_errors(log):
-        detect_format(log)
-        text = draft_profile(log, name or log.stem) if like is None else draft_like(log, like)
+        api.log_format(log)
+        text = api.draft_profile(log, name, like)
         if output is None:
             typer.echo(text, nl=False)
             return
@@ -158,20 +146,13 @@ def derive_table(
     and no --log) on the DMSs played one after another. The b signatures are printed, and
     the table they imply is compared with the profile's. Exit status 0 when they agree, 1
     when they differ."""
-    from auvdiag_cli.engine.ingest import ingest
-    from auvdiag_cli.engine.signatures import derive_table as run_derivation
-    from auvdiag_cli.engine.signatures import log_mission
+    from auvdiag_cli import api
     from auvdiag_cli.files import write_json
     from auvdiag_cli.reports.derivation import derivation_lines
-    from auvdiag_cli.vehicle.profile import load_profile
-    from models.store import load_model
 
     with user_errors(log or model or "builtin model"):
-        loaded_profile = load_profile(profile)
-        open_loop = (None if log is None
-                     else log_mission(ingest(log, loaded_profile).frame, loaded_profile))
-        result = run_derivation(load_model(model, loaded_profile.name), loaded_profile,
-                                open_loop=open_loop)
+        loaded_profile = api.load_profile(profile)
+        result = api.derive_table(api.load_model(model, loaded_profile), loaded_profile, log)
     for line in derivation_lines(result, loaded_profile.sensor_names):
         typer.echo(line)
     if json_path is not None:
@@ -184,11 +165,10 @@ def derive_table(
 @app.command()
 def scenarios(profile: ProfileOption = None) -> None:
     """List the simulator's named scenarios for the profile's vehicle."""
-    from auvdiag_cli.simulator.scenarios import scenarios_for
-    from auvdiag_cli.vehicle.profile import load_profile
+    from auvdiag_cli import api
 
     with user_errors(profile or "builtin profile"):
-        known = scenarios_for(load_profile(profile))
+        known = api.scenarios(api.load_profile(profile))
     width = max(len(name) for name in known)
     for name, scenario in known.items():
         typer.echo(f"{name:<{width}}  {scenario.description}")

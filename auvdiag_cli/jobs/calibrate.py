@@ -158,16 +158,29 @@ def _check_faulty(path: Path, profile: Profile, calibrated: LoadedModel) -> Faul
     return FaultyCheck(str(path), d.verdict, d.component, d.candidates, round(ratio, 2))
 
 
+@dataclass(frozen=True)
+class CalibrateOptions:
+    """How thresholds are set. ``margin``: threshold = margin x the largest normal g.
+    ``budget``: thresholds to a false-alarm rate instead of the margin rule wherever a judge
+    has enough logs (`jobs.budget`). ``floor_at_profile``: never below the profile's
+    threshold for the mode (a signal a sequence hardly moves has a tiny normal g, and a
+    threshold of 1.5 times noise would trip on the next dive's noise)."""
+
+    margin: float = 1.5
+    budget: FalseAlarmBudget | None = None
+    floor_at_profile: bool = False
+
+
+DEFAULT_CALIBRATION = CalibrateOptions()
+
+
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
-              faulty_logs: Sequence[Path] = (), margin: float = 1.5, floor_at_profile: bool = False,
-              budget: FalseAlarmBudget | None = None,
+              faulty_logs: Sequence[Path] = (), options: CalibrateOptions = DEFAULT_CALIBRATION,
               progress: Callable[[str], None] = lambda _: None) -> CalibrationResult:
-    """Derive thresholds; the model's entries are updated (not yet written).
-    ``floor_at_profile``: never below the profile's threshold for the mode (a signal a
-    sequence hardly moves has a tiny normal g, and a threshold of 1.5 times noise would
-    trip on the next dive's noise). ``budget``: thresholds to a false-alarm rate instead
-    of the margin rule wherever a judge has enough logs (`jobs.budget`). Logs in which the
-    vehicle never operates are left out."""
+    """Derive thresholds; the model's entries are updated (not yet written). Logs in which
+    the vehicle never operates are left out; ``faulty_logs`` are diagnosed with the new
+    thresholds to show the margin."""
+    margin, budget, floor_at_profile = options.margin, options.budget, options.floor_at_profile
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
     kept = read_operating(normal_logs, lambda path: ingest(path, profile), progress,
