@@ -5,11 +5,11 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped test model \
+	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples test model \
 	samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped
+	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -56,6 +56,13 @@ bench-shipped:
 	$(PYTHON) benchmarks/shipped_models.py > $(OUT)/shipped_models.md
 	$(PYTHON) benchmarks/readme.py shipped_models $(OUT)/shipped_models.md
 
+bench-samples:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/sample_facts.py > $(OUT)/sample_facts.md
+	$(PYTHON) benchmarks/readme.py sample_facts $(OUT)/sample_facts.md
+	$(PYTHON) benchmarks/sample_facts.py --catalogue > $(OUT)/sample_logs.md
+	$(PYTHON) benchmarks/readme.py sample_logs $(OUT)/sample_logs.md
+
 bench-real:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/real_data.py > $(OUT)/real_data.md
@@ -83,3 +90,4 @@ model:
 
 samples:
 	$(PYTHON) scripts/shipped.py samples
+	$(MAKE) bench-samples
