@@ -194,12 +194,15 @@ def _reference(profile: Profile) -> Path:
 
 def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = None,
           model: LoadedModel | None = None, jobs: int = 1, mcap: bool = False,
-          scheduler: str | None = None, progress: AuditProgress | None = None) -> AuditResult:
+          scheduler: str | None = None, progress: AuditProgress | None = None,
+          vehicle_from: str = "log") -> AuditResult:
     """Diagnose every log under ``paths`` (folders and globs) into ``output`` (one JSON
     report per log under logs/, audit.csv, audit.parquet and the fleet PDF audit.pdf),
     resuming a finished part. ``model``: a model read from a directory (None: the profile's
     shipped model); ``scheduler``: a Dask scheduler's address instead of ``jobs`` local
-    processes. The result holds one record per log (``records``) and the counts; it is
+    processes; ``vehicle_from``: which vehicle of the fleet each log is (log, folder,
+    regex:PATTERN or csv:FILE, as `auvdiag audit --vehicle-from`). The result holds one
+    record per log (``records``) and the counts; it is
     marked ``interrupted`` (with what finished saved) when the work is interrupted."""
     from auvdiag_cli.audit.fleet_pdf import render_fleet_report
 
@@ -208,7 +211,7 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
     options = AuditOptions([str(p) for p in paths], output,
                            None if profile is None else _reference(profile),
                            None if model is None or model.shipped else model.directory,
-                           jobs, scheduler, mcap)
+                           jobs, scheduler, mcap, vehicle_from)
     result = run_audit(options, progress or SilentReporter())
     render_fleet_report(result.records, result.skipped, output / "audit.pdf",
                         result.companions, result.interrupted)

@@ -69,7 +69,7 @@ def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, 
 
 
 def _vehicle_and_date(row: dict[str, Any]) -> tuple[str, str]:
-    vehicle = row["vehicle"] or ("not analysable" if row["error"] else "?")
+    vehicle = row["fleet_vehicle"] or ("not analysable" if row["error"] else "?")
     return vehicle, (row["start_time_utc"] or "no clock")[:10]
 
 

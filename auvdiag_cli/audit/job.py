@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from auvdiag_cli.audit.discovery import discover
+from auvdiag_cli.audit.fleet_vehicle import VehicleRule
 from auvdiag_cli.audit.progress import Reporter
 from auvdiag_cli.audit.runner import run_tasks
 from auvdiag_cli.audit.store import Inputs, ResultStore, folder_digest, text_digest
@@ -29,6 +30,7 @@ class AuditOptions:
     jobs: int = 1
     scheduler: str | None = None
     mcap: bool = False           # each diagnosis also as an MCAP beside its JSON
+    vehicle_from: str = "log"    # which vehicle of the fleet a log is: `VehicleRule`
 
 
 @dataclass
@@ -92,12 +94,14 @@ class TableWriter:
 
 def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
     inputs, model_dir = _inputs(options)
+    rule = VehicleRule.parse(options.vehicle_from)
     options.output.mkdir(parents=True, exist_ok=True)
     found = discover(options.paths, exclude=[options.output])
     store = ResultStore(options.output, inputs, options.mcap)
     result = AuditResult(skipped=found.skipped, companions=len(found.companions))
     done: dict[str, dict[str, Any]] = {}
     digests: dict[str, str] = {}
+    vehicles = {str(log): rule.vehicle_of(log) for log in found.logs}
     tasks = []
     for log in found.logs:
         try:
@@ -107,7 +111,7 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
             continue
         reused = store.reusable(log, digests[str(log)])
         if reused is not None:
-            done[str(log)] = reused
+            done[str(log)] = store.with_vehicle(log, reused, vehicles[str(log)])
         else:
             profile = None if options.profile is None else str(options.profile)
             tasks.append(AuditTask(str(log), profile, model_dir))
@@ -116,7 +120,8 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
     reporter.start(len(found.logs), result.reused)
     try:
         for outcome in run_tasks(tasks, options.jobs, options.scheduler):
-            done[outcome.log] = store.save(outcome, digests[outcome.log])
+            done[outcome.log] = store.save(outcome, digests[outcome.log],
+                                           vehicles[outcome.log])
             result.computed += 1
             reporter.done(done[outcome.log])
             table.write(list(done.values()))

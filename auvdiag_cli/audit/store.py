@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from auvdiag_cli import __version__
+from auvdiag_cli.audit.fleet_vehicle import FleetVehicle
 from auvdiag_cli.audit.worker import AuditOutcome
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.files import write_json
@@ -67,7 +68,17 @@ class ResultStore:
             return None
         return record
 
-    def save(self, outcome: AuditOutcome, log_sha256: str) -> dict[str, Any]:
+    def with_vehicle(self, log: Path, record: dict[str, Any], vehicle: FleetVehicle
+                     ) -> dict[str, Any]:
+        """A reused record with the fleet vehicle this run assigns (rewritten if it moved)."""
+        entry = {"id": vehicle.vehicle, "from": vehicle.source}
+        if record.get("audit", {}).get("vehicle") != entry:
+            record = {**record, "audit": {**record.get("audit", {}), "vehicle": entry}}
+            write_json(record, self.path_for(log))
+        return record
+
+    def save(self, outcome: AuditOutcome, log_sha256: str, vehicle: FleetVehicle
+             ) -> dict[str, Any]:
         """Write the outcome (series first, so a JSON on disk always has its series)."""
         path = self.path_for(Path(outcome.log))
         record: dict[str, Any] = dict(outcome.document or {"log": outcome.log})
@@ -80,7 +91,8 @@ class ResultStore:
                 write_diagnosis_mcap(outcome.document, outcome.series,
                                      path.with_suffix(".mcap"))
         record["audit"] = {**self.inputs.stamp(log_sha256), "seconds": outcome.seconds,
-                           "peak_rss_mb": outcome.peak_rss_mb, "result_file": path.name}
+                           "peak_rss_mb": outcome.peak_rss_mb, "result_file": path.name,
+                           "vehicle": {"id": vehicle.vehicle, "from": vehicle.source}}
         if outcome.final:
             write_json(record, path)
         return record

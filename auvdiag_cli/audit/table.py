@@ -8,8 +8,8 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import pandas as pd
 
-FIXED_COLUMNS = ["log", "format", "vehicle", "start_time_utc", "duration_s", "not_operating_s",
-                 "verdict", "completeness", "not_judged", "signals_judged",
+FIXED_COLUMNS = ["log", "format", "vehicle", "fleet_vehicle", "start_time_utc", "duration_s",
+                 "not_operating_s", "verdict", "completeness", "not_judged", "signals_judged",
                  "actuators_judged", "coverage_complete", "component", "candidates", "case",
                  "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
@@ -53,6 +53,12 @@ def _coverage_columns(coverage: dict[str, Any] | None) -> dict[str, Any]:
             "coverage_complete": bool(coverage["complete"])}
 
 
+def fleet_vehicle_of(record: dict[str, Any]) -> str:
+    """The fleet vehicle the audit assigned (audits before it knew: the folder)."""
+    assigned = (record.get("audit") or {}).get("vehicle") or {}
+    return str(assigned.get("id") or Path(record["log"]).parent.name or ".")
+
+
 def flatten(record: dict[str, Any]) -> dict[str, Any]:
     """One table row from a stored per-log record (a report, or an error)."""
     segments = record.get("segments") or []
@@ -64,6 +70,7 @@ def flatten(record: dict[str, Any]) -> dict[str, Any]:
     effort_ratio, effort_actuator = _worst_effort(record)
     row: dict[str, Any] = {
         "log": record["log"], "format": record.get("format"), "vehicle": record.get("vehicle"),
+        "fleet_vehicle": fleet_vehicle_of(record),
         "start_time_utc": record.get("start_time_utc"), "duration_s": record.get("duration_s"),
         "not_operating_s": record.get("not_operating_s"),
         "verdict": record.get("verdict", "error" if record.get("error") else None),

@@ -10,8 +10,9 @@ fouling or wearing). 1 is an alarm. The trend test is Mann-Kendall's rank test o
 last N dives (one-sided: the ratio rising), with Sen's slope for its size; a signal is
 flagged when the test's p-value is below alpha divided by the number of the vehicle's
 signals (Bonferroni) and none of those dives alarmed on it. The
-vehicle of a log is the folder that holds it (``fleet/VEHICLE/dive.tlog``); its date is the
-log's own start time (Unix clock), else the order of the file names."""
+vehicle of a log is the one the audit assigned (`audit.fleet_vehicle`: the log's own id,
+or by ``--vehicle-from``, else the folder that holds it); its date is the log's own start
+time (Unix clock), else the order of the file names."""
 
 import dataclasses
 import json
@@ -23,6 +24,7 @@ from typing import Any
 
 from auvdiag_cli.audit.fleet_coverage import coverage_lines
 from auvdiag_cli.audit.store import RESULTS_FOLDER
+from auvdiag_cli.audit.table import fleet_vehicle_of
 from auvdiag_errors import UsageError
 
 DEFAULT_LAST = 8
@@ -82,9 +84,6 @@ class FleetTrend:
         return sorted({t.vehicle for t in self.flagged})
 
 
-def vehicle_of(log: str) -> str:
-    """The folder holding the log (for a ROS 2 bag directory, the folder holding that)."""
-    return Path(log).parent.name or "."
 
 
 def dive_margins(record: dict[str, Any]) -> dict[str, float]:
@@ -114,7 +113,7 @@ def dive_margins(record: dict[str, Any]) -> dict[str, float]:
 def margin_history(records: Sequence[dict[str, Any]]) -> list[DiveMargin]:
     """The analysed dives, oldest first within each vehicle (logs without a date last, by
     name)."""
-    dives = [DiveMargin(vehicle_of(r["log"]), r["log"], r.get("start_time_utc"),
+    dives = [DiveMargin(fleet_vehicle_of(r), r["log"], r.get("start_time_utc"),
                         dive_margins(r))
              for r in records if not r.get("error") and r.get("verdict") is not None]
     return sorted(dives, key=lambda d: (d.vehicle, d.date is None, d.date or "", d.log))
@@ -161,7 +160,7 @@ def fleet_trend(records: Sequence[dict[str, Any]], last: int = DEFAULT_LAST,
                 alpha: float = DEFAULT_ALPHA) -> FleetTrend:
     """The trend test over each vehicle's last ``last`` dives, per signal."""
     result = FleetTrend(last, alpha, coverage=coverage_lines(
-        records, lambda record: vehicle_of(record["log"])))
+        records, fleet_vehicle_of))
     by_vehicle: dict[str, list[DiveMargin]] = {}
     for dive in margin_history(records):
         by_vehicle.setdefault(dive.vehicle, []).append(dive)

@@ -158,6 +158,13 @@ def audit(
     mcap: Annotated[bool, typer.Option(
         "--mcap", help="Also write each log's diagnosis as an MCAP (OUTPUT/logs/NAME.mcap) "
                        "to open beside the log in Foxglove or PlotJuggler.")] = False,
+    vehicle_from: Annotated[str, typer.Option(
+        "--vehicle-from", metavar="log|folder|regex:PATTERN|csv:FILE",
+        help="Which vehicle of the fleet each log is, for the trend and the fleet PDF: log "
+             "(the default: the id the log gives, a MAVLink system id other than the default "
+             "1 or the board's unique id, else the folder), folder, regex:PATTERN (its first "
+             "group in the file name, else the folder) or csv:FILE (rows 'log,vehicle').")
+    ] = "log",
 ) -> None:
     """Diagnose every log under PATHS and write one table and a fleet summary.
 
@@ -175,7 +182,7 @@ def audit(
     with user_errors(output):
         vehicle = api.load_profile(profile)
         result = api.audit(paths, output, vehicle, api.load_model(model, vehicle), jobs, mcap,
-                           scheduler, reporter_for_stderr())
+                           scheduler, reporter_for_stderr(), vehicle_from)
     typer.echo(result.summary(output))
     if result.interrupted:
         fail(f"audit interrupted after {result.computed} logs; run it again to finish")
@@ -194,9 +201,9 @@ def trend(
 ) -> None:
     """Fleet health over time: flag vehicles whose margin to the thresholds is shrinking.
 
-    Per vehicle (the folder holding its logs) and per signal, the peak ratio to the
-    threshold of each dive, in the dives' date order; Mann-Kendall's rank test over the last
-    dives flags a rising ratio that has not alarmed yet. Exit status 1 when a vehicle is
+    Per vehicle (as the audit's --vehicle-from assigned it) and per signal, the peak ratio
+    to the threshold of each dive, in the dives' date order; Mann-Kendall's rank test over
+    the last dives flags a rising ratio that has not alarmed yet. Exit status 1 when a vehicle is
     flagged, 0 otherwise."""
     from auvdiag_cli import api
     from auvdiag_cli.audit.trend import trend_lines

@@ -1,0 +1,89 @@
+"""Which vehicle wrote a log, where the log itself says so: a MAVLink telemetry log's
+autopilot (its system id and vehicle type, from HEARTBEAT; the flight controller's unique
+id from AUTOPILOT_VERSION where it is sent) and a DataFlash log's SYSID_THISMAV parameter.
+Nothing here raises on a damaged log: what cannot be read says nothing."""
+
+import struct
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from adapters.mavlink_scan import TLOG_TIME_LENGTH, RecordIndex, index_file, tlog_frame_fields
+
+HEARTBEAT, AUTOPILOT_VERSION = 0, 148
+AUTOPILOT_INVALID = 8          # MAV_AUTOPILOT_INVALID: a ground station, not a vehicle
+DATAFLASH_PARM_NAME = 16       # PARM's Name column: 16 bytes ('N')
+
+
+DEFAULT_SYSTEM_ID = 1          # ArduPilot's and PX4's default: names no vehicle in a fleet
+
+
+@dataclass(frozen=True)
+class LogIdentity:
+    vehicle: str       # what the fleet calls it: "mavlink-7", "mavlink-1-uid-3d0041…"
+    evidence: str      # where in the log it was read
+
+    @property
+    def distinctive(self) -> bool:
+        """Whether it tells this vehicle from others: a board's unique id, or a system id
+        someone set (every autopilot leaves the factory as system 1)."""
+        return "-uid-" in self.vehicle or self.vehicle != f"mavlink-{DEFAULT_SYSTEM_ID}"
+
+
+def log_identity(path: Path, log_format: str) -> LogIdentity | None:
+    """The vehicle the log names, or None where it names none (or cannot be read)."""
+    try:
+        if log_format == "tlog":
+            return _tlog_identity(index_file(path, "tlog"))
+        if log_format == "bin":
+            return _dataflash_identity(index_file(path, "bin"))
+    except (OSError, ValueError, IndexError, struct.error):
+        return None
+    return None
+
+
+def _tlog_identity(index: RecordIndex) -> LogIdentity | None:
+    data = index.data
+    version, msgid, starts, lengths = tlog_frame_fields(data, index.offsets)
+    frames = index.offsets + TLOG_TIME_LENGTH
+    sysids = np.where(version == 2, data[frames + 5], data[frames + 3]).astype(int)
+    vehicles: Counter[tuple[int, int]] = Counter()
+    for k in np.flatnonzero((msgid == HEARTBEAT) & (lengths >= 6)):
+        payload = bytes(data[starts[k]:starts[k] + 6])
+        if payload[5] != AUTOPILOT_INVALID:            # type, autopilot after custom_mode
+            vehicles[(int(sysids[k]), payload[4])] += 1
+    if not vehicles:
+        return None
+    (sysid, mav_type), _ = vehicles.most_common(1)[0]
+    name, evidence = f"mavlink-{sysid}", f"HEARTBEAT: system {sysid}, MAV_TYPE {mav_type}"
+    uid = _board_uid(data, starts, lengths, msgid, sysids, sysid)
+    if uid:
+        name, evidence = f"{name}-uid-{uid}", f"{evidence}; AUTOPILOT_VERSION uid {uid}"
+    return LogIdentity(name, evidence)
+
+
+def _board_uid(data: np.ndarray, starts: np.ndarray, lengths: np.ndarray, msgid: np.ndarray,
+               sysids: np.ndarray, sysid: int) -> str | None:
+    """AUTOPILOT_VERSION's 64-bit uid (bytes 8-15 of the payload), where non-zero."""
+    for k in np.flatnonzero((msgid == AUTOPILOT_VERSION) & (sysids == sysid)):
+        payload = bytes(data[starts[k]:starts[k] + lengths[k]]).ljust(16, b"\0")
+        uid = int.from_bytes(payload[8:16], "little")
+        if uid:
+            return f"{uid:016x}"
+    return None
+
+
+def _dataflash_identity(index: RecordIndex) -> LogIdentity | None:
+    parm = next((t for t, f in index.formats.items()
+                 if f.name == "PARM" and f.types[:3] == "QNf"), None)
+    if parm is None:
+        return None
+    for position in index.of_type(parm):
+        start = int(index.offsets[position]) + 3 + 8
+        raw = bytes(index.data[start:start + DATAFLASH_PARM_NAME + 4])
+        if raw[:DATAFLASH_PARM_NAME].split(b"\0", 1)[0] == b"SYSID_THISMAV":
+            (value,) = struct.unpack("<f", raw[DATAFLASH_PARM_NAME:])
+            return LogIdentity(f"mavlink-{int(value)}", f"PARM SYSID_THISMAV = {int(value)}")
+    return None
