@@ -10,11 +10,20 @@ from pathlib import Path
 
 import numpy as np
 
-from adapters.mavlink_scan import TLOG_TIME_LENGTH, RecordIndex, index_file, tlog_frame_fields
+from adapters.mavlink_scan import (
+    TLOG_TIME_LENGTH,
+    RecordIndex,
+    index_dataflash,
+    index_tlog,
+    tlog_frame_fields,
+)
 
 HEARTBEAT, AUTOPILOT_VERSION = 0, 148
 AUTOPILOT_INVALID = 8          # MAV_AUTOPILOT_INVALID: a ground station, not a vehicle
 DATAFLASH_PARM_NAME = 16       # PARM's Name column: 16 bytes ('N')
+# Autopilots send HEARTBEAT and AUTOPILOT_VERSION, and write their parameters, as a log
+# begins: its first bytes say who wrote it, and an audit does not walk every log twice.
+PREFIX_BYTES = 2 << 20
 
 
 DEFAULT_SYSTEM_ID = 1          # ArduPilot's and PX4's default: names no vehicle in a fleet
@@ -34,14 +43,16 @@ class LogIdentity:
 
 def log_identity(path: Path, log_format: str) -> LogIdentity | None:
     """The vehicle the log names, or None where it names none (or cannot be read)."""
+    if log_format not in ("tlog", "bin"):
+        return None
     try:
+        with path.open("rb") as stream:
+            prefix = stream.read(PREFIX_BYTES)
         if log_format == "tlog":
-            return _tlog_identity(index_file(path, "tlog"))
-        if log_format == "bin":
-            return _dataflash_identity(index_file(path, "bin"))
+            return _tlog_identity(index_tlog(prefix, {}))
+        return _dataflash_identity(index_dataflash(prefix))
     except (OSError, ValueError, IndexError, struct.error):
         return None
-    return None
 
 
 def _tlog_identity(index: RecordIndex) -> LogIdentity | None:
