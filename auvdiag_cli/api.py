@@ -32,6 +32,7 @@ from adapters.signals import Signals
 from auvdiag_cli.audit.discovery import expand_logs
 from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
 from auvdiag_cli.audit.progress import Reporter, SilentReporter
+from auvdiag_cli.audit.record import AuditRecord
 from auvdiag_cli.audit.trend import FleetTrend, trend_of_audit
 from auvdiag_cli.engine.results import Diagnosis, Verdict
 from auvdiag_cli.engine.signatures import DerivedTable
@@ -57,16 +58,19 @@ from auvdiag_cli.simulator.scenarios import Scenario
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_cli.vehicle.profile import load_profile as _load_profile
 from auvdiag_errors import UsageError
-from models.card import ModelCard
+from models.card import ModelCard, Refused, StartReference
+from models.command_relations import CommandRelations
+from models.effort_model import EffortModel
 from models.skill import HorizonScore
 from models.store import LoadedModel, write_model
 from models.store import load_model as _load_model
 
 __all__ = [
-    "AuditProgress", "AuditResult", "CalibrateOptions", "CalibrationResult", "DerivedTable",
-    "Diagnosis", "FalseAlarmBudget", "FleetTrend", "HorizonScore", "Inspection",
-    "LoadedModel", "ModelCard", "Profile", "Scenario", "Signals", "SimulatedDive",
-    "TrainOptions", "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
+    "AuditProgress", "AuditRecord", "AuditResult", "CalibrateOptions", "CalibrationResult",
+    "CommandRelations", "DerivedTable", "Diagnosis", "EffortModel", "FalseAlarmBudget",
+    "FleetTrend", "HorizonScore", "Inspection", "LoadedModel", "ModelCard", "Profile",
+    "Refused", "Scenario", "Signals", "SimulatedDive", "StartReference", "TrainOptions",
+    "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
     "diagnose", "draft_profile", "inspect", "load_model", "load_profile", "log_format",
     "read_log", "redraw_report", "relate", "save_model", "scenarios", "score", "simulate",
     "to_json", "train", "trend", "write_reports",
@@ -147,11 +151,11 @@ def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
 
 def relate(model: LoadedModel, profile: Profile, logs: Sequence[Path],
            holdout: Sequence[Path] = (), progress: Progress = _quiet
-           ) -> tuple[dict[str, Any], dict[str, Any]]:
+           ) -> tuple[CommandRelations | Refused, StartReference]:
     """Learn how the commands follow the motion and where normal logs start, into the model
-    (write it with `save_model`): `auvdiag relate`. Returns the two entries as model.json
-    holds them (``command_relations``, ``start_state``); one with a ``refused`` key says
-    why nothing was learned, and the model keeps what it had there."""
+    (write it with `save_model`): `auvdiag relate`. Returns both; a `Refused` relation or a
+    start with ``refused`` set says why nothing was learned, and the model keeps what it
+    had there."""
     return relate_model(model, profile, logs, holdout, progress)
 
 
@@ -201,9 +205,10 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
     resuming a finished part. ``model``: a model read from a directory (None: the profile's
     shipped model); ``scheduler``: a Dask scheduler's address instead of ``jobs`` local
     processes; ``vehicle_from``: which vehicle of the fleet each log is (log, folder,
-    regex:PATTERN or csv:FILE, as `auvdiag audit --vehicle-from`). The result holds one
-    record per log (``records``) and the counts; it is
-    marked ``interrupted`` (with what finished saved) when the work is interrupted."""
+    regex:PATTERN or csv:FILE, as `auvdiag audit --vehicle-from`). The result holds an
+    `AuditRecord` per log (``records``: verdict, component, fleet vehicle, worst margins…)
+    and the counts; it is marked ``interrupted`` (with what finished saved) when the work is
+    interrupted."""
     from auvdiag_cli.audit.fleet_pdf import render_fleet_report
 
     if model is not None and model.directory is None:

@@ -39,6 +39,20 @@ class FalseAlarmSetting:
         return {"rate": self.rate, "per": self.per}
 
 
+def _optional_float(value: object) -> float | None:
+    return None if value is None else float(value)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class Refused:
+    """Why something was not learned from the logs (model.json keeps ``{"refused": …}``)."""
+
+    reason: str
+
+    def to_json(self) -> dict[str, str]:
+        return {"refused": self.reason}
+
+
 @dataclass(frozen=True)
 class StartReference:
     """Where normal logs recorded from rest start, and how far a start may lie from it
@@ -48,10 +62,34 @@ class StartReference:
     thresholds: tuple[float | None, ...] = ()
     training_starts: tuple[tuple[float | None, ...], ...] = ()
     refused: str | None = None
+    span_s: float = 0.0                 # the start: the logs' first span_s seconds
+    spread: tuple[float, ...] = ()      # rms of the training starts about the reference
+    logs: int = 0                       # training starts
+    heldout_logs: int = 0               # held-out starts that set the thresholds
 
     @property
     def usable(self) -> bool:
         return bool(self.reference)
+
+    def to_json(self) -> dict[str, object]:
+        """model.json's ``start_state`` entry."""
+        if self.refused is not None:
+            return {"refused": self.refused}
+        return {"span_s": self.span_s, "reference": list(self.reference),
+                "thresholds": list(self.thresholds), "spread": list(self.spread),
+                "logs": self.logs, "heldout_logs": self.heldout_logs,
+                # calibrate --false-alarm-rate fits each start's law to these as well
+                "training_starts": [list(row) for row in self.training_starts]}
+
+    @classmethod
+    def from_json(cls, entry: Mapping[str, Any]) -> "StartReference":
+        return cls(tuple(float(v) for v in entry.get("reference", [])),
+                   tuple(_optional_float(t) for t in entry.get("thresholds", [])),
+                   tuple(tuple(_optional_float(v) for v in row)
+                         for row in entry.get("training_starts", [])),
+                   entry.get("refused"), float(entry.get("span_s", 0.0)),
+                   tuple(float(v) for v in entry.get("spread", [])),
+                   int(entry.get("logs", 0)), int(entry.get("heldout_logs", 0)))
 
 
 @dataclass(frozen=True)
@@ -89,10 +127,6 @@ def _plain(mapping: Mapping[str, float | None] | None) -> dict[str, float | None
 
 def _frozen(mapping: Mapping[str, Any]) -> Mapping[str, Any]:
     return MappingProxyType(dict(mapping))
-
-
-def _optional_float(value: object) -> float | None:
-    return None if value is None else float(value)  # type: ignore[arg-type]
 
 
 @dataclass(frozen=True)
@@ -151,7 +185,6 @@ class ModelCard:
         chosen = meta.get("predictors", {}).get("per_signal", {})
         calibration = meta.get("calibration") or {}
         budget = calibration.get("false_alarm_budget")
-        start = meta.get("start_state") or {}
         return cls(
             name=meta.get("name"), vehicle=meta.get("vehicle"), created=meta.get("created"),
             dt_s=float(meta["dt_s"]),
@@ -184,11 +217,6 @@ class ModelCard:
                                                                        str(budget["per"])),
             training_digests=frozenset(str(e.get("sha256")) for e in
                                        meta.get("training", {}).get("logs", [])),
-            start_state=StartReference(
-                tuple(float(v) for v in start.get("reference", [])),
-                tuple(_optional_float(t) for t in start.get("thresholds", [])),
-                tuple(tuple(_optional_float(v) for v in row)
-                      for row in start.get("training_starts", [])),
-                start.get("refused")),
+            start_state=StartReference.from_json(meta.get("start_state") or {}),
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"))

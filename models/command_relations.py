@@ -78,6 +78,30 @@ def _trailing_sum(values: np.ndarray, steps: int) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class FittedOn:
+    """What a relation was learned from."""
+
+    logs: tuple[str, ...] = ()                  # the training logs fitted
+    open_loop_left_out: tuple[str, ...] = ()    # training logs left out as open loop
+    steps: int = 0                              # usable steps fitted
+    heldout: tuple[str, ...] = ()               # the logs that set the thresholds
+    heldout_judged_steps: tuple[int, ...] | None = None   # per actuator, in whole windows
+
+    def to_json(self) -> dict[str, object]:
+        return {"logs": list(self.logs), "open_loop_left_out": list(self.open_loop_left_out),
+                "steps": self.steps, "heldout": list(self.heldout),
+                **({} if self.heldout_judged_steps is None
+                   else {"heldout_judged_steps": list(self.heldout_judged_steps)})}
+
+    @classmethod
+    def from_json(cls, entry: dict[str, Any]) -> "FittedOn":
+        judged = entry.get("heldout_judged_steps")
+        return cls(tuple(entry.get("logs", [])), tuple(entry.get("open_loop_left_out", [])),
+                   int(entry.get("steps", 0)), tuple(entry.get("heldout", [])),
+                   None if judged is None else tuple(int(n) for n in judged))
+
+
+@dataclass(frozen=True)
 class CommandRelations:
     sensor_scale: np.ndarray         # (n_sensors,)
     weights: np.ndarray              # (n_features, n_commands)
@@ -88,12 +112,13 @@ class CommandRelations:
     dt_s: float
     window_steps: int
     smoothing_steps: int
-    fitted_on: dict[str, Any]
+    fitted_on: FittedOn
 
     def too_little_heldout(self, k: int) -> str:
         """Why actuator k has no threshold though its relation has skill: how long the
         held-out logs drove it in whole windows, against one window's length."""
-        steps = (self.fitted_on.get("heldout_judged_steps") or [None] * (k + 1))[k]
+        judged = self.fitted_on.heldout_judged_steps
+        steps = None if judged is None else judged[k]
         had = "" if steps is None else f"{steps * self.dt_s:.1f} s, "
         return (f"too little held-out data drove it to set a threshold ({had}needs "
                 f"{self.window_steps * self.dt_s:g} s: one window)")
@@ -158,7 +183,7 @@ class CommandRelations:
             "basis": self.basis.tolist(), "thresholds": numbers(self.thresholds),
             "skill": numbers(self.skill), "groups": [list(g) for g in self.groups],
             "dt_s": self.dt_s, "window_steps": self.window_steps,
-            "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on,
+            "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on.to_json(),
         }
 
     @classmethod
@@ -171,7 +196,8 @@ class CommandRelations:
                    numbers(data["thresholds"]), numbers(data["skill"]),
                    tuple(tuple(int(i) for i in g) for g in data["groups"]),
                    float(data["dt_s"]), int(data["window_steps"]),
-                   int(data["smoothing_steps"]), dict(data.get("fitted_on", {})))
+                   int(data["smoothing_steps"]),
+                   FittedOn.from_json(data.get("fitted_on", {})))
 
 
 class RelationsRefused(ValueError):
@@ -270,15 +296,16 @@ def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog
     relations = CommandRelations(
         scale, _least_squares(rows), basis, np.full(m, np.nan), np.full(m, np.nan),
         _groups(commands, basis), dt_s, max(2, round(window_s / dt_s)), smoothing,
-        {"logs": [training[i].name for i in kept], "open_loop_left_out": open_loop,
-         "steps": len(features), "heldout": [h.name for h in heldout]})
+        FittedOn(tuple(training[i].name for i in kept), tuple(open_loop), len(features),
+                 tuple(h.name for h in heldout)))
     skill = _skill(relations, heldout, commands.mean(axis=0))
     efforts = [relations.extra_effort(h.commands, h.sensors, h.usable) for h in heldout]
     stacked = np.vstack(efforts) if efforts else np.full((0, m), np.nan)
     finite = np.isfinite(stacked)
     peak = np.where(finite, np.abs(stacked), 0.0).max(axis=0, initial=0.0)
     judged = (finite.sum(axis=0) >= relations.window_steps) & (skill >= MIN_SKILL)
-    fitted_on = {**relations.fitted_on, "heldout_judged_steps": finite.sum(axis=0).tolist()}
+    fitted_on = replace(relations.fitted_on,
+                        heldout_judged_steps=tuple(finite.sum(axis=0).tolist()))
     return replace(relations, thresholds=np.where(judged, MARGIN * peak, np.nan), skill=skill,
                    fitted_on=fitted_on)
 

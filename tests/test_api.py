@@ -83,7 +83,7 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
     assert (tmp_path / "d.mcap").stat().st_size > 0
     fleet = api.audit([make_log("paper-normal", 13), make_log("paper-flow-sensor-covered", 11)],
                       tmp_path / "audit", profile, saved)
-    assert len(fleet.records) == 2 and all(r["model"]["path"] == str(tmp_path / "calibrated")
+    assert len(fleet.records) == 2 and all(r.model_path == str(tmp_path / "calibrated")
                                            for r in fleet.records)
     assert api.trend(tmp_path / "audit").short         # two dives: too few for a trend
     with pytest.raises(AuvdiagError, match="not an audit folder"):

@@ -221,13 +221,27 @@ def _untyped_fields(root: type) -> list[str]:
     return found
 
 
+def _arguments(annotation: object) -> set[object]:
+    """Every type named inside ``annotation`` (``tuple[dict[str, Any], X]`` holds Any)."""
+    import typing
+
+    found = {annotation}
+    for argument in typing.get_args(annotation):
+        found |= _arguments(argument)
+    return found
+
+
 def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
     """The diagnosis and the model card are typed all the way down, and only the writers
     of model.json (train, calibrate, relate, score) touch the JSON document itself."""
+    import typing
     from dataclasses import dataclass
     from typing import Any
 
+    from auvdiag_cli import api
     from auvdiag_cli.engine.results import Diagnosis
+    from auvdiag_cli.jobs.calibrate import CalibrationResult
+    from auvdiag_cli.jobs.train import TrainingResult
     from models.card import ModelCard
 
     @dataclass
@@ -235,7 +249,12 @@ def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
         inner: dict[str, Any]
 
     assert _untyped_fields(Loose) == ["Loose.inner"]        # the check sees one
-    assert _untyped_fields(Diagnosis) == [] and _untyped_fields(ModelCard) == []
+    for typed in (Diagnosis, ModelCard, TrainingResult, CalibrationResult, api.AuditResult):
+        assert _untyped_fields(typed) == [], typed
+    # What the library's model-learning functions return is typed too.
+    for function in (api.relate, api.score, api.train, api.calibrate, api.audit, api.trend):
+        returned = typing.get_type_hints(function)["return"]
+        assert Any not in _arguments(returned), function.__name__
     writers = {"auvdiag_cli.jobs.calibrate", "auvdiag_cli.jobs.relate", "auvdiag_cli.jobs.train"}
     for name, path in _modules().items():
         if name.startswith("models") or name in writers:

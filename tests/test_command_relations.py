@@ -114,7 +114,7 @@ def test_relate_learns_the_relation_for_an_existing_model(make_log, tmp_path):
     assert "command relations learned from 4 log(s)" in result.stdout
     learned = load_model(model).relations
     assert learned is not None and np.isfinite(learned.thresholds).all()
-    assert learned.fitted_on["heldout"] == [Path(held).name]
+    assert learned.fitted_on.heldout == (Path(held).name,)
 
     short = str(make_log("dms-zb", 31))         # a DMS only: nothing follows the motion
     refused = runner.invoke(app, ["relate", short, "--model", str(model)])

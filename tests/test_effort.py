@@ -155,17 +155,19 @@ def test_calibrate_sets_the_threshold_for_a_false_alarm_budget(flights: Path, mo
 
 
 def test_the_audit_table_and_the_trend_carry_the_shares():
-    from auvdiag_cli.audit.table import flatten
-    from auvdiag_cli.audit.trend import dive_margins
+    from auvdiag_cli.audit.record import AuditRecord
+    from auvdiag_cli.audit.table import table_row
 
-    record = {"log": "fleet/cf/a.csv", "verdict": "fault", "actuators": {"shares": {
-        "motor_1": {"over_threshold": -0.2, "driven_harder": False},
-        "motor_3": {"over_threshold": 1.4, "driven_harder": True},
-        "motor_4": {"over_threshold": None, "driven_harder": False}}}}
-    row = flatten(record)
+    record = AuditRecord.from_report({
+        "log": "fleet/cf/a.csv", "verdict": "fault", "actuators": {"shares": {
+            "motor_1": {"over_threshold": -0.2, "driven_harder": False},
+            "motor_3": {"over_threshold": 1.4, "driven_harder": True},
+            "motor_4": {"over_threshold": None, "driven_harder": False}}}})
+    row = table_row(record)
     assert (row["driven_harder"], row["worst_effort_actuator"], row["worst_effort_ratio"]) == \
         ("motor_3", "motor_3", 1.4)
-    assert dive_margins(record) == {"motor_1 share": -0.2, "motor_3 share": 1.4}
+    assert record.margins == {"motor_1 share": -0.2, "motor_3 share": 1.4}
+    assert record.fleet_vehicle == "cf"          # no vehicle assigned: the folder
 
 
 def test_effort_groups_in_a_profile_are_checked(tmp_path: Path):

@@ -82,7 +82,7 @@ def test_two_vehicles_in_one_folder_trend_apart(tmp_path):
         for number, sample in enumerate(("mission-large-cw.mcap", "mission-thruster-1-dead.mcap")):
             shutil.copy(SAMPLES / sample, fleet / f"{vehicle}-{number}.mcap")
     result = api.audit([fleet], tmp_path / "out", vehicle_from=r"regex:^(rov\w)-")
-    assert {r["audit"]["vehicle"]["id"] for r in result.records} == {"rovA", "rovB"}
+    assert {r.fleet_vehicle for r in result.records} == {"rovA", "rovB"}
     assert api.trend(tmp_path / "out").short == {"rovA": 2, "rovB": 2}
     table = (tmp_path / "out" / "audit.csv").read_text().splitlines()
     assert "fleet_vehicle" in table[0] and sum("rovA" in row for row in table[1:]) == 2

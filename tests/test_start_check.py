@@ -43,15 +43,17 @@ def test_allowances_come_from_held_out_starts_with_a_floor():
 
     training = [at(0.0, 0.00), at(0.01, 0.0), at(-0.01, 0.0)]
     refused = learn_start_state(training, [at(0.0, 0.0)], [1.0, 1.0])
-    assert "refused" in refused and "needs normal logs recorded from rest" in refused["refused"]
-    entry = learn_start_state(training, [at(0.1, 0.0), at(0.0, 0.0), None, at(0.02, 0.01)],
+    assert refused.refused and "needs normal logs recorded from rest" in refused.refused
+    assert not refused.usable and refused.to_json() == {"refused": refused.refused}
+    start = learn_start_state(training, [at(0.1, 0.0), at(0.0, 0.0), None, at(0.02, 0.01)],
                               [1.0, 1.0])
-    assert entry["reference"] == [0.0, 0.0] and entry["heldout_logs"] == 3
-    assert entry["thresholds"] == pytest.approx([MARGIN * 0.1, FLOOR])
+    assert start.reference == (0.0, 0.0) and start.heldout_logs == 3 and start.logs == 3
+    assert start.thresholds == pytest.approx([MARGIN * 0.1, FLOOR])
+    assert StartReference.from_json(start.to_json()) == start    # model.json round trip
     # Starts that scatter (a body rate in a swell) are not judged.
     scattered = [at(0.0, v) for v in (-0.3, -0.1, 0.0, 0.1, 0.3)]
-    entry = learn_start_state(scattered, scattered[:3], [1.0, 1.0])
-    assert entry["thresholds"][0] is not None and entry["thresholds"][1] is None
+    start = learn_start_state(scattered, scattered[:3], [1.0, 1.0])
+    assert start.thresholds[0] is not None and start.thresholds[1] is None
 
 
 def _dive(profile, scenario: str, seed: int, target: Path) -> Path:
@@ -63,14 +65,14 @@ def test_a_flow_sensor_reading_high_from_the_first_sample_is_named(tmp_path, pro
     readings = [start_reading(f.commands, f.sensors, profile.dt_s) for f in (
         ingest(_dive(profile, s, seed, tmp_path / f"{s}-{seed}.csv"), profile).frame
         for s in ("paper-normal", "mission-ccw") for seed in (41, 42, 43, 44))]
-    entry = learn_start_state(readings[:4], readings[4:], [0.5, 1.0])
-    assert "thresholds" in entry, entry
+    start = learn_start_state(readings[:4], readings[4:], [0.5, 1.0])
+    assert start.usable, start
     model = tmp_path / "model"
     model.mkdir()
     for file in default_model_dir().iterdir():
         (model / file.name).write_bytes(file.read_bytes())
     meta = json.loads((model / "model.json").read_text())
-    (model / "model.json").write_text(json.dumps({**meta, "start_state": entry}))
+    (model / "model.json").write_text(json.dumps({**meta, "start_state": start.to_json()}))
 
     clean = _dive(profile, "paper-normal", 45, tmp_path / "clean.csv")
     table = pd.read_csv(clean)

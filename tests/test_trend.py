@@ -3,11 +3,13 @@ thruster loses thrust every week: flagged weeks before its first alarm; the heal
 never."""
 
 import json
+from dataclasses import replace
 
 import pytest
 from pypdf import PdfReader
 from typer.testing import CliRunner
 
+from auvdiag_cli.audit.record import AuditRecord
 from auvdiag_cli.audit.trend import flag_history, fleet_trend, mann_kendall, sen_slope
 from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.season import write_season
@@ -30,9 +32,10 @@ def test_mann_kendall_and_sen_slope_on_known_series():
 
 
 def _record(log, date, flow, verdict="normal"):
-    return {"log": log, "start_time_utc": date, "verdict": verdict, "not_judged": {},
-            "segments": [{"max_g": {"flow": flow, "yaw_rate": 2.0},
-                          "thresholds": {"flow": 10.0, "yaw_rate": 10.0}}]}
+    return AuditRecord.from_report({
+        "log": log, "start_time_utc": date, "verdict": verdict, "not_judged": {},
+        "segments": [{"max_g": {"flow": flow, "yaw_rate": 2.0},
+                      "thresholds": {"flow": 10.0, "yaw_rate": 10.0}}]})
 
 
 def test_a_rising_margin_is_flagged_and_an_alarm_is_not_a_trend():
@@ -46,7 +49,7 @@ def test_a_rising_margin_is_flagged_and_an_alarm_is_not_a_trend():
     alarmed = [*rising, _record("fleet/a/d9.tlog", "2026-01-10T00:00:00", 12.0, "fault")]
     assert fleet_trend(alarmed).flagged == []
     # Dates, not file names, order the dives.
-    shuffled = [dict(r, log=f"fleet/a/z{9 - k}.tlog") for k, r in enumerate(rising)]
+    shuffled = [replace(r, log=f"fleet/a/z{9 - k}.tlog") for k, r in enumerate(rising)]
     assert fleet_trend(shuffled).flagged_vehicles == ["a"]
 
 
@@ -63,7 +66,8 @@ def season(tmp_path_factory, profile):
 
 
 def test_the_worn_vehicle_is_flagged_weeks_before_its_first_alarm(season):
-    records = [json.loads(p.read_text()) for p in (season / "logs").glob("*.json")]
+    records = [AuditRecord.from_report(json.loads(p.read_text()))
+               for p in (season / "logs").glob("*.json")]
     history = flag_history(records)
     assert set(history) == {"auv-1", "auv-2", "auv-3"}
     for healthy in ("auv-1", "auv-3"):

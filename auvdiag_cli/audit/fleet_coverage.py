@@ -2,25 +2,24 @@
 than one on all six, and a fleet summary must show which it holds."""
 
 from collections import Counter
-from collections.abc import Callable, Sequence
-from typing import Any
+from collections.abc import Sequence
+
+from auvdiag_cli.audit.record import AuditRecord, Coverage
 
 
-def coverage_lines(records: Sequence[dict[str, Any]],
-                   vehicle_of: Callable[[dict[str, Any]], str]) -> list[str]:
-    """Per vehicle (as ``vehicle_of`` a report says): the signals and actuators judged in
-    every log, in some, in none."""
-    by_vehicle: dict[str, list[dict[str, Any]]] = {}
+def coverage_lines(records: Sequence[AuditRecord]) -> list[str]:
+    """Per fleet vehicle: the signals and actuators judged in every log, in some, in none."""
+    by_vehicle: dict[str, list[Coverage]] = {}
     for record in records:
-        if record.get("coverage"):
-            by_vehicle.setdefault(vehicle_of(record), []).append(record["coverage"])
+        if record.coverage is not None:
+            by_vehicle.setdefault(record.fleet_vehicle, []).append(record.coverage)
     lines = []
     for vehicle, coverages in sorted(by_vehicle.items()):
         lines.append(f"{vehicle} ({len(coverages)} logs):")
         for part in ("signals", "actuators"):
-            names = list(dict.fromkeys(n for c in coverages for key in ("judged", "not_judged")
-                                       for n in c[part][key]))
-            judged = Counter(n for c in coverages for n in c[part]["judged"])
+            names = list(dict.fromkeys(n for c in coverages for names in c.part(part)
+                                       for n in names))
+            judged = Counter(n for c in coverages for n in c.part(part)[0])
             always = [n for n in names if judged[n] == len(coverages)]
             sometimes = [f"{n} ({judged[n]})" for n in names if 0 < judged[n] < len(coverages)]
             never = [n for n in names if not judged[n]]

@@ -5,9 +5,9 @@ each vehicle's margin history."""
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from auvdiag_cli.audit.table import flatten
+from auvdiag_cli.audit.record import AuditRecord
 from auvdiag_cli.audit.trend import fleet_trend, trend_lines
 from auvdiag_cli.audit.trend_pdf import trend_page
 from auvdiag_cli.reports.pdf.style import COLOURS, new_page, pdf_document
@@ -22,16 +22,16 @@ LABELS = {"partial": "normal, part judged"}
 WORST_SHOWN = 30
 
 
-def _verdict(row: dict[str, Any]) -> str:
+def _verdict(row: AuditRecord) -> str:
     """The verdict, with "partial" for a NORMAL over less than the whole vehicle."""
-    if row["error"]:
+    if row.error:
         return "error"
-    if row["verdict"] == "normal" and row.get("coverage_complete") is False:
+    if row.partly_judged:
         return "partial"
-    return str(row["verdict"])
+    return str(row.verdict)
 
 
-def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, str]],
+def summary_lines(rows: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str]],
                   companions: int, interrupted: bool) -> list[Line]:
     counts = Counter(_verdict(r) for r in rows)
     partly = f" and {counts['partial']} normal on part of the vehicle" if counts["partial"] \
@@ -50,15 +50,15 @@ def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, 
     if faults:
         lines += heading("Faults")
         for r in faults:
-            what = r["component"] or (r["candidates"] or "unidentified").replace(";", " or ")
-            when = "" if r["onset_s"] is None else f", onset {r['onset_s']:.1f} s"
-            lines += paragraph(f"{Path(r['log']).name}: {what}{when}", family="monospace",
+            what = r.component or " or ".join(r.candidates) or "unidentified"
+            when = "" if r.onset_s is None else f", onset {r.onset_s:.1f} s"
+            lines += paragraph(f"{Path(r.log).name}: {what}{when}", family="monospace",
                                size=8.5)
-    errors = [r for r in rows if r["error"]]
+    errors = [r for r in rows if r.error]
     if errors:
         lines += heading("Logs that could not be analysed")
         for r in errors:
-            lines += paragraph(f"{Path(r['log']).name}: {r['error']}", family="monospace",
+            lines += paragraph(f"{Path(r.log).name}: {r.error}", family="monospace",
                                size=8.5)
     if skipped:
         lines += heading(f"Skipped: {len(skipped)} files that are not logs")
@@ -68,12 +68,12 @@ def summary_lines(rows: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, 
     return lines
 
 
-def _vehicle_and_date(row: dict[str, Any]) -> tuple[str, str]:
-    vehicle = row["fleet_vehicle"] or ("not analysable" if row["error"] else "?")
-    return vehicle, (row["start_time_utc"] or "no clock")[:10]
+def _vehicle_and_date(row: AuditRecord) -> tuple[str, str]:
+    vehicle = row.fleet_vehicle or ("not analysable" if row.error else "?")
+    return vehicle, (row.start_time_utc or "no clock")[:10]
 
 
-def _by_vehicle_and_date(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+def _by_vehicle_and_date(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     from matplotlib.ticker import MaxNLocator
 
     groups = sorted({_vehicle_and_date(r) for r in rows})
@@ -92,10 +92,10 @@ def _by_vehicle_and_date(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
     ax.legend(loc="upper right", fontsize=7)
 
 
-def _faults_by_component(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+def _faults_by_component(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     from matplotlib.ticker import MaxNLocator
 
-    named = Counter(r["component"] or "not isolated" for r in rows if _verdict(r) == "fault")
+    named = Counter(r.component or "not isolated" for r in rows if _verdict(r) == "fault")
     ax.set_title("Faults by component", loc="left", fontweight="bold")
     if not named:
         ax.text(0.5, 0.5, "no fault found", ha="center", va="center", transform=ax.transAxes,
@@ -109,18 +109,18 @@ def _faults_by_component(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
     ax.set_xlabel("logs")
 
 
-def _timeline(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
+def _timeline(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     """Each log at its start time (or its place in the list, for logs without a clock)."""
     import matplotlib.dates as mdates
     import pandas as pd
 
-    dated = all(r["start_time_utc"] for r in rows)
+    dated = all(r.start_time_utc for r in rows)
     vehicles = sorted({_vehicle_and_date(r)[0] for r in rows})
     for verdict in VERDICTS:
         chosen = [(i, r) for i, r in enumerate(rows) if _verdict(r) == verdict]
         if not chosen:
             continue
-        x = ([pd.Timestamp(r["start_time_utc"]).to_pydatetime() for _, r in chosen] if dated
+        x = ([pd.Timestamp(r.start_time_utc).to_pydatetime() for _, r in chosen] if dated
              else [i for i, _ in chosen])
         y = [vehicles.index(_vehicle_and_date(r)[0]) for _, r in chosen]
         ax.scatter(x, y, color=COLOURS[verdict], s=18, label=LABELS.get(verdict, verdict),
@@ -135,16 +135,16 @@ def _timeline(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
         ax.set_xlabel("log (in table order; not every log has a clock)")
 
 
-def _worst_g(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
-    ranked = sorted((r for r in rows if r["worst_g_ratio"] is not None),
-                    key=lambda r: -r["worst_g_ratio"])[:WORST_SHOWN]
+def _worst_g(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
+    ranked = sorted((r for r in rows if r.worst_g_ratio is not None),
+                    key=lambda r: -(r.worst_g_ratio or 0.0))[:WORST_SHOWN]
     shown = f" (the {WORST_SHOWN} highest)" if len(ranked) == WORST_SHOWN else ""
     ax.set_title(f"Worst g per log, over its threshold{shown}", loc="left", fontweight="bold")
     if not ranked:
         ax.set_axis_off()
         return
-    names = [Path(r["log"]).name for r in ranked]
-    ax.barh(names, [r["worst_g_ratio"] for r in ranked],
+    names = [Path(r.log).name for r in ranked]
+    ax.barh(names, [r.worst_g_ratio or 0.0 for r in ranked],
             color=[COLOURS[_verdict(r)] for r in ranked])
     ax.axvline(1.0, color=COLOURS["threshold"], ls=":", lw=1.0)
     ax.invert_yaxis()
@@ -153,7 +153,7 @@ def _worst_g(ax: "Axes", rows: Sequence[dict[str, Any]]) -> None:
     ax.tick_params(axis="y", labelsize=max(4, 8 - len(ranked) // 10))
 
 
-def charts_page(rows: Sequence[dict[str, Any]]) -> "Figure":
+def charts_page(rows: Sequence[AuditRecord]) -> "Figure":
     figure = new_page()
     grid = figure.subplots(2, 2)
     _by_vehicle_and_date(grid[0][0], rows)
@@ -163,9 +163,9 @@ def charts_page(rows: Sequence[dict[str, Any]]) -> "Figure":
     return figure
 
 
-def render_fleet_report(records: Sequence[dict[str, Any]], skipped: Sequence[tuple[Path, str]],
+def render_fleet_report(records: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str]],
                         target: Path, companions: int = 0, interrupted: bool = False) -> int:
-    rows = sorted((flatten(r) for r in records), key=lambda r: str(r["log"]))
+    rows = sorted(records, key=lambda r: r.log)
     title = "auvdiag fleet audit"
     trend = fleet_trend(records)
     text = summary_lines(rows, skipped, companions, interrupted) + heading("Health over time")

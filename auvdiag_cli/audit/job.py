@@ -5,11 +5,11 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from auvdiag_cli.audit.discovery import discover
 from auvdiag_cli.audit.fleet_vehicle import VehicleRule
 from auvdiag_cli.audit.progress import Reporter
+from auvdiag_cli.audit.record import AuditRecord
 from auvdiag_cli.audit.runner import run_tasks
 from auvdiag_cli.audit.store import Inputs, ResultStore, folder_digest, text_digest
 from auvdiag_cli.audit.table import build_table, write_tables
@@ -35,7 +35,7 @@ class AuditOptions:
 
 @dataclass
 class AuditResult:
-    records: list[dict[str, Any]] = field(default_factory=list)
+    records: list[AuditRecord] = field(default_factory=list)
     skipped: list[tuple[Path, str]] = field(default_factory=list)
     companions: int = 0
     reused: int = 0
@@ -43,7 +43,7 @@ class AuditResult:
     interrupted: bool = False
 
     def count(self, verdict: str) -> int:
-        return sum(1 for r in self.records if not r.get("error") and r.get("verdict") == verdict)
+        return sum(1 for r in self.records if r.analysed and r.verdict == verdict)
 
     def summary(self, output: Path) -> str:
         """The line an audit ends with: what it found and where the results are."""
@@ -56,19 +56,17 @@ class AuditResult:
 
     @property
     def errors(self) -> int:
-        return sum(1 for r in self.records if r.get("error"))
+        return sum(1 for r in self.records if r.error)
 
     @property
     def partly_judged(self) -> int:
         """NORMAL verdicts over less than every signal and actuator of the profile."""
-        return sum(1 for r in self.records if not r.get("error") and r.get("verdict") == "normal"
-                   and not (r.get("coverage") or {}).get("complete", True))
+        return sum(1 for r in self.records if r.partly_judged)
 
     @property
     def damaged(self) -> int:
         """Logs analysed only up to damage (salvaged), not counting errors."""
-        return sum(1 for r in self.records if not r.get("error")
-                   and (r.get("completeness") or {}).get("status") == "partial")
+        return sum(1 for r in self.records if r.damaged)
 
 
 def _inputs(options: AuditOptions) -> tuple[Inputs, str]:
@@ -86,7 +84,7 @@ class TableWriter:
     def __init__(self, output: Path) -> None:
         self.output, self.last = output, 0.0
 
-    def write(self, records: Sequence[dict[str, Any]], force: bool = False) -> None:
+    def write(self, records: Sequence[AuditRecord], force: bool = False) -> None:
         if force or (records and time.monotonic() - self.last >= TABLE_EVERY_S):
             write_tables(build_table(records), self.output)
             self.last = time.monotonic()
@@ -99,7 +97,7 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
     found = discover(options.paths, exclude=[options.output])
     store = ResultStore(options.output, inputs, options.mcap)
     result = AuditResult(skipped=found.skipped, companions=len(found.companions))
-    done: dict[str, dict[str, Any]] = {}
+    done: dict[str, AuditRecord] = {}
     digests: dict[str, str] = {}
     vehicles = {str(log): rule.vehicle_of(log) for log in found.logs}
     tasks = []
@@ -107,11 +105,13 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
         try:
             digests[str(log)] = log_digest(log)
         except OSError as error:
-            done[str(log)] = {"log": str(log), "error": f"{log}: unreadable: {error.strerror}"}
+            done[str(log)] = AuditRecord(str(log), f"{log}: unreadable: {error.strerror}",
+                                         fleet_vehicle=vehicles[str(log)].vehicle)
             continue
         reused = store.reusable(log, digests[str(log)])
         if reused is not None:
-            done[str(log)] = store.with_vehicle(log, reused, vehicles[str(log)])
+            done[str(log)] = AuditRecord.from_report(
+                store.with_vehicle(log, reused, vehicles[str(log)]))
         else:
             profile = None if options.profile is None else str(options.profile)
             tasks.append(AuditTask(str(log), profile, model_dir))
@@ -120,8 +120,8 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
     reporter.start(len(found.logs), result.reused)
     try:
         for outcome in run_tasks(tasks, options.jobs, options.scheduler):
-            done[outcome.log] = store.save(outcome, digests[outcome.log],
-                                           vehicles[outcome.log])
+            done[outcome.log] = AuditRecord.from_report(
+                store.save(outcome, digests[outcome.log], vehicles[outcome.log]))
             result.computed += 1
             reporter.done(done[outcome.log])
             table.write(list(done.values()))

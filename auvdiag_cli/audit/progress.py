@@ -2,22 +2,17 @@
 library). The live bar for a terminal is the command line's (`cli.progress_bar`)."""
 
 import sys
-from typing import Any, Protocol
+from typing import Protocol
+
+from auvdiag_cli.audit.record import AuditRecord
 
 
 class Reporter(Protocol):
     def start(self, total: int, reused: int) -> None: ...
 
-    def done(self, record: dict[str, Any]) -> None: ...
+    def done(self, record: AuditRecord) -> None: ...
 
     def stop(self) -> None: ...
-
-
-def _describe(record: dict[str, Any]) -> str:
-    if record.get("error"):
-        return f"error: {record['error']}"
-    what = record.get("component") or " or ".join(record.get("candidates") or [])
-    return record.get("verdict", "?") + (f" ({what})" if what else "")
 
 
 class PlainReporter:
@@ -28,9 +23,9 @@ class PlainReporter:
         self.total, self.count = total, reused
         print(f"auditing {total} logs ({reused} reused from an earlier run)", file=sys.stderr)
 
-    def done(self, record: dict[str, Any]) -> None:
+    def done(self, record: AuditRecord) -> None:
         self.count += 1
-        print(f"[{self.count}/{self.total}] {record['log']}: {_describe(record)}",
+        print(f"[{self.count}/{self.total}] {record.log}: {record.describe()}",
               file=sys.stderr, flush=True)
 
     def stop(self) -> None:
@@ -41,7 +36,7 @@ class SilentReporter:
     def start(self, total: int, reused: int) -> None:
         pass
 
-    def done(self, record: dict[str, Any]) -> None:
+    def done(self, record: AuditRecord) -> None:
         pass
 
     def stop(self) -> None:

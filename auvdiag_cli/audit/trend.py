@@ -20,11 +20,10 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from auvdiag_cli.audit.fleet_coverage import coverage_lines
+from auvdiag_cli.audit.record import AuditRecord
 from auvdiag_cli.audit.store import RESULTS_FOLDER
-from auvdiag_cli.audit.table import fleet_vehicle_of
 from auvdiag_errors import UsageError
 
 DEFAULT_LAST = 8
@@ -86,36 +85,11 @@ class FleetTrend:
 
 
 
-def dive_margins(record: dict[str, Any]) -> dict[str, float]:
-    """A report's peak ratio to the threshold per judged sensor and per judged actuator
-    (its commands against the motion, and its share of the effort)."""
-    not_judged = set(record.get("not_judged") or {})
-    ratios: dict[str, float] = {}
-    for segment in record.get("segments") or []:
-        for signal, g in (segment.get("max_g") or {}).items():
-            threshold = (segment.get("thresholds") or {}).get(signal)
-            if signal in not_judged or g is None or not threshold:
-                continue
-            ratios[signal] = max(ratios.get(signal, 0.0), g / threshold)
-    check = record.get("commands_check") or {}
-    for actuator, ratio in (check.get("peak_over_threshold") or {}).items():
-        if ratio is not None and math.isfinite(ratio) and actuator not in \
-                (check.get("not_judged") or {}):
-            ratios[actuator] = float(ratio)
-    shares = (record.get("actuators") or {}).get("shares") or {}
-    for actuator, entry in shares.items():
-        ratio = entry.get("over_threshold")
-        if ratio is not None and math.isfinite(ratio):
-            ratios[f"{actuator} share"] = float(ratio)
-    return ratios
-
-
-def margin_history(records: Sequence[dict[str, Any]]) -> list[DiveMargin]:
+def margin_history(records: Sequence[AuditRecord]) -> list[DiveMargin]:
     """The analysed dives, oldest first within each vehicle (logs without a date last, by
     name)."""
-    dives = [DiveMargin(fleet_vehicle_of(r), r["log"], r.get("start_time_utc"),
-                        dive_margins(r))
-             for r in records if not r.get("error") and r.get("verdict") is not None]
+    dives = [DiveMargin(r.fleet_vehicle, r.log, r.start_time_utc, dict(r.margins))
+             for r in records if r.analysed]
     return sorted(dives, key=lambda d: (d.vehicle, d.date is None, d.date or "", d.log))
 
 
@@ -156,11 +130,10 @@ def _trend(vehicle: str, signal: str, ratios: list[float], alpha: float) -> Sign
                        None if to_go is None else round(to_go, 1))
 
 
-def fleet_trend(records: Sequence[dict[str, Any]], last: int = DEFAULT_LAST,
+def fleet_trend(records: Sequence[AuditRecord], last: int = DEFAULT_LAST,
                 alpha: float = DEFAULT_ALPHA) -> FleetTrend:
     """The trend test over each vehicle's last ``last`` dives, per signal."""
-    result = FleetTrend(last, alpha, coverage=coverage_lines(
-        records, fleet_vehicle_of))
+    result = FleetTrend(last, alpha, coverage=coverage_lines(records))
     by_vehicle: dict[str, list[DiveMargin]] = {}
     for dive in margin_history(records):
         by_vehicle.setdefault(dive.vehicle, []).append(dive)
@@ -188,16 +161,16 @@ class DiveFlag:
     alarmed: bool          # this dive's verdict is a fault
 
 
-def flag_history(records: Sequence[dict[str, Any]], last: int = DEFAULT_LAST,
+def flag_history(records: Sequence[AuditRecord], last: int = DEFAULT_LAST,
                  alpha: float = DEFAULT_ALPHA) -> dict[str, list[DiveFlag]]:
     """For each vehicle, dive by dive: would the trend test have flagged it then (over the
     dives made so far), and did the dive itself alarm."""
-    analysed = [r for r in records if not r.get("error") and r.get("verdict") is not None]
-    by_log = {r["log"]: r for r in analysed}
+    analysed = [r for r in records if r.analysed]
+    by_log = {r.log: r for r in analysed}
     history: dict[str, list[DiveFlag]] = {}
     for margin in margin_history(analysed):
         history.setdefault(margin.vehicle, []).append(DiveFlag(
-            margin.log, margin.date, False, by_log[margin.log]["verdict"] == "fault"))
+            margin.log, margin.date, False, by_log[margin.log].verdict == "fault"))
     for vehicle, dives in history.items():
         for k, dive in enumerate(dives):
             so_far = fleet_trend([by_log[d.log] for d in dives[:k + 1]], last, alpha)
@@ -235,7 +208,9 @@ def trend_of_audit(audit_dir: Path, last: int = DEFAULT_LAST,
     records = []
     for path in sorted(folder.glob("*.json")):
         try:
-            records.append(json.loads(path.read_text(encoding="utf-8")))
-        except (OSError, ValueError) as error:
+            report = json.loads(path.read_text(encoding="utf-8"))
+            if isinstance(report, dict) and "log" in report:
+                records.append(AuditRecord.from_report(report))
+        except (OSError, ValueError, TypeError, KeyError, AttributeError) as error:
             raise UsageError(f"{path}: not a readable report: {error}") from None
-    return fleet_trend([r for r in records if isinstance(r, dict) and "log" in r], last, alpha)
+    return fleet_trend(records, last, alpha)

@@ -2,9 +2,10 @@
 threshold per signal, dive by dive in date order), the flagged signals in the alarm colour."""
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from auvdiag_cli.audit.trend import FleetTrend, margin_history
+from auvdiag_cli.audit.record import AuditRecord
+from auvdiag_cli.audit.trend import DiveMargin, FleetTrend, margin_history
 from auvdiag_cli.reports.pdf.style import COLOURS, new_page
 
 if TYPE_CHECKING:
@@ -13,9 +14,9 @@ if TYPE_CHECKING:
 VEHICLES_SHOWN = 6
 
 
-def trend_page(records: Sequence[dict[str, Any]], trend: FleetTrend) -> "Figure | None":
+def trend_page(records: Sequence[AuditRecord], trend: FleetTrend) -> "Figure | None":
     """One panel per vehicle (the flagged ones first), or None without dives to show."""
-    by_vehicle: dict[str, list[Any]] = {}
+    by_vehicle: dict[str, list[DiveMargin]] = {}
     for dive in margin_history(records):
         by_vehicle.setdefault(dive.vehicle, []).append(dive)
     if not by_vehicle:

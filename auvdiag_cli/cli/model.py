@@ -138,16 +138,17 @@ def relate(
         vehicle = api.load_profile(profile)
         loaded = api.load_model(model, vehicle)
         relations, start = api.relate(loaded, vehicle, logs, holdout or (), report_progress)
-        if "refused" not in relations or "refused" not in start:
+        relations_refused = isinstance(relations, api.Refused)
+        if not relations_refused or start.refused is None:
             api.save_model(loaded, output or model)
     for line in [*relation_lines(relations, vehicle.command_names),
                  *start_lines(start, vehicle.sensor_names)]:
         typer.echo(line)
-    if "refused" in relations and "refused" in start:
+    if relations_refused and start.refused is not None:
         typer.echo("auvdiag: nothing learned; the model is left as it was", err=True)
         raise typer.Exit(EXIT_FAULT)
     typer.echo(f"written to {(output or model) / 'model.json'}")
-    if "refused" in relations:
+    if relations_refused:
         raise typer.Exit(EXIT_FAULT)
 
 

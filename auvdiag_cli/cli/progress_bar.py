@@ -1,7 +1,5 @@
 """The audit's live bar on a terminal (logs done, failed, time left); plain lines elsewhere."""
 
-from typing import Any
-
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -13,6 +11,7 @@ from rich.progress import (
 )
 
 from auvdiag_cli.audit.progress import PlainReporter, Reporter
+from auvdiag_cli.audit.record import AuditRecord
 
 
 class BarReporter:
@@ -28,8 +27,8 @@ class BarReporter:
         self.progress.start()
         self.progress.update(self.task, total=total, completed=reused)
 
-    def done(self, record: dict[str, Any]) -> None:
-        self.failed += bool(record.get("error"))
+    def done(self, record: AuditRecord) -> None:
+        self.failed += bool(record.error)
         self.progress.update(self.task, advance=1, failed=self.failed)
 
     def stop(self) -> None:

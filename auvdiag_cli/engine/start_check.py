@@ -6,8 +6,7 @@ from rest: at the surface, still, their sensors read alike. A log that begins mi
 (its commands already working) is not judged: its start says nothing."""
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -47,16 +46,17 @@ def start_reading(commands: np.ndarray, sensors: np.ndarray, dt_s: float
 
 def learn_start_state(training: Sequence[StartReading | None],
                       heldout: Sequence[StartReading | None], full_scale: Sequence[float]
-                      ) -> dict[str, Any]:
-    """The model.json entry: where normal logs recorded from rest start (median of the
-    training starts), and per sensor how far a start may lie from it (MARGIN x the largest
-    held-out deviation, at least FLOOR of the full scale; null where the training starts
-    spread more than ALIKE of the full scale), or why there is none."""
+                      ) -> StartReference:
+    """Where normal logs recorded from rest start (median of the training starts), and per
+    sensor how far a start may lie from it (MARGIN x the largest held-out deviation, at
+    least FLOOR of the full scale; None where the training starts spread more than ALIKE of
+    the full scale), or why there is none."""
     train = [r for r in training if r is not None]
     held = [r for r in heldout if r is not None]
     if not train or len(held) < MIN_HELDOUT:
-        return {"refused": f"needs normal logs recorded from rest, held out, to set how far a "
-                           f"start may lie ({len(held)} held out, needs {MIN_HELDOUT})"}
+        return StartReference(refused=f"needs normal logs recorded from rest, held out, to "
+                                      f"set how far a start may lie ({len(held)} held out, "
+                                      f"needs {MIN_HELDOUT})")
     starts = np.array([r.sensors for r in train])
     reference = np.median(starts, axis=0)
     scale = np.asarray(full_scale, float)
@@ -65,31 +65,31 @@ def learn_start_state(training: Sequence[StartReading | None],
     deviation = np.abs(np.array([r.sensors for r in held]) - reference).max(axis=0)
     allowed = np.where(spread <= ALIKE * scale, np.maximum(MARGIN * deviation, FLOOR * scale),
                        np.nan)
-    return {"span_s": SPAN_S, "reference": reference.round(6).tolist(),
-            "thresholds": [None if np.isnan(a) else round(float(a), 6) for a in allowed],
-            "spread": spread.round(6).tolist(),
-            "logs": len(train), "heldout_logs": len(held),
-            # calibrate --false-alarm-rate fits each start's law to these as well
-            "training_starts": [[round(float(v), 6) if np.isfinite(v) else None for v in row]
-                                for row in starts]}
+    return StartReference(
+        reference=tuple(reference.round(6).tolist()),
+        thresholds=tuple(None if np.isnan(a) else round(float(a), 6) for a in allowed),
+        training_starts=tuple(tuple(round(float(v), 6) if np.isfinite(v) else None
+                                    for v in row) for row in starts),
+        span_s=SPAN_S, spread=tuple(spread.round(6).tolist()), logs=len(train),
+        heldout_logs=len(held))
 
 
-def raise_thresholds(entry: dict[str, Any], readings: Sequence[StartReading | None],
-                     margin: float) -> list[int]:
-    """Raise, in ``entry``, each sensor's threshold to ``margin`` times the deviation of
-    these normal logs' starts where that is more; returns the sensors raised."""
-    if "thresholds" not in entry:
-        return []
-    reference = np.asarray(entry["reference"])
+def raise_thresholds(start: StartReference, readings: Sequence[StartReading | None],
+                     margin: float) -> tuple[StartReference, list[int]]:
+    """``start`` with each sensor's threshold raised to ``margin`` times the deviation of
+    these normal logs' starts where that is more, and the sensors raised."""
+    thresholds = list(start.thresholds)
+    reference = np.asarray(start.reference)
     raised = []
     for reading in readings:
-        if reading is None:
+        if reading is None or not start.usable:
             continue
         for i, deviation in enumerate(np.abs(reading.sensors - reference)):
-            if entry["thresholds"][i] is not None and margin * deviation > entry["thresholds"][i]:
-                entry["thresholds"][i] = round(float(margin * deviation), 6)
+            allowed = thresholds[i]
+            if allowed is not None and margin * deviation > allowed:
+                thresholds[i] = round(float(margin * deviation), 6)
                 raised.append(i)
-    return sorted(set(raised))
+    return replace(start, thresholds=tuple(thresholds)), sorted(set(raised))
 
 
 @dataclass(frozen=True)

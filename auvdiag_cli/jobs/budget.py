@@ -20,6 +20,8 @@ from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.start_check import StartReading
 from auvdiag_cli.numeric import peak
 from auvdiag_errors import UsageError
+from models.card import StartReference
+from models.command_relations import CommandRelations
 from models.false_alarms import LawFit, checked_share, fit_law, judge_share
 
 RATE_PATTERN = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(/\s*h)?\s*$")
@@ -161,25 +163,26 @@ def g_judges(per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[str],
         for g in per_log)) for mode in modes for name in judged]
 
 
-def start_judges(entry: dict[str, Any], readings: Sequence[StartReading | None],
+def start_judges(start: StartReference, readings: Sequence[StartReading | None],
                  sensor_names: Sequence[str]) -> list[Judge]:
     """Each judged sensor's start deviation per log (NaN: not recorded from rest)."""
-    if "thresholds" not in entry:
+    if not start.usable:
         return []
-    reference = np.asarray(entry["reference"], float)
-    training = np.asarray(entry.get("training_starts") or np.empty((0, len(reference))), float)
+    reference = np.asarray(start.reference, float)
+    training = np.asarray(start.training_starts or np.empty((0, len(reference))), float)
     return [Judge("start", sensor_names[i], None, tuple(
         float("nan") if r is None else float(r.sensors[i] - reference[i]) for r in readings),
         tuple(float(v) for v in training[:, i] - reference[i] if np.isfinite(v)))
-        for i, allowed in enumerate(entry["thresholds"]) if allowed is not None]
+        for i, allowed in enumerate(start.thresholds) if allowed is not None]
 
 
-def command_judges(entry: dict[str, Any], checks: Sequence[CommandCheck | None],
+def command_judges(relations: CommandRelations | None, checks: Sequence[CommandCheck | None],
                    command_names: Sequence[str]) -> list[Judge]:
     """Each judged actuator's peak extra effort per log (NaN: not judged in that log)."""
     judges = []
-    for k, allowed in enumerate(entry.get("thresholds") or []):
-        if allowed is None:
+    thresholds = () if relations is None else relations.thresholds.tolist()
+    for k, allowed in enumerate(thresholds):
+        if np.isnan(allowed):
             continue
         ratios = [None if c is None else c.peak_ratio.get(command_names[k]) for c in checks]
         judges.append(Judge("command", command_names[k], None, tuple(

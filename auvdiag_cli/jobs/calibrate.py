@@ -32,13 +32,15 @@ from auvdiag_cli.jobs.budget import (
     g_judges,
     start_judges,
 )
-from auvdiag_cli.jobs.effort import learn_effort_entry, refit_effort
+from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
+from models.card import Refused
 from models.effort import DEFAULT_FALSE_ALARM_RATE
+from models.effort_model import EffortModel
 from models.store import LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
@@ -100,7 +102,7 @@ class CalibrationResult:
     warnings: list[str]
     relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
     start_thresholds_raised: list[str]             # sensors whose start allowance was raised
-    effort: dict[str, Any] | None = None           # the refitted effort entry, if any
+    effort: EffortModel | Refused | None = None    # the refitted effort model, if any
     effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
     budget: BudgetThresholds | None = None         # --false-alarm-rate: the fitted judges
 
@@ -208,9 +210,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                 for e in (d.histories for d in diagnoses)]
     checks = [d.command_check for d in diagnoses]
     raised = widen_thresholds(model, checks, margin)
-    start_entry = model.entry("start_state")
-    starts_raised = raise_thresholds(start_entry, readings, margin)
-    model.update_entries(**{"start_state": start_entry} if start_entry else {})
+    start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
+    if start.usable:
+        model.update_entries(start_state=start.to_json())
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested])
@@ -265,19 +267,23 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                   log_hours: Sequence[float]) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
     model's entries (g's go into the modes, `_with_budget`)."""
-    start_entry, relations_entry = model.entry("start_state"), model.entry("command_relations")
+    start, relations = model.card.start_state, model.relations
     judges = [*g_judges(per_log, [m.mode for m in modes if not m.kept_default], judged,
                         profile.sensor_names),
-              *start_judges(start_entry, readings, profile.sensor_names),
-              *command_judges(relations_entry, checks, profile.command_names)]
+              *start_judges(start, readings, profile.sensor_names),
+              *command_judges(relations, checks, profile.command_names)]
     actuators = sum(len(group.members) for group in profile.effort_groups)
     fitted = budget_thresholds(judges, actuators, budget, log_hours)
-    for (_, name), value in fitted.thresholds("start").items():
-        start_entry["thresholds"][profile.sensor_names.index(name)] = value
-    for (_, name), value in fitted.thresholds("command").items():
-        relations_entry["thresholds"][profile.command_names.index(name)] = value
-    model.update_entries(**{key: entry for key, entry in (
-        ("start_state", start_entry), ("command_relations", relations_entry)) if entry})
+    if start.usable:
+        allowed = list(start.thresholds)
+        for (_, name), value in fitted.thresholds("start").items():
+            allowed[profile.sensor_names.index(name)] = value
+        model.update_entries(start_state=replace(start, thresholds=tuple(allowed)).to_json())
+    if relations is not None:
+        extra = relations.thresholds.copy()
+        for (_, name), value in fitted.thresholds("command").items():
+            extra[profile.command_names.index(name)] = value
+        model.update_entries(command_relations=replace(relations, thresholds=extra).to_json())
     return fitted
 
 
@@ -294,7 +300,8 @@ def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,
 
 
 def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedLog],
-                  false_alarm_rate: float | None) -> tuple[dict[str, Any] | None, list[str]]:
+                  false_alarm_rate: float | None
+                  ) -> tuple[EffortModel | Refused | None, list[str]]:
     """The effort model with these normal logs added (learnt from them where the model has
     none yet), written into the model's entries; None where the profile has no groups.
     ``false_alarm_rate``: a new budget (a share of normal logs) for its thresholds."""
@@ -302,16 +309,14 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
         return None, []
     relations = [relation_log(log, profile) for log in logs]
     if model.effort is None:
-        entry, notes = learn_effort_entry(
+        effort, notes = learn_effort_model(
             relations, profile, DEFAULT_FALSE_ALARM_RATE if false_alarm_rate is None
             else false_alarm_rate)
     else:
-        refit, notes = refit_effort(model.effort, relations, profile, false_alarm_rate)
-        entry = refit.to_json()
-    if "groups" in entry:
-        model.update_entries(effort=entry)
-        model.__dict__.pop("effort", None)        # the cached parse is stale
-    return entry, notes
+        effort, notes = refit_effort(model.effort, relations, profile, false_alarm_rate)
+    if isinstance(effort, EffortModel):
+        model.update_entries(effort=effort.to_json())
+    return effort, notes
 
 
 def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],

@@ -2,9 +2,9 @@
 part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."""
 
 from collections.abc import Sequence
-from typing import Any
 
 from auvdiag_cli.vehicle.profile import Profile
+from models.card import Refused
 from models.command_relations import RelationLog
 from models.effort import DEFAULT_FALSE_ALARM_RATE
 from models.effort_model import EffortLog, EffortModel, learn_effort
@@ -19,18 +19,18 @@ def effort_log(log: RelationLog, profile: Profile) -> EffortLog:
     return EffortLog(log.name, log.commands, log.usable, profile.command_names)
 
 
-def learn_effort_entry(logs: Sequence[RelationLog], profile: Profile,
+def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
                        false_alarm_rate: float = DEFAULT_FALSE_ALARM_RATE
-                       ) -> tuple[dict[str, Any], list[str]]:
-    """The model.json ``effort`` entry (or why there is none), and notes on logs left out."""
+                       ) -> tuple[EffortModel | Refused, list[str]]:
+    """The effort model (or why there is none), and notes on logs left out."""
     if not profile.effort_groups:
-        return {"refused": NO_GROUPS}, []
+        return Refused(NO_GROUPS), []
     model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
                                 profile.dt_s, false_alarm_rate)
     if model is None:
-        return {"refused": "not judged (the actuators of its groups never work at a steady "
-                           "level, min_level or more, in these logs)"}, notes
-    return model.to_json(), notes
+        return Refused("not judged (the actuators of its groups never work at a steady "
+                       "level, min_level or more, in these logs)"), notes
+    return model, notes
 
 
 def refit_effort(model: EffortModel, logs: Sequence[RelationLog], profile: Profile,

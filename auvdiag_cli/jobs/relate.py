@@ -2,8 +2,9 @@
 normal logs: part of `auvdiag train`, and `auvdiag relate` for an existing model."""
 
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -13,7 +14,13 @@ from auvdiag_cli.engine.start_check import StartReading, learn_start_state, star
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
-from models.command_relations import RelationLog, RelationsRefused, fit_relations
+from models.card import Refused, StartReference
+from models.command_relations import (
+    CommandRelations,
+    RelationLog,
+    RelationsRefused,
+    fit_relations,
+)
 
 if TYPE_CHECKING:
     from auvdiag_cli.engine.command_check import CommandCheck
@@ -38,8 +45,8 @@ def _split_in_time(log: RelationLog) -> tuple[RelationLog, RelationLog]:
 
 
 def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
-                    profile: Profile) -> dict[str, Any]:
-    """The model.json entry: the relation, or why the logs could not teach one. One
+                    profile: Profile) -> CommandRelations | Refused:
+    """The relation, or why the logs could not teach one. One
     training log and no held-out one: its last 20 % (in time) sets the thresholds."""
     if not heldout and len(training) == 1:
         head, tail = _split_in_time(training[0])
@@ -48,16 +55,16 @@ def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationL
     try:
         relations = fit_relations(training, heldout, scales, profile.dt_s)
     except RelationsRefused as why:
-        return {"refused": str(why)}
-    return relations.to_json()
+        return Refused(str(why))
+    return relations
 
 
 def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                  holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
-                 ) -> tuple[dict[str, Any], dict[str, Any]]:
+                 ) -> tuple[CommandRelations | Refused, StartReference]:
     """Learn, for an existing model, how the commands follow the motion and where normal
     logs recorded from rest start, and record both in the model's entries (not yet
-    written); a refusal (the entry says why) keeps what the model had."""
+    written); a refusal (which says why) keeps what the model had."""
     from auvdiag_cli.engine.diagnosis import check_model_fits
 
     for log in [*logs, *holdout]:
@@ -77,8 +84,11 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
 
     start = learn_start_state(readings(training), readings(heldout),
                               [profile.full_scales[n] for n in profile.sensor_names])
-    model.update_entries(**{key: entry for key, entry in (
-        ("command_relations", relations), ("start_state", start)) if "refused" not in entry})
+    learned: dict[str, CommandRelations | StartReference] = (
+        {} if isinstance(relations, Refused) else {"command_relations": relations})
+    if start.refused is None:
+        learned["start_state"] = start
+    model.update_entries(**{key: value.to_json() for key, value in learned.items()})
     return relations, start
 
 
@@ -87,18 +97,18 @@ def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None
     """Raise, in the model's command relations, each actuator's allowed extra effort to ``margin``
     times the most these normal logs reached where that is more (never lower: the held-out
     logs set it): no calibration log may alarm. Returns the raised thresholds by command."""
-    entry = model.entry("command_relations")
-    if "thresholds" not in entry:
+    relations = model.relations
+    if relations is None:
         return {}
+    thresholds = relations.thresholds.copy()
     raised = {}
-    names = model.command_names
     for check in checks:
         if check is None:
             continue
-        for k, name in enumerate(names):
-            threshold, ratio = entry["thresholds"][k], check.peak_ratio.get(name)
-            if threshold is not None and ratio is not None and margin * ratio > 1.0:
-                entry["thresholds"][k] = round(margin * ratio * threshold, 6)
-                raised[name] = entry["thresholds"][k]
-    model.update_entries(command_relations=entry)
+        for k, name in enumerate(model.command_names):
+            ratio = check.peak_ratio.get(name)
+            if not np.isnan(thresholds[k]) and ratio is not None and margin * ratio > 1.0:
+                thresholds[k] = round(margin * ratio * thresholds[k], 6)
+                raised[name] = float(thresholds[k])
+    model.update_entries(command_relations=replace(relations, thresholds=thresholds).to_json())
     return raised

@@ -16,13 +16,15 @@ from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.jobs.candidates import fit_candidates
-from auvdiag_cli.jobs.effort import learn_effort_entry
+from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
-from models.command_relations import RelationLog
+from models.card import Refused, StartReference
+from models.command_relations import CommandRelations, RelationLog
+from models.effort_model import EffortModel
 from models.fast import PREDICTOR_KINDS
 from models.skill import (
     HORIZON_CANDIDATES_S,
@@ -86,9 +88,9 @@ class TrainingResult:
     chosen: HorizonScore
     operating_hours: float
     logged_rates_hz: dict[str, float]   # per signal, median over the training logs
-    command_relations: dict[str, Any]   # model.json's entry: the relation or why none
-    start_state: dict[str, Any]         # model.json's entry: where normal logs start
-    effort: dict[str, Any]              # model.json's entry: each actuator's share of effort
+    command_relations: CommandRelations | Refused   # how the commands follow the motion
+    start_state: StartReference                     # where normal logs start (or why not)
+    effort: EffortModel | Refused                   # each actuator's share of the effort
     effort_notes: tuple[str, ...] = ()  # logs the effort model left out, and why
     by_predictor: dict[str, list[HorizonScore]] = field(default_factory=dict)
     predictor_notes: tuple[str, ...] = ()   # predictors left out, and why
@@ -98,10 +100,11 @@ class TrainingResult:
     def judges_anything(self) -> bool:
         """A signal has skill, some actuator's commands can be judged against the motion, or
         some actuator's share of the effort can be judged."""
-        thresholds = self.command_relations.get("thresholds") or []
-        effort_judged = any("normal" in g for g in self.effort.get("groups", []))
-        return bool(self.chosen.judged) or any(t is not None for t in thresholds) \
-            or effort_judged
+        relations, effort = self.command_relations, self.effort
+        return bool(self.chosen.judged) or (
+            isinstance(relations, CommandRelations)
+            and bool(np.isfinite(relations.thresholds).any())) or (
+            isinstance(effort, EffortModel) and effort.judges_anything)
 
 
 @dataclass(frozen=True)
@@ -214,7 +217,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
     progress("learning the command relations, the start state and the effort shares")
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
-    effort, effort_notes = learn_effort_entry([r.relation for r in [*read, *read_heldout]],
+    effort, effort_notes = learn_effort_model([r.relation for r in [*read, *read_heldout]],
                                               profile)
     result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
                             hours, rates, relations, start_state, effort, tuple(effort_notes),
@@ -223,17 +226,17 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, options.seed)
-        metadata |= {"command_relations": relations, "start_state": start_state,
-                     "effort": effort}
+        metadata |= {"command_relations": relations.to_json(),
+                     "start_state": start_state.to_json(), "effort": effort.to_json()}
         save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     return result
 
 
 def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_ReadLog],
                             training: Sequence[ScoringLog], profile: Profile
-                            ) -> tuple[dict[str, Any], dict[str, Any]]:
-    """The command relations and the start state (model.json entries, or why there are
-    none). ``training`` is what the network trained on (a single log's first part)."""
+                            ) -> tuple[CommandRelations | Refused, StartReference]:
+    """The command relations and the start state (or why there are none). ``training`` is
+    what the network trained on (a single log's first part)."""
     relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],
                                 profile)
     actuators = len(profile.commands)     # the logs' model drive ends with measured inputs

@@ -4,12 +4,13 @@ paper's vehicle only); the thresholds, which log set each, and what to be wary o
 
 import math
 from collections.abc import Sequence
-from typing import Any
 
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibrate import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
+from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
+from models.effort_model import EffortModel
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
 
@@ -98,68 +99,65 @@ def _listed(names: Sequence[str], most: int = 5) -> str:
     return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
 
 
-def relation_lines(entry: dict[str, Any], command_names: Sequence[str]) -> list[str]:
+def relation_lines(relations: CommandRelations | Refused,
+                   command_names: Sequence[str]) -> list[str]:
     """How the commands follow the motion: learned from which logs, and the extra effort
     each actuator may show before it is called weakened."""
-    if "refused" in entry:
-        return [f"commands not judged against the motion: {entry['refused']}"]
-    fitted = entry.get("fitted_on", {})
-    left_out = fitted.get("open_loop_left_out") or []
-    lines = [f"command relations learned from {len(fitted.get('logs', []))} log(s), "
-             f"{fitted.get('steps', 0)} steps"
+    if isinstance(relations, Refused):
+        return [f"commands not judged against the motion: {relations.reason}"]
+    fitted = relations.fitted_on
+    left_out = list(fitted.open_loop_left_out)
+    lines = [f"command relations learned from {len(fitted.logs)} log(s), {fitted.steps} steps"
              + (f" (left out as open loop: {_listed(left_out)})" if left_out else "")
-             + f"; extra effort allowed per {entry['window_steps'] * entry['dt_s']:g} s window:"]
-    groups = [[command_names[k] for k in g] for g in entry["groups"] if len(g) > 1]
-    relations = CommandRelations.from_json(entry)
-    for k, (name, threshold, skill) in enumerate(zip(command_names, entry["thresholds"],
-                                                     entry["skill"], strict=True)):
-        if skill is None or skill < MIN_SKILL:
+             + f"; extra effort allowed per {relations.window_steps * relations.dt_s:g} s "
+             "window:"]
+    groups = [[command_names[k] for k in g] for g in relations.groups if len(g) > 1]
+    for k, (name, threshold, skill) in enumerate(zip(
+            command_names, relations.thresholds.tolist(), relations.skill.tolist(),
+            strict=True)):
+        if math.isnan(skill) or skill < MIN_SKILL:
             allowed = "not judged (the relation does not predict its commands)"
         else:
-            allowed = (f"not judged ({relations.too_little_heldout(k)})" if threshold is None
-                       else f"{threshold:.0%}")
-        lines.append(f"  {name:<14}{allowed}" + ("" if skill is None else
+            allowed = (f"not judged ({relations.too_little_heldout(k)})"
+                       if math.isnan(threshold) else f"{threshold:.0%}")
+        lines.append(f"  {name:<14}{allowed}" + ("" if math.isnan(skill) else
                                                  f"   (skill {skill:.2f})"))
     lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
               for g in groups]
     return lines
 
 
-def start_lines(entry: dict[str, Any], sensor_names: Sequence[str]) -> list[str]:
+def start_lines(start: StartReference, sensor_names: Sequence[str]) -> list[str]:
     """Where normal logs start, and how far a log's start may lie from it."""
-    if "refused" in entry:
-        return [f"start not judged: {entry['refused']}"]
-    return [f"start learned from {entry['logs']} log starts (first {entry['span_s']:g} s); "
+    if start.refused is not None:
+        return [f"start not judged: {start.refused}"]
+    return [f"start learned from {start.logs} log starts (first {start.span_s:g} s); "
             "allowed from the normal start: " + ", ".join(
                 f"{name} {reference:.3g} ± {allowed:.3g}" if allowed is not None else
                 f"{name} not judged (normal starts spread)" for name, reference, allowed in zip(
-                    sensor_names, entry["reference"], entry["thresholds"], strict=True))]
+                    sensor_names, start.reference, start.thresholds, strict=True))]
 
 
-def effort_lines(entry: dict[str, Any]) -> list[str]:
+def effort_lines(effort: EffortModel | Refused) -> list[str]:
     """Lines for `train` and `calibrate`: per group, each actuator's normal share and
     spread, the threshold and the false-alarm budget, or why it is not judged."""
-    if "groups" not in entry:
-        return [f"effort: {entry.get('refused', 'not judged')}"]
+    if isinstance(effort, Refused):
+        return [f"effort: {effort.reason}"]
     lines = []
-    rate = float(entry["false_alarm_rate"])
-    for group in entry["groups"]:
-        logs = len(group["logs"])
-        if "normal" not in group:
-            lines.append(f"effort of {group['name']}: {group['refused']}")
+    for setup, logs, fit, why in zip(effort.setups, effort.summaries, effort.fits,
+                                     effort.refused, strict=True):
+        group = setup.group
+        if fit is None or effort.thresholds is None:
+            lines.append(f"effort of {group.name}: {why}")
             continue
-        normal = group["normal"]
-        shares = normal["share"]
-        mean = shares if not normal["conditioned_on_level"] else [
-            sum(column) / len(column) for column in zip(*shares, strict=True)]
         parts = ", ".join(f"{m} {s:.3f} ± {d:.3f}" for m, s, d in zip(
-            group["members"], mean, normal["spread"], strict=True))
+            group.members, fit.means.mean(axis=0), fit.spread, strict=True))
         lines.append(
-            f"effort of {group['name']} ({logs} normal logs, {group['window_s']:.1f} s windows"
-            f"{', by level' if normal['conditioned_on_level'] else ''}): share {parts}; "
-            f"driven harder past z {normal['threshold_z']:.2f} (false alarms budgeted at "
-            f"{rate:.1%} of normal logs; each normal log judged by the others: largest z "
-            f"{normal['leave_one_out_max_z']:.2f})")
+            f"effort of {group.name} ({len(logs)} normal logs, {setup.window_s:.1f} s windows"
+            f"{', by level' if fit.conditioned else ''}): share {parts}; driven harder past "
+            f"z {effort.thresholds.whole_log(fit):.2f} (false alarms budgeted at "
+            f"{effort.false_alarm_rate:.1%} of normal logs; each normal log judged by the "
+            f"others: largest z {float(fit.loo_z.max()):.2f})")
     return lines
 
 
