@@ -5,10 +5,10 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples test model \
+	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples bench-silence test model \
 	samples
 
-bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
+bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-silence bench-fuzz \
 	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples
 
 bench-reference:
@@ -35,6 +35,11 @@ bench-audit:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/audit.py --logs 200 --jobs 2 > $(OUT)/audit.md
 	$(PYTHON) benchmarks/readme.py audit $(OUT)/audit.md
+
+bench-silence:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/silence.py > $(OUT)/silence.md
+	$(PYTHON) benchmarks/readme.py silence $(OUT)/silence.md
 
 bench-fuzz:
 	@mkdir -p $(OUT)

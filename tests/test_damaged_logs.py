@@ -9,6 +9,7 @@ from typer.testing import CliRunner
 
 from adapters.ulog import walk_framing
 from auvdiag_cli.cli import app
+from auvdiag_cli.engine.silences import EDGE_S
 
 FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
 DAMAGE_WORDS = ("cut short", "damaged", "index unusable")
@@ -163,15 +164,18 @@ def test_log_missing_one_needed_source_is_one_line(make_log, tmp_path, fmt, miss
     assert "\n" not in line and str(log) in line and renamed[missing] in line
 
 
-def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_cache, profile):
-    """All topics silent for 5 minutes (a paused recorder or a clock jump forward)."""
+@pytest.mark.parametrize("pause_s", [300.0, 9.8 * 3600])
+def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_cache, profile,
+                                                               pause_s):
+    """All topics silent for 5 minutes or 9.8 hours (a paused recorder or a clock jump
+    forward): the silence costs nothing, only its edges stay on the grid."""
     import copy
 
     from auvdiag_cli.simulator.writers import write_log
 
     dive = copy.deepcopy(dive_cache("paper-normal", 31))
     for stream in (dive.commands, *dive.sensors.values()):
-        stream.times_s = [t + 300.0 if t > 60.0 else t for t in stream.times_s]
+        stream.times_s = [t + pause_s if t > 60.0 else t for t in stream.times_s]
     path = tmp_path / "paused.mcap"
     write_log(dive, profile, path, "mcap")
     code, report = outcome(path)
@@ -183,4 +187,8 @@ def test_recording_pause_is_reported_and_raises_no_false_alarm(tmp_path, dive_ca
     spans = {m.group(1): (float(m.group(2)), float(m.group(3))) for m in gaps if m}
     assert set(spans) == {"thruster_0", "thruster_1", "flow", "yaw_rate"}
     for start, end in spans.values():
-        assert 59.8 <= start <= 60.1 and 359.9 <= end <= 360.2
+        assert 59.8 <= start <= 60.1 and 59.9 + pause_s <= end <= 60.2 + pause_s
+    left_off = [note for note in report["notes"] if "left off the model grid" in note]
+    assert bool(left_off) == (pause_s > 2 * EDGE_S + 60)
+    if left_off:
+        assert float(left_off[0].split()[0]) == pytest.approx(pause_s - 2 * EDGE_S, abs=2)

@@ -7,7 +7,9 @@ import pandas as pd
 import pytest
 
 from adapters import Signals
+from adapters.signals import OPERATING
 from auvdiag_cli.engine.resample import resample
+from auvdiag_cli.engine.silences import EDGE_S, silences
 
 S = 1_000_000_000
 
@@ -83,3 +85,50 @@ def test_clock_jumping_back_is_retimed_and_reported():
     assert frame.time_s[-1] == pytest.approx(15.9, abs=0.11)
     np.testing.assert_allclose(np.diff(frame.sensors[:, 0]), 1.0)
     assert any("clock jumps back by 11.9 s" in note for note in frame.notes)
+
+
+def _steady(start_s: float, stop_s: float, hz: float = 10.0) -> list[float]:
+    return [start_s + i / hz for i in range(round((stop_s - start_s) * hz) + 1)]
+
+
+def test_a_long_silence_is_left_off_the_grid_but_its_edges_stay():
+    """A recorder paused for 9.8 h: the grid keeps the data and one minute at each end of
+    the silence, on the same lattice; the replay restarts after it."""
+    times = _steady(0.0, 40.0) + _steady(40.0 + 9.8 * 3600, 80.0 + 9.8 * 3600)
+    frame = resample(signals(c=(times, [0.5] * len(times)), s=(times, [1.0] * len(times))),
+                     ("c",), ("s",), 0.1, max_gap_s=1.0)
+    assert len(frame.time_s) < (80 + 2 * EDGE_S) / 0.1 + 10      # not 353 000 steps
+    np.testing.assert_allclose(frame.time_s / 0.1, np.round(frame.time_s / 0.1), atol=1e-6)
+    jump = int(np.flatnonzero(np.diff(frame.time_s) > 1.0)[0])
+    assert frame.time_s[jump] == pytest.approx(40.0 + EDGE_S, abs=0.11)
+    assert frame.time_s[jump + 1] == pytest.approx(40.0 + 9.8 * 3600 - EDGE_S, abs=0.11)
+    assert np.isnan(frame.sensors[(frame.time_s > 40.05) & (frame.time_s < 35320), 0]).all()
+    assert np.isfinite(frame.sensors[frame.time_s > 35321, 0]).all()
+    assert frame.restarts == [int(np.searchsorted(frame.time_s, 40.0 + 9.8 * 3600))]
+    assert any("left off the model grid" in note for note in frame.notes)
+
+
+def test_a_long_stretch_not_operating_is_left_off_but_a_short_one_is_not():
+    times = _steady(0.0, 1000.0)
+    armed = [1.0 if t < 100 or t >= 900 else 0.0 for t in times]     # 800 s on deck
+    data = signals(c=(times, [0.5] * len(times)), s=(times, [1.0] * len(times)),
+                   **{OPERATING: (times, armed)})
+    frame = resample(data, ("c",), ("s",), 0.1)
+    assert len(frame.time_s) == pytest.approx((200 + 2 * EDGE_S) / 0.1, abs=5)
+    assert frame.not_operating_s == pytest.approx(800.0, abs=0.5)      # counted before
+    assert frame.operating.sum() == pytest.approx(200 / 0.1, abs=5)
+    short = [1.0 if t < 450 or t >= 550 else 0.0 for t in times]       # 100 s: kept
+    frame = resample(signals(c=(times, [0.5] * len(times)), s=(times, [1.0] * len(times)),
+                             **{OPERATING: (times, short)}), ("c",), ("s",), 0.1)
+    assert len(frame.time_s) == len(times)
+    assert not any("left off" in note for note in frame.notes)
+
+
+def test_silences_are_where_every_signal_is_quiet():
+    a = np.array([0, 10, 1000, 1010]) * S
+    b = np.array([0, 200, 400, 600, 800, 1010]) * S
+    assert silences([a, b], long_s=300) == []             # b talks inside a's silence
+    b = np.array([0, 400, 1010]) * S                      # once: two silences either side
+    assert silences([a, b], long_s=300) == [(10 * S, 400 * S), (400 * S, 1000 * S)]
+    c = np.array([0, 5, 1005, 1010]) * S
+    assert silences([a, c], long_s=300) == [(10 * S, 1000 * S)]

@@ -21,16 +21,19 @@ Method (documented for users in docs/method.md):
   restarts from the measured state when operation begins again;
 - a clock that jumps back by more than ``max_gap_s`` in the order the log stored the
   samples (a clock reset) is re-timed: the samples after the jump are shifted to follow on
-  one median period after the last sample before it, and the jump is reported.
+  one median period after the last sample before it, and the jump is reported;
+- a stretch longer than `silences.LONG_S` with nothing to judge (no signal at all, no
+  command, or not operating) keeps only its edges on the grid (`silences`).
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
 
 from adapters.signals import OPERATING, Signals
 from adapters.timebase import MAX_TIME_NS
+from auvdiag_cli.engine.silences import LONG_S, kept_steps, lattice_spans, silences
 
 NS_PER_S = 1_000_000_000
 # The grid is sized from the times; times can be damaged. A grid far longer than the
@@ -71,6 +74,7 @@ class AlignedFrame:
     operating: np.ndarray = field(default_factory=lambda: np.ones(0, bool))
     inputs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (steps, n_inputs)
     input_names: tuple[str, ...] = ()
+    not_operating_s: float = 0.0        # time on the grid the vehicle was not operating
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
@@ -209,16 +213,21 @@ def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_
 
 
 def _grid(cleaned: dict[str, pd.Series], dt_ns: int) -> np.ndarray:
-    """The Δt grid over the time every signal covers; damaged timestamps refused."""
+    """The Δt grid over the time every signal covers, less the inside of long silences
+    (`silences`); damaged timestamps refused."""
     first_ns = max(int(s.index[0]) for s in cleaned.values())
     last_ns = min(int(s.index[-1]) for s in cleaned.values())
     if last_ns - first_ns < 2 * dt_ns:
         raise ValueError("the signals overlap for less than two model steps")
+    quiet = silences(s.index.to_numpy(dtype=np.int64) for s in cleaned.values())
+    spans = lattice_spans(first_ns, last_ns, dt_ns, quiet)
     most = max(s.size for s in cleaned.values())
-    if (last_ns - first_ns) // dt_ns > max(GRID_STEPS_PER_SAMPLE * most, MIN_GRID_LIMIT):
+    if sum(stop - start for start, stop in spans) > max(GRID_STEPS_PER_SAMPLE * most,
+                                                        MIN_GRID_LIMIT):
         raise ValueError(f"the signals span {(last_ns - first_ns) / NS_PER_S:.3g} s but hold "
                          f"at most {most} samples each: the timestamps are damaged")
-    return np.arange(first_ns, last_ns + 1, dt_ns, dtype=np.int64)
+    return first_ns + dt_ns * np.concatenate([np.arange(start, stop, dtype=np.int64)
+                                              for start, stop in spans])
 
 
 def _operating_steps(signals: Signals, grid_ns: np.ndarray, commands: np.ndarray,
@@ -270,15 +279,14 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
                 columns[name][inside] = np.nan
             gaps.append(Gap(name, (start_ns - signals.start_ns) / NS_PER_S,
                             (end_ns - signals.start_ns) / NS_PER_S))
-    slow = slow_command_note(command_rates, dt_s)
-    slow_commands = [] if slow is None else [slow]
+    slow_commands = [n for n in [slow_command_note(command_rates, dt_s)] if n is not None]
     commands = np.column_stack([columns[n] for n in command_names])
     operating = _operating_steps(signals, grid_ns, commands, dt_s, idle_after_s, notes)
     blind |= ~operating
     restarts.update(int(i) + 1 for i in np.flatnonzero(~operating[:-1] & operating[1:]))
     sensors = np.column_stack([columns[n] for n in sensor_names])
     sensors[blind] = np.nan
-    return AlignedFrame(
+    return _without_long_blind_runs(AlignedFrame(
         time_s=(grid_ns - signals.start_ns) / NS_PER_S,
         commands=commands,
         sensors=sensors,
@@ -293,4 +301,23 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         inputs=np.column_stack([columns[n] for n in input_names]) if input_names
         else np.zeros((len(grid_ns), 0)),
         input_names=input_names,
-    )
+        not_operating_s=float((~operating).sum()) * dt_s,
+    ), blind, grid_ns)
+
+
+def _without_long_blind_runs(frame: AlignedFrame, blind: np.ndarray, grid_ns: np.ndarray
+                             ) -> AlignedFrame:
+    """The frame less the inside of each long stretch where nothing can be judged
+    (`silences.kept_steps`); a replay restart inside one moves to the next step kept."""
+    keep = kept_steps(blind, grid_ns)
+    kept = np.flatnonzero(keep)
+    left_off = float(grid_ns[-1] - grid_ns[0]) / NS_PER_S - (kept.size - 1) * frame.dt_s
+    if left_off < frame.dt_s:
+        return frame
+    restarts = sorted({int(np.searchsorted(kept, r)) for r in frame.restarts} - {0, kept.size})
+    note = (f"{left_off:.0f} s with nothing to judge (no signal, no command or not operating "
+            f"for more than {LONG_S:.0f} s at a time) left off the model grid; the replay "
+            "restarts after each such stretch")
+    return replace(frame, time_s=frame.time_s[keep], commands=frame.commands[keep],
+                   sensors=frame.sensors[keep], operating=frame.operating[keep],
+                   inputs=frame.inputs[keep], restarts=restarts, notes=[*frame.notes, note])
