@@ -6,11 +6,18 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
-from adapters.signals import Damage, FieldSource, LogSources, SegmentMarker, Signals, fallback_name
+from adapters.signals import (
+    Damage,
+    FieldSource,
+    LogSources,
+    SegmentMarker,
+    Series,
+    Signals,
+    fallback_name,
+)
 from adapters.timebase import MAX_TIME_NS, spikes
 from auvdiag_errors import LogError
 
@@ -55,12 +62,12 @@ class _Extractor:
         return None
 
 
-def _with_state_before(flag: pd.Series, start_ns: int) -> pd.Series:
+def _with_state_before(flag: Series, start_ns: int) -> Series:
     """A flag logged only when it changes was, before its first record, the other way."""
-    if flag.empty or int(flag.index[0]) <= start_ns:
+    if not len(flag) or int(flag.times_ns[0]) <= start_ns:
         return flag
-    before = pd.Series([float(flag.iloc[0] == 0)], index=[start_ns], name=flag.name)
-    return pd.concat([before, flag])
+    return Series(np.concatenate(([start_ns], flag.times_ns)).astype(np.int64),
+                  np.concatenate(([float(flag.values[0] == 0)], flag.values)), flag.name)
 
 
 def _resolves(message: Any, path: str) -> bool:
@@ -234,8 +241,8 @@ class SignalCollector:
             raise LogError(self.path, f"{MISSING_SIGNALS} {where}")
         series = {name: self._series(name, time_ordered) for name in self.times
                   if name not in empty}
-        firsts = [int(s.index.min()) for s in series.values() if s.size]
-        lasts = [int(s.index.max()) for s in series.values() if s.size]
+        firsts = [int(s.times_ns.min()) for s in series.values() if len(s)]
+        lasts = [int(s.times_ns.max()) for s in series.values() if len(s)]
         firsts += [m.time_ns for m in self.markers]
         # The container's own span (index, statistics) widens the data's, unless it is so
         # far from it that the container's record of it must be damaged.
@@ -277,7 +284,7 @@ class SignalCollector:
         return (f"{name} ({source.topic} has no message with {wanted}; its values: "
                 f"{', '.join(closest_first(source.where[0][1], offered))})")
 
-    def _series(self, name: str, time_ordered: bool) -> pd.Series:
+    def _series(self, name: str, time_ordered: bool) -> Series:
         times = np.frombuffer(self.times[name], dtype=np.int64)
         values = np.frombuffer(self.values[name], dtype=np.float64)
         if time_ordered:
@@ -288,4 +295,4 @@ class SignalCollector:
             self.notes.append(f"{name}: {int(corrupt.sum())} sample(s) with a corrupted "
                               "timestamp left out")
             times, values = times[~corrupt], values[~corrupt]
-        return pd.Series(values, index=times, name=name)
+        return Series(times, values, name)

@@ -1,10 +1,10 @@
 """The uniform signal frame every adapter produces.
 
-Contract: each signal is a float64 ``pandas.Series`` whose index is the receive time in
-integer nanoseconds (int64, the log's own clock), values in the profile's SI units, in the
-order the log stored them (not yet sorted or de-duplicated: resampling does that, and
-reports what it found). ``start_ns`` is the time of the log's first message on any topic;
-report times are seconds from it.
+Contract: each signal is a `Series`: float64 values at receive times in integer
+nanoseconds (int64, the log's own clock), values in the profile's SI units, in the order the
+log stored them (not yet sorted or de-duplicated: resampling does that, and reports what it
+found). Plain NumPy arrays: reading a log needs no data-frame library. ``start_ns`` is the
+time of the log's first message on any topic; report times are seconds from it.
 """
 
 from dataclasses import dataclass, field
@@ -12,7 +12,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 
 @dataclass(frozen=True)
@@ -124,6 +123,26 @@ class Damage:
     at_byte: int | None = None    # offset in the (storage) file where the damage begins
 
 
+@dataclass(frozen=True, eq=False)
+class Series:
+    """One signal: ``values`` (float64) at ``times_ns`` (int64), in the log's order."""
+
+    times_ns: np.ndarray
+    values: np.ndarray
+    name: str = ""
+
+    def __len__(self) -> int:
+        return int(self.values.size)
+
+    def equals(self, other: "Series") -> bool:
+        """The same samples at the same times (NaN equal to NaN)."""
+        return np.array_equal(self.times_ns, other.times_ns) and np.array_equal(
+            self.values, other.values, equal_nan=True)
+
+    def where(self, keep: np.ndarray) -> "Series":
+        return Series(self.times_ns[keep], self.values[keep], self.name)
+
+
 @dataclass
 class Signals:
     """Everything diagnosis needs from one log, on each signal's own time base."""
@@ -132,7 +151,7 @@ class Signals:
     format: str
     start_ns: int
     end_ns: int
-    series: dict[str, pd.Series]
+    series: dict[str, Series]
     markers: list[SegmentMarker] = field(default_factory=list)
     topics: dict[str, str] = field(default_factory=dict)
     notes: list[str] = field(default_factory=list)

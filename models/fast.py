@@ -19,9 +19,9 @@ import numpy as np
 from models.normaliser import Normaliser
 
 Engine = Literal["auto", "numpy", "compiled"]
-# Loading the compiled kernel costs about 0.4 s a process; the NumPy loop 8-20 µs a step
-# of one rollout (the less, the more rollouts advance together). Below this many rollout
-# steps (rollouts x steps) the NumPy loop is done before numba would have loaded.
+# Loading the compiled kernel costs about 0.4 s a process; the NumPy loop 8-20 µs a step,
+# paid once for every rollout advancing together in a batch. Below this many sequential
+# steps (each batch's length, summed) the NumPy loop is done before numba would have loaded.
 COMPILED_PAYS_FROM_STEPS = 20_000
 # The commands' contributions to the gates are held for this many values at once (4 MB of
 # float32), however many rollouts and steps a replay has; at least CHUNK_STEPS_MIN steps.
@@ -34,10 +34,16 @@ def compiled_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
+_expected_steps = 0     # sequential steps announced in this process so far
+
+
 def expect_steps(steps: int) -> None:
-    """Say that about ``steps`` rollout steps are coming in several calls (rollouts batched
-    by length): the compiled loop is loaded now if they pay for it together."""
-    if compiled_available() and steps >= COMPILED_PAYS_FROM_STEPS:
+    """Say that about ``steps`` sequential steps are coming in several calls (batches of
+    rollouts, each as long as its longest): the compiled loop is loaded now once the steps
+    announced in this process (a diagnosis replays once per hypothesis) pay for it."""
+    global _expected_steps
+    _expected_steps += steps
+    if compiled_available() and _expected_steps >= COMPILED_PAYS_FROM_STEPS:
         importlib.import_module("models.compiled")
 
 
@@ -119,7 +125,7 @@ class FastDynamics:
         states = np.empty((batch, steps, self.out_bias.size), np.float32)
         states[:, 0] = initial_states.astype(np.float32)
         hidden = np.zeros((batch, self.hidden), np.float32)
-        compiled = _use_compiled(engine, batch * steps)
+        compiled = _use_compiled(engine, steps)
         chunk_steps = max(CHUNK_STEPS_MIN, CHUNK_VALUES // (batch * self.input_bias.size))
         for first in range(0, steps - 1, chunk_steps):
             last = min(first + chunk_steps, steps - 1)      # steps first … last − 1 advance

@@ -95,7 +95,7 @@ def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
     modelled = np.full(sensors.shape, np.nan)
     starts = start_states(sensors, plan) / state_scale if plan else np.empty((0, 0))
     batches = _batches_of_like_length(plan)
-    expect_steps(sum(len(rows) * (plan[rows[0]].end - plan[rows[0]].start) for rows in batches))
+    expect_steps(sum(plan[rows[0]].end - plan[rows[0]].start for rows in batches))
     for rows in batches:
         longest = max(plan[row].end - plan[row].start for row in rows)
         batch = np.stack([np.pad(commands[plan[row].start:plan[row].end],

@@ -18,17 +18,17 @@ def test_round_trip_values_and_markers(make_log, dive_cache, profile, fmt):
     signals = read_log(log, profile.sources)
     assert signals.format == fmt
     commands = np.asarray(dive.commands.values)
-    np.testing.assert_allclose(signals.series["thruster_0"].to_numpy(), commands[:, 0])
-    np.testing.assert_allclose(signals.series["thruster_1"].to_numpy(), commands[:, 1])
-    np.testing.assert_allclose(signals.series["flow"].to_numpy(),
+    np.testing.assert_allclose(signals.series["thruster_0"].values, commands[:, 0])
+    np.testing.assert_allclose(signals.series["thruster_1"].values, commands[:, 1])
+    np.testing.assert_allclose(signals.series["flow"].values,
                                np.asarray(dive.sensors["flow"].values)[:, 0])
-    np.testing.assert_allclose(signals.series["yaw_rate"].to_numpy(),
+    np.testing.assert_allclose(signals.series["yaw_rate"].values,
                                np.asarray(dive.sensors["yaw_rate"].values)[:, 0])
     gyro_times = np.asarray(dive.sensors["yaw_rate"].times_s)
     expected_ns = dive.start_ns + np.round(gyro_times * 1e9).astype(np.int64)
-    np.testing.assert_array_equal(signals.series["yaw_rate"].index.to_numpy(), expected_ns)
+    np.testing.assert_array_equal(signals.series["yaw_rate"].times_ns, expected_ns)
     assert [m.label for m in signals.markers] == ["ZA", "ZB", "ZC", "MISSION"]
-    first_ns = min([int(s.index[0]) for s in signals.series.values()]
+    first_ns = min([int(s.times_ns[0]) for s in signals.series.values()]
                    + [m.time_ns for m in signals.markers])
     assert signals.start_ns == first_ns
 

@@ -262,3 +262,20 @@ def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
         tree = ast.parse(path.read_text(encoding="utf-8"))
         touched = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
         assert not touched & {"model_json", "entry", "update_entries"}, name
+
+
+def test_a_diagnosis_loads_no_data_frame_library_and_no_compiler_for_a_short_log(tmp_path):
+    """Start-up follows what a diagnosis uses: a field log (no simulator truth beside it) is
+    read, replayed and judged without pandas, and a short one without numba."""
+    import shutil
+    import subprocess
+    import sys
+
+    log = shutil.copy(ROOT / "sample_logs" / "mission-large-ccw.bin", tmp_path / "dive.bin")
+    loaded = subprocess.run(
+        [sys.executable, "-c", "import sys; from pathlib import Path; from auvdiag_cli import "
+         "api; p = api.load_profile(None); d = api.diagnose(Path(sys.argv[1]), p, "
+         "api.load_model(profile=p)); print(d.verdict.value, ' '.join(sorted({m.split('.')[0] "
+         "for m in sys.modules} & {'pandas', 'numba', 'torch', 'matplotlib'})))", str(log)],
+        capture_output=True, text=True, check=True, cwd=ROOT).stdout.split()
+    assert loaded == ["normal"]

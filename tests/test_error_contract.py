@@ -99,12 +99,12 @@ def test_one_corrupted_dataflash_timestamp_costs_one_record(make_log, tmp_path, 
 
 
 def test_a_clock_that_jumps_beyond_any_log_is_rejected_not_overflowed():
-    from adapters.signals import Signals
+    from adapters.signals import Series, Signals
     from auvdiag_cli.engine.resample import resample
 
     times = np.arange(100, dtype=np.int64) * 100_000_000
     times[50:52] = [2**62, 2**62 + 100_000_000]        # two corrupt records in a row
-    series = {name: pd.Series(np.zeros(100), index=times) for name in ("c", "s")}
+    series = {name: Series(times, np.zeros(100), name) for name in ("c", "s")}
     signals = Signals(path=None, format="bin", start_ns=0, end_ns=int(times.max()),  # type: ignore[arg-type]
                       series=series)
     with pytest.raises(ValueError, match="damaged"):

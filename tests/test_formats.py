@@ -74,7 +74,7 @@ def test_standalone_mcap_with_json_and_ros1_encodings(tmp_path, profile, dive_ca
         writer.finish()
     signals = read_log(path, profile.sources)
     assert signals.format == "mcap"
-    np.testing.assert_allclose(signals.series["flow"].to_numpy(),
+    np.testing.assert_allclose(signals.series["flow"].values,
                                np.asarray(dive.sensors["flow"].values)[:, 0])
 
 
@@ -109,8 +109,8 @@ def test_ros1_encoded_mcap(tmp_path, profile):
                                     "flow": FieldSource("/flow/velocity", "x"),
                                     "yaw_rate": FieldSource("/imu/data", "z")})
     signals = read_log(path, {"ros": sources})
-    assert signals.series["thruster_1"].iloc[-1] == 0.25
-    assert signals.series["yaw_rate"].iloc[0] == pytest.approx(0.2)
+    assert signals.series["thruster_1"].values[-1] == 0.25
+    assert signals.series["yaw_rate"].values[0] == pytest.approx(0.2)
     assert len(signals.series["flow"]) == 50
 
 

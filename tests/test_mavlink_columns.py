@@ -108,7 +108,7 @@ def test_a_damaged_tlog_frame_becomes_a_note_in_the_analysis(tmp_path, make_log,
     damaged.write_bytes(bytes(source))
     log = ingest(damaged, profile)
     assert "1 MAVLink frames failed their checksum and were left out" in log.signals.notes
-    assert log.signals.series["thruster_0"].size == servo.size - 1
+    assert len(log.signals.series["thruster_0"]) == servo.size - 1
 
 
 FMT = struct.Struct("<BB4s16s64s")

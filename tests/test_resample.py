@@ -3,11 +3,10 @@
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 
 from adapters import Signals
-from adapters.signals import OPERATING
+from adapters.signals import OPERATING, Series
 from auvdiag_cli.engine.resample import resample
 from auvdiag_cli.engine.silences import EDGE_S, silences
 
@@ -15,8 +14,8 @@ S = 1_000_000_000
 
 
 def signals(**series: tuple[list[float], list[float]]) -> Signals:
-    data = {name: pd.Series(values, index=np.asarray([round(t * S) for t in times]),
-                            dtype=float)
+    data = {name: Series(np.asarray([round(t * S) for t in times], dtype=np.int64),
+                         np.asarray(values, dtype=float), name)
             for name, (times, values) in series.items()}
     return Signals(Path("x.bag"), "bag", 0, 10 * S, data)
 
@@ -132,3 +131,20 @@ def test_silences_are_where_every_signal_is_quiet():
     assert silences([a, b], long_s=300) == [(10 * S, 400 * S), (400 * S, 1000 * S)]
     c = np.array([0, 5, 1005, 1010]) * S
     assert silences([a, c], long_s=300) == [(10 * S, 1000 * S)]
+
+
+@pytest.mark.parametrize(("window", "min_periods"), [(7, 3), (31, 5), (6, 2)])
+def test_the_centred_median_is_pandas_rolling_median(window, min_periods):
+    """The spike finder's running median, in NumPy, gives what pandas' rolling median gave,
+    gaps (NaN) and short ends included."""
+    import pandas as pd
+
+    from auvdiag_cli.engine.outliers import centred_median
+
+    rng = np.random.default_rng(window)
+    for size in (1, 2, 5, 40, 1000):
+        values = rng.normal(size=size)
+        values[rng.random(size) < 0.2] = np.nan
+        expected = pd.Series(values).rolling(window, center=True,
+                                             min_periods=min_periods).median().to_numpy()
+        np.testing.assert_allclose(centred_median(values, window, min_periods), expected)

@@ -26,15 +26,15 @@ def test_round_trip_values_times_and_markers(make_log, dive_cache, profile):
     signals = read_log(log, profile.sources)
     commands = np.asarray(dive.commands.values)
     # ULog fields are float32.
-    np.testing.assert_allclose(signals.series["thruster_0"].to_numpy(), commands[:, 0],
+    np.testing.assert_allclose(signals.series["thruster_0"].values, commands[:, 0],
                                atol=1e-6)
-    np.testing.assert_allclose(signals.series["yaw_rate"].to_numpy(),
+    np.testing.assert_allclose(signals.series["yaw_rate"].values,
                                np.asarray(dive.sensors["yaw_rate"].values)[:, 0], atol=1e-6)
     # PX4's clock counts µs from boot, which came a little before the log.
     boot_ns = dive.start_ns - BOOT_BEFORE_LOG_US * 1000
     expected_us = (dive.start_ns + np.round(np.asarray(dive.sensors["flow"].times_s) * 1e9)
                    .astype(np.int64) - boot_ns) // 1000
-    np.testing.assert_array_equal(signals.series["flow"].index.to_numpy(), expected_us * 1000)
+    np.testing.assert_array_equal(signals.series["flow"].times_ns, expected_us * 1000)
     assert [m.label for m in signals.markers] == ["ZA", "ZB", "ZC", "MISSION"]
 
 
@@ -65,8 +65,8 @@ def test_px4_profile_reads_a_px4_log_and_inspect_lists_it(tmp_path):
     signals = read_log(log, px4.sources)
     assert set(signals.series) == {"motor_1", "motor_2", "motor_3", "motor_4", "roll_rate",
                                    "pitch_rate", "yaw_rate", "heave", "operating"}
-    assert signals.series["operating"].to_numpy()[:50].sum() == 0
-    assert signals.series["operating"].to_numpy()[50:].min() == 1
+    assert signals.series["operating"].values[:50].sum() == 0
+    assert signals.series["operating"].values[50:].min() == 1
     assert [m.label for m in signals.markers] == ["M1"]
     listed = {topic.name: topic for topic in inventory(log)[0].topics}
     assert listed["vehicle_angular_velocity"].fields[:3] == ("xyz[0]", "xyz[1]", "xyz[2]")
@@ -90,7 +90,7 @@ def test_a_multi_instance_topic_is_chosen_by_instance(tmp_path):
                     .replace('field = "xyz[1]" }', 'field = "xyz[1]", where = { instance = 1 } }'))
     chosen = read_log(log, load_profile(text).sources)
     t = np.arange(int(SECONDS * RATE_HZ)) / RATE_HZ
-    np.testing.assert_allclose(chosen.series["yaw_rate"].to_numpy(), 0.2 * np.sin(0.5 * t),
+    np.testing.assert_allclose(chosen.series["yaw_rate"].values, 0.2 * np.sin(0.5 * t),
                                atol=1e-6)
 
 

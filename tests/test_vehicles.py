@@ -42,9 +42,9 @@ def test_three_thruster_signals_round_trip(tmp_path, fmt):
     write_log(dive, profile, path, fmt)
     signals = read_log(path, profile.sources)
     commands = np.asarray(dive.commands.values)
-    np.testing.assert_allclose(signals.series["thruster_2"].to_numpy(), commands[:, 2],
+    np.testing.assert_allclose(signals.series["thruster_2"].values, commands[:, 2],
                                atol=0.0013)   # PWM formats quantise to 1/400
-    np.testing.assert_allclose(signals.series["heave"].to_numpy(),
+    np.testing.assert_allclose(signals.series["heave"].values,
                                np.asarray(dive.sensors["heave"].values)[:, 0], atol=1e-6)
     assert [m.label for m in signals.markers] == ["ZD"]
     # Both DVL velocities travel in one message on ROS and DataFlash, in two on MAVLink.
@@ -110,11 +110,11 @@ def test_bluerov2_signals_round_trip_through_a_tlog(tmp_path):
     write_log(dive, profile, path, "tlog")
     signals = read_log(path, profile.sources)
     commands = np.asarray(dive.commands.values)
-    np.testing.assert_allclose(signals.series["motor_3"].to_numpy(), commands[:, 2],
+    np.testing.assert_allclose(signals.series["motor_3"].values, commands[:, 2],
                                atol=0.0013)
     # Heave is the negated VFR_HUD climb; surge and sway are two NAMED_VALUE_FLOATs.
     for name in ("heave", "surge", "sway"):
-        np.testing.assert_allclose(signals.series[name].to_numpy(),
+        np.testing.assert_allclose(signals.series[name].values,
                                    np.asarray(dive.sensors[name].values)[:, 0], atol=1e-6)
     assert [m.label for m in signals.markers] == ["M3"]
 

@@ -30,6 +30,7 @@ from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
+from models.fast import expect_steps
 from models.store import LoadedModel
 
 THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
@@ -116,7 +117,10 @@ def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
                          judge: _Judge, restarts: Sequence[int]) -> list[Hypothesis]:
     found = []
-    for component in dict.fromkeys(c.component for c in profile.commands):
+    components = dict.fromkeys(c.component for c in profile.commands)
+    # Each trial replays the log from the onset: together they may pay for the compiled loop.
+    expect_steps(len(components) * len(THRUST_FRACTIONS) * (len(frame.time_s) - judge.onset))
+    for component in components:
         columns = [i for i, c in enumerate(profile.commands) if c.component == component]
         for fraction in THRUST_FRACTIONS:
             commands = frame.commands.copy()

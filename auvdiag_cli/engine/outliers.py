@@ -8,7 +8,7 @@ sensor that dies and stays dead, a commanded change) moves the median with it an
 """
 
 import numpy as np
-import pandas as pd
+from numpy.lib.stride_tricks import sliding_window_view
 
 SPIKE_WINDOW = 7          # samples: the neighbourhood a spike stands out from
 SCALE_WINDOW = 31         # samples: the local scatter's neighbourhood
@@ -17,13 +17,26 @@ SPIKE_FLOOR = 0.1         # of the signal's full scale
 MAD_TO_SIGMA = 1.4826
 
 
+def centred_median(values: np.ndarray, window: int, min_periods: int) -> np.ndarray:
+    """The median of the finite values in a centred window of ``window`` samples (NaN where
+    it holds fewer than ``min_periods``; the middle two averaged for an even count), as
+    pandas' rolling(window, center=True, min_periods).median() gives it."""
+    after = (window - 1) // 2
+    padded = np.concatenate((np.full(window - 1 - after, np.nan), values, np.full(after, np.nan)))
+    windows = np.sort(sliding_window_view(padded, window), axis=1)     # NaN sorts last
+    count = np.isfinite(windows).sum(axis=1)
+    rows = np.arange(values.size)
+    low, high = np.maximum(count - 1, 0) // 2, np.maximum(count, 1) // 2
+    median = 0.5 * (windows[rows, low] + windows[rows, np.minimum(high, window - 1)])
+    return np.where(count >= min_periods, median, np.nan)
+
+
 def spike_mask(values: np.ndarray, full_scale: float) -> np.ndarray:
-    series = pd.Series(values)
-    median = series.rolling(SPIKE_WINDOW, center=True, min_periods=3).median()
-    departure = (series - median).abs()
-    scatter = MAD_TO_SIGMA * departure.rolling(SCALE_WINDOW, center=True, min_periods=5).median()
-    limit = np.maximum(SPIKE_SIGMAS * scatter.to_numpy(), SPIKE_FLOOR * full_scale)
-    return np.asarray(departure.to_numpy() > limit)
+    departure = np.abs(values - centred_median(values, SPIKE_WINDOW, 3))
+    scatter = MAD_TO_SIGMA * centred_median(departure, SCALE_WINDOW, 5)
+    with np.errstate(invalid="ignore"):
+        limit = np.maximum(SPIKE_SIGMAS * scatter, SPIKE_FLOOR * full_scale)
+        return np.asarray(departure > limit)
 
 
 def remove_spikes(sensors: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],

@@ -29,9 +29,8 @@ Method (documented for users in docs/method.md):
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import pandas as pd
 
-from adapters.signals import OPERATING, Signals
+from adapters.signals import OPERATING, Series, Signals
 from adapters.timebase import MAX_TIME_NS
 from auvdiag_cli.engine.silences import LONG_S, kept_steps, lattice_spans, silences
 
@@ -85,9 +84,9 @@ class AlignedFrame:
         return np.hstack([self.commands, self.inputs]) if self.input_names else self.commands
 
 
-def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
-            ) -> pd.Series:
-    times = series.index.to_numpy(dtype=np.int64).copy()
+def _unjump(series: Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
+            ) -> Series:
+    times = series.times_ns.astype(np.int64, copy=True)
     steps = np.diff(times)
     jumps = np.flatnonzero(steps < -max_gap_ns)
     if jumps.size == 0:
@@ -101,26 +100,25 @@ def _unjump(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes:
         times[i + 1:] += back + period
         notes.append(f"{name}: clock jumps back by {back / NS_PER_S:.1f} s at "
                      f"{(times[i] - start_ns) / NS_PER_S:.1f} s; later samples re-timed")
-    return pd.Series(series.to_numpy(), index=times, name=series.name)
+    return Series(times, series.values, series.name)
 
 
-def _clean(series: pd.Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
-           ) -> pd.Series:
-    values = series.to_numpy()
+def _clean(series: Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
+           ) -> Series:
     with np.errstate(invalid="ignore"):
-        usable = np.isfinite(values) & (np.abs(values) < MAX_ABS_VALUE)
+        usable = np.isfinite(series.values) & (np.abs(series.values) < MAX_ABS_VALUE)
     if not usable.all():
         notes.append(f"{name}: dropped {int((~usable).sum())} non-finite or impossible "
                      "value(s)")
-        series = series[usable]
+        series = series.where(usable)
     series = _unjump(series, name, max_gap_ns, start_ns, notes)
-    if not series.index.is_monotonic_increasing:
+    if (np.diff(series.times_ns) < 0).any():
         notes.append(f"{name}: messages out of time order, sorted")
-        series = series.sort_index(kind="stable")
-    duplicated = series.index.duplicated(keep="last")
+        series = series.where(np.argsort(series.times_ns, kind="stable"))
+    duplicated = np.concatenate((series.times_ns[1:] == series.times_ns[:-1], [False]))
     if duplicated.any():
         notes.append(f"{name}: {int(duplicated.sum())} duplicate timestamp(s), kept the last")
-        series = series[~duplicated]
+        series = series.where(~duplicated)
     return series
 
 
@@ -164,12 +162,12 @@ def _operating(signals: Signals, grid_ns: np.ndarray) -> np.ndarray:
     flag = signals.series.get(OPERATING)
     if flag is None:
         return np.ones(grid_ns.size, bool)
-    flag = flag[np.isfinite(flag.to_numpy())].sort_index(kind="stable")
-    times_ns = flag.index.to_numpy(dtype=np.int64)
-    if times_ns.size == 0:
+    flag = flag.where(np.isfinite(flag.values))
+    flag = flag.where(np.argsort(flag.times_ns, kind="stable"))
+    if not len(flag):
         raise ValueError("the operating flag has no usable value")
-    index = np.searchsorted(times_ns, grid_ns, side="right") - 1
-    return (index >= 0) & (flag.to_numpy()[np.clip(index, 0, None)] != 0)
+    index = np.searchsorted(flag.times_ns, grid_ns, side="right") - 1
+    return (index >= 0) & (flag.values[np.clip(index, 0, None)] != 0)
 
 
 class NeverOperates(ValueError):
@@ -212,16 +210,16 @@ def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_
     return means
 
 
-def _grid(cleaned: dict[str, pd.Series], dt_ns: int) -> np.ndarray:
+def _grid(cleaned: dict[str, Series], dt_ns: int) -> np.ndarray:
     """The Δt grid over the time every signal covers, less the inside of long silences
     (`silences`); damaged timestamps refused."""
-    first_ns = max(int(s.index[0]) for s in cleaned.values())
-    last_ns = min(int(s.index[-1]) for s in cleaned.values())
+    first_ns = max(int(s.times_ns[0]) for s in cleaned.values())
+    last_ns = min(int(s.times_ns[-1]) for s in cleaned.values())
     if last_ns - first_ns < 2 * dt_ns:
         raise ValueError("the signals overlap for less than two model steps")
-    quiet = silences(s.index.to_numpy(dtype=np.int64) for s in cleaned.values())
+    quiet = silences(s.times_ns for s in cleaned.values())
     spans = lattice_spans(first_ns, last_ns, dt_ns, quiet)
-    most = max(s.size for s in cleaned.values())
+    most = max(len(s) for s in cleaned.values())
     if sum(stop - start for start, stop in spans) > max(GRID_STEPS_PER_SAMPLE * most,
                                                         MIN_GRID_LIMIT):
         raise ValueError(f"the signals span {(last_ns - first_ns) / NS_PER_S:.3g} s but hold "
@@ -252,7 +250,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
                for name in command_names + sensor_names + input_names}
     drives = command_names + input_names
-    empty = [name for name, s in cleaned.items() if s.empty]
+    empty = [name for name, s in cleaned.items() if not len(s)]
     if empty:
         raise ValueError(f"no usable samples for {', '.join(empty)}")
     dt_ns = round(dt_s * NS_PER_S)
@@ -263,8 +261,7 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     command_rates: dict[str, float | None] = {}
     restarts: set[int] = set()
     for name, series in cleaned.items():
-        times_ns = series.index.to_numpy(dtype=np.int64)
-        values = series.to_numpy(dtype=np.float64)
+        times_ns, values = series.times_ns, series.values.astype(np.float64, copy=False)
         if name in command_names:
             columns[name] = _held(times_ns, values, grid_ns)
             command_rates[name] = _rate_hz(times_ns)

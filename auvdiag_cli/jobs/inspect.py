@@ -109,7 +109,7 @@ def inspect_log(path: Path, profile: Profile) -> Inspection:
     for name, source in shown.items():
         if name in read:
             series = read[name].series[name]
-            span_s = (int(series.index.max()) - int(series.index.min())) / 1e9
+            span_s = (int(series.times_ns.max()) - int(series.times_ns.min())) / 1e9
             rate = (len(series) - 1) / span_s if span_s > 0 else None
             results.append(SignalResolution(name, source.topic, source.field, len(series),
                                             rate, None, on_grid=on_grid(name, rate, profile)))

@@ -142,7 +142,7 @@ def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
     some source fails)."""
     def read(chosen: dict[str, FieldSource]) -> dict[str, np.ndarray]:
         signals = read_log(path, {family: LogSources(chosen, time=time)})
-        return {name: series.to_numpy() for name, series in signals.series.items()}
+        return {name: series.values for name, series in signals.series.items()}
 
     try:
         return read(sources)

@@ -122,7 +122,7 @@ def _read(path: Path, profile: Profile, progress: Callable[[str], None]) -> _Rea
         progress(f"warning: {path.name}: {note}")
     rates = {}
     for name, series in log.signals.series.items():
-        steps = np.diff(series.index.to_numpy(dtype=np.int64))
+        steps = np.diff(series.times_ns)
         if (steps > 0).any():
             rates[name] = 1e9 / float(np.median(steps[steps > 0]))
     return _ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts)),

@@ -8,7 +8,6 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from auvdiag_cli.engine.diagnosis import diagnose
 from auvdiag_cli.engine.results import Diagnosis
@@ -27,6 +26,8 @@ def truth_series(log_path: Path, columns: list[str], time_s: np.ndarray
     csv_path = truth_paths(log_path)[1]
     if not csv_path.is_file():
         return None
+    import pandas as pd  # only the simulator's own logs have a truth table
+
     table = pd.read_csv(csv_path)
     if "t_s" not in table or any(column not in table for column in columns):
         return None

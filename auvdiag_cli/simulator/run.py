@@ -3,9 +3,9 @@ rate its profile's `[simulation]` table gives, with its own phase, noise, quanti
 receive jitter."""
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from auvdiag_cli.simulator.faults import Fault
 from auvdiag_cli.simulator.scenarios import Phase, Scenario
@@ -13,6 +13,9 @@ from auvdiag_cli.simulator.vehicle import Vehicle
 from auvdiag_cli.vehicle.controller import VehicleController, rectangle_waypoints
 from auvdiag_cli.vehicle.followers import make_follower
 from auvdiag_cli.vehicle.profile import Profile
+
+if TYPE_CHECKING:
+    import pandas as pd
 from auvdiag_cli.vehicle.simulation_spec import TRUTH_COLUMNS, SensorPhysics, SimulationSpec
 
 PHYSICS_DT_S = 0.01
@@ -42,7 +45,7 @@ class SimulatedDive:
     sensors: dict[str, Stream]          # by sensor name
     markers: list[tuple[float, str]]
     phase_starts_s: list[tuple[str, float]]
-    truth: pd.DataFrame
+    truth: "pd.DataFrame"
     start_ns: int = LOG_EPOCH_NS
     # The mission plans as the vehicle had them: start time, waypoints, cruise speed.
     missions: list[dict[str, object]] = field(default_factory=list)
@@ -101,6 +104,8 @@ class _Dive:
         self.tick = 0
         self.command: tuple[float, ...] = (0.0,) * len(profile.commands)
         streams = {channel.name: Stream() for channel in self.channels}
+        import pandas as pd  # the simulator's truth table; diagnosis needs no pandas
+
         self.out = SimulatedDive(scenario, seed, Stream(), streams, [], [], pd.DataFrame())
         self.truth_rows: list[tuple[float, ...]] = []
 
@@ -210,6 +215,8 @@ class _Dive:
         columns = ["t_s", *(TRUTH_COLUMNS[d] for d in self.spec.dofs), "heading_rad", "x_m",
                    "y_m", "depth_m", *(f"thrust_{i}_n" for i in range(len(self.spec.thrusters))),
                    *(f"{c.name}_reading" for c in self.channels)]
+        import pandas as pd
+
         self.out.truth = pd.DataFrame(self.truth_rows, columns=columns)
         return self.out
 
