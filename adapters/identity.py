@@ -1,7 +1,8 @@
 """Which vehicle wrote a log, where the log itself says so: a MAVLink telemetry log's
 autopilot (its system id and vehicle type, from HEARTBEAT; the flight controller's unique
-id from AUTOPILOT_VERSION where it is sent) and a DataFlash log's SYSID_THISMAV parameter.
-Nothing here raises on a damaged log: what cannot be read says nothing."""
+id from AUTOPILOT_VERSION where it is sent), a DataFlash log's SYSID_THISMAV parameter, and
+a ULog's information messages (``sys_uuid``, else ``sys_name``). Nothing here raises on a
+damaged log: what cannot be read says nothing."""
 
 import struct
 from collections import Counter
@@ -27,6 +28,10 @@ PREFIX_BYTES = 2 << 20
 
 
 DEFAULT_SYSTEM_ID = 1          # ArduPilot's and PX4's default: names no vehicle in a fleet
+DEFAULT_ULOG_NAME = "PX4"      # PX4's sys_name unless someone named the vehicle
+ULOG_HEADER_BYTES = 16
+ULOG_INFO = ord("I")
+ULOG_DATA_BEGINS = b"ALCD"     # subscriptions, text and data end the definitions
 
 
 @dataclass(frozen=True)
@@ -36,20 +41,23 @@ class LogIdentity:
 
     @property
     def distinctive(self) -> bool:
-        """Whether it tells this vehicle from others: a board's unique id, or a system id
-        someone set (every autopilot leaves the factory as system 1)."""
-        return "-uid-" in self.vehicle or self.vehicle != f"mavlink-{DEFAULT_SYSTEM_ID}"
+        """Whether it tells this vehicle from others: a board's unique id, or a system id or
+        name someone set (every autopilot leaves the factory as system 1, and PX4 as "PX4")."""
+        return "-uid-" in self.vehicle or self.vehicle not in (
+            f"mavlink-{DEFAULT_SYSTEM_ID}", f"ulog-{DEFAULT_ULOG_NAME}")
 
 
 def log_identity(path: Path, log_format: str) -> LogIdentity | None:
     """The vehicle the log names, or None where it names none (or cannot be read)."""
-    if log_format not in ("tlog", "bin"):
+    if log_format not in ("tlog", "bin", "ulog"):
         return None
     try:
         with path.open("rb") as stream:
             prefix = stream.read(PREFIX_BYTES)
         if log_format == "tlog":
             return _tlog_identity(index_tlog(prefix, {}))
+        if log_format == "ulog":
+            return _ulog_identity(_ulog_info(prefix))
         return _dataflash_identity(index_dataflash(prefix))
     except (OSError, ValueError, IndexError, struct.error):
         return None
@@ -98,3 +106,30 @@ def _dataflash_identity(index: RecordIndex) -> LogIdentity | None:
             (value,) = struct.unpack("<f", raw[DATAFLASH_PARM_NAME:])
             return LogIdentity(f"mavlink-{int(value)}", f"PARM SYSID_THISMAV = {int(value)}")
     return None
+
+
+def _ulog_info(prefix: bytes) -> dict[str, bytes]:
+    """The information messages ('I': "type name" and value) of a ULog's definitions."""
+    info, at = {}, ULOG_HEADER_BYTES
+    while at + 3 <= len(prefix):
+        length, kind = struct.unpack_from("<HB", prefix, at)
+        body = prefix[at + 3:at + 3 + length]
+        if kind in ULOG_DATA_BEGINS or length == 0 or len(body) < length:
+            break
+        if kind == ULOG_INFO and body and 1 + body[0] <= length:
+            key = body[1:1 + body[0]].decode("ascii", "replace").split(" ")[-1]
+            info[key] = body[1 + body[0]:]
+        at += 3 + length
+    return info
+
+
+def _ulog_identity(info: dict[str, bytes]) -> LogIdentity | None:
+    """``sys_uuid`` (a board's unique id, where the firmware writes it), else ``sys_name``."""
+    def text(key: str) -> str:
+        return info.get(key, b"").split(b"\0", 1)[0].decode("utf-8", "replace").strip()
+
+    name, uuid = text("sys_name"), text("sys_uuid")
+    if uuid:
+        return LogIdentity(f"ulog-{name or 'board'}-uid-{uuid}",
+                           f"ULog sys_uuid {uuid}" + (f", sys_name {name}" if name else ""))
+    return LogIdentity(f"ulog-{name}", f"ULog sys_name {name}") if name else None

@@ -88,3 +88,31 @@ def test_two_vehicles_in_one_folder_trend_apart(tmp_path):
     assert "fleet_vehicle" in table[0] and sum("rovA" in row for row in table[1:]) == 2
     again = api.audit([fleet], tmp_path / "out", vehicle_from="folder")   # reused, re-assigned
     assert again.reused == 4 and api.trend(tmp_path / "out").short == {"fleet": 4}
+
+
+def _ulog(path: Path, system: str, info: dict[str, str] | None = None) -> Path:
+    import numpy as np
+
+    from auvdiag_cli.simulator.writers.ulog import UlogTopic, write_ulog_file
+
+    topic = UlogTopic("actuator_motors", ("control[0]",), np.arange(10) * 10_000,
+                      np.zeros((10, 1)))
+    write_ulog_file(path, [topic], 0, system=system, info=info)
+    return path
+
+
+def test_a_ulog_names_its_vehicle_by_board_id_else_by_a_name_someone_gave_it(tmp_path):
+    from pyulog import ULog
+
+    named = _ulog(tmp_path / "named.ulg", "auv-7")
+    assert ULog(str(named)).msg_info_dict["sys_name"] == "auv-7"     # what PX4 tools read
+    said = log_identity(named, "ulog")
+    assert said is not None and said.vehicle == "ulog-auv-7" and said.distinctive
+    board = log_identity(_ulog(tmp_path / "board.ulg", "PX4", {"sys_uuid": "0001a2b3"}),
+                         "ulog")
+    assert board is not None and board.vehicle == "ulog-PX4-uid-0001a2b3" and board.distinctive
+    default = log_identity(_ulog(tmp_path / "default.ulg", "PX4"), "ulog")
+    assert default is not None and not default.distinctive          # PX4's factory name
+    cut = tmp_path / "cut.ulg"
+    cut.write_bytes(named.read_bytes()[:20])
+    assert log_identity(cut, "ulog") is None

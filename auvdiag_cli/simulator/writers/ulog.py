@@ -5,7 +5,7 @@ then topic subscriptions and data messages in time order; every message is ``<si
 <type u8> <payload>``, little-endian."""
 
 import struct
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -59,13 +59,15 @@ def _layout(fields: Sequence[str]) -> tuple[str, list[int], int]:
 
 
 def write_ulog_file(path: Path, topics: Sequence[UlogTopic], start_us: int,
-                    texts: Sequence[tuple[int, str]] = (), system: str = "auvdiag simulate"
-                    ) -> None:
-    """Write ``topics`` (and logged text messages ``(time_us, text)``) as a ULog file."""
+                    texts: Sequence[tuple[int, str]] = (), system: str = "PX4",
+                    info: Mapping[str, str] | None = None) -> None:
+    """Write ``topics`` (and logged text messages ``(time_us, text)``) as a ULog file, its
+    information messages ``sys_name`` = ``system`` and ``info``."""
     parts = [MAGIC + bytes([VERSION]) + struct.pack("<Q", start_us),
              _message("B", bytes(40))]
-    key = f"char[{len(system)}] sys_name".encode()
-    parts.append(_message("I", bytes([len(key)]) + key + system.encode()))
+    for name, value in {"sys_name": system, **(info or {})}.items():
+        key = f"char[{len(value)}] {name}".encode()
+        parts.append(_message("I", bytes([len(key)]) + key + value.encode()))
     formats: dict[str, tuple[str, list[int], int]] = {}
     for topic in topics:
         layout = _layout(topic.fields)
