@@ -4,7 +4,8 @@ than one on all six, and a fleet summary must show which it holds."""
 from collections import Counter
 from collections.abc import Sequence
 
-from auvdiag_cli.audit.record import AuditRecord, Coverage
+from auvdiag_cli.audit.record import AuditRecord
+from auvdiag_cli.engine.coverage import Coverage
 
 
 def coverage_lines(records: Sequence[AuditRecord]) -> list[str]:
@@ -17,9 +18,8 @@ def coverage_lines(records: Sequence[AuditRecord]) -> list[str]:
     for vehicle, coverages in sorted(by_vehicle.items()):
         lines.append(f"{vehicle} ({len(coverages)} logs):")
         for part in ("signals", "actuators"):
-            names = list(dict.fromkeys(n for c in coverages for names in c.part(part)
-                                       for n in names))
-            judged = Counter(n for c in coverages for n in c.part(part)[0])
+            names = list(dict.fromkeys(n for c in coverages for n in getattr(c, part)))
+            judged = Counter(n for c in coverages for n in getattr(c, f"{part}_judged"))
             always = [n for n in names if judged[n] == len(coverages)]
             sometimes = [f"{n} ({judged[n]})" for n in names if 0 < judged[n] < len(coverages)]
             never = [n for n in names if not judged[n]]

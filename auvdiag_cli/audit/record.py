@@ -7,24 +7,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from auvdiag_cli.engine.coverage import Coverage
+
 Document = Mapping[str, Any]     # a stored report as JSON gives it back
-
-
-@dataclass(frozen=True)
-class Coverage:
-    """What the verdict looked at: the signals and actuators judged and not judged."""
-
-    signals_judged: tuple[str, ...]
-    signals_not_judged: tuple[str, ...]
-    actuators_judged: tuple[str, ...]
-    actuators_not_judged: tuple[str, ...]
-    complete: bool
-
-    def part(self, name: str) -> tuple[tuple[str, ...], tuple[str, ...]]:
-        """(judged, not judged) of "signals" or "actuators"."""
-        if name == "signals":
-            return self.signals_judged, self.signals_not_judged
-        return self.actuators_judged, self.actuators_not_judged
 
 
 @dataclass(frozen=True)
@@ -105,7 +90,8 @@ class AuditRecord:
             start_time_utc=report.get("start_time_utc"), duration_s=report.get("duration_s"),
             not_operating_s=report.get("not_operating_s"),
             completeness=(report.get("completeness") or {}).get("status"),
-            not_judged=not_judged, coverage=_coverage(report.get("coverage")),
+            not_judged=not_judged, coverage=Coverage.from_dict(report["coverage"])
+            if report.get("coverage") else None,
             component=report.get("component"),
             candidates=tuple(report.get("candidates") or ()), case=report.get("case"),
             onset_s=report.get("onset_s"), detected_at_s=report.get("detected_at_s"),
@@ -143,15 +129,6 @@ def _worst_effort(shares: Document) -> tuple[float | None, str | None]:
     judged = [(entry["over_threshold"], name) for name, entry in shares.items()
               if entry.get("over_threshold") is not None]
     return max(judged, default=(None, None))
-
-
-def _coverage(coverage: Document | None) -> Coverage | None:
-    if not coverage:
-        return None
-    signals, actuators = coverage["signals"], coverage["actuators"]
-    return Coverage(tuple(signals["judged"]), tuple(signals["not_judged"]),
-                    tuple(actuators["judged"]), tuple(actuators["not_judged"]),
-                    bool(coverage["complete"]))
 
 
 def _margins(report: Document, segments: Sequence[Document], not_judged: set[str],

@@ -5,7 +5,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from auvdiag_cli.audit.record import AuditRecord, Coverage
+from auvdiag_cli.audit.record import AuditRecord
+from auvdiag_cli.engine.coverage import Coverage
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -50,11 +51,8 @@ def _coverage_columns(coverage: Coverage | None) -> dict[str, object]:
     if coverage is None:
         return {"signals_judged": None, "actuators_judged": None, "coverage_complete": None}
 
-    def share(part: str) -> str:
-        judged, not_judged = coverage.part(part)
-        return f"{len(judged)}/{len(judged) + len(not_judged)}"
-
-    return {"signals_judged": share("signals"), "actuators_judged": share("actuators"),
+    return {"signals_judged": f"{len(coverage.signals_judged)}/{len(coverage.signals)}",
+            "actuators_judged": f"{len(coverage.actuators_judged)}/{len(coverage.actuators)}",
             "coverage_complete": coverage.complete}
 
 

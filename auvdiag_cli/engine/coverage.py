@@ -3,7 +3,7 @@
 was. A NORMAL over less than the whole set is not the same claim as a NORMAL over all of
 it, and every report says which one it is."""
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -63,6 +63,14 @@ class Coverage:
                 "actuators": {"judged": list(self.actuators_judged),
                               "not_judged": list(self.actuators_not_judged)},
                 "start_judged": self.start_judged}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Coverage":
+        """Back from a JSON report's ``coverage`` (`to_dict`)."""
+        signals, actuators = data["signals"], data["actuators"]
+        return cls((*signals["judged"], *signals["not_judged"]), tuple(signals["judged"]),
+                   (*actuators["judged"], *actuators["not_judged"]),
+                   tuple(actuators["judged"]), bool(data.get("start_judged", False)))
 
 
 def coverage_of(signals: Sequence[str], not_judged: Sequence[str], actuators: Sequence[str],
