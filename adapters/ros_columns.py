@@ -24,6 +24,7 @@ from adapters.collect import SignalCollector
 from adapters.fieldnames import ros_field_paths
 from adapters.fieldpath import parse_field_path
 from adapters.packed import gather_words, gathered
+from auvdiag_errors import LogError
 
 PRIMITIVES = {"bool": "u1", "byte": "u1", "char": "u1", "int8": "i1", "uint8": "u1",
               "int16": "<i2", "uint16": "<u2", "int32": "<i4", "uint32": "<u4",
@@ -235,6 +236,33 @@ class TopicBatches:
     def flush(self) -> None:
         while self.pending:
             self._add(*self.pending.popitem())
+
+    def fill(self, feed: Callable[[], None]) -> None:
+        """Run ``feed`` (which appends the log's messages) and hand everything over. Damage
+        met on the way keeps what came before it, noted; damage before any message is an
+        error."""
+        damage: Exception | None = None
+        try:
+            feed()
+        except LogError:
+            raise
+        except Exception as error:  # damaged data surfaces as several unrelated types
+            damage = error
+        try:
+            self.flush()
+        except LogError:
+            raise
+        except Exception as error:  # a message its own definition does not describe
+            damage = damage or error
+        if damage is None:
+            return
+        collector = self.collector
+        if collector.count == 0:
+            raise LogError(collector.path, f"damaged log: {damage}") from None
+        reason = (f"log damaged after {collector.count} messages ({damage}); analysed "
+                  "the part before the damage")
+        collector.notes.append(reason)
+        collector.damaged(reason)
 
     def _add(self, topic: str, batch: RawMessages) -> None:
         msgtype = self.msgtypes[topic]

@@ -2,9 +2,6 @@
 rosbags' AnyReader; message definitions come from the bag itself. A ROS 2 bag stored in one
 MCAP file is read as MCAP (`adapters.mcap`)."""
 
-import contextlib
-import tempfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +10,8 @@ from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mcap import MCAP_MAGIC, McapAdapter, read_mcap, read_sequential
 from adapters.ros_columns import TopicBatches
+from adapters.rosbag1_index import read_bag_index, read_indexed_bag
+from adapters.rosbag1_records import BagDamaged
 from adapters.rosbag1_salvage import salvage_bag1
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
@@ -32,19 +31,6 @@ def _head(path: Path, size: int) -> bytes:
 
 def _storage_files(directory: Path) -> list[Path]:
     return sorted(p for p in directory.iterdir() if p.suffix in (".mcap", ".db3"))
-
-
-@contextlib.contextmanager
-def _named_for_rosbags(path: Path, fmt: str) -> Iterator[Path]:
-    """rosbags tells ROS 1 from ROS 2 by the ``.bag`` suffix; a ROS 1 bag under another name
-    (recognised here by content) is read through a temporary link with that suffix."""
-    if fmt != "bag" or path.suffix == ".bag":
-        yield path
-        return
-    with tempfile.TemporaryDirectory(prefix="auvdiag-") as folder:
-        link = Path(folder) / "log.bag"
-        link.symlink_to(path.resolve())
-        yield link
 
 
 def _open_reader(path: Path) -> Any:
@@ -86,41 +72,46 @@ class RosbagAdapter:
             # One MCAP storage file is plain MCAP: read through its chunk indexes, which is
             # several times faster than rosbags' message iteration.
             return read_mcap(self._mcap_file(path), path, sources, fmt)
+        if fmt == "bag":
+            try:
+                return read_indexed_bag(path, SignalCollector(path, sources))
+            except BagDamaged as error:
+                return self._salvage_bag1(path, SignalCollector(path, sources), str(error))
         collector = SignalCollector(path, sources)
-        with _named_for_rosbags(path, fmt) as readable:
-            try:
-                reader = _open_reader(readable)
-            except Exception as error:  # rosbags raises several unrelated types on damage
-                if fmt == "ros2-mcap":
-                    # The storage is plain MCAP: read what is readable, say what was lost.
-                    return read_sequential(self._mcap_file(path), collector, fmt)
-                if fmt == "bag":
-                    return self._salvage_bag1(path, collector, str(error))
-                raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
-            try:
-                return self._extract(reader, collector, fmt)
-            finally:
-                reader.close()
+        try:
+            reader = _open_reader(path)
+        except Exception as error:  # rosbags raises several unrelated types on damage
+            if fmt == "ros2-mcap":
+                # The storage is plain MCAP: read what is readable, say what was lost.
+                return read_sequential(self._mcap_file(path), collector, fmt)
+            raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
+        try:
+            return self._extract(reader, collector, fmt)
+        finally:
+            reader.close()
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
-        with _named_for_rosbags(path, fmt) as readable:
+        if fmt == "bag":
             try:
-                reader = _open_reader(readable)
-            except Exception as error:  # damaged: read what the records still say
-                if fmt == "ros2-mcap":
-                    inventory = McapAdapter().inventory(self._mcap_file(path), "mcap")
-                    inventory.format = fmt
-                    return inventory
-                if fmt == "bag":
-                    return self._salvaged_inventory(path, _problem(error))
-                raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
-            counts: dict[tuple[str, str], int] = {}
-            for c in reader.connections:
-                counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
-            span = (int(reader.start_time), int(reader.end_time))
-            fields = {msgtype: tuple(ros_field_paths(reader.typestore, msgtype))
-                      for _, msgtype in counts}
-            reader.close()
+                with path.open("rb") as stream:
+                    return read_bag_index(stream, path.stat().st_size).inventory()
+            except BagDamaged as error:  # read what the records still say
+                return self._salvaged_inventory(path, _problem(error))
+        try:
+            reader = _open_reader(path)
+        except Exception as error:  # damaged: read what the records still say
+            if fmt == "ros2-mcap":
+                inventory = McapAdapter().inventory(self._mcap_file(path), "mcap")
+                inventory.format = fmt
+                return inventory
+            raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
+        counts: dict[tuple[str, str], int] = {}
+        for c in reader.connections:
+            counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
+        span = (int(reader.start_time), int(reader.end_time))
+        fields = {msgtype: tuple(ros_field_paths(reader.typestore, msgtype))
+                  for _, msgtype in counts}
+        reader.close()
         topics = [TopicInfo(topic, msgtype, count, fields[msgtype])
                   for (topic, msgtype), count in sorted(counts.items())]
         return LogInventory(fmt, *span, topics)
@@ -166,25 +157,10 @@ class RosbagAdapter:
         connections = [c for c in reader.connections if c.topic in collector.topics]
         batches = TopicBatches(collector, topics, reader.is2, reader.typestore,
                                reader.deserialize)
-        damage: Exception | None = None
-        try:
+
+        def feed() -> None:
             for connection, timestamp, raw in reader.messages(connections=connections):
                 batches.append(connection.topic, int(timestamp), raw)
-        except LogError:
-            raise
-        except Exception as error:  # damaged data surfaces as several unrelated types
-            damage = error
-        try:
-            batches.flush()
-        except LogError:
-            raise
-        except Exception as error:  # a message its own definition does not describe
-            damage = damage or error
-        if damage is not None:
-            if collector.count == 0:
-                raise LogError(collector.path, f"damaged log: {damage}") from None
-            reason = (f"log damaged after {collector.count} messages ({damage}); analysed "
-                      "the part before the damage")
-            collector.notes.append(reason)
-            collector.damaged(reason)
+
+        batches.fill(feed)
         return collector.finish(fmt, int(reader.start_time), int(reader.end_time), topics)
