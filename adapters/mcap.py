@@ -22,21 +22,23 @@ from adapters.mcap_records import (
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
-__all__ = ["MCAP_MAGIC", "McapAdapter", "read_mcap", "read_sequential"]
+__all__ = ["MCAP_MAGIC", "McapAdapter", "read_mcap"]
 
 
 def _problem(error: BaseException) -> str:
     return str(error).strip() or type(error).__name__
 
 
-def read_sequential(path: Path, collector: SignalCollector, fmt: str) -> Signals:
-    """Read an MCAP front to back without its summary, up to the first damaged record."""
+def _feed_sequential(storage: Path, collector: SignalCollector
+                     ) -> tuple[dict[str, str], str | None]:
+    """Walk an MCAP front to back without its summary, up to the first damaged record,
+    noting what was lost: every topic seen → its schema name, and the first damage."""
     router = ChannelRouter(collector)
     progress = Progress()
     damage: str | None = None
     try:
-        with path.open("rb") as stream:
-            for record in walk_records(stream, path.stat().st_size, progress):
+        with storage.open("rb") as stream:
+            for record in walk_records(stream, storage.stat().st_size, progress):
                 router.take(record)
     except LogError:
         raise
@@ -52,19 +54,12 @@ def read_sequential(path: Path, collector: SignalCollector, fmt: str) -> Signals
         reason = f"damaged chunk at byte {at_byte} left out ({why})"
         collector.notes.append(reason)
         collector.damaged(reason, at_byte)
-    if (damage is not None or progress.skipped) and collector.count == 0:
-        first = damage or progress.skipped[0][1]
-        raise LogError(path, f"damaged MCAP, nothing readable ({first})")
     if damage is not None:
         reason = (f"log damaged at byte {progress.good_bytes} ({damage}); read "
                   f"{collector.count} messages up to the damage and analysed that part")
         collector.notes.append(reason)
         collector.damaged(reason, progress.good_bytes)
-    missing = collector.missing_topics(set(router.topics))
-    if missing:
-        where = " in the readable part" if damage or progress.skipped else ""
-        raise LogError(path, f"missing topic(s) {', '.join(missing)}{where}")
-    return collector.finish(fmt, None, None, router.topics, time_ordered=True)
+    return router.topics, damage or (progress.skipped[0][1] if progress.skipped else None)
 
 
 def _summary(stream: BinaryIO, size: int) -> Any | None:
@@ -106,7 +101,7 @@ class McapAdapter:
             return "mcap" if stream.read(len(MCAP_MAGIC)) == MCAP_MAGIC else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
-        return read_mcap(path, path, sources, fmt)
+        return read_mcap([path], path, sources, fmt)
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         """From the summary when it has statistics, else by a raw scan (nothing decoded)."""
@@ -125,32 +120,53 @@ class McapAdapter:
             return _scanned_inventory(stream, path.stat().st_size)
 
 
-def read_mcap(storage: Path, path: Path, sources: LogSources, fmt: str) -> Signals:
-    """The profile's signals from the MCAP file ``storage`` of the log ``path`` (the file
-    itself, or a ROS 2 bag holding it): through the chunk indexes when the summary is whole,
-    else, or when a chunk is damaged, front to back."""
-    with storage.open("rb") as stream:
-        summary = _summary(stream, storage.stat().st_size)
-        if summary is not None and summary.chunk_indexes:
-            try:
-                return _read_indexed(summary, stream, SignalCollector(path, sources), fmt)
-            except LogError:
-                raise
-            except Exception:  # a damaged chunk: read the file front to back instead
-                pass
-    return read_sequential(storage, SignalCollector(path, sources), fmt)
+def read_mcap(storages: list[Path], path: Path, sources: LogSources, fmt: str) -> Signals:
+    """The profile's signals from the MCAP files ``storages`` of the log ``path`` (the file
+    itself, or the storage files of a ROS 2 bag, in order): through the chunk indexes where
+    the summary is whole, else, or when a chunk is damaged, front to back."""
+    try:
+        return _read_files(storages, SignalCollector(path, sources), fmt, indexed=True)
+    except LogError:
+        raise
+    except Exception:  # a damaged chunk: read the files front to back instead
+        return _read_files(storages, SignalCollector(path, sources), fmt, indexed=False)
 
 
-def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector, fmt: str
-                  ) -> Signals:
+def _read_files(storages: list[Path], collector: SignalCollector, fmt: str, indexed: bool
+                ) -> Signals:
+    topics: dict[str, str] = {}
+    starts: list[int] = []
+    ends: list[int] = []
+    damage: str | None = None
+    for storage in storages:
+        with storage.open("rb") as stream:
+            summary = _summary(stream, storage.stat().st_size) if indexed else None
+            if summary is not None and summary.chunk_indexes:
+                topics |= _read_indexed(summary, stream, collector)
+                if summary.statistics is not None:
+                    starts.append(summary.statistics.message_start_time)
+                    ends.append(summary.statistics.message_end_time)
+            else:
+                seen, damaged = _feed_sequential(storage, collector)
+                topics |= seen
+                damage = damage or damaged
+    if damage is not None and collector.count == 0:
+        raise LogError(collector.path, f"damaged MCAP, nothing readable ({damage})")
+    missing = collector.missing_topics(set(topics))
+    if missing:
+        where = " in the readable part" if damage is not None else ""
+        raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}{where}")
+    return collector.finish(fmt, min(starts, default=None), max(ends, default=None), topics,
+                            time_ordered=True)
+
+
+def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector
+                  ) -> dict[str, str]:
     router = ChannelRouter(collector)
     for schema in summary.schemas.values():
         router.take(schema)
     for channel in summary.channels.values():
         router.take(channel)
-    missing = collector.missing_topics(set(router.topics))
-    if missing:
-        raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
     # File order, not a merge by log time (the merge costs more than decoding);
     # resampling sorts a series if its messages were stored out of order.
     _read_wanted_chunks(stream, summary, router)
@@ -159,9 +175,7 @@ def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector, fm
             c, 0) for c in router.routes):
         raise IndexUnusable("the chunk indexes leave out messages the statistics count")
     router.flush()
-    return collector.finish(fmt, stats.message_start_time if stats else None,
-                            stats.message_end_time if stats else None, router.topics,
-                            time_ordered=True)
+    return router.topics
 
 
 def _read_wanted_chunks(stream: BinaryIO, summary: Any, router: ChannelRouter) -> None:

@@ -1,18 +1,24 @@
-"""ROS 1 bags and ROS 2 bags (sqlite3 or mcap storage, directory or storage file) through
-rosbags' AnyReader; message definitions come from the bag itself. A ROS 2 bag stored in one
-MCAP file is read as MCAP (`adapters.mcap`)."""
+"""ROS 1 bags and ROS 2 bags (sqlite3 or MCAP storage; a directory, possibly split over
+several storage files, or one storage file). Each storage is read directly: a ROS 1 bag
+through its index (`adapters.rosbag1_index`, or record by record when it has none), db3
+through SQL (`adapters.rosbag2_sqlite`), MCAP through its chunk indexes (`adapters.mcap`).
+Message definitions come from the bag itself."""
 
+import re
 from pathlib import Path
-from typing import Any
 
 from adapters.collect import SignalCollector
-from adapters.fieldnames import ros_field_paths
-from adapters.inventory import LogInventory, TopicInfo
-from adapters.mcap import MCAP_MAGIC, McapAdapter, read_mcap, read_sequential
-from adapters.ros_columns import TopicBatches
+from adapters.inventory import LogInventory, TopicInfo, merged_inventory
+from adapters.mcap import MCAP_MAGIC, McapAdapter, read_mcap
 from adapters.rosbag1_index import read_bag_index, read_indexed_bag
 from adapters.rosbag1_records import BagDamaged
 from adapters.rosbag1_salvage import salvage_bag1
+from adapters.rosbag2_compressed import (
+    compressed_by_rosbag2,
+    compressed_inventory,
+    read_compressed,
+)
+from adapters.rosbag2_sqlite import Db3Bag
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
@@ -29,19 +35,22 @@ def _head(path: Path, size: int) -> bytes:
         return stream.read(size)
 
 
+def _recording_order(path: Path) -> list[str | int]:
+    """rosbag2 numbers split files ``NAME_0``, ``NAME_1``, … ``NAME_10``: numbers as numbers."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
+
+
 def _storage_files(directory: Path) -> list[Path]:
-    return sorted(p for p in directory.iterdir() if p.suffix in (".mcap", ".db3"))
+    return sorted((p for p in directory.iterdir() if p.suffix in (".mcap", ".db3")),
+                  key=_recording_order)
 
 
-def _open_reader(path: Path) -> Any:
-    """An open AnyReader. Bags that carry no message definitions (ROS 2 Humble and older
-    .db3) are decoded with the Humble type store."""
-    from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
+def _storages(path: Path) -> list[Path]:
+    return _storage_files(path) if path.is_dir() else [path]
 
-    reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
-    reader.open()
-    return reader
+
+def _metadata(path: Path) -> Path:
+    return (path if path.is_dir() else path.parent) / "metadata.yaml"
 
 
 class RosbagAdapter:
@@ -68,27 +77,16 @@ class RosbagAdapter:
         return None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
-        if fmt == "ros2-mcap" and (path.is_file() or len(_storage_files(path)) == 1):
-            # One MCAP storage file is plain MCAP: read through its chunk indexes, which is
-            # several times faster than rosbags' message iteration.
-            return read_mcap(self._mcap_file(path), path, sources, fmt)
         if fmt == "bag":
             try:
                 return read_indexed_bag(path, SignalCollector(path, sources))
             except BagDamaged as error:
                 return self._salvage_bag1(path, SignalCollector(path, sources), str(error))
-        collector = SignalCollector(path, sources)
-        try:
-            reader = _open_reader(path)
-        except Exception as error:  # rosbags raises several unrelated types on damage
-            if fmt == "ros2-mcap":
-                # The storage is plain MCAP: read what is readable, say what was lost.
-                return read_sequential(self._mcap_file(path), collector, fmt)
-            raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
-        try:
-            return self._extract(reader, collector, fmt)
-        finally:
-            reader.close()
+        if compressed_by_rosbag2(_metadata(path)):
+            return read_compressed(path, SignalCollector(path, sources), fmt)
+        if fmt == "ros2-mcap":
+            return read_mcap(_storages(path), path, sources, fmt)
+        return Db3Bag(path, _storages(path)).read(SignalCollector(path, sources))
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         if fmt == "bag":
@@ -97,24 +95,12 @@ class RosbagAdapter:
                     return read_bag_index(stream, path.stat().st_size).inventory()
             except BagDamaged as error:  # read what the records still say
                 return self._salvaged_inventory(path, _problem(error))
-        try:
-            reader = _open_reader(path)
-        except Exception as error:  # damaged: read what the records still say
-            if fmt == "ros2-mcap":
-                inventory = McapAdapter().inventory(self._mcap_file(path), "mcap")
-                inventory.format = fmt
-                return inventory
-            raise LogError(path, f"cannot open {fmt} log: {_problem(error)}") from None
-        counts: dict[tuple[str, str], int] = {}
-        for c in reader.connections:
-            counts[c.topic, c.msgtype] = counts.get((c.topic, c.msgtype), 0) + c.msgcount
-        span = (int(reader.start_time), int(reader.end_time))
-        fields = {msgtype: tuple(ros_field_paths(reader.typestore, msgtype))
-                  for _, msgtype in counts}
-        reader.close()
-        topics = [TopicInfo(topic, msgtype, count, fields[msgtype])
-                  for (topic, msgtype), count in sorted(counts.items())]
-        return LogInventory(fmt, *span, topics)
+        if compressed_by_rosbag2(_metadata(path)):
+            return compressed_inventory(path, fmt)
+        if fmt == "ros2-mcap":
+            return merged_inventory(fmt, [McapAdapter().inventory(storage, "mcap")
+                                          for storage in _storages(path)])
+        return Db3Bag(path, _storages(path)).inventory()
 
     @staticmethod
     def _salvage_bag1(path: Path, collector: SignalCollector, reason: str) -> Signals:
@@ -144,23 +130,3 @@ class RosbagAdapter:
         notes = [f"bag index unusable ({reason}); messages counted record by record"
                  + (f" up to the damage ({salvaged.stopped})" if salvaged.stopped else "")]
         return LogInventory("bag", None, None, topics, notes)
-
-    @staticmethod
-    def _mcap_file(path: Path) -> Path:
-        return _storage_files(path)[0] if path.is_dir() else path
-
-    def _extract(self, reader: Any, collector: SignalCollector, fmt: str) -> Signals:
-        topics = {c.topic: c.msgtype for c in reader.connections}
-        missing = collector.missing_topics(set(topics))
-        if missing:
-            raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
-        connections = [c for c in reader.connections if c.topic in collector.topics]
-        batches = TopicBatches(collector, topics, reader.is2, reader.typestore,
-                               reader.deserialize)
-
-        def feed() -> None:
-            for connection, timestamp, raw in reader.messages(connections=connections):
-                batches.append(connection.topic, int(timestamp), raw)
-
-        batches.fill(feed)
-        return collector.finish(fmt, int(reader.start_time), int(reader.end_time), topics)

@@ -1,4 +1,5 @@
-"""PX4 ULog logs (.ulg), read with pyulog.
+"""PX4 ULog logs (.ulg), decoded column-wise (`adapters.ulog_decode`); a log with appended
+data (written after a crash) goes through pyulog instead.
 
 A signal is a topic and a field as pyulog names it (``vehicle_angular_velocity`` and
 ``xyz[2]``, ``actuator_motors`` and ``control[0]``). A topic logged in several instances
@@ -6,8 +7,8 @@ A signal is a topic and a field as pyulog names it (``vehicle_angular_velocity``
 a profile chooses one with ``where = { instance = 0 }`` (mixing them is refused, as for
 DataFlash sensor instances). Logged text messages are the pseudo-topic ``logging`` with the
 field ``message`` (segment markers). Times are the log's timestamps, µs since boot. Only the
-profile's topics are decoded. pyulog resynchronises after damaged bytes and stops at a
-truncation; both are reported, and the part read is analysed."""
+profile's topics are decoded. Damaged bytes are skipped up to the next sync marker and a
+truncation ends the log; both are reported, and the part read is analysed."""
 
 import contextlib
 import io
@@ -15,56 +16,79 @@ import mmap
 import struct
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from adapters.collect import ColumnSource, SignalCollector
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
+from adapters.ulog_decode import (
+    HEADER_BYTES,
+    MAGIC,
+    TIMESTAMP,
+    AppendedData,
+    DecodedUlog,
+    DefinitionsDamaged,
+    Instance,
+    decode_ulog,
+)
 from auvdiag_errors import LogError
 
-MAGIC = b"ULog\x01\x12\x35"
 INSTANCE = "instance"
 LOGGING_TOPIC = "logging"
-TIMESTAMP = "timestamp"
-HEADER_BYTES = 16
 
 
-def _load(path: Path, topics: list[str] | None, framing: "Framing") -> Any:
-    """pyulog's parse of the file (only ``topics`` decoded), its errors as LogError. pyulog
-    prints warnings about damaged bytes: they become notes, not terminal output."""
+def _definitions_damaged(path: Path, at: int) -> LogError:
+    return LogError(path, f"the ULog's definitions (message formats, parameters) are "
+                          f"damaged at byte {at}: its messages cannot be decoded")
+
+
+def decoded_ulog(path: Path, topics: set[str] | None) -> DecodedUlog:
+    """The log's messages (only ``topics`` decoded; None: all), its errors as LogError."""
+    try:
+        return decode_ulog(path.read_bytes(), topics)
+    except DefinitionsDamaged as damaged:
+        raise _definitions_damaged(path, damaged.at) from None
+    except AppendedData:
+        return _through_pyulog(path, topics)
+    except MemoryError:
+        raise
+    except Exception as error:   # an incompatible or unreadable log: one line, not a trace
+        raise LogError(path, f"not a readable ULog: {type(error).__name__}: {error}") from None
+
+
+def _through_pyulog(path: Path, topics: set[str] | None) -> DecodedUlog:
+    """pyulog's parse, which follows appended offsets. It prints warnings about damaged
+    bytes: they become notes, not terminal output."""
     from pyulog import ULog
 
-    damaged = framing.definitions_damaged_at
-    if damaged is not None:
-        raise LogError(path, f"the ULog's definitions (message formats, parameters) are "
-                             f"damaged at byte {damaged}: its messages cannot be decoded")
-
+    framing = walk_framing(path)
+    if framing.definitions_damaged_at is not None:
+        raise _definitions_damaged(path, framing.definitions_damaged_at)
     chatter = io.StringIO()
     try:
         with contextlib.redirect_stdout(chatter), contextlib.redirect_stderr(chatter):
-            return ULog(str(path), message_name_filter_list=topics,
-                        disable_str_exceptions=True)
+            ulog = ULog(str(path), message_name_filter_list=None if topics is None else
+                        sorted(topics), disable_str_exceptions=True)
     except MemoryError:
         raise
     except Exception as error:   # pyulog raises what the bytes make it raise: wrap it
         raise LogError(path, f"not a readable ULog: {type(error).__name__}: {error}") from None
-
-
-def _instances(ulog: Any) -> dict[str, list[Any]]:
-    by_name: dict[str, list[Any]] = {}
+    decoded = DecodedUlog(int(ulog.start_timestamp), corrupt=bool(ulog.file_corruption),
+                          cut_at=framing.cut_at, last_us=int(ulog.last_timestamp))
     for data in ulog.data_list:
-        by_name.setdefault(data.name, []).append(data)
-    return by_name
+        decoded.topics.setdefault(data.name, []).append(Instance(data.multi_id, data.data))
+    decoded.logged = [(int(m.timestamp), m.message) for m in ulog.logged_messages]
+    decoded.dropouts_ms = [int(d.duration) for d in ulog.dropouts]
+    return decoded
 
 
-def _topic_columns(instances: list[Any]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+def _topic_columns(instances: list[Instance]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """A topic's instances as one table: times (ns) and columns (fields and ``instance``)."""
-    names = [n for n in instances[0].data if all(n in d.data for d in instances)]
-    columns = {name: np.concatenate([d.data[name] for d in instances]) for name in names}
-    columns[INSTANCE] = np.concatenate([np.full(d.data[TIMESTAMP].size, d.multi_id, np.int64)
-                                        for d in instances])
+    names = [n for n in instances[0].columns if all(n in d.columns for d in instances)]
+    columns = {name: np.concatenate([d.columns[name] for d in instances]) for name in names}
+    columns[INSTANCE] = np.concatenate([
+        np.full(d.columns[TIMESTAMP].size, d.multi_id, np.int64) for d in instances])
     return columns[TIMESTAMP].astype(np.int64) * 1000, columns
 
 
@@ -86,40 +110,33 @@ class UlogAdapter:
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
-        wanted = sorted(collector.topics - {LOGGING_TOPIC})
-        framing = walk_framing(path)
-        ulog = _load(path, wanted, framing)
-        by_name = _instances(ulog)
-        for topic in wanted:
-            if topic in by_name:
-                times_ns, columns = _topic_columns(by_name[topic])
-                collector.add_columns(topic, times_ns, _column_source(columns),
-                                      tuple(columns))
+        wanted = collector.topics - {LOGGING_TOPIC}
+        decoded = decoded_ulog(path, wanted)
+        for topic in sorted(wanted & decoded.topics.keys()):
+            times_ns, columns = _topic_columns(decoded.topics[topic])
+            collector.add_columns(topic, times_ns, _column_source(columns), tuple(columns))
         if LOGGING_TOPIC in collector.topics:
-            for message in ulog.logged_messages:
-                collector.add(LOGGING_TOPIC, int(message.timestamp) * 1000,
-                              {"message": message.message})
-        _note_damage(ulog, framing, collector)
-        return collector.finish("ulog", int(ulog.start_timestamp) * 1000,
-                                int(ulog.last_timestamp) * 1000,
-                                {name: "ULog" for name in by_name})
+            for time_us, text in decoded.logged:
+                collector.add(LOGGING_TOPIC, time_us * 1000, {"message": text})
+        _note_damage(decoded, collector)
+        return collector.finish("ulog", decoded.start_us * 1000, decoded.last_us * 1000,
+                                dict.fromkeys(decoded.topics, "ULog"))
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
-        ulog = _load(path, None, walk_framing(path))
+        decoded = decoded_ulog(path, None)
         topics = []
-        for name, instances in sorted(_instances(ulog).items()):
+        for name, instances in sorted(decoded.topics.items()):
             _, columns = _topic_columns(instances)
             ids = tuple(str(d.multi_id) for d in instances)
             topics.append(TopicInfo(name, "ULog", int(columns[TIMESTAMP].size),
                                     tuple(n for n in columns if n != TIMESTAMP),
                                     ((INSTANCE, ids),) if len(ids) > 1 else ()))
-        if ulog.logged_messages:
-            topics.append(TopicInfo(LOGGING_TOPIC, "ULog text", len(ulog.logged_messages),
+        if decoded.logged:
+            topics.append(TopicInfo(LOGGING_TOPIC, "ULog text", len(decoded.logged),
                                     ("message",)))
-        notes = [_damage_text(ulog)] if ulog.file_corruption else []
-        return LogInventory("ulog", int(ulog.start_timestamp) * 1000,
-                            int(ulog.last_timestamp) * 1000, topics, notes)
-
+        notes = [DAMAGE_TEXT] if decoded.corrupt else []
+        return LogInventory("ulog", decoded.start_us * 1000, decoded.last_us * 1000, topics,
+                            notes)
 
 DEFINITION_KINDS = b"BFIMPQ"     # flag bits, formats, info, parameters
 DATA_KINDS = b"ALC"              # subscriptions and text messages begin the data section
@@ -158,21 +175,20 @@ def walk_framing(path: Path) -> Framing:
         return Framing(cut_at=None if at == size else at)
 
 
-def _damage_text(ulog: Any) -> str:
-    return ("damaged bytes in the ULog: pyulog skipped to the next readable message, so "
-            "some messages are missing")
+DAMAGE_TEXT = ("damaged bytes in the ULog: skipped to the next readable message, so some "
+               "messages are missing")
 
 
-def _note_damage(ulog: Any, framing: Framing, collector: SignalCollector) -> None:
-    if ulog.file_corruption:
-        collector.notes.append(_damage_text(ulog))
-        collector.damaged(_damage_text(ulog))
-    cut = framing.cut_at
+def _note_damage(decoded: DecodedUlog, collector: SignalCollector) -> None:
+    if decoded.corrupt:
+        collector.notes.append(DAMAGE_TEXT)
+        collector.damaged(DAMAGE_TEXT)
+    cut = decoded.cut_at
     if cut is not None:
         reason = f"the ULog ends inside a message at byte {cut}: the file was cut short"
         collector.notes.append(reason)
         collector.damaged(reason, cut)
-    dropped_ms = sum(int(d.duration) for d in ulog.dropouts)
+    dropped_ms = sum(decoded.dropouts_ms)
     if dropped_ms:
-        collector.notes.append(f"the logger dropped data {len(ulog.dropouts)} time(s), "
+        collector.notes.append(f"the logger dropped data {len(decoded.dropouts_ms)} time(s), "
                                f"{dropped_ms} ms in all")
