@@ -244,7 +244,7 @@ class TopicBatches:
         damage: Exception | None = None
         try:
             feed()
-        except LogError:
+        except (LogError, MemoryError):
             raise
         except Exception as error:  # damaged data surfaces as several unrelated types
             damage = error

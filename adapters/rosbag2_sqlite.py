@@ -17,16 +17,23 @@ import numpy as np
 from adapters.collect import SignalCollector
 from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
+from adapters.limits import MAX_CHUNK_BYTES
 from adapters.ros_columns import TopicBatches
 from adapters.signals import Signals
 from auvdiag_errors import LogError
 
 ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on long bags
+# sqlite reports a damaged record that declares more bytes than it will allocate as "out of
+# memory", which Python raises as MemoryError: from a query, that is damage.
+SQLITE_FAILURES = (sqlite3.Error, MemoryError)
 IDL_SEPARATOR = "=" * 80 + "\n"
 
 
 def _connect(storage: Path) -> sqlite3.Connection:
-    return sqlite3.connect(f"file:{quote(str(storage.resolve()))}?mode=ro", uri=True)
+    db = sqlite3.connect(f"file:{quote(str(storage.resolve()))}?mode=ro", uri=True)
+    # A damaged record can declare a blob of a gigabyte: refuse it rather than allocate it.
+    db.setlimit(sqlite3.SQLITE_LIMIT_LENGTH, MAX_CHUNK_BYTES)
+    return db
 
 
 def _problem(error: BaseException) -> str:
@@ -51,7 +58,7 @@ class Db3Bag:
                         definitions += db.execute(
                             "SELECT topic_type, encoding, encoded_message_definition "
                             "FROM message_definitions").fetchall()
-        except sqlite3.Error as error:
+        except SQLITE_FAILURES as error:
             raise LogError(path, f"cannot open db3 log: {_problem(error)}") from None
         self.store = _typestore(definitions, set(self.topics.values()))
 
@@ -61,9 +68,9 @@ class Db3Bag:
             with closing(_connect(storage)) as db:
                 first, last = db.execute(
                     "SELECT MIN(timestamp), MAX(timestamp) FROM messages").fetchone()
-            if first is not None:
-                firsts.append(int(first))
-                lasts.append(int(last))
+            if isinstance(first, int) and isinstance(last, int):   # else damaged cells
+                firsts.append(first)
+                lasts.append(last)
         return min(firsts, default=None), max(lasts, default=None)
 
     def read(self, collector: SignalCollector) -> Signals:
@@ -82,13 +89,13 @@ class Db3Bag:
                     marks = ",".join("?" * len(ids))
                     cursor = db.execute("SELECT topic_id, timestamp, data FROM messages "
                                         f"WHERE topic_id IN ({marks})", list(ids))
-                    while rows := cursor.fetchmany(ROWS_AT_ONCE):
+                    while rows := _fetch(cursor):
                         _hand_over(rows, ids, batches)
 
         batches.fill(feed)
         try:
             span = self.span()
-        except sqlite3.Error:        # the damage is already noted; the data gives the span
+        except SQLITE_FAILURES:      # the damage is already noted; the data gives the span
             span = (None, None)
         return collector.finish("db3", *span, self.topics)
 
@@ -100,15 +107,23 @@ class Db3Bag:
                     names = dict(db.execute("SELECT id, name FROM topics").fetchall())
                     for topic_id, count in db.execute(
                             "SELECT topic_id, COUNT(*) FROM messages GROUP BY topic_id"):
-                        if topic_id in names:
+                        if topic_id in names and names[topic_id] in counts:
                             counts[names[topic_id]] += int(count)
             span = self.span()
-        except sqlite3.Error as error:
+        except SQLITE_FAILURES as error:
             raise LogError(self.path, f"damaged db3 log: {_problem(error)}") from None
         topics = [TopicInfo(topic, self.topics[topic], count,
                             tuple(ros_field_paths(self.store, self.topics[topic])))
                   for topic, count in sorted(counts.items())]
         return LogInventory("db3", *span, topics)
+
+
+def _fetch(cursor: sqlite3.Cursor) -> list[tuple[int, int, bytes]]:
+    try:
+        return cursor.fetchmany(ROWS_AT_ONCE)
+    except MemoryError:
+        raise sqlite3.DatabaseError("a record declares more bytes than sqlite will read "
+                                    "(database disk image is malformed)") from None
 
 
 def _hand_over(rows: list[tuple[int, int, bytes]], topics: dict[int, str],
