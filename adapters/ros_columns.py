@@ -55,7 +55,7 @@ class RawMessages:
         """Many messages stored back to back in ``block``, each from its ``begins``."""
         self.starts.frombytes((begins + len(self.buffer)).astype(np.int64).tobytes())
         self.times_ns.frombytes(times_ns.astype(np.int64).tobytes())
-        self.buffer += block.tobytes()
+        self.buffer += np.ascontiguousarray(block).data
 
     def __len__(self) -> int:
         return len(self.starts)

@@ -24,8 +24,9 @@ from auvdiag_errors import LogError
 
 ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on long bags
 # sqlite reports a damaged record that declares more bytes than it will allocate as "out of
-# memory", which Python raises as MemoryError: from a query, that is damage.
-SQLITE_FAILURES = (sqlite3.Error, MemoryError)
+# memory", which Python raises as MemoryError; an error message quoting a damaged schema
+# is not UTF-8, which Python raises as UnicodeDecodeError. From a query, both are damage.
+SQLITE_FAILURES = (sqlite3.Error, MemoryError, UnicodeDecodeError)
 IDL_SEPARATOR = "=" * 80 + "\n"
 
 
@@ -33,6 +34,8 @@ def _connect(storage: Path) -> sqlite3.Connection:
     db = sqlite3.connect(f"file:{quote(str(storage.resolve()))}?mode=ro", uri=True)
     # A damaged record can declare a blob of a gigabyte: refuse it rather than allocate it.
     db.setlimit(sqlite3.SQLITE_LIMIT_LENGTH, MAX_CHUNK_BYTES)
+    # Damaged text (a topic name, a definition) is not UTF-8: keep it readable, not fatal.
+    db.text_factory = lambda raw: raw.decode("utf-8", "replace")
     return db
 
 
@@ -51,7 +54,8 @@ class Db3Bag:
             for storage in storages:
                 with closing(_connect(storage)) as db:
                     self.topics |= {name: msgtype for name, msgtype in db.execute(
-                        "SELECT name, type FROM topics")}
+                        "SELECT name, type FROM topics")
+                        if isinstance(name, str) and isinstance(msgtype, str)}
                     tables = {row[0] for row in db.execute(
                         "SELECT name FROM sqlite_master WHERE type = 'table'")}
                     if "message_definitions" in tables:

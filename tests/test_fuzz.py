@@ -115,6 +115,7 @@ def test_an_error_must_be_one_line_naming_the_file(monkeypatch, tmp_path, profil
     ("bin", 4963),    # an MSG format without its Message column: the marker field raised
     ("db3", 712),     # a damaged timestamp cell read as text: the span query raised
     ("db3", 2154),    # a record declaring a huge blob: sqlite's "out of memory" escaped
+    ("db3", 6365),    # a topic name that is not UTF-8: the text conversion raised
 ])
 def test_defects_the_campaign_found_stay_fixed(tmp_path, fmt, case):
     report_path = tmp_path / "case.json"
