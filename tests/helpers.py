@@ -16,3 +16,15 @@ def diagnose_json(log: Path, *options: str) -> tuple[int, dict[str, Any]]:
                                       *options])
     assert result.exit_code in (0, 1), result.output
     return result.exit_code, json.loads(result.stdout)
+
+
+def assert_same_signals(read: Any, reference: Any) -> None:
+    """Two reads of one log: the same messages, the same samples at the same times."""
+    import numpy as np
+
+    assert read.messages_read == reference.messages_read > 0
+    assert read.series.keys() == reference.series.keys()
+    for name, series in read.series.items():
+        assert np.array_equal(series.times_ns, reference.series[name].times_ns), name
+        assert np.array_equal(series.values, reference.series[name].values), name
+    assert len(read.markers) == len(reference.markers)

@@ -4,8 +4,8 @@ times, same counts; a chunk whose index is damaged is walked instead, with the s
 
 from pathlib import Path
 
-import numpy as np
 import pytest
+from helpers import assert_same_signals
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag1 import Writer
 from rosbags.typesys import Stores, get_typestore
@@ -44,15 +44,6 @@ def walked(path: Path, profile) -> object:
     """The bag read record by record, its index ignored."""
     return RosbagAdapter._salvage_bag1(path, SignalCollector(path, profile.sources["ros"]),
                                        "index not used")
-
-
-def assert_same_signals(indexed, reference) -> None:
-    assert indexed.messages_read == reference.messages_read > 0
-    assert indexed.series.keys() == reference.series.keys()
-    for name, series in indexed.series.items():
-        assert np.array_equal(series.times_ns, reference.series[name].times_ns), name
-        assert np.array_equal(series.values, reference.series[name].values), name
-    assert len(indexed.markers) == len(reference.markers)
 
 
 @pytest.mark.parametrize("compression, chunk_bytes", [

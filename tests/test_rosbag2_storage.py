@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import assert_same_signals
 from rosbags.highlevel import AnyReader
 from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, Writer
 
@@ -48,15 +49,6 @@ def rewrite(source: Path, target: Path, fmt: str, version: int = 9, parts: int =
     (pieces[0] / "metadata.yaml").rename(target / "metadata.yaml")
     for piece in pieces:
         shutil.rmtree(piece)
-
-
-def assert_same_signals(read, reference) -> None:
-    assert read.messages_read == reference.messages_read > 0
-    assert read.series.keys() == reference.series.keys()
-    for name, series in read.series.items():
-        assert np.array_equal(series.times_ns, reference.series[name].times_ns), name
-        assert np.array_equal(series.values, reference.series[name].values), name
-    assert len(read.markers) == len(reference.markers)
 
 
 @pytest.fixture(scope="module")
