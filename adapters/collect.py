@@ -1,7 +1,7 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
 from array import array
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -9,6 +9,7 @@ import numpy as np
 
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
+from adapters.namespace import ROOT, Resolution, normalised, resolve
 from adapters.signals import (
     Damage,
     FieldSource,
@@ -93,10 +94,12 @@ class SignalCollector:
 
     def __init__(self, path: Path, sources: LogSources) -> None:
         self.path, self.sources = path, sources
-        self.by_topic: dict[str, list[_Extractor]] = {}
         self.wanted = sources.wanted
-        for name, source in self.wanted.items():
-            self.by_topic.setdefault(source.topic, []).append(_Extractor(name, source))
+        self.extractors = [_Extractor(name, source) for name, source in self.wanted.items()]
+        self._apply(Resolution(normalised(sources.namespace or ROOT),
+                               {topic: topic for topic in sources.topics}))
+        self.namespace_fixed = False      # set once the log's topics decided the namespace
+        self.claimed: set[str] = set()    # profile topics `wants` found a name for
         # Typed arrays: 8 bytes a sample, not a Python object, so long dives stay small.
         self.times: dict[str, array[int]] = {name: array("q") for name in self.wanted}
         self.values: dict[str, array[float]] = {name: array("d") for name in self.wanted}
@@ -127,16 +130,54 @@ class SignalCollector:
         if self.damage is None:
             self.damage = Damage(reason, at_byte)
 
+    def _apply(self, resolution: Resolution) -> None:
+        """Read the profile's topics under the log's names for them."""
+        self.namespace, self.names = resolution.namespace, resolution.names
+        self.by_topic: dict[str, list[_Extractor]] = {}
+        for extractor in self.extractors:
+            self.by_topic.setdefault(self.names[extractor.source.topic], []).append(extractor)
+        segment = self.sources.segment
+        self.segment_topic = None if segment is None else self.names[segment.topic]
+        self.log_names = set(self.names.values())
+
     @property
     def topics(self) -> set[str]:
-        return self.sources.topics
+        """The log's names of the topics to read."""
+        return self.log_names
+
+    def resolve_topics(self, available: Iterable[str]) -> None:
+        """The log's topics, known before reading (an index, a summary): the namespace the
+        profile's topics are under is found from them (`adapters.namespace`)."""
+        if not self.namespace_fixed:
+            self._apply(resolve(self.path, self.sources.topics, available,
+                                self.sources.namespace))
+            self.namespace_fixed = True
+
+    def wants(self, topic: str) -> bool:
+        """Whether to read ``topic``, for readers that meet the topics as they read (no
+        index): a profile topic is read under the first name it shows up with, at the root
+        or under the namespace the first namespaced one showed (`require_topics` checks
+        the choice against all of the log's topics at the end)."""
+        if topic in self.log_names or self.namespace_fixed:
+            return topic in self.log_names
+        for wanted in self.sources.topics - self.claimed:
+            suffix = "/" + wanted.lstrip("/")
+            namespace = normalised(topic[:-len(suffix)]) if topic.endswith(suffix) else None
+            if namespace is None or (namespace and namespace != self.namespace and (
+                    self.namespace or self.sources.namespace is not None)):
+                continue
+            self.claimed.add(wanted)
+            self._apply(Resolution(namespace or self.namespace,
+                                   {**self.names, wanted: topic}))
+            return True
+        return False
 
     def field_paths(self, topic: str) -> list[str]:
         """Every field path read on ``topic``: values, `where` filters, segment labels."""
         paths = [path for extractor in self.by_topic.get(topic, ())
                  for path in (extractor.source.field, *(k for k, _ in extractor.source.where))]
         segment = self.sources.segment
-        if segment is not None and segment.topic == topic:
+        if segment is not None and self.segment_topic == topic:
             paths.append(segment.field)
         return list(dict.fromkeys(paths))
 
@@ -145,7 +186,7 @@ class SignalCollector:
             return
         self.count += 1
         segment = self.sources.segment
-        if segment is not None and topic == segment.topic and self.segment_get is not None:
+        if segment is not None and topic == self.segment_topic and self.segment_get is not None:
             text = _text(self.segment_get(message))
             if text.startswith(segment.prefix):
                 self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
@@ -173,7 +214,7 @@ class SignalCollector:
         rows = times_ns.size
         self.count += rows
         segment = self.sources.segment
-        if segment is not None and topic == segment.topic:
+        if segment is not None and topic == self.segment_topic:
             try:
                 texts = column(segment.field).tolist()
             except (IndexError, KeyError, TypeError, ValueError):
@@ -217,11 +258,23 @@ class SignalCollector:
             self.times[extractor.name].frombytes(times.astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())
 
-    def missing_topics(self, available: set[str]) -> list[str]:
-        """Signal topics the log does not have at all."""
-        return sorted({s.topic for s in self.sources.signals.values()} - available
-                      - {s.topic for n, s in self.sources.signals.items()
-                         if n in self.sources.fallbacks})
+    def require_topics(self, available: Iterable[str], where: str = "") -> None:
+        """Every signal topic is among the log's topics ``available`` (under its namespace,
+        which this settles), else a `LogError`; ``where``: "in the readable part"."""
+        available = set(available)
+        settled = resolve(self.path, self.sources.topics, available, self.sources.namespace)
+        if settled.names != self.names and (self.namespace_fixed or self.count):
+            raise LogError(self.path, f"the profile's topics are under the namespace "
+                           f"{settled.namespace or '/'}, but the first ones read were under "
+                           f"{self.namespace or '/'}: name it with namespace = "
+                           f"\"{settled.namespace or '/'}\" under [sources.ros] in the profile")
+        self._apply(settled)
+        self.namespace_fixed = True
+        signals = self.sources.signals
+        optional = {self.names[s.topic] for n, s in signals.items() if n in self.sources.fallbacks}
+        missing = sorted({self.names[s.topic] for s in signals.values()} - available - optional)
+        if missing:
+            raise LogError(self.path, f"missing topic(s) {', '.join(missing)}{where}")
 
     def finish(self, fmt: str, start_ns: int | None, end_ns: int | None,
                topics: dict[str, str], require_all: bool = True,
@@ -235,6 +288,8 @@ class SignalCollector:
             self.notes.append(f"{self.impossible_times} message(s) with an impossible time "
                               "left out")
         self._use_fallbacks()
+        if self.namespace:
+            self.notes.append(f"topics read under the namespace {self.namespace}")
         empty = sorted(name for name, times in self.times.items() if not times)
         if empty and require_all:
             where = ", ".join(self._why_empty(n) for n in empty)
@@ -259,7 +314,8 @@ class SignalCollector:
                        start_ns=0 if first is None else first,
                        end_ns=0 if last is None else last,
                        series=series, markers=self.markers, topics=topics, notes=self.notes,
-                       damage=self.damage, messages_read=self.count)
+                       damage=self.damage, messages_read=self.count,
+                       namespace=self.namespace)
 
     def _use_fallbacks(self) -> None:
         """A signal without a message of its own source takes its fallback's samples."""
@@ -279,7 +335,7 @@ class SignalCollector:
         source = self.wanted[name]
         offered = self.filtered_out.get(name)
         if offered is None:
-            return f"{name} ({source.topic})"
+            return f"{name} ({self.names.get(source.topic, source.topic)})"
         wanted = " and ".join(f"{key} = {value}" for key, value in source.where)
         return (f"{name} ({source.topic} has no message with {wanted}; its values: "
                 f"{', '.join(closest_first(source.where[0][1], offered))})")

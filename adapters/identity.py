@@ -1,16 +1,19 @@
 """Which vehicle wrote a log, where the log itself says so: a MAVLink telemetry log's
 autopilot (its system id and vehicle type, from HEARTBEAT; the flight controller's unique
-id from AUTOPILOT_VERSION where it is sent), a DataFlash log's SYSID_THISMAV parameter, and
-a ULog's information messages (``sys_uuid``, else ``sys_name``). Nothing here raises on a
-damaged log: what cannot be read says nothing."""
+id from AUTOPILOT_VERSION where it is sent), a DataFlash log's SYSID_THISMAV parameter,
+a ULog's information messages (``sys_uuid``, else ``sys_name``), and the ROS namespace a
+bag's or an MCAP's topics are under. Nothing here raises on a damaged log: what cannot be
+read says nothing."""
 
 import struct
 from collections import Counter
+from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from adapters import inventory
 from adapters.mavlink_scan import (
     TLOG_TIME_LENGTH,
     RecordIndex,
@@ -18,6 +21,8 @@ from adapters.mavlink_scan import (
     index_tlog,
     tlog_frame_fields,
 )
+from adapters.namespace import resolve
+from auvdiag_errors import LogError
 
 HEARTBEAT, AUTOPILOT_VERSION = 0, 148
 AUTOPILOT_INVALID = 8          # MAV_AUTOPILOT_INVALID: a ground station, not a vehicle
@@ -47,8 +52,16 @@ class LogIdentity:
             f"mavlink-{DEFAULT_SYSTEM_ID}", f"ulog-{DEFAULT_ULOG_NAME}")
 
 
-def log_identity(path: Path, log_format: str) -> LogIdentity | None:
-    """The vehicle the log names, or None where it names none (or cannot be read)."""
+ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap")
+
+
+def log_identity(path: Path, log_format: str, ros_topics: Collection[str] = (),
+                 namespace: str | None = None) -> LogIdentity | None:
+    """The vehicle the log names, or None where it names none (or cannot be read).
+    ``ros_topics``: the profile's ROS topics, whose namespace in a ROS log or MCAP names
+    the vehicle (``namespace``: the one the profile fixes, else found)."""
+    if log_format in ROS_FORMATS:
+        return _namespace_identity(path, ros_topics, namespace)
     if log_format not in ("tlog", "bin", "ulog"):
         return None
     try:
@@ -133,3 +146,18 @@ def _ulog_identity(info: dict[str, bytes]) -> LogIdentity | None:
         return LogIdentity(f"ulog-{name or 'board'}-uid-{uuid}",
                            f"ULog sys_uuid {uuid}" + (f", sys_name {name}" if name else ""))
     return LogIdentity(f"ulog-{name}", f"ULog sys_name {name}") if name else None
+
+
+def _namespace_identity(path: Path, ros_topics: Collection[str], namespace: str | None
+                        ) -> LogIdentity | None:
+    if not ros_topics:
+        return None
+    try:
+        held = inventory(path)[0]
+        found = resolve(path, ros_topics, {topic.name for topic in held.topics}, namespace)
+    except LogError:
+        return None
+    if not found.namespace:
+        return None
+    return LogIdentity(f"ros-{found.namespace.lstrip('/')}",
+                       f"topics under the ROS namespace {found.namespace}")

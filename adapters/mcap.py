@@ -152,10 +152,7 @@ def _read_files(storages: list[Path], collector: SignalCollector, fmt: str, inde
                 damage = damage or damaged
     if damage is not None and collector.count == 0:
         raise LogError(collector.path, f"damaged MCAP, nothing readable ({damage})")
-    missing = collector.missing_topics(set(topics))
-    if missing:
-        where = " in the readable part" if damage is not None else ""
-        raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}{where}")
+    collector.require_topics(topics, " in the readable part" if damage is not None else "")
     return collector.finish(fmt, min(starts, default=None), max(ends, default=None), topics,
                             time_ordered=True)
 
@@ -163,6 +160,7 @@ def _read_files(storages: list[Path], collector: SignalCollector, fmt: str, inde
 def _read_indexed(summary: Any, stream: BinaryIO, collector: SignalCollector
                   ) -> dict[str, str]:
     router = ChannelRouter(collector)
+    collector.resolve_topics(channel.topic for channel in summary.channels.values())
     for schema in summary.schemas.values():
         router.take(schema)
     for channel in summary.channels.values():

@@ -164,7 +164,7 @@ class ChannelRouter:
     def channel(self, channel: Any) -> None:
         schema = self.schemas.get(channel.schema_id)
         self.topics[channel.topic] = schema.name if schema is not None else ""
-        if channel.topic in self.collector.topics and channel.id not in self.routes:
+        if self.collector.wants(channel.topic) and channel.id not in self.routes:
             self.routes[channel.id] = (channel.topic, self._decoder(channel, schema))
 
     def message(self, channel_id: int, time_ns: int, data: bytes) -> None:

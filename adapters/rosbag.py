@@ -109,9 +109,7 @@ class RosbagAdapter:
         if collector.count == 0:
             raise LogError(path, f"cannot open bag log ({reason}) and no message is "
                                  f"readable without its index ({stopped})")
-        missing = collector.missing_topics(set(topics))
-        if missing:
-            raise LogError(path, f"missing topic(s) {', '.join(missing)} in the readable part")
+        collector.require_topics(topics, " in the readable part")
         collector.notes.append(
             f"bag index unusable ({reason}); read {collector.count} messages record by record"
             + (f" up to the damage ({stopped})" if stopped else ""))

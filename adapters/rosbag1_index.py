@@ -40,7 +40,6 @@ from adapters.rosbag1_records import (
     stamp_ns,
 )
 from adapters.signals import Signals
-from auvdiag_errors import LogError
 
 INDEX_ENTRY = np.dtype([("secs", "<u4"), ("nsecs", "<u4"), ("offset", "<u4")])
 MESSAGE_HEADER_BYTES = 38    # op (1 byte), conn (4), time (8): three length-prefixed fields
@@ -165,9 +164,7 @@ def read_indexed_bag(path: Path, collector: SignalCollector) -> Signals:
     with path.open("rb") as stream:
         index = read_bag_index(stream, path.stat().st_size)
         topics = index.topics()
-        missing = collector.missing_topics(set(topics))
-        if missing:
-            raise LogError(path, f"missing topic(s) {', '.join(missing)}")
+        collector.require_topics(topics)
         wanted = {conn: c.topic for conn, c in index.connections.items()
                   if c.topic in collector.topics}
         batches = TopicBatches(collector, topics, False, index.store,

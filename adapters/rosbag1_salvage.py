@@ -51,7 +51,7 @@ class _Decoder:
             return
         topics[connection.topic] = connection.msgtype
         self.counts[connection.topic] = self.counts.get(connection.topic, 0) + 1
-        if connection.topic in collector.topics:
+        if collector.wants(connection.topic):
             decoded: Any = self.store.deserialize_ros1(bytes(payload), connection.msgtype)
             collector.add(connection.topic, stamp_ns(header["time"]), decoded)
 

@@ -48,9 +48,7 @@ def read_compressed(path: Path, collector: SignalCollector, fmt: str) -> Signals
     reader = _open_reader(path, fmt)
     try:
         topics = {c.topic: c.msgtype for c in reader.connections}
-        missing = collector.missing_topics(set(topics))
-        if missing:
-            raise LogError(collector.path, f"missing topic(s) {', '.join(missing)}")
+        collector.require_topics(topics)
         connections = [c for c in reader.connections if c.topic in collector.topics]
         batches = TopicBatches(collector, topics, True, reader.typestore, reader.deserialize)
 

@@ -78,9 +78,7 @@ class Db3Bag:
         return min(firsts, default=None), max(lasts, default=None)
 
     def read(self, collector: SignalCollector) -> Signals:
-        missing = collector.missing_topics(set(self.topics))
-        if missing:
-            raise LogError(self.path, f"missing topic(s) {', '.join(missing)}")
+        collector.require_topics(self.topics)
         wanted = [t for t in self.topics if t in collector.topics]
         batches = TopicBatches(collector, self.topics, True, self.store,
                                self.store.deserialize_cdr)

@@ -93,6 +93,9 @@ class LogSources:
     # Where a signal may live instead when its own source has no message in a log (older
     # ArduSub DataFlash logs keep arming in EV records, not ARM).
     fallbacks: dict[str, FieldSource] = field(default_factory=dict)
+    # The ROS namespace the topics are under: None finds it from the log's topics, "" is
+    # the root (`adapters.namespace`).
+    namespace: str | None = None
 
     @property
     def wanted(self) -> dict[str, FieldSource]:
@@ -157,3 +160,4 @@ class Signals:
     notes: list[str] = field(default_factory=list)
     damage: Damage | None = None          # None: the whole file was read
     messages_read: int = 0                # messages of the profile's topics
+    namespace: str = ""                   # the ROS namespace the topics were read under

@@ -4,10 +4,11 @@ gives: the folder holding the log, a regular expression on its name, or a CSV ma
 
 import csv
 import re
-from dataclasses import dataclass, field
+from collections.abc import Collection
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from adapters import detect_format
+from adapters import LogSources, detect_format
 from adapters.identity import log_identity
 from auvdiag_errors import AuvdiagError, UsageError
 
@@ -30,9 +31,19 @@ class VehicleRule:
     kind: str = "log"
     pattern: re.Pattern[str] | None = None
     mapping: dict[str, str] = field(default_factory=dict)
+    ros_topics: frozenset[str] = frozenset()
+    namespace: str | None = None
 
     @classmethod
-    def parse(cls, text: str) -> "VehicleRule":
+    def parse(cls, text: str, ros: LogSources | None = None) -> "VehicleRule":
+        """``ros``: the profile's ROS sources, whose namespace names a ROS log's vehicle."""
+        rule = cls._parsed(text)
+        if ros is None:
+            return rule
+        return replace(rule, ros_topics=frozenset(ros.topics), namespace=ros.namespace)
+
+    @classmethod
+    def _parsed(cls, text: str) -> "VehicleRule":
         kind, _, argument = text.partition(":")
         if kind in ("log", "folder") and not argument:
             return cls(kind)
@@ -48,7 +59,7 @@ class VehicleRule:
 
     def vehicle_of(self, log: Path) -> FleetVehicle:
         if self.kind == "log":
-            said = _identity(log)
+            said = _identity(log, self.ros_topics, self.namespace)
             if said is not None:
                 return said
         elif self.kind == "regex" and self.pattern is not None:
@@ -63,9 +74,10 @@ class VehicleRule:
         return FleetVehicle(log.parent.name or ".", "folder")
 
 
-def _identity(log: Path) -> FleetVehicle | None:
+def _identity(log: Path, ros_topics: Collection[str], namespace: str | None
+              ) -> FleetVehicle | None:
     try:
-        said = log_identity(log, detect_format(log))
+        said = log_identity(log, detect_format(log), ros_topics, namespace)
     except AuvdiagError:
         return None
     return None if said is None or not said.distinctive else FleetVehicle(

@@ -69,13 +69,16 @@ class AuditResult:
         return sum(1 for r in self.records if r.damaged)
 
 
-def _inputs(options: AuditOptions) -> tuple[Inputs, str]:
+def _inputs(options: AuditOptions) -> tuple[Inputs, str, VehicleRule]:
     """Validate the profile and the model once (a bad one fails the audit before it
-    starts) and fingerprint them; returns the model directory the workers load."""
+    starts) and fingerprint them; returns the model directory the workers load, and how
+    a log's vehicle is found."""
     profile = load_profile(options.profile)
     model_dir = options.model or default_model_dir(profile.name)
     load_model(options.model, profile.name)
-    return Inputs(folder_digest(model_dir), text_digest(repr(profile))), str(model_dir)
+    rule = VehicleRule.parse(options.vehicle_from, profile.sources.get("ros"))
+    return (Inputs(folder_digest(model_dir), text_digest(repr(profile))), str(model_dir),
+            rule)
 
 
 class TableWriter:
@@ -91,8 +94,7 @@ class TableWriter:
 
 
 def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
-    inputs, model_dir = _inputs(options)
-    rule = VehicleRule.parse(options.vehicle_from)
+    inputs, model_dir, rule = _inputs(options)
     options.output.mkdir(parents=True, exist_ok=True)
     found = discover(options.paths, exclude=[options.output])
     store = ResultStore(options.output, inputs, options.mcap)

@@ -78,4 +78,6 @@ def log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
         if time.unit not in TIME_UNITS:
             raise ProfileError(f"key '{entry.key('unit')}' must be one of "
                                f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
-    return LogSources(signals, segment, time, fallbacks)
+    # ROS: the namespace the topics are under ("" the root); found from the log if unset.
+    namespace = reader.get("namespace", str, None)
+    return LogSources(signals, segment, time, fallbacks, namespace)
