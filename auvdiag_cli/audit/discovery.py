@@ -1,7 +1,7 @@
 """Finding the logs under the paths an audit is given: files, folders (walked), and glob
 patterns. A log is recognised by its content; a file named like a log whose content is not
 one is kept (it becomes an error row: most likely a damaged log), anything else is skipped
-and listed."""
+and listed, as is a copy of another log (`copies`)."""
 
 import glob
 from collections.abc import Callable, Sequence
@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from adapters import detect_format
+from auvdiag_cli.audit.copies import copies
 from auvdiag_errors import LogError, UsageError
 
 LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin"}
@@ -40,12 +41,15 @@ def _set_companions_apart(found: Discovery) -> None:
             unrelated.append((path, reason))
     found.skipped = unrelated
     # A companion can itself read as a log (a truth table is a CSV with a header): NAME.x.csv
-    # beside NAME.mcap is the log's, not a dive of its own. Binary logs (run.1.bin beside
-    # run.bin) stay dives.
+    # beside NAME.mcap is the log's, not a dive of its own. A binary log named after another
+    # (run.1.bin beside run.bin) is judged by its content (`copies`).
     readable_companions = [log for log in found.logs if log.suffix.lower() == ".csv"
                            and named_after_a_log(log)]
     found.companions += readable_companions
     found.logs = [log for log in found.logs if log not in readable_companions]
+    copied = copies(found.logs)
+    found.skipped += list(copied.items())
+    found.logs = [log for log in found.logs if log not in copied]
 
 
 def _expand(pattern: str) -> list[Path]:

@@ -61,7 +61,7 @@ def summary_lines(rows: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str
             lines += paragraph(f"{Path(r.log).name}: {r.error}", family="monospace",
                                size=8.5)
     if skipped:
-        lines += heading(f"Skipped: {len(skipped)} files that are not logs")
+        lines += heading(f"Skipped: {len(skipped)} files that are not logs, or copies of one")
         for path, reason in skipped:
             lines += paragraph(f"{path}: {reason}", family="monospace", size=8.5,
                                colour=COLOURS["muted"])

@@ -162,7 +162,8 @@ def audit(
         "--vehicle-from", metavar="log|folder|regex:PATTERN|csv:FILE",
         help="Which vehicle of the fleet each log is, for the trend and the fleet PDF: log "
              "(the default: the id the log gives, a MAVLink system id other than the default "
-             "1 or the board's unique id, else the folder), folder, regex:PATTERN (its first "
+             "1 or the board's unique id, a ULog's sys_uuid or sys_name, the ROS namespace "
+             "of its topics, else the folder), folder, regex:PATTERN (its first "
              "group in the file name, else the folder) or csv:FILE (rows 'log,vehicle').")
     ] = "log",
 ) -> None:
