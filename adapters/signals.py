@@ -7,11 +7,13 @@ found). Plain NumPy arrays: reading a log needs no data-frame library. ``start_n
 time of the log's first message on any topic; report times are seconds from it.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
+
+from adapters.namespace import normalised, under
 
 
 @dataclass(frozen=True)
@@ -61,6 +63,8 @@ class SegmentSource:
     prefix: str = ""
 
 
+_Source = TypeVar("_Source", FieldSource, SegmentSource)
+
 # The reserved signal that says when the vehicle is operating (armed, under way): where a
 # profile names one, only that time is trained on and judged.
 OPERATING = "operating"
@@ -102,6 +106,15 @@ class LogSources:
         """Every source to read: the signals', and their fallbacks' under `fallback_name`."""
         return {**self.signals, **{fallback_name(n): s for n, s in self.fallbacks.items()
                                    if n in self.signals}}
+
+    def moved_under(self, namespace: str) -> "LogSources":
+        """These sources as a vehicle launched under the ROS ``namespace`` publishes them."""
+        def moved(source: _Source) -> _Source:
+            return replace(source, topic=under(normalised(namespace), source.topic))
+
+        return replace(self, signals={n: moved(s) for n, s in self.signals.items()},
+                       fallbacks={n: moved(s) for n, s in self.fallbacks.items()},
+                       segment=None if self.segment is None else moved(self.segment))
 
     @property
     def topics(self) -> set[str]:

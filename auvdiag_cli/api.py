@@ -225,12 +225,13 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
 
 def simulate(scenario: str | Scenario, profile: Profile, output: Path,
              log_format: str = "ros2-mcap", seed: int = 0, fault_at_s: float | None = None,
-             start_ns: int = LOG_EPOCH_NS) -> SimulatedDive:
+             start_ns: int = LOG_EPOCH_NS, namespace: str = "") -> SimulatedDive:
     """Fly one of the profile's ``scenarios`` (by name, or a `Scenario` built from the
     simulator's steps) with its [simulation] physics and write it to
     ``output`` in ``log_format`` (bag, db3, ros2-mcap, mcap, tlog, bin, ulog, csv) with
     its ground truth beside it (NAME.truth.json, NAME.truth.csv); an existing ``output``
-    is never overwritten: `auvdiag simulate`."""
+    is never overwritten: `auvdiag simulate`. ``namespace``: the ROS namespace the
+    vehicle publishes under (ROS formats)."""
     from auvdiag_cli.simulator.run import simulate as fly
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import LOG_FORMATS, write_log
@@ -246,7 +247,7 @@ def simulate(scenario: str | Scenario, profile: Profile, output: Path,
     if output.exists():
         raise UsageError(f"{output}: exists already, not overwriting")
     dive = fly(chosen, profile, seed, start_ns)
-    write_log(dive, profile, output, log_format)
+    write_log(dive, profile, output, log_format, namespace=namespace)
     return dive
 
 

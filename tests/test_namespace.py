@@ -7,12 +7,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import assert_same_signals
+from helpers import assert_same_signals, diagnose_json
+from typer.testing import CliRunner
 
-from adapters import LogSources, read_log
+from adapters import read_log
 from adapters.identity import log_identity
 from adapters.namespace import ROOT, normalised, resolve
 from auvdiag_cli import api
+from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.writers import ExtraTopic, write_log
 from auvdiag_cli.simulator.writers.ros import RosMessages, ros_topics
 from auvdiag_cli.vehicle.profile import Profile
@@ -21,28 +23,10 @@ from auvdiag_errors import LogError
 ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap")
 
 
-def _under(namespace: str, sources: LogSources) -> LogSources:
-    def moved(topic: str) -> str:
-        return f"{namespace}{topic}"
-
-    return replace(
-        sources,
-        signals={n: replace(s, topic=moved(s.topic)) for n, s in sources.signals.items()},
-        fallbacks={n: replace(s, topic=moved(s.topic)) for n, s in sources.fallbacks.items()},
-        segment=None if sources.segment is None else replace(
-            sources.segment, topic=moved(sources.segment.topic)))
-
-
-def _namespaced(profile: Profile, namespace: str) -> Profile:
-    return replace(profile, sources={**profile.sources,
-                                     "ros": _under(namespace, profile.sources["ros"])})
-
-
 def _write(dive, profile: Profile, path: Path, fmt: str, namespace: str,
            also: str | None = None) -> Path:
     """The dive written under ``namespace``; ``also``: a second vehicle's topics (one zero
     message each) under that namespace in the same log."""
-    writer = _namespaced(profile, namespace)
     extra = []
     if also is not None:
         builder = RosMessages(fmt == "bag", {})
@@ -56,7 +40,7 @@ def _write(dive, profile: Profile, path: Path, fmt: str, namespace: str,
                 return message
 
             extra.append(ExtraTopic(f"{also}{topic}", msgtype, [start], build))
-    write_log(dive, writer, path, fmt, extra)
+    write_log(dive, profile, path, fmt, extra, namespace)
     return path
 
 
@@ -137,3 +121,13 @@ def test_a_fleet_folder_of_namespaced_logs_trends_per_vehicle(tmp_path, dive_cac
     assert {r.fleet_vehicle for r in result.records} == {"ros-rovA", "ros-rovB"}
     assert all(r.verdict == "normal" for r in result.records), [r.error for r in result.records]
     assert api.trend(tmp_path / "out").short == {"ros-rovA": 2, "ros-rovB": 2}
+
+
+def test_a_vehicle_simulated_under_a_namespace_diagnoses_as_at_the_root(tmp_path):
+    log = tmp_path / "rov2.bag"
+    made = CliRunner().invoke(app, ["simulate", "paper-normal", "--format", "bag",
+                                    "--namespace", "rov2", "--output", str(log)])
+    assert made.exit_code == 0, made.output
+    status, report = diagnose_json(log)
+    assert status == 0 and report["verdict"] == "normal"
+    assert "topics read under the namespace /rov2" in report["notes"]

@@ -34,6 +34,9 @@ def simulate(
     start: Annotated[str, typer.Option(
         help="When the log's clock starts (ISO 8601, UTC if no zone).")
     ] = "2026-11-22T10:00:00Z",
+    namespace: Annotated[str, typer.Option(
+        help="ROS namespace the vehicle publishes under (/rov2: /rov2/thrusters/command); "
+             "ROS formats only.")] = "",
     profile: ProfileOption = None,
 ) -> None:
     """Simulate a dive of the profile's vehicle and write it as a log with its ground truth.
@@ -49,7 +52,7 @@ def simulate(
         fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
     with user_errors(output):
         dive = api.simulate(scenario, api.load_profile(profile), output, log_format, seed,
-                            fault_at, _unix_ns(start))
+                            fault_at, _unix_ns(start), namespace)
     typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
                f"{truth_paths(output)[0].name}")
 

@@ -2,6 +2,7 @@
 
 import json
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from auvdiag_cli.engine.missions import mission_path
@@ -26,13 +27,18 @@ def truth_paths(log_path: Path) -> tuple[Path, Path]:
 
 
 def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
-              extra: Sequence[ExtraTopic] = ()) -> None:
+              extra: Sequence[ExtraTopic] = (), namespace: str = "") -> None:
     """Write ``dive`` to ``path`` in format ``fmt`` and its truth beside it; ``extra`` adds
-    unrelated topics to the ROS formats (MAVLink logs have no place for them)."""
+    unrelated topics to the ROS formats (MAVLink logs have no place for them), and
+    ``namespace`` puts the profile's ROS topics under a namespace, as a vehicle launched
+    under it publishes them."""
     if fmt not in LOG_FORMATS:
         raise ValueError(f"unknown log format {fmt!r} (writable: {', '.join(LOG_FORMATS)})")
     if path.exists():
         raise FileExistsError(f"{path}: exists already, not overwriting")
+    if namespace and "ros" in profile.sources:
+        profile = replace(profile, sources={
+            **profile.sources, "ros": profile.sources["ros"].moved_under(namespace)})
     if fmt in ("bag", "db3", "ros2-mcap"):
         write_rosbag(dive, profile, path, fmt, extra)
     elif fmt == "mcap":
