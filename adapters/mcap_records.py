@@ -148,7 +148,7 @@ class ChannelRouter:
         self.store = get_typestore(Stores.EMPTY)
         self.batches = TopicBatches(collector, self.msgtypes, True, self.store,
                                     self.store.deserialize_cdr)
-        self.factories = decoder_factories()
+        self.factories: list[Any] | None = None       # made when a channel is not batched
         self.counts: dict[int, int] = {}                 # wanted channel → messages taken
 
     def take(self, record: Any) -> None:
@@ -201,6 +201,8 @@ class ChannelRouter:
                 and self._register(schema)):
             self.msgtypes[channel.topic] = schema.name
             return None
+        if self.factories is None:
+            self.factories = decoder_factories()
         for factory in self.factories:
             # The vendored ROS 2 definition parser prints to stderr about a schema it cannot
             # parse, and then raises: the exception is what we report.
