@@ -21,7 +21,10 @@ from adapters.mavlink_scan import (
     index_tlog,
     tlog_frame_fields,
 )
+from adapters.mcap import summary_topics
 from adapters.namespace import resolve
+from adapters.rosbag import bag_storages, bag_topics
+from adapters.rosbag2_sqlite import db3_topics
 from auvdiag_errors import LogError
 
 HEARTBEAT, AUTOPILOT_VERSION = 0, 148
@@ -61,7 +64,7 @@ def log_identity(path: Path, log_format: str, ros_topics: Collection[str] = (),
     ``ros_topics``: the profile's ROS topics, whose namespace in a ROS log or MCAP names
     the vehicle (``namespace``: the one the profile fixes, else found)."""
     if log_format in ROS_FORMATS:
-        return _namespace_identity(path, ros_topics, namespace)
+        return _namespace_identity(path, log_format, ros_topics, namespace)
     if log_format not in ("tlog", "bin", "ulog"):
         return None
     try:
@@ -148,16 +151,28 @@ def _ulog_identity(info: dict[str, bytes]) -> LogIdentity | None:
     return LogIdentity(f"ulog-{name}", f"ULog sys_name {name}") if name else None
 
 
-def _namespace_identity(path: Path, ros_topics: Collection[str], namespace: str | None
-                        ) -> LogIdentity | None:
+def _namespace_identity(path: Path, log_format: str, ros_topics: Collection[str],
+                        namespace: str | None) -> LogIdentity | None:
     if not ros_topics:
         return None
     try:
-        held = inventory(path)[0]
-        found = resolve(path, ros_topics, {topic.name for topic in held.topics}, namespace)
+        found = resolve(path, ros_topics, _topic_names(path, log_format), namespace)
     except LogError:
         return None
     if not found.namespace:
         return None
     return LogIdentity(f"ros-{found.namespace.lstrip('/')}",
                        f"topics under the ROS namespace {found.namespace}")
+
+
+def _topic_names(path: Path, log_format: str) -> set[str]:
+    """The log's topics from a bag's index, an MCAP's summary or a db3's topics table where
+    whole (a millisecond: no type is built, no message counted), else from its inventory."""
+    names: set[str] | None = None
+    if log_format == "bag":
+        names = bag_topics(path)
+    elif log_format in ("mcap", "ros2-mcap"):
+        names = summary_topics(bag_storages(path))
+    elif log_format == "db3":
+        names = db3_topics(bag_storages(path))
+    return names if names is not None else {topic.name for topic in inventory(path)[0].topics}

@@ -83,6 +83,18 @@ def _summary(stream: BinaryIO, size: int) -> Any | None:
     return summary
 
 
+def summary_topics(storages: list[Path]) -> set[str] | None:
+    """The topics of MCAP files from their summaries alone; None where one has none."""
+    names: set[str] = set()
+    for storage in storages:
+        with storage.open("rb") as stream:
+            summary = _summary(stream, storage.stat().st_size)
+        if summary is None:
+            return None
+        names |= {channel.topic for channel in summary.channels.values()}
+    return names
+
+
 def _schema_name(schemas: dict[int, Any], schema_id: int) -> str:
     schema = schemas.get(schema_id)
     return schema.name if schema is not None else ""

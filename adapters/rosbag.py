@@ -45,8 +45,19 @@ def _storage_files(directory: Path) -> list[Path]:
                   key=_recording_order)
 
 
-def _storages(path: Path) -> list[Path]:
+def bag_storages(path: Path) -> list[Path]:
+    """A ROS 2 bag's storage files in recording order (a file given alone: itself)."""
     return _storage_files(path) if path.is_dir() else [path]
+
+
+def bag_topics(path: Path) -> set[str] | None:
+    """The topics of a ROS 1 bag from its index alone; None where it has none to read."""
+    try:
+        with path.open("rb") as stream:
+            index = read_bag_index(stream, path.stat().st_size, types=False)
+    except BagDamaged:
+        return None
+    return {connection.topic for connection in index.connections.values()}
 
 
 def _metadata(path: Path) -> Path:
@@ -85,8 +96,8 @@ class RosbagAdapter:
         if compressed_by_rosbag2(_metadata(path)):
             return read_compressed(path, SignalCollector(path, sources), fmt)
         if fmt == "ros2-mcap":
-            return read_mcap(_storages(path), path, sources, fmt)
-        return Db3Bag(path, _storages(path)).read(SignalCollector(path, sources))
+            return read_mcap(bag_storages(path), path, sources, fmt)
+        return Db3Bag(path, bag_storages(path)).read(SignalCollector(path, sources))
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         if fmt == "bag":
@@ -99,8 +110,8 @@ class RosbagAdapter:
             return compressed_inventory(path, fmt)
         if fmt == "ros2-mcap":
             return merged_inventory(fmt, [McapAdapter().inventory(storage, "mcap")
-                                          for storage in _storages(path)])
-        return Db3Bag(path, _storages(path)).inventory()
+                                          for storage in bag_storages(path)])
+        return Db3Bag(path, bag_storages(path)).inventory()
 
     @staticmethod
     def _salvage_bag1(path: Path, collector: SignalCollector, reason: str) -> Signals:

@@ -108,18 +108,18 @@ def _read_record(stream: BinaryIO, position: int, limit: int
     return header_fields(header), data, data_at + len(data)
 
 
-def read_bag_index(stream: BinaryIO, size: int) -> BagIndex:
-    """The bag's connections (with their definitions) and chunk list; `BagDamaged` when
-    the bag has no index that can be read."""
+def read_bag_index(stream: BinaryIO, size: int, types: bool = True) -> BagIndex:
+    """The bag's connections (with their definitions registered, unless not ``types``) and
+    chunk list; `BagDamaged` when the bag has no index that can be read."""
     try:
-        return _read_bag_index(stream, size)
+        return _read_bag_index(stream, size, types)
     except BagDamaged:
         raise
     except Exception as error:  # a definition rosbags cannot parse, a bad UTF-8 name, ...
         raise BagDamaged(f"bag index unreadable: {error}") from None
 
 
-def _read_bag_index(stream: BinaryIO, size: int) -> BagIndex:
+def _read_bag_index(stream: BinaryIO, size: int, types: bool) -> BagIndex:
     from rosbags.typesys import Stores, get_typestore
 
     stream.seek(0)
@@ -139,7 +139,8 @@ def _read_bag_index(stream: BinaryIO, size: int) -> BagIndex:
         kind = opcode(record)
         if kind == OP_CONNECTION:
             conn = number(record, "conn", "<I")
-            connections[conn] = BagConnection(*register_connection(store, payload))
+            connections[conn] = BagConnection(*register_connection(
+                store if types else None, payload))
         elif kind == OP_CHUNK_INFO:
             chunks.append(_chunk_info(record, payload, index_position))
     return BagIndex(connections, sorted(chunks, key=lambda c: c.position), store,

@@ -94,15 +94,16 @@ def decompress_chunk(header: dict[str, bytes], payload: memoryview) -> bytes:
 
 
 def register_connection(store: Any, payload: memoryview) -> tuple[str, str]:
-    """Register the message definition a connection record carries in ``store``; its
-    topic and its message type in ROS 2 spelling (``pkg/msg/Type``)."""
+    """Register the message definition a connection record carries in ``store`` (None:
+    only name it); its topic and its message type in ROS 2 spelling (``pkg/msg/Type``)."""
     from rosbags.typesys import get_types_from_msg
 
     fields = header_fields(payload)
     if "type" not in fields or "topic" not in fields:
         raise BagDamaged("a connection record without topic or type")
     msgtype = fields["type"].decode("utf-8", "replace")
-    store.register(get_types_from_msg(
-        fields.get("message_definition", b"").decode("utf-8", "replace"), msgtype))
+    if store is not None:
+        store.register(get_types_from_msg(
+            fields.get("message_definition", b"").decode("utf-8", "replace"), msgtype))
     name = msgtype if "/msg/" in msgtype else msgtype.replace("/", "/msg/", 1)
     return fields["topic"].decode("utf-8", "replace"), name

@@ -43,6 +43,19 @@ def _problem(error: BaseException) -> str:
     return str(error).strip() or type(error).__name__
 
 
+def db3_topics(storages: list[Path]) -> set[str] | None:
+    """The topics of a db3 bag from its topics tables alone; None where one is unreadable."""
+    names: set[str] = set()
+    try:
+        for storage in storages:
+            with closing(_connect(storage)) as db:
+                names |= {name for (name,) in db.execute("SELECT name FROM topics")
+                          if isinstance(name, str)}
+    except SQLITE_FAILURES:
+        return None
+    return names
+
+
 class Db3Bag:
     """The storage files of one bag, their topics and a type store for their messages."""
 
