@@ -100,6 +100,7 @@ class SignalCollector:
                                {topic: topic for topic in sources.topics}))
         self.namespace_fixed = False      # set once the log's topics decided the namespace
         self.claimed: set[str] = set()    # profile topics `wants` found a name for
+        self.refused: set[str] = set()    # log topics `wants` said no to
         # Typed arrays: 8 bytes a sample, not a Python object, so long dives stay small.
         self.times: dict[str, array[int]] = {name: array("q") for name in self.wanted}
         self.values: dict[str, array[float]] = {name: array("d") for name in self.wanted}
@@ -158,7 +159,7 @@ class SignalCollector:
         index): a profile topic is read under the first name it shows up with, at the root
         or under the namespace the first namespaced one showed (`require_topics` checks
         the choice against all of the log's topics at the end)."""
-        if topic in self.log_names or self.namespace_fixed:
+        if topic in self.log_names or self.namespace_fixed or topic in self.refused:
             return topic in self.log_names
         for wanted in self.sources.topics - self.claimed:
             suffix = "/" + wanted.lstrip("/")
@@ -170,6 +171,7 @@ class SignalCollector:
             self._apply(Resolution(namespace or self.namespace,
                                    {**self.names, wanted: topic}))
             return True
+        self.refused.add(topic)       # salvage asks once a message
         return False
 
     def field_paths(self, topic: str) -> list[str]:
