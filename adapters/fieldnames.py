@@ -26,13 +26,22 @@ def unresolved(topic: str, path: str, signal: str, names: Sequence[str]) -> str:
     return f"{topic} has no field {path!r} (signal {signal}); its fields, closest first: {offered}"
 
 
+def message_fields(typestore: Any, msgtype: str) -> list[tuple[str, Any]]:
+    """A ROS message type's fields (name, rosbags' descriptor), from the store's definitions:
+    its ``get_msgdef`` would also compile a dozen (de)serialisers per type, unused here.
+    KeyError for a type the store does not know."""
+    from rosbags.typesys.base import normalize_fieldname
+
+    return [(normalize_fieldname(name), desc) for name, desc in typestore.fielddefs[msgtype][1]]
+
+
 def ros_field_paths(typestore: Any, msgtype: str, prefix: str = "", depth: int = 0
                     ) -> list[str]:
     """Every value's path in a ROS message definition: ``twist.linear.x``, ``data[0]``
     (a sequence or array is shown by its first element)."""
     paths: list[str] = []
     try:
-        fields = typestore.get_msgdef(msgtype).fields
+        fields = message_fields(typestore, msgtype)
     except Exception:  # a type the store does not know: nothing to list
         return paths
     for name, (kind, detail) in fields:

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from adapters.collect import SignalCollector
-from adapters.fieldnames import ros_field_paths
+from adapters.fieldnames import message_fields, ros_field_paths
 from adapters.fieldpath import parse_field_path
 from adapters.packed import gather_words, gathered
 from auvdiag_errors import LogError
@@ -123,7 +123,7 @@ class ColumnReader:
 
     def _fields(self, typename: str) -> list[tuple[str, tuple[str, Any]]]:
         return [(name, self._node(desc))
-                for name, desc in self.typestore.get_msgdef(typename).fields]
+                for name, desc in message_fields(self.typestore, typename)]
 
     def _counts(self, node: tuple[str, Any], positions: np.ndarray, rows: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray]:
