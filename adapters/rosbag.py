@@ -40,9 +40,18 @@ def _recording_order(path: Path) -> list[str | int]:
     return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
 
 
+def _storage_kind(path: Path) -> str | None:
+    """``.mcap`` or ``.db3`` for a storage file, also one rosbag2 compressed whole
+    (compression mode ``file``: ``NAME_0.db3.zstd``)."""
+    suffixes = path.suffixes[-2:]
+    if suffixes[-1:] == [".zstd"]:
+        suffixes = suffixes[:-1]
+    kind = suffixes[-1] if suffixes else None
+    return kind if kind in (".mcap", ".db3") else None
+
+
 def _storage_files(directory: Path) -> list[Path]:
-    return sorted((p for p in directory.iterdir() if p.suffix in (".mcap", ".db3")),
-                  key=_recording_order)
+    return sorted((p for p in directory.iterdir() if _storage_kind(p)), key=_recording_order)
 
 
 def bag_storages(path: Path) -> list[Path]:
@@ -74,7 +83,7 @@ class RosbagAdapter:
         if path.is_dir():
             storage = _storage_files(path)
             if (path / "metadata.yaml").is_file() and storage:
-                return "ros2-mcap" if storage[0].suffix == ".mcap" else "db3"
+                return "ros2-mcap" if _storage_kind(storage[0]) == ".mcap" else "db3"
             return None
         if not path.is_file():
             return None

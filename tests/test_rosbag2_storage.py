@@ -106,3 +106,18 @@ def test_messages_compressed_by_rosbag2_are_decompressed(dive, tmp_path, profile
     rewrite(dive, compressed, "ros2-mcap", compression=CompressionMode.MESSAGE)
     assert_same_signals(read_log(compressed, profile.sources),
                         read_log(plain, profile.sources))
+
+
+@pytest.mark.parametrize("fmt", ["db3", "ros2-mcap"])
+def test_a_bag_compressed_file_by_file_is_read(fmt, dive, tmp_path, profile):
+    """rosbag2's compression mode ``file`` leaves NAME_0.db3.zstd (or .mcap.zstd) beside
+    metadata.yaml; it reads as the plain bag."""
+    plain, compressed = tmp_path / "plain", tmp_path / "compressed"
+    rewrite(dive, plain, fmt)
+    rewrite(dive, compressed, fmt, compression=CompressionMode.FILE)
+    assert [p.suffix for p in compressed.iterdir() if p.name != "metadata.yaml"] == [".zstd"]
+    read = read_log(compressed, profile.sources)
+    assert read.format == fmt
+    assert_same_signals(read, read_log(plain, profile.sources))
+    held, _ = inventory(compressed)
+    assert {t.name for t in held.topics} == {t.name for t in inventory(plain)[0].topics}
