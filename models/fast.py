@@ -8,7 +8,6 @@ Long rollouts go to the numba-compiled loop in `models.compiled` when numba is i
 Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 
 import importlib.util
-import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cache
@@ -34,13 +33,21 @@ def compiled_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-_expected_steps = 0     # sequential steps announced in this process so far
+_expected_steps = 0     # sequential steps announced since `new_replay_budget`
+
+
+def new_replay_budget() -> None:
+    """A new piece of work (one log's diagnosis) begins: which loop replays follows the
+    steps it announces, never what the process ran before. The two loops agree to float32
+    rounding only, and a log's figures must not depend on the logs diagnosed before it."""
+    global _expected_steps
+    _expected_steps = 0
 
 
 def expect_steps(steps: int) -> None:
     """Say that about ``steps`` sequential steps are coming in several calls (batches of
-    rollouts, each as long as its longest): the compiled loop is loaded now once the steps
-    announced in this process (a diagnosis replays once per hypothesis) pay for it."""
+    rollouts, each as long as its longest): the compiled loop is loaded now, and used from
+    now on, once the steps announced (a diagnosis replays once per hypothesis) pay for it."""
     global _expected_steps
     _expected_steps += steps
     if compiled_available() and _expected_steps >= COMPILED_PAYS_FROM_STEPS:
@@ -54,9 +61,8 @@ def _use_compiled(engine: Engine, rollout_steps: int) -> bool:
         if not compiled_available():
             raise RuntimeError("the compiled replay needs numba (pip install numba)")
         return True
-    already_loaded = "models.compiled" in sys.modules
-    return compiled_available() and (already_loaded
-                                     or rollout_steps >= COMPILED_PAYS_FROM_STEPS)
+    return compiled_available() and max(rollout_steps, _expected_steps) >= \
+        COMPILED_PAYS_FROM_STEPS
 
 
 @dataclass(frozen=True)

@@ -57,15 +57,17 @@ def test_a_nan_command_poisons_what_follows_and_nothing_before(engine):
     assert np.isnan(states[121:]).all()
 
 
-def test_long_replays_take_the_compiled_loop_and_short_ones_need_not(monkeypatch):
-    import sys
-
+def test_long_replays_take_the_compiled_loop_and_short_ones_need_not():
     from models import fast
 
-    monkeypatch.delitem(sys.modules, "models.compiled", raising=False)
+    fast.new_replay_budget()
     assert not fast._use_compiled("auto", 600)
     assert fast._use_compiled("auto", fast.COMPILED_PAYS_FROM_STEPS)
     assert not fast._use_compiled("numpy", 10**6)
+    fast.expect_steps(fast.COMPILED_PAYS_FROM_STEPS)     # many short replays announced
+    assert fast._use_compiled("auto", 600)
+    fast.new_replay_budget()                             # the next log starts afresh
+    assert not fast._use_compiled("auto", 600)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -82,3 +84,19 @@ def test_a_replay_run_in_chunks_is_the_same_replay(monkeypatch, engine):
     monkeypatch.setattr(models.fast, "CHUNK_VALUES", 7 * 3 * model.fast.hidden)
     chunked = fast_replay(model.fast, model.normaliser, commands, start, engine)
     np.testing.assert_allclose(chunked, reference, rtol=0, atol=1e-6)
+
+
+def test_a_logs_figures_do_not_depend_on_what_the_process_did_before(make_log, profile):
+    """An audit worker diagnoses log after log: one that needed the compiled loop (a long
+    or faulty log) must not change the figures of the next, replayed on the NumPy loop."""
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from models import fast
+    from models.store import load_model
+
+    model = load_model()
+    log = make_log("paper-normal", 11)
+    first = diagnose(log, profile, model)
+    fast.expect_steps(fast.COMPILED_PAYS_FROM_STEPS)     # as a faulty log's isolation does
+    again = diagnose(log, profile, model)
+    assert np.array_equal(first.histories.matching.g_percent,
+                          again.histories.matching.g_percent, equal_nan=True)

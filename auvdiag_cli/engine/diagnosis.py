@@ -46,6 +46,7 @@ from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import CompanionError, ModelError
+from models.fast import new_replay_budget
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
@@ -119,6 +120,7 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
 def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                       companion_runs: Sequence[tuple[DmsRun, int]] = (),
                       mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
+    new_replay_budget()
     frame, signals = log.frame, log.signals
     judging = Judging.of(model, profile)
     not_judged, decision = judging.not_judged, judging.decision_steps
