@@ -34,6 +34,7 @@ def compiled_available() -> bool:
 
 
 _expected_steps = 0     # sequential steps announced since `new_replay_budget`
+_many_logs = False      # `replay_many_logs`: every replay of this process is compiled
 
 
 def new_replay_budget() -> None:
@@ -42,6 +43,14 @@ def new_replay_budget() -> None:
     rounding only, and a log's figures must not depend on the logs diagnosed before it."""
     global _expected_steps
     _expected_steps = 0
+
+
+def replay_many_logs() -> None:
+    """This process replays log after log (an audit's worker): the compiled loop, loaded
+    once, replays every log, so that each log of the audit is replayed the same way
+    whatever came before it (the NumPy loop would be chosen for short logs otherwise)."""
+    global _many_logs
+    _many_logs = True
 
 
 def expect_steps(steps: int) -> None:
@@ -61,8 +70,8 @@ def _use_compiled(engine: Engine, rollout_steps: int) -> bool:
         if not compiled_available():
             raise RuntimeError("the compiled replay needs numba (pip install numba)")
         return True
-    return compiled_available() and max(rollout_steps, _expected_steps) >= \
-        COMPILED_PAYS_FROM_STEPS
+    return compiled_available() and (
+        _many_logs or max(rollout_steps, _expected_steps) >= COMPILED_PAYS_FROM_STEPS)
 
 
 @dataclass(frozen=True)

@@ -100,3 +100,16 @@ def test_a_logs_figures_do_not_depend_on_what_the_process_did_before(make_log, p
     again = diagnose(log, profile, model)
     assert np.array_equal(first.histories.matching.g_percent,
                           again.histories.matching.g_percent, equal_nan=True)
+
+
+def test_an_audit_worker_replays_every_log_on_the_compiled_loop(monkeypatch):
+    """A worker diagnoses log after log: loaded once, the compiled loop replays them all
+    (each log of an audit replayed the same way, whatever the worker did before)."""
+    from auvdiag_cli.audit import worker
+    from models import fast
+
+    monkeypatch.setattr(fast, "_many_logs", False)
+    worker._profile_and_model.cache_clear()
+    worker._profile_and_model(None, None)
+    fast.new_replay_budget()
+    assert fast._use_compiled("auto", 600)

@@ -36,8 +36,10 @@ class AuditOutcome:
 @cache
 def _profile_and_model(profile: str | None, model: str | None) -> tuple[Any, Any]:
     from auvdiag_cli.vehicle.profile import load_profile
+    from models.fast import replay_many_logs
     from models.store import load_model
 
+    replay_many_logs()
     vehicle = load_profile(None if profile is None else Path(profile))
     return vehicle, load_model(None if model is None else Path(model), vehicle.name)
 
