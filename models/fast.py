@@ -8,7 +8,8 @@ Long rollouts go to the numba-compiled loop in `models.compiled` when numba is i
 Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 
 import importlib.util
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -34,7 +35,7 @@ def compiled_available() -> bool:
 
 
 _expected_steps = 0     # sequential steps announced since `new_replay_budget`
-_many_logs = False      # `replay_many_logs`: every replay of this process is compiled
+_many_logs = False      # within `replaying_many_logs`: every replay is compiled
 
 
 def new_replay_budget() -> None:
@@ -45,12 +46,17 @@ def new_replay_budget() -> None:
     _expected_steps = 0
 
 
-def replay_many_logs() -> None:
-    """This process replays log after log (an audit's worker): the compiled loop, loaded
-    once, replays every log, so that each log of the audit is replayed the same way
-    whatever came before it (the NumPy loop would be chosen for short logs otherwise)."""
+@contextmanager
+def replaying_many_logs() -> Iterator[None]:
+    """Within: one of many logs replayed in a row (an audit's task): the compiled loop,
+    loaded once a process, replays every log, so that each log of the audit is replayed
+    the same way whatever came before it (the NumPy loop would take short logs otherwise)."""
     global _many_logs
-    _many_logs = True
+    before, _many_logs = _many_logs, True
+    try:
+        yield
+    finally:
+        _many_logs = before
 
 
 def expect_steps(steps: int) -> None:

@@ -87,8 +87,8 @@ def test_a_replay_run_in_chunks_is_the_same_replay(monkeypatch, engine):
 
 
 def test_a_logs_figures_do_not_depend_on_what_the_process_did_before(make_log, profile):
-    """An audit worker diagnoses log after log: one that needed the compiled loop (a long
-    or faulty log) must not change the figures of the next, replayed on the NumPy loop."""
+    """One log after another in a process: one that needed the compiled loop (a long or
+    faulty log) must not change the figures of the next, replayed on the NumPy loop."""
     from auvdiag_cli.engine.diagnosis import diagnose
     from models import fast
     from models.store import load_model
@@ -102,14 +102,22 @@ def test_a_logs_figures_do_not_depend_on_what_the_process_did_before(make_log, p
                           again.histories.matching.g_percent, equal_nan=True)
 
 
-def test_an_audit_worker_replays_every_log_on_the_compiled_loop(monkeypatch):
-    """A worker diagnoses log after log: loaded once, the compiled loop replays them all
-    (each log of an audit replayed the same way, whatever the worker did before)."""
-    from auvdiag_cli.audit import worker
+def test_an_audit_task_is_replayed_on_the_compiled_loop(monkeypatch, make_log):
+    """An audit diagnoses log after log: within a task the compiled loop, loaded once a
+    process, replays every log, short ones too (each replayed the same way, whatever came
+    before it); the choice does not outlast the task."""
+    from auvdiag_cli.audit.worker import AuditTask, analyse
     from models import fast
 
-    monkeypatch.setattr(fast, "_many_logs", False)
-    worker._profile_and_model.cache_clear()
-    worker._profile_and_model(None, None)
+    compiled = fast.FastDynamics._compiled_rollout
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return compiled(*args, **kwargs)
+
+    monkeypatch.setattr(fast.FastDynamics, "_compiled_rollout", counted)
+    outcome = analyse(AuditTask(str(make_log("paper-normal", 11)), None, None))
+    assert outcome.error is None and calls                # a 175 s log: NumPy alone
     fast.new_replay_budget()
-    assert fast._use_compiled("auto", 600)
+    assert not fast._use_compiled("auto", 600)

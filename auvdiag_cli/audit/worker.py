@@ -36,10 +36,8 @@ class AuditOutcome:
 @cache
 def _profile_and_model(profile: str | None, model: str | None) -> tuple[Any, Any]:
     from auvdiag_cli.vehicle.profile import load_profile
-    from models.fast import replay_many_logs
     from models.store import load_model
 
-    replay_many_logs()
     vehicle = load_profile(None if profile is None else Path(profile))
     return vehicle, load_model(None if model is None else Path(model), vehicle.name)
 
@@ -54,12 +52,14 @@ def analyse(task: AuditTask) -> AuditOutcome:
     from auvdiag_cli.jobs.truth import diagnose_with_truth
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
+    from models.fast import replaying_many_logs
 
     started = time.perf_counter()
     outcome = AuditOutcome(task.log, None)
     try:
         profile, model = _profile_and_model(task.profile, task.model)
-        result = diagnose_with_truth(Path(task.log), profile, model)
+        with replaying_many_logs():
+            result = diagnose_with_truth(Path(task.log), profile, model)
         outcome.document = diagnosis_to_dict(result)
         outcome.series = series_from_diagnosis(result)
     except AuvdiagError as error:
