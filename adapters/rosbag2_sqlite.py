@@ -6,7 +6,7 @@ Message definitions come from the bag's ``message_definitions`` table (Iron and 
 types it does not define (Humble and older write none) come from ROS 2 Humble's."""
 
 import sqlite3
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from contextlib import closing
 from pathlib import Path
 from typing import Any
@@ -28,6 +28,10 @@ ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on l
 # is not UTF-8, which Python raises as UnicodeDecodeError. From a query, both are damage.
 SQLITE_FAILURES = (sqlite3.Error, MemoryError, UnicodeDecodeError)
 IDL_SEPARATOR = "=" * 80 + "\n"
+# Past damaged pages: strides of 1, 2, 4 … row ids, at most this many (2**40 rows ahead).
+STRIDES_AT_MOST = 40
+MAX_ROW_ID = 2**63 - 1
+Row = tuple[int, int, bytes]               # topic_id, timestamp, data
 
 
 def _connect(storage: Path) -> sqlite3.Connection:
@@ -101,10 +105,7 @@ class Db3Bag:
                 with closing(_connect(storage)) as db:
                     ids = {topic_id: name for topic_id, name in db.execute(
                         "SELECT id, name FROM topics") if name in wanted}
-                    marks = ",".join("?" * len(ids))
-                    cursor = db.execute("SELECT topic_id, timestamp, data FROM messages "
-                                        f"WHERE topic_id IN ({marks})", list(ids))
-                    while rows := _fetch(cursor):
+                    for rows in _WantedRows(db, list(ids), collector, storage):
                         _hand_over(rows, ids, batches)
 
         batches.fill(feed)
@@ -133,16 +134,90 @@ class Db3Bag:
         return LogInventory("db3", *span, topics)
 
 
-def _fetch(cursor: sqlite3.Cursor) -> list[tuple[int, int, bytes]]:
+class _WantedRows:
+    """The wanted topics' messages of one storage file in storage order, a fetch at a time
+    (topic, time and data only: a row id with each would cost a tenth of the read). Past
+    damaged pages the reading goes on at the next row sqlite can read, noted as damage: the
+    last readable row before them is found one row at a time, then they are stepped over
+    in doubling strides of row ids; the damage is raised when no stride gets past it."""
+
+    def __init__(self, db: sqlite3.Connection, topic_ids: list[int],
+                 collector: SignalCollector, storage: Path) -> None:
+        self.db, self.topic_ids, self.collector, self.storage = db, topic_ids, collector, storage
+        marks = ",".join("?" * len(topic_ids))
+        self.where = f"FROM messages WHERE topic_id IN ({marks}) AND id > ? ORDER BY id"
+        self.start = 0           # rows after this id are still to read (rosbag2 counts from 1)
+        self.fetched = 0         # rows the current bulk read has handed over
+
+    def __iter__(self) -> Iterator[list[Row]]:
+        stride = probes = 0
+        while True:
+            try:
+                yield from self._bulk(stride)
+                return
+            except SQLITE_FAILURES:
+                if stride and not self.fetched:          # the stride fell short of the end
+                    probes += 1
+                    if probes > STRIDES_AT_MOST or self.start + 2 * stride >= MAX_ROW_ID:
+                        raise
+                    stride *= 2
+                    continue
+            try:
+                yield from self._creep()
+                return
+            except SQLITE_FAILURES:
+                stride, probes = 1, 1
+
+    def _bulk(self, stride: int) -> Iterator[list[Row]]:
+        begin, self.fetched = self.start + stride, 0
+        try:
+            cursor = self.db.execute(f"SELECT topic_id, timestamp, data {self.where}",
+                                     [*self.topic_ids, begin])
+            while rows := _fetch(cursor, ROWS_AT_ONCE):
+                if stride and not self.fetched:
+                    _stepped_over(self.collector, f"{self.storage.name}: rows "
+                                  f"{self.start + 1} to {self._id_after(begin, 0) - 1} "
+                                  "unreadable (damaged pages); read on after them")
+                self.fetched += len(rows)
+                yield rows
+        except SQLITE_FAILURES:
+            if self.fetched:
+                self.start = self._id_after(begin, self.fetched - 1)
+            raise
+
+    def _creep(self) -> Iterator[list[Row]]:
+        """One row at a time, each with its id, up to the damage."""
+        cursor = self.db.execute(f"SELECT id, topic_id, timestamp, data {self.where}",
+                                 [*self.topic_ids, self.start])
+        while fetched := _fetch(cursor, 1):
+            row_id, topic_id, stamp, data = fetched[0]
+            self.start = row_id
+            yield [(topic_id, stamp, data)]
+
+    def _id_after(self, begin: int, skip: int) -> int:
+        """The id of the wanted row ``skip`` rows past the first after ``begin``."""
+        (found,) = self.db.execute(f"SELECT id {self.where} LIMIT 1 OFFSET ?",
+                                   [*self.topic_ids, begin, skip]).fetchone()
+        return int(found)
+
+
+def _stepped_over(collector: SignalCollector, what: str) -> None:
+    """The first damage stepped over is the log's; any further one is a note."""
+    if collector.damage is None:
+        collector.damaged(what)
+    else:
+        collector.notes.append(what)
+
+
+def _fetch(cursor: sqlite3.Cursor, size: int) -> list[Any]:
     try:
-        return cursor.fetchmany(ROWS_AT_ONCE)
+        return cursor.fetchmany(size)
     except MemoryError:
         raise sqlite3.DatabaseError("a record declares more bytes than sqlite will read "
                                     "(database disk image is malformed)") from None
 
 
-def _hand_over(rows: list[tuple[int, int, bytes]], topics: dict[int, str],
-               batches: TopicBatches) -> None:
+def _hand_over(rows: list[Row], topics: dict[int, str], batches: TopicBatches) -> None:
     """One fetch of rows, split by topic, each topic's blobs joined into one buffer."""
     topic_ids, stamps, blobs = zip(*rows, strict=True)
     ids = np.fromiter(topic_ids, np.int64, len(rows))

@@ -121,3 +121,22 @@ def test_a_bag_compressed_file_by_file_is_read(fmt, dive, tmp_path, profile):
     assert_same_signals(read, read_log(plain, profile.sources))
     held, _ = inventory(compressed)
     assert {t.name for t in held.topics} == {t.name for t in inventory(plain)[0].topics}
+
+
+def test_damaged_pages_in_a_db3_are_stepped_over(dive, tmp_path, profile):
+    """A damaged page halfway through the messages table: sqlite stops there, the reader
+    goes on at the next readable row and says which rows it could not read."""
+    damaged = tmp_path / "damaged"
+    shutil.copytree(dive, damaged)
+    storage = next(damaged.glob("*.db3"))
+    pages = storage.stat().st_size // 4096
+    with storage.open("r+b") as stream:
+        stream.seek(4096 * (pages // 2))
+        stream.write(b"\xff" * 200)
+    read, whole = read_log(damaged, profile.sources), read_log(dive, profile.sources)
+    assert read.damage is not None and "unreadable (damaged pages); read on" in \
+        read.damage.reason
+    for name, series in whole.series.items():
+        assert 0.9 * len(series) <= len(read.series[name]) <= len(series)
+    assert read.messages_read < whole.messages_read   # the damaged page's rows are lost
+    assert read.end_ns == whole.end_ns               # the messages after the damage are in
