@@ -22,6 +22,8 @@ import time
 from datetime import date
 from pathlib import Path
 
+from bytecode import write_bytecode  # benchmarks/bytecode.py, beside this script
+
 FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
 ROS_TOPICS = ["/thrusters/command", "/flow/velocity", "/imu/data", "/diagnosis/sequence"]
 MAVLINK_TYPES = ["SERVO_OUTPUT_RAW", "NAMED_VALUE_FLOAT", "ATTITUDE", "STATUSTEXT"]
@@ -155,6 +157,7 @@ def main() -> None:
     if args.child:
         child(args.child[0], args.child[1], Path(args.child[2]))
         return
+    write_bytecode()          # as on an installed copy: no process compiles the sources
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="auvdiag-ingest-"))
     workdir.mkdir(parents=True, exist_ok=True)
     try:

@@ -26,6 +26,8 @@ import time
 from datetime import date
 from pathlib import Path
 
+from bytecode import write_bytecode  # benchmarks/bytecode.py, beside this script
+
 ONE_THREAD = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
 FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
@@ -205,6 +207,7 @@ def main() -> None:
                   "replay": child_replay}[kind]()
         print(json.dumps(result))
         return
+    write_bytecode()          # as on an installed copy: no process compiles the sources
     workdir = args.workdir or Path(tempfile.mkdtemp(prefix="auvdiag-speed-"))
     workdir.mkdir(parents=True, exist_ok=True)
     formats = args.formats.split(",")
