@@ -9,7 +9,7 @@ import numpy as np
 
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
-from adapters.namespace import ROOT, Resolution, normalised, resolve
+from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve
 from adapters.signals import (
     Damage,
     FieldSource,
@@ -268,8 +268,7 @@ class SignalCollector:
         if settled.names != self.names and (self.namespace_fixed or self.count):
             raise LogError(self.path, f"the profile's topics are under the namespace "
                            f"{settled.namespace or '/'}, but the first ones read were under "
-                           f"{self.namespace or '/'}: name it with namespace = "
-                           f"\"{settled.namespace or '/'}\" under [sources.ros] in the profile")
+                           f"{self.namespace or '/'}: " + naming_hint(settled.namespace))
         self._apply(settled)
         self.namespace_fixed = True
         signals = self.sources.signals

@@ -47,6 +47,11 @@ def resolve(path: Path, wanted: Collection[str], available: Iterable[str],
     return Resolution(namespace, names)
 
 
+def naming_hint(namespace: str) -> str:
+    """How a user picks the namespace to read."""
+    return f"name it with namespace = \"{namespace or '/'}\" under [sources.ros] in the profile"
+
+
 def _found_namespace(path: Path, wanted: Collection[str], log_topics: set[str]) -> str:
     at_root = sum(topic in log_topics for topic in wanted)
     if at_root == len(wanted):
@@ -63,7 +68,6 @@ def _found_namespace(path: Path, wanted: Collection[str], log_topics: set[str]) 
     best = sorted(ns for ns, count in held.items() if count == most)
     if len(best) > 1:
         raise LogError(path, f"the profile's topics are under {len(best)} namespaces "
-                             f"({', '.join(best)}): the log holds several vehicles; name one "
-                             f"with namespace = \"{best[0]}\" under [sources.ros] in the "
-                             "profile")
+                             f"({', '.join(best)}): the log holds several vehicles; "
+                             + naming_hint(best[0]))
     return best[0]

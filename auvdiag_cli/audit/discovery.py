@@ -47,6 +47,10 @@ def _set_companions_apart(found: Discovery) -> None:
                            and named_after_a_log(log)]
     found.companions += readable_companions
     found.logs = [log for log in found.logs if log not in readable_companions]
+
+
+def _set_copies_apart(found: Discovery) -> None:
+    """A copy of another log found (`copies`) is skipped, with the reason."""
     copied = copies(found.logs)
     found.skipped += list(copied.items())
     found.logs = [log for log in found.logs if log not in copied]
@@ -108,6 +112,7 @@ def discover(paths: Sequence[str], exclude: Sequence[Path] = ()) -> Discovery:
         unique.setdefault(log.resolve(), log)
     found.logs = list(unique.values())
     _set_companions_apart(found)
+    _set_copies_apart(found)
     return found
 
 
