@@ -15,7 +15,6 @@ message instead."""
 from array import array
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -35,6 +34,26 @@ CDR_LITTLE_ENDIAN = (0x01, 0x03)             # CDR_LE, PL_CDR_LE
 
 class NotColumnar(ValueError):
     """This field of these messages cannot be read column-wise."""
+
+
+@dataclass(frozen=True)
+class PlacedMessages:
+    """Serialised messages of one topic where they lie: message i is
+    ``data[starts[i]:ends[i]]`` (a log's own bytes, read in place, or a gathered batch)."""
+
+    cdr: bool
+    data: np.ndarray            # uint8
+    starts: np.ndarray          # int64
+    ends: np.ndarray            # int64
+    times_ns: np.ndarray        # int64
+
+    def placed(self) -> "PlacedMessages":
+        return self
+
+    def messages(self) -> list[bytes]:
+        """Each message's bytes (for the per-message fallback)."""
+        return [bytes(self.data[a:b]) for a, b in zip(self.starts.tolist(), self.ends.tolist(),
+                                                       strict=True)]
 
 
 @dataclass
@@ -60,22 +79,27 @@ class RawMessages:
     def __len__(self) -> int:
         return len(self.starts)
 
+    def placed(self) -> PlacedMessages:
+        """The messages back to back in the buffer, each ending where the next begins."""
+        starts = np.frombuffer(self.starts, np.int64) if len(self) else np.zeros(0, np.int64)
+        data = np.frombuffer(self.buffer, np.uint8)
+        ends = np.append(starts[1:], data.size)[:starts.size]
+        times = np.frombuffer(self.times_ns, np.int64) if len(self) else np.zeros(0, np.int64)
+        return PlacedMessages(self.cdr, data, starts, ends, times)
+
     def messages(self) -> list[bytes]:
-        """Each message's bytes (for the per-message fallback)."""
-        bounds = [*self.starts, len(self.buffer)]
-        return [bytes(self.buffer[a:b]) for a, b in pairwise(bounds)]
+        return self.placed().messages()
 
 
 class ColumnReader:
     """Field paths → one NumPy column per path (numbers) or object column (strings)."""
 
-    def __init__(self, messages: RawMessages, msgtype: str, typestore: Any) -> None:
-        self.msgtype, self.typestore, self.cdr = msgtype, typestore, messages.cdr
-        self.raw = messages.buffer
-        self.data = np.frombuffer(self.raw, np.uint8)
-        starts = np.frombuffer(messages.starts, np.int64) if len(messages) else np.zeros(
-            0, np.int64)
-        self.ends = np.append(starts[1:], self.data.size)[:starts.size]
+    def __init__(self, messages: RawMessages | PlacedMessages, msgtype: str,
+                 typestore: Any) -> None:
+        placed = messages.placed()
+        self.msgtype, self.typestore, self.cdr = msgtype, typestore, placed.cdr
+        self.data = self.raw = placed.data
+        starts, self.ends = placed.starts, placed.ends
         if self.cdr:
             if starts.size and not np.isin(self.data[starts + 1], CDR_LITTLE_ENDIAN).all():
                 raise NotColumnar("big-endian CDR")
@@ -223,6 +247,18 @@ class TopicBatches:
         batch.extend(times_ns[keep], *gathered(data, starts[keep], ends[keep]))
         self._hand_over_if_full(topic, batch)
 
+    def hand_over_in_place(self, topic: str, times_ns: np.ndarray, data: np.ndarray,
+                           starts: np.ndarray, ends: np.ndarray) -> None:
+        """Many messages of a topic read where they lie in ``data`` (the log's own bytes),
+        handed over now: no copy, and ``data`` is not kept. Messages batched for the
+        topic before them go first."""
+        keep = self.collector.accepts_times(times_ns)
+        pending = self.pending.pop(topic, None)
+        if pending is not None:
+            self._add(topic, pending.placed())
+        self._add(topic, PlacedMessages(self.cdr, data, starts[keep], ends[keep],
+                                        times_ns[keep]))
+
     def _batch(self, topic: str) -> RawMessages:
         batch = self.pending.get(topic)
         if batch is None:        # not setdefault: that would build a batch per message
@@ -231,11 +267,12 @@ class TopicBatches:
 
     def _hand_over_if_full(self, topic: str, batch: RawMessages) -> None:
         if len(batch.buffer) >= self.BATCH_BYTES:
-            self._add(topic, self.pending.pop(topic))
+            self._add(topic, self.pending.pop(topic).placed())
 
     def flush(self) -> None:
         while self.pending:
-            self._add(*self.pending.popitem())
+            topic, batch = self.pending.popitem()
+            self._add(topic, batch.placed())
 
     def fill(self, feed: Callable[[], None]) -> None:
         """Run ``feed`` (which appends the log's messages) and hand everything over. Damage
@@ -264,16 +301,15 @@ class TopicBatches:
         collector.notes.append(reason)
         collector.damaged(reason)
 
-    def _add(self, topic: str, batch: RawMessages) -> None:
+    def _add(self, topic: str, batch: PlacedMessages) -> None:
         msgtype = self.msgtypes[topic]
         try:
             reader = ColumnReader(batch, msgtype, self.typestore)
             columns = {path: reader.column(path)
                        for path in self.collector.field_paths(topic)}
         except (NotColumnar, KeyError, IndexError):
-            for time_ns, raw in zip(batch.times_ns, batch.messages(), strict=True):
+            for time_ns, raw in zip(batch.times_ns.tolist(), batch.messages(), strict=True):
                 self.collector.add(topic, time_ns, self.deserialize(raw, msgtype))
             return
-        self.collector.add_columns(topic, np.frombuffer(batch.times_ns, np.int64),
-                                   columns.__getitem__,
+        self.collector.add_columns(topic, batch.times_ns, columns.__getitem__,
                                    ros_field_paths(self.typestore, msgtype))

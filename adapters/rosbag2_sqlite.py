@@ -19,6 +19,7 @@ from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.limits import MAX_CHUNK_BYTES
 from adapters.ros_columns import TopicBatches
+from adapters.rosbag2_pages import Span, read_pages
 from adapters.signals import Signals
 from auvdiag_errors import LogError
 
@@ -83,7 +84,7 @@ class Db3Bag:
             raise LogError(path, f"cannot open db3 log: {_problem(error)}") from None
         self.store = _typestore(definitions, set(self.topics.values()))
 
-    def span(self) -> tuple[int | None, int | None]:
+    def span(self) -> Span:
         firsts, lasts = [], []
         for storage in self.storages:
             with closing(_connect(storage)) as db:
@@ -100,20 +101,35 @@ class Db3Bag:
         batches = TopicBatches(collector, self.topics, True, self.store,
                                self.store.deserialize_cdr)
 
+        spans: list[Span] = []
+
         def feed() -> None:
             for storage in self.storages:
                 with closing(_connect(storage)) as db:
                     ids = {topic_id: name for topic_id, name in db.execute(
                         "SELECT id, name FROM topics") if name in wanted}
-                    for rows in _WantedRows(db, list(ids), collector, storage):
-                        _hand_over(rows, ids, batches)
+                    paged = read_pages(storage, db, ids, batches.hand_over_in_place)
+                    spans.append(paged.span())
+                    if paged.whole:
+                        continue
+                    rows = _WantedRows(db, list(ids), collector, storage)
+                    rows.start = paged.last_row
+                    for fetched in rows:
+                        _hand_over(fetched, ids, batches)
 
         batches.fill(feed)
+        return collector.finish("db3", *self._span(spans), self.topics)
+
+    def _span(self, spans: list[Span]) -> Span:
+        """The bag's first and last message time: from the pages where every file was read
+        from them, else from sqlite (None where damage hides it: the data then tells)."""
+        if len(spans) == len(self.storages) and all(first is not None for first, _ in spans):
+            return (min(first for first, _ in spans if first is not None),
+                    max(last for _, last in spans if last is not None))
         try:
-            span = self.span()
-        except SQLITE_FAILURES:      # the damage is already noted; the data gives the span
-            span = (None, None)
-        return collector.finish("db3", *span, self.topics)
+            return self.span()
+        except SQLITE_FAILURES:
+            return (None, None)
 
     def inventory(self) -> LogInventory:
         counts: dict[str, int] = dict.fromkeys(self.topics, 0)
