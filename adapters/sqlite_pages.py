@@ -21,8 +21,8 @@ MAGIC = b"SQLite format 3\x00"
 INTERIOR_TABLE, LEAF_TABLE = 0x05, 0x0D
 INTERIOR_HEADER, LEAF_HEADER = 12, 8
 MAX_DEPTH = 24                 # far more levels than 2**63 rows need at the smallest page
-PAGES_AT_ONCE = 2048           # leaf pages read and decoded together: bounds memory
-READ_ACROSS_PAGES = 8          # pages apart that still come in one read
+BYTES_AT_ONCE = 8 << 20        # of pages read and decoded together: bounds memory
+READ_ACROSS_BYTES = 32 << 10   # pages this close come in one read, with those between
 # Bytes a value of serial type 0 to 11 takes (10 and 11 are reserved: never written).
 SERIAL_SIZES = np.array([0, 1, 2, 3, 4, 6, 8, 8, 0, 0, -1, -1], np.int64)
 INTEGER_TYPES = (1, 2, 3, 4, 5, 6, 8, 9)
@@ -98,12 +98,11 @@ class SqliteFile:
         self.file.close()
 
     def records(self, root: int, columns: int) -> Iterator[Records]:
-        """The table's rows in rowid order, leaf pages ``PAGES_AT_ONCE`` at a time. Each
+        """The table's rows in rowid order, a few megabytes of leaf pages at a time. Each
         `Records` lies in the file's one buffer: use it before taking the next."""
-        leaves = self._leaf_pages(root)
         last_rowid = None
-        for first in range(0, leaves.size, PAGES_AT_ONCE):
-            data, bases = self._read_pages(leaves[first:first + PAGES_AT_ONCE])
+        for group in self._groups(self._leaf_pages(root)):
+            data, bases = self._read_pages(group)
             records = _leaf_records(data, bases, self.usable, columns)
             rowids = records.rowids
             if rowids.size and ((np.diff(rowids) <= 0).any()
@@ -113,28 +112,39 @@ class SqliteFile:
                 last_rowid = int(rowids[-1])
             yield records
 
+    def _groups(self, pages: np.ndarray) -> list[np.ndarray]:
+        """``pages`` in groups of ``BYTES_AT_ONCE``."""
+        size = max(1, BYTES_AT_ONCE // self.page_size)
+        return [pages[first:first + size] for first in range(0, pages.size, size)]
+
     def _leaf_pages(self, root: int) -> np.ndarray:
         """The table's leaf pages in key order, walking its interior pages a level at a
-        time (a page's children in cell order, then its right-most child)."""
+        time (a page's children in cell order, then its right-most child). All leaves lie
+        at one depth: the first page of a level says whether it is theirs (each leaf's own
+        kind is checked as it is read)."""
         level, listed = np.array([root], np.int64), 0
         for _ in range(MAX_DEPTH):
             listed += level.size
             if listed > self.page_count or np.unique(level).size != level.size:
                 raise NotPlain("a page listed twice")
-            data, bases = self._read_pages(level)
-            kinds = data[bases]
-            if (kinds == LEAF_TABLE).all():
+            data, bases = self._read_pages(level[:1])
+            if data[bases[0]] == LEAF_TABLE:
                 return level
-            if not (kinds == INTERIOR_TABLE).all():
-                raise NotPlain("not a rowid table's page")
-            cells, counts = _cell_offsets(data, bases, self.usable, INTERIOR_HEADER, 4)
-            children = _unsigned(data, cells, 4)
-            rightmost = _unsigned(data, bases + 8, 4)
-            level = np.empty(children.size + rightmost.size, np.int64)
-            last = np.cumsum(counts + 1) - 1
-            level[last] = rightmost
-            level[np.setdiff1d(np.arange(level.size), last, assume_unique=True)] = children
+            level = np.concatenate([self._children(group) for group in self._groups(level)])
         raise NotPlain("a tree deeper than any table's")
+
+    def _children(self, pages: np.ndarray) -> np.ndarray:
+        """The pages that interior ``pages`` point to, in key order."""
+        data, bases = self._read_pages(pages)
+        if not (data[bases] == INTERIOR_TABLE).all():
+            raise NotPlain("not a rowid table's interior page")
+        cells, counts = _cell_offsets(data, bases, self.usable, INTERIOR_HEADER, 4)
+        children = np.empty(cells.size + bases.size, np.int64)
+        last = np.cumsum(counts + 1) - 1
+        children[last] = _unsigned(data, bases + 8, 4)        # the right-most child
+        children[np.setdiff1d(np.arange(children.size), last, assume_unique=True)] = \
+            _unsigned(data, cells, 4)
+        return children
 
     def _read_pages(self, numbers: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The pages in ``data``, and where each of ``numbers`` begins there. Pages close
@@ -142,8 +152,8 @@ class SqliteFile:
         between a table's as both grow: reading them is cheaper than a call each)."""
         if numbers.size and (numbers.min() < 2 or numbers.max() > self.page_count):
             raise NotPlain("a page outside the file")
-        order = np.unique(numbers)
-        breaks = np.flatnonzero(np.diff(order) > READ_ACROSS_PAGES)
+        order = np.sort(numbers)
+        breaks = np.flatnonzero(np.diff(order) * self.page_size > READ_ACROSS_BYTES)
         firsts, lasts = order[np.r_[0, breaks + 1]], order[np.r_[breaks, order.size - 1]]
         lengths = (lasts - firsts + 1) * self.page_size
         offsets = np.cumsum(lengths) - lengths

@@ -53,7 +53,7 @@ def root_of(path: Path, table: str) -> int:
 def test_a_tables_rows_read_from_its_pages_are_sqlites(tmp_path, monkeypatch):
     path = tmp_path / "table.sqlite"
     held = make_table(path, 3000)
-    monkeypatch.setattr(adapters.sqlite_pages, "PAGES_AT_ONCE", 7)   # many reads, one buffer
+    monkeypatch.setattr(adapters.sqlite_pages, "BYTES_AT_ONCE", 7 * 512)  # many reads
     pages, seen, overflowing = SqliteFile(path), [], 0
     for records in pages.records(root_of(path, "t"), 4):
         seen += records.rowids.tolist()
@@ -169,7 +169,7 @@ def test_where_the_pages_stop_sqlite_reads_on(db3_dive, tmp_path, profile, monke
     sqlite_only(monkeypatch)
     reference = read_log(bag, profile.sources)
     monkeypatch.undo()
-    monkeypatch.setattr(adapters.sqlite_pages, "PAGES_AT_ONCE", 16)
+    monkeypatch.setattr(adapters.sqlite_pages, "BYTES_AT_ONCE", 16 * 4096)
     real_blobs, real_read, calls, progress = adapters.sqlite_pages.Records.blobs, \
         adapters.rosbag2_pages.read_pages, [], []
 
