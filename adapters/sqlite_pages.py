@@ -21,7 +21,7 @@ MAGIC = b"SQLite format 3\x00"
 INTERIOR_TABLE, LEAF_TABLE = 0x05, 0x0D
 INTERIOR_HEADER, LEAF_HEADER = 12, 8
 MAX_DEPTH = 24                 # far more levels than 2**63 rows need at the smallest page
-BYTES_AT_ONCE = 8 << 20        # of pages read and decoded together: bounds memory
+BYTES_AT_ONCE = 4 << 20        # of pages read and decoded together: bounds memory
 READ_ACROSS_BYTES = 32 << 10   # pages this close come in one read, with those between
 # Bytes a value of serial type 0 to 11 takes (10 and 11 are reserved: never written).
 SERIAL_SIZES = np.array([0, 1, 2, 3, 4, 6, 8, 8, 0, 0, -1, -1], np.int64)
@@ -125,7 +125,8 @@ class SqliteFile:
         level, listed = np.array([root], np.int64), 0
         for _ in range(MAX_DEPTH):
             listed += level.size
-            if listed > self.page_count or np.unique(level).size != level.size:
+            ordered = np.sort(level)
+            if listed > self.page_count or (ordered[1:] == ordered[:-1]).any():
                 raise NotPlain("a page listed twice")
             data, bases = self._read_pages(level[:1])
             if data[bases[0]] == LEAF_TABLE:
@@ -225,7 +226,7 @@ def _local_sizes(sizes: np.ndarray, usable: int) -> np.ndarray:
 
 
 def _value_sizes(types: np.ndarray) -> np.ndarray:
-    sizes = np.where(types >= 12, (types - 12) // 2, SERIAL_SIZES[np.minimum(types, 11)])
+    sizes = np.where(types >= 12, (types - 12) >> 1, SERIAL_SIZES.take(types, mode="clip"))
     if (sizes < 0).any():
         raise NotPlain("a reserved serial type")
     return sizes
@@ -240,19 +241,19 @@ def _varints(data: np.ndarray, positions: np.ndarray) -> tuple[np.ndarray, np.nd
         return first.astype(np.uint64), np.ones(positions.size, np.int64)
     values = np.zeros(positions.size, np.uint64)
     lengths = np.zeros(positions.size, np.int64)
-    going = np.arange(positions.size)
+    going = np.ones(positions.size, bool)
     for index in range(9):
-        if not going.size:
-            break
-        byte = data.take(positions[going] + index, mode="clip").astype(np.uint64)
+        byte = data.take(positions + index, mode="clip").astype(np.uint64)
         if index == 8:
-            values[going] = (values[going] << np.uint64(8)) | byte
+            np.copyto(values, (values << np.uint64(8)) | byte, where=going)
             lengths[going] = 9
             break
-        values[going] = (values[going] << np.uint64(7)) | (byte & np.uint64(0x7F))
-        ended = byte < 0x80
-        lengths[going[ended]] = index + 1
-        going = going[~ended]
+        np.copyto(values, (values << np.uint64(7)) | (byte & np.uint64(0x7F)), where=going)
+        ended = going & (byte < 0x80)
+        lengths[ended] = index + 1
+        going &= ~ended
+        if not going.any():
+            break
     return values, lengths
 
 
@@ -268,7 +269,7 @@ def _big_endian(data: np.ndarray, positions: np.ndarray, widths: np.ndarray) -> 
     if widths.size and (widths == widths[0]).all():           # the usual case: one width
         return _of_width(data, positions, int(widths[0]))
     values = np.zeros(positions.size, np.int64)
-    for width in np.unique(widths).tolist():
+    for width in np.flatnonzero(np.bincount(widths)).tolist():      # widths are 0 to 8
         at = np.flatnonzero(widths == width)
         values[at] = _of_width(data, positions[at], width)
     return values
