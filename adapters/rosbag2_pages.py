@@ -30,11 +30,14 @@ class MessagesTable:
 
     @classmethod
     def of(cls, db: sqlite3.Connection) -> "MessagesTable | None":
-        """The table's layout, or None where its key is not the row id or a column is
-        missing (sqlite then reads it)."""
-        found = db.execute("SELECT rootpage FROM sqlite_master "
-                           "WHERE type = 'table' AND name = 'messages'").fetchone()
-        columns = db.execute("PRAGMA table_info(messages)").fetchall()
+        """The table's layout, or None where its key is not the row id, a column is
+        missing or the schema cannot be read (sqlite then reads it, and names any damage)."""
+        try:
+            found = db.execute("SELECT rootpage FROM sqlite_master "
+                               "WHERE type = 'table' AND name = 'messages'").fetchone()
+            columns = db.execute("PRAGMA table_info(messages)").fetchall()
+        except sqlite3.Error:
+            return None
         names = [str(name) for _, name, *_ in columns]
         keys = [(name, str(kind).upper()) for _, name, kind, _, _, key in columns if key]
         if (found is None or not isinstance(found[0], int) or keys != [("id", "INTEGER")]

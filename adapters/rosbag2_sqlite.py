@@ -1,6 +1,8 @@
-"""ROS 2 bags in sqlite3 storage (``.db3``, one file or a bag split over several) read with
-one SQL query per file for the wanted topics, the message blobs handed over in bulk and
-their fields read column-wise, instead of one Python object per message.
+"""ROS 2 bags in sqlite3 storage (``.db3``, one file or a bag split over several), their
+messages' fields read column-wise instead of one Python object per message. Each storage
+file's messages table is read from the file's pages (`adapters.rosbag2_pages`); from
+wherever those hold what that reader does not follow, one SQL query for the wanted topics
+reads on, the blobs handed over a fetch at a time.
 
 Message definitions come from the bag's ``message_definitions`` table (Iron and later);
 types it does not define (Humble and older write none) come from ROS 2 Humble's."""
