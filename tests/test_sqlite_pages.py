@@ -20,17 +20,17 @@ INTEGERS = [0, 1, -1, 127, -128, 255, 2**15 - 1, -2**15, 2**23 - 1, -2**23, 2**3
             -2**31, 2**47 - 1, -2**47, 2**47, 2**63 - 1, -2**63]
 
 
-def make_table(path: Path, rows: int, overflowing: bool = True
+def make_table(path: Path, rows: int, overflowing: bool = True, page_size: int = 512
                ) -> dict[int, tuple[int, int, bytes]]:
-    """A table of ``rows`` rows on small pages (a tree three levels deep and more), blobs
-    of 0 to 300 bytes and (``overflowing``) a few that run onto overflow pages, some rows
-    deleted; what it holds, by row id."""
+    """A table of ``rows`` rows (on 512-byte pages, a tree three levels deep and more),
+    blobs of 0 to 300 bytes and (``overflowing``) a few that run onto overflow pages, some
+    rows deleted; what it holds, by row id."""
     rng = np.random.default_rng(7)
     with sqlite3.connect(path) as db:
-        db.execute("PRAGMA page_size = 512")
+        db.execute(f"PRAGMA page_size = {page_size}")
         db.execute("CREATE TABLE t (id INTEGER PRIMARY KEY, a INTEGER, b INTEGER, data BLOB)")
         for row in range(rows):
-            size = 2000 if overflowing and row % 97 == 5 else int(rng.integers(0, 300))
+            size = 4 * page_size if overflowing and row % 97 == 5 else int(rng.integers(0, 300))
             db.execute("INSERT INTO t (a, b, data) VALUES (?, ?, ?)",
                        (INTEGERS[row % len(INTEGERS)], int(rng.integers(-2**40, 2**40)),
                         rng.bytes(size)))
@@ -50,10 +50,11 @@ def root_of(path: Path, table: str) -> int:
     return int(root)
 
 
-def test_a_tables_rows_read_from_its_pages_are_sqlites(tmp_path, monkeypatch):
+@pytest.mark.parametrize("page_size", [512, 65536])     # the header writes 65536 as 1
+def test_a_tables_rows_read_from_its_pages_are_sqlites(tmp_path, monkeypatch, page_size):
     path = tmp_path / "table.sqlite"
-    held = make_table(path, 3000)
-    monkeypatch.setattr(adapters.sqlite_pages, "BYTES_AT_ONCE", 7 * 512)  # many reads
+    held = make_table(path, 3000, page_size=page_size)
+    monkeypatch.setattr(adapters.sqlite_pages, "BYTES_AT_ONCE", 7 * page_size)  # many reads
     pages, seen, overflowing = SqliteFile(path), [], 0
     for records in pages.records(root_of(path, "t"), 4):
         seen += records.rowids.tolist()
@@ -63,7 +64,7 @@ def test_a_tables_rows_read_from_its_pages_are_sqlites(tmp_path, monkeypatch):
             try:
                 start, end = records.blobs(3, np.array([row]))
             except NotPlain:                    # on overflow pages: not followed here
-                assert len(held[row_id][2]) > 400
+                assert len(held[row_id][2]) > page_size
                 overflowing += 1
                 continue
             assert records.data[start[0]:end[0]].tobytes() == held[row_id][2]
