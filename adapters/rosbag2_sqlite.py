@@ -31,7 +31,7 @@ ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on l
 # is not UTF-8, which Python raises as UnicodeDecodeError. From a query, both are damage.
 SQLITE_FAILURES = (sqlite3.Error, MemoryError, UnicodeDecodeError)
 IDL_SEPARATOR = "=" * 80 + "\n"
-# Past damaged pages: strides of 1, 2, 4 … row ids, at most this many (2**40 rows ahead).
+# Past damaged pages: strides of 1, 2, 4 … row ids, up to 2**40 rows ahead.
 STRIDES_AT_MOST = 40
 MAX_ROW_ID = 2**63 - 1
 Row = tuple[int, int, bytes]               # topic_id, timestamp, data
@@ -115,7 +115,7 @@ class Db3Bag:
                     if paged.whole:
                         continue
                     rows = _WantedRows(db, list(ids), collector, storage)
-                    rows.start = paged.last_row
+                    rows.next_id = paged.last_row + 1
                     for fetched in rows:
                         _hand_over(fetched, ids, batches)
 
@@ -156,64 +156,98 @@ class _WantedRows:
     """The wanted topics' messages of one storage file in storage order, a fetch at a time
     (topic, time and data only: a row id with each would cost a tenth of the read). Past
     damaged pages the reading goes on at the next row sqlite can read, noted as damage: the
-    last readable row before them is found one row at a time, then they are stepped over
-    in doubling strides of row ids; the damage is raised when no stride gets past it."""
+    last readable row before them is found one row at a time, then the fewest row ids
+    ahead from which sqlite reads again (strides that double until one reads, then halve
+    back); the damage is raised when no stride gets past it."""
 
     def __init__(self, db: sqlite3.Connection, topic_ids: list[int],
                  collector: SignalCollector, storage: Path) -> None:
         self.db, self.topic_ids, self.collector, self.storage = db, topic_ids, collector, storage
         marks = ",".join("?" * len(topic_ids))
-        self.where = f"FROM messages WHERE topic_id IN ({marks}) AND id > ? ORDER BY id"
-        self.start = 0           # rows after this id are still to read (rosbag2 counts from 1)
-        self.fetched = 0         # rows the current bulk read has handed over
+        # ``id >=``, not ``id >``: sqlite seeks ``id > N`` through the page holding N, so
+        # past a damaged page only the first id after it can be asked for.
+        self.where = f"FROM messages WHERE topic_id IN ({marks}) AND id >= ? ORDER BY id"
+        self.next_id = 1         # rows from this id on are still to read (rosbag2 counts from 1)
 
     def __iter__(self) -> Iterator[list[Row]]:
-        stride = probes = 0
         while True:
             try:
-                yield from self._bulk(stride)
+                yield from self._bulk()
                 return
             except SQLITE_FAILURES:
-                if stride and not self.fetched:          # the stride fell short of the end
-                    probes += 1
-                    if probes > STRIDES_AT_MOST or self.start + 2 * stride >= MAX_ROW_ID:
-                        raise
-                    stride *= 2
-                    continue
+                pass                           # `next_id` is past every row handed over
             try:
                 yield from self._creep()
                 return
-            except SQLITE_FAILURES:
-                stride, probes = 1, 1
+            except SQLITE_FAILURES as damage:
+                self._step_over(damage)
 
-    def _bulk(self, stride: int) -> Iterator[list[Row]]:
-        begin, self.fetched = self.start + stride, 0
+    def _bulk(self) -> Iterator[list[Row]]:
+        begin, fetched = self.next_id, 0
         try:
             cursor = self.db.execute(f"SELECT topic_id, timestamp, data {self.where}",
                                      [*self.topic_ids, begin])
             while rows := _fetch(cursor, ROWS_AT_ONCE):
-                if stride and not self.fetched:
-                    _stepped_over(self.collector, f"{self.storage.name}: rows "
-                                  f"{self.start + 1} to {self._id_after(begin, 0) - 1} "
-                                  "unreadable (damaged pages); read on after them")
-                self.fetched += len(rows)
+                fetched += len(rows)
                 yield rows
         except SQLITE_FAILURES:
-            if self.fetched:
-                self.start = self._id_after(begin, self.fetched - 1)
+            if fetched:
+                self.next_id = self._id_after(begin, fetched - 1) + 1
             raise
 
     def _creep(self) -> Iterator[list[Row]]:
-        """One row at a time, each with its id, up to the damage."""
-        cursor = self.db.execute(f"SELECT id, topic_id, timestamp, data {self.where}",
-                                 [*self.topic_ids, self.start])
-        while fetched := _fetch(cursor, 1):
-            row_id, topic_id, stamp, data = fetched[0]
-            self.start = row_id
-            yield [(topic_id, stamp, data)]
+        """One row at a time, each with its id, up to the damage. Python's sqlite3 steps to
+        the next row before it returns one, so the last row before damaged pages comes back
+        as the error; asked for alone (``LIMIT 1`` stops before the next row) it reads."""
+        query = f"SELECT id, topic_id, timestamp, data {self.where}"
+        cursor = self.db.execute(query, [*self.topic_ids, self.next_id])
+        try:
+            while fetched := _fetch(cursor, 1):
+                yield [self._handed(fetched[0])]
+        except SQLITE_FAILURES:
+            last = self.db.execute(f"{query} LIMIT 1", [*self.topic_ids, self.next_id])
+            if fetched := _fetch(last, 1):
+                yield [self._handed(fetched[0])]
+            raise
+
+    def _handed(self, row: tuple[int, int, int, bytes]) -> Row:
+        row_id, topic_id, stamp, data = row
+        self.next_id = row_id + 1
+        return topic_id, stamp, data
+
+    def _step_over(self, damage: BaseException) -> None:
+        """Move ``next_id`` past the damaged pages at it, noting the rows lost."""
+        failed, stride = 0, 1
+        readable, found = self._probe(self.next_id + stride)
+        while not readable:
+            failed, stride = stride, 2 * stride
+            if stride > 2**STRIDES_AT_MOST or self.next_id + stride >= MAX_ROW_ID:
+                raise damage
+            readable, found = self._probe(self.next_id + stride)
+        while stride - failed > 1:
+            middle = (failed + stride) // 2
+            readable, first = self._probe(self.next_id + middle)
+            if readable:
+                stride, found = middle, first
+            else:
+                failed = middle
+        lost = f"rows {self.next_id} to {found - 1}" if found is not None else \
+            f"the rows from {self.next_id} on"
+        _stepped_over(self.collector, f"{self.storage.name}: {lost} unreadable (damaged "
+                      "pages); read on after them")
+        self.next_id = found if found is not None else self.next_id + stride
+
+    def _probe(self, begin: int) -> tuple[bool, int | None]:
+        """Whether sqlite reads the rows from id ``begin`` on, and the first wanted one's id."""
+        try:
+            found = self.db.execute(f"SELECT id {self.where} LIMIT 1",
+                                    [*self.topic_ids, begin]).fetchone()
+        except SQLITE_FAILURES:
+            return False, None
+        return True, None if found is None else int(found[0])
 
     def _id_after(self, begin: int, skip: int) -> int:
-        """The id of the wanted row ``skip`` rows past the first after ``begin``."""
+        """The id of the wanted row ``skip`` rows past the first from ``begin`` on."""
         (found,) = self.db.execute(f"SELECT id {self.where} LIMIT 1 OFFSET ?",
                                    [*self.topic_ids, begin, skip]).fetchone()
         return int(found)
