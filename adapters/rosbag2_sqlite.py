@@ -9,7 +9,7 @@ types it does not define (Humble and older write none) come from ROS 2 Humble's.
 
 import sqlite3
 from collections.abc import Iterable, Iterator
-from contextlib import closing
+from contextlib import closing, suppress
 from pathlib import Path
 from typing import Any
 from urllib.parse import quote
@@ -26,6 +26,7 @@ from adapters.signals import Signals
 from auvdiag_errors import LogError
 
 ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on long bags
+CREPT_AT_ONCE = 1000           # rows read one at a time (up to damage) handed over together
 # sqlite reports a damaged record that declares more bytes than it will allocate as "out of
 # memory", which Python raises as MemoryError; an error message quoting a damaged schema
 # is not UTF-8, which Python raises as UnicodeDecodeError. From a query, both are damage.
@@ -192,27 +193,38 @@ class _WantedRows:
                 yield rows
         except SQLITE_FAILURES:
             if fetched:
-                self.next_id = self._id_after(begin, fetched - 1) + 1
+                self.next_id = max(self.next_id, self._id_after(begin, fetched - 1) + 1)
             raise
 
     def _creep(self) -> Iterator[list[Row]]:
-        """One row at a time, each with its id, up to the damage. Python's sqlite3 steps to
-        the next row before it returns one, so the last row before damaged pages comes back
-        as the error; asked for alone (``LIMIT 1`` stops before the next row) it reads."""
+        """One row at a time, each with its id, up to the damage; handed over in batches.
+        Python's sqlite3 steps to the next row before it returns one, so the last row
+        before damaged pages comes back as the error; asked for alone (``LIMIT 1`` stops
+        before the next row) it reads."""
         query = f"SELECT id, topic_id, timestamp, data {self.where}"
         cursor = self.db.execute(query, [*self.topic_ids, self.next_id])
+        crept: list[Row] = []
+        damage: BaseException | None = None
         try:
             while fetched := _fetch(cursor, 1):
-                yield [self._handed(fetched[0])]
-        except SQLITE_FAILURES:
-            last = self.db.execute(f"{query} LIMIT 1", [*self.topic_ids, self.next_id])
-            if fetched := _fetch(last, 1):
-                yield [self._handed(fetched[0])]
-            raise
+                crept.append(self._handed(fetched[0]))
+                if len(crept) == CREPT_AT_ONCE:
+                    yield crept
+                    crept = []
+        except SQLITE_FAILURES as error:
+            damage = error
+            with suppress(*SQLITE_FAILURES):
+                if fetched := _fetch(self.db.execute(f"{query} LIMIT 1",
+                                                     [*self.topic_ids, self.next_id]), 1):
+                    crept.append(self._handed(fetched[0]))
+        if crept:
+            yield crept
+        if damage is not None:
+            raise damage
 
     def _handed(self, row: tuple[int, int, int, bytes]) -> Row:
         row_id, topic_id, stamp, data = row
-        self.next_id = row_id + 1
+        self.next_id = max(self.next_id, row_id + 1)     # damaged pages can misorder ids
         return topic_id, stamp, data
 
     def _step_over(self, damage: BaseException) -> None:
@@ -238,13 +250,14 @@ class _WantedRows:
         self.next_id = found if found is not None else self.next_id + stride
 
     def _probe(self, begin: int) -> tuple[bool, int | None]:
-        """Whether sqlite reads the rows from id ``begin`` on, and the first wanted one's id."""
+        """Whether sqlite reads the rows from id ``begin`` on, and the first wanted one's id
+        (``begin`` at least: a damaged tree can answer with a smaller one)."""
         try:
             found = self.db.execute(f"SELECT id {self.where} LIMIT 1",
                                     [*self.topic_ids, begin]).fetchone()
         except SQLITE_FAILURES:
             return False, None
-        return True, None if found is None else int(found[0])
+        return True, None if found is None else max(int(found[0]), begin)
 
     def _id_after(self, begin: int, skip: int) -> int:
         """The id of the wanted row ``skip`` rows past the first from ``begin`` on."""
