@@ -270,9 +270,20 @@ class TopicBatches:
             self._add(topic, self.pending.pop(topic).placed())
 
     def flush(self) -> None:
+        """Hand every pending batch over. A batch holding a message its definition does not
+        describe keeps the messages before that one, and does not keep the other topics'
+        batches from the collector: the first such failure is raised after them all."""
+        failure: Exception | None = None
         while self.pending:
             topic, batch = self.pending.popitem()
-            self._add(topic, batch.placed())
+            try:
+                self._add(topic, batch.placed())
+            except LogError:
+                raise
+            except Exception as error:  # damaged data surfaces as several unrelated types
+                failure = failure or error
+        if failure is not None:
+            raise failure
 
     def fill(self, feed: Callable[[], None]) -> None:
         """Run ``feed`` (which appends the log's messages) and hand everything over. Damage
