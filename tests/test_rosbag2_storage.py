@@ -148,3 +148,36 @@ def test_damaged_pages_in_a_db3_are_stepped_over(dive, tmp_path, profile):
     # Exactly the damaged page's rows are lost (all of them wanted), none after it.
     assert last - first + 1 == rows_on_it == whole.messages_read - read.messages_read
     assert read.end_ns == whole.end_ns
+
+
+def test_a_damaged_message_in_one_topic_keeps_the_other_topics(dive, tmp_path, profile,
+                                                                monkeypatch):
+    """One IMU message cut short: the IMU's batch stops at it (the messages before it are
+    kept), and every other topic's batch still reaches the signals; the cut is the damage."""
+    import sqlite3
+
+    import adapters.rosbag2_pages
+    from adapters.sqlite_pages import NotPlain
+
+    def refuse(*_: object) -> None:        # through sqlite, where batches wait per topic
+        raise NotPlain("refused for the test")
+
+    monkeypatch.setattr(adapters.rosbag2_pages, "SqliteFile", refuse)
+    damaged = tmp_path / "damaged"
+    shutil.copytree(dive, damaged)
+    storage = next(damaged.glob("*.db3"))
+    with sqlite3.connect(storage) as db:
+        db.execute("UPDATE messages SET data = substr(data, 1, 12) WHERE id = (SELECT m.id "
+                   "FROM messages m JOIN topics t ON m.topic_id = t.id "
+                   "WHERE t.name = '/imu/data' ORDER BY m.id LIMIT 1 OFFSET 100)")
+    db.close()
+    read, whole = read_log(damaged, profile.sources), read_log(dive, profile.sources)
+    assert read.damage is not None
+    imu_signals = {name for name, signal in profile.sources["ros"].signals.items()
+                   if signal.topic == "/imu/data"}
+    assert imu_signals and set(read.series) == set(whole.series)
+    for name, series in whole.series.items():
+        if name in imu_signals:
+            assert len(read.series[name]) == 100       # the messages before the cut one
+        else:
+            assert len(read.series[name]) == len(series)
