@@ -8,7 +8,7 @@ Message definitions come from the bag's ``message_definitions`` table (Iron and 
 types it does not define (Humble and older write none) come from ROS 2 Humble's."""
 
 import sqlite3
-from collections.abc import Iterable, Iterator
+from collections.abc import Generator, Iterable, Iterator
 from contextlib import closing, suppress
 from pathlib import Path
 from typing import Any
@@ -171,19 +171,16 @@ class _WantedRows:
         self.next_id = 1         # rows from this id on are still to read (rosbag2 counts from 1)
 
     def __iter__(self) -> Iterator[list[Row]]:
-        while True:
-            try:
-                yield from self._bulk()
-                return
-            except SQLITE_FAILURES:
-                pass                           # `next_id` is past every row handed over
+        while not (yield from self._bulk()):
             try:
                 yield from self._creep()
                 return
             except SQLITE_FAILURES as damage:
                 self._step_over(damage)
 
-    def _bulk(self) -> Iterator[list[Row]]:
+    def _bulk(self) -> Generator[list[Row], None, bool]:
+        """Fetches from ``next_id`` on; whether they reached the end (else ``next_id`` is
+        past every row handed over, and damage stopped them)."""
         begin, fetched = self.next_id, 0
         try:
             cursor = self.db.execute(f"SELECT topic_id, timestamp, data {self.where}",
@@ -194,7 +191,8 @@ class _WantedRows:
         except SQLITE_FAILURES:
             if fetched:
                 self.next_id = max(self.next_id, self._id_after(begin, fetched - 1) + 1)
-            raise
+            return False
+        return True
 
     def _creep(self) -> Iterator[list[Row]]:
         """One row at a time, each with its id, up to the damage; handed over in batches.
