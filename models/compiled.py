@@ -1,6 +1,6 @@
-"""The replay loop compiled with numba: the same arithmetic as `FastDynamics.advance`, one
-sample at a time, with no per-step Python. A one-hour 10 Hz log replays in about a tenth
-of a second instead of most of one.
+"""The replay loop compiled with numba: the same model as the NumPy loop
+(`models.numpy_step`), one sample at a time, with no per-step Python. A one-hour 10 Hz log
+replays in about a tenth of a second instead of most of one.
 
 Compiled once per machine (about 3 s, cached beside this file or in the user's cache);
 loading the cached kernel costs about 0.4 s per process, mostly importing numba. Only

@@ -10,13 +10,14 @@ Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 import importlib.util
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
-from functools import cache
+from dataclasses import dataclass, fields
+from functools import cache, cached_property
 from typing import Literal
 
 import numpy as np
 
 from models.normaliser import Normaliser
+from models.numpy_step import FusedStep
 
 Engine = Literal["auto", "numpy", "compiled"]
 # Loading the compiled kernel costs about 0.4 s a process; the NumPy loop 8-20 µs a step,
@@ -134,6 +135,11 @@ class FastDynamics:
     def hidden(self) -> int:
         return self.hidden_weights.shape[0]
 
+    @cached_property
+    def fused(self) -> FusedStep:
+        """The weights as the NumPy loop steps them (`models.numpy_step`)."""
+        return FusedStep.of(*(getattr(self, f.name) for f in fields(self)))
+
     def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
                 engine: Engine = "auto") -> np.ndarray:
         """Free-run ``batch`` rollouts in normalised units: commands (batch, steps, n_c),
@@ -151,18 +157,20 @@ class FastDynamics:
         for first in range(0, steps - 1, chunk_steps):
             last = min(first + chunk_steps, steps - 1)      # steps first … last − 1 advance
             chunk = commands[:, first:last]
-            gates = chunk @ self.input_commands + self.input_bias
-            head = chunk @ self.head_commands + self.head_bias
-            linear = self.linear_from(chunk)
             if compiled:
-                self._compiled_rollout(gates, head, linear, states[:, first], hidden,
+                self._compiled_rollout(chunk @ self.input_commands + self.input_bias,
+                                       chunk @ self.head_commands + self.head_bias,
+                                       self.linear_from(chunk), states[:, first], hidden,
                                        states[:, first + 1:last + 1])
                 continue
+            # Step-major, so that each step's inputs and states are contiguous.
+            inputs = self.fused.inputs(chunk.transpose(1, 0, 2))
+            advanced = np.empty((last - first, batch, states.shape[2]), np.float32)
             state = states[:, first]
             for k in range(last - first):
-                state, hidden = self.advance(gates[:, k], head[:, k], linear[:, k], state,
-                                             hidden)
-                states[:, first + k + 1] = state
+                state, hidden = self.fused.advance(inputs[k], state, hidden)
+                advanced[k] = state
+            states[:, first + 1:last + 1] = advanced.transpose(1, 0, 2)
         return states
 
     def _compiled_rollout(self, gates_from_commands: np.ndarray,
@@ -186,23 +194,6 @@ class FastDynamics:
                        np.ascontiguousarray(linear_from_commands, np.float32),
                        outputs_by_inputs(self.linear[:self.out_bias.size]), out)
         states[:] = out
-
-    def advance(self, gates_from_command: np.ndarray, head_from_command: np.ndarray,
-                linear_from_command: np.ndarray, state: np.ndarray, hidden: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """One step, given what the command contributes (see `rollout`)."""
-        h = self.hidden
-        x_gates = gates_from_command + state @ self.input_states
-        h_gates = hidden @ self.hidden_weights + self.hidden_bias
-        # The logistic function as tanh: equal, and it cannot overflow on extreme inputs.
-        reset_update = 0.5 + 0.5 * np.tanh(0.5 * (x_gates[:, :2 * h] + h_gates[:, :2 * h]))
-        reset, update = reset_update[:, :h], reset_update[:, h:]
-        candidate = np.tanh(x_gates[:, 2 * h:] + reset * h_gates[:, 2 * h:])
-        hidden = candidate + update * (hidden - candidate)
-        layer = np.tanh(hidden @ self.head_hidden + head_from_command + state @ self.head_states)
-        linear = linear_from_command + state @ self.linear[:self.out_bias.size]
-        return (state + self.delta_ratio * (layer @ self.out_weights + self.out_bias) + linear,
-                hidden)
 
 
 # The predictors a model can keep per signal, simplest first (kept on a tie).
@@ -273,9 +264,8 @@ class FastStepper:
     def step(self, command: np.ndarray) -> np.ndarray:
         scaled = (np.asarray(command) / self.command_scale).astype(np.float32)[None]
         for m, d in enumerate(self.dynamics.members):
-            self.states[m], self.hidden[m] = d.advance(
-                scaled @ d.input_commands + d.input_bias, scaled @ d.head_commands
-                + d.head_bias, d.linear_from(scaled), self.states[m], self.hidden[m])
+            self.states[m], self.hidden[m] = d.fused.advance(
+                d.fused.inputs(scaled), self.states[m], self.hidden[m])
         return self.current
 
 

@@ -72,18 +72,30 @@ def robust_state(sensors: np.ndarray, index: int, begin: int = 0, end: int | Non
     """The state at ``index``: per signal, the median of the measured samples within
     START_HALF_WIDTH steps of it, inside [begin, end); NaN where a signal has none."""
     stop = len(sensors) if end is None else end
-    window = sensors[max(begin, index - START_HALF_WIDTH):min(stop, index + START_HALF_WIDTH + 1)]
-    state = np.full(sensors.shape[1], np.nan)
-    measured = np.isfinite(window)
-    for column in np.flatnonzero(measured.any(axis=0)):
-        state[column] = np.median(window[measured[:, column], column])
-    return state
+    return robust_states(sensors, np.array([index]), np.array([begin]), np.array([stop]))[0]
+
+
+def robust_states(sensors: np.ndarray, indices: np.ndarray, begins: np.ndarray,
+                  ends: np.ndarray) -> np.ndarray:
+    """`robust_state` at many indices at once, (len(indices), n_signals)."""
+    offsets = indices[:, None] + np.arange(-START_HALF_WIDTH, START_HALF_WIDTH + 1)
+    windows = sensors[np.clip(offsets, 0, len(sensors) - 1)]
+    windows[(offsets < begins[:, None]) | (offsets >= ends[:, None])] = np.nan
+    # NaN sorts last, so the measured samples lead and the median lies among them.
+    ordered = np.sort(windows, axis=1)
+    counts = np.isfinite(ordered).sum(axis=1, keepdims=True)
+    lower = np.take_along_axis(ordered, np.maximum(counts - 1, 0) // 2, axis=1)[:, 0]
+    upper = np.take_along_axis(ordered, counts // 2, axis=1)[:, 0]
+    return np.where(counts[:, 0] > 0, (lower + upper) / 2, np.nan)
 
 
 def start_states(sensors: np.ndarray, plan: Sequence[Rollout]) -> np.ndarray:
     """The robust state each rollout starts from (module docstring)."""
-    return np.asarray([robust_state(sensors, r.start, r.stretch_begin, r.stretch_end)
-                       for r in plan]).reshape(len(plan), sensors.shape[1])
+    def column(field: str) -> np.ndarray:
+        return np.array([getattr(r, field) for r in plan], dtype=np.int64)
+
+    return robust_states(sensors, column("start"), column("stretch_begin"),
+                         column("stretch_end"))
 
 
 def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
