@@ -17,26 +17,41 @@ SPIKE_FLOOR = 0.1         # of the signal's full scale
 MAD_TO_SIGMA = 1.4826
 
 
-def centred_median(values: np.ndarray, window: int, min_periods: int) -> np.ndarray:
+def centred_median(values: np.ndarray, window: int, min_periods: int,
+                   rows: np.ndarray | None = None) -> np.ndarray:
     """The median of the finite values in a centred window of ``window`` samples (NaN where
     it holds fewer than ``min_periods``; the middle two averaged for an even count), as
-    pandas' rolling(window, center=True, min_periods).median() gives it."""
+    pandas' rolling(window, center=True, min_periods).median() gives it; at ``rows`` only
+    when given."""
     after = (window - 1) // 2
     padded = np.concatenate((np.full(window - 1 - after, np.nan), values, np.full(after, np.nan)))
-    windows = np.sort(sliding_window_view(padded, window), axis=1)     # NaN sorts last
-    count = np.isfinite(windows).sum(axis=1)
-    rows = np.arange(values.size)
-    low, high = np.maximum(count - 1, 0) // 2, np.maximum(count, 1) // 2
-    median = 0.5 * (windows[rows, low] + windows[rows, np.minimum(high, window - 1)])
+    windows = sliding_window_view(padded, window)
+    finite = np.concatenate(([0], np.cumsum(np.isfinite(padded))))
+    count = finite[window:] - finite[:-window]
+    if rows is not None:
+        windows, count = windows[rows], count[rows]
+    ordered = np.sort(windows, axis=1).ravel()                          # NaN sorts last
+    first = np.arange(0, ordered.size, window)
+    low, high = np.maximum(count - 1, 0) // 2, np.minimum(np.maximum(count, 1) // 2, window - 1)
+    median = 0.5 * (ordered[first + low] + ordered[first + high])
     return np.where(count >= min_periods, median, np.nan)
 
 
 def spike_mask(values: np.ndarray, full_scale: float) -> np.ndarray:
     departure = np.abs(values - centred_median(values, SPIKE_WINDOW, 3))
-    scatter = MAD_TO_SIGMA * centred_median(departure, SCALE_WINDOW, 5)
+    # Only a sample further out than the floor can be a spike: the local scatter is worked
+    # out for those alone (the wider median is most of the cost).
     with np.errstate(invalid="ignore"):
-        limit = np.maximum(SPIKE_SIGMAS * scatter, SPIKE_FLOOR * full_scale)
-        return np.asarray(departure > limit)
+        candidates = np.flatnonzero(departure > SPIKE_FLOOR * full_scale)
+    many = 4 * candidates.size > values.size       # then one pass over all is cheaper
+    scatter = MAD_TO_SIGMA * centred_median(departure, SCALE_WINDOW, 5,
+                                            None if many else candidates)
+    if many:
+        scatter = scatter[candidates]
+    spikes = np.zeros(values.size, bool)
+    with np.errstate(invalid="ignore"):
+        spikes[candidates] = departure[candidates] > SPIKE_SIGMAS * scatter
+    return spikes
 
 
 def remove_spikes(sensors: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],
