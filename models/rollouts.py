@@ -104,7 +104,16 @@ def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
     """Every rollout of ``plan`` advanced (in normalised units), in batches of rollouts of
     like length so that padding never doubles the memory; the prediction in physical units,
     NaN where nothing is predicted."""
-    modelled = np.full(sensors.shape, np.nan)
+    return replay_trials(dynamics, [commands], sensors, plan, command_scale, state_scale)[0]
+
+
+def replay_trials(dynamics: Rollouts, trials: Sequence[np.ndarray], sensors: np.ndarray,
+                  plan: Sequence[Rollout], command_scale: np.ndarray,
+                  state_scale: np.ndarray) -> list[np.ndarray]:
+    """`replay_plan` for several command histories of one log (trials: each actuator fault
+    assumed in turn), all advancing together: each step's Python overhead is paid once for
+    every trial, so they cost little more than one replay."""
+    modelled = [np.full(sensors.shape, np.nan) for _ in trials]
     starts = start_states(sensors, plan) / state_scale if plan else np.empty((0, 0))
     batches = _batches_of_like_length(plan)
     expect_steps(sum(plan[rows[0]].end - plan[rows[0]].start for rows in batches))
@@ -112,11 +121,12 @@ def replay_plan(dynamics: Rollouts, commands: np.ndarray, sensors: np.ndarray,
         longest = max(plan[row].end - plan[row].start for row in rows)
         batch = np.stack([np.pad(commands[plan[row].start:plan[row].end],
                                  ((0, longest - (plan[row].end - plan[row].start)), (0, 0)),
-                                 mode="edge") for row in rows]) / command_scale
-        states = dynamics.rollout(batch.astype(np.float32), starts[rows])
-        for k, row in enumerate(rows):
+                                 mode="edge") for commands in trials for row in rows])
+        states = dynamics.rollout((batch / command_scale).astype(np.float32),
+                                  np.tile(starts[rows], (len(trials), 1)))
+        for k, (trial, row) in enumerate(itertools.product(range(len(trials)), rows)):
             r = plan[row]
-            modelled[r.start:r.end] = states[k, :r.end - r.start].astype(np.float64) \
+            modelled[trial][r.start:r.end] = states[k, :r.end - r.start].astype(np.float64) \
                 * state_scale
     return modelled
 

@@ -21,16 +21,15 @@ log where the table's sensor cannot.
 """
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
-from auvdiag_cli.engine.residuals import Matching, match
+from auvdiag_cli.engine.residuals import Matching, match_trials
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import Profile
-from models.fast import expect_steps
 from models.store import LoadedModel
 
 THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
@@ -116,20 +115,21 @@ def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
 
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
                          judge: _Judge, restarts: Sequence[int]) -> list[Hypothesis]:
-    found = []
     components = dict.fromkeys(c.component for c in profile.commands)
-    # Each trial replays the log from the onset: together they may pay for the compiled loop.
-    expect_steps(len(components) * len(THRUST_FRACTIONS) * (len(frame.time_s) - judge.onset))
-    for component in components:
+    trials = [(component, fraction) for component in components
+              for fraction in THRUST_FRACTIONS]
+    histories = []
+    for component, fraction in trials:
         columns = [i for i, c in enumerate(profile.commands) if c.component == component]
-        for fraction in THRUST_FRACTIONS:
-            commands = frame.commands.copy()
-            commands[judge.onset:, columns] *= np.sqrt(fraction)
-            trial = match(model, replace(frame, commands=commands), judge.judging.full_scale,
-                          judge.judging.window, restarts, since=judge.onset)
-            found.append(Hypothesis(component, "dead" if fraction == 0 else "weakened",
-                                    judge.ratio(trial.g_percent[judge.onset:]), fraction))
-    return found
+        commands = frame.commands.copy()
+        commands[judge.onset:, columns] *= np.sqrt(fraction)
+        histories.append(commands)
+    # Every trial replays the log from the onset, all of them together.
+    matched = match_trials(model, frame, histories, judge.judging.full_scale,
+                           judge.judging.window, restarts, since=judge.onset)
+    return [Hypothesis(component, "dead" if fraction == 0 else "weakened",
+                       judge.ratio(trial.g_percent[judge.onset:]), fraction)
+            for (component, fraction), trial in zip(trials, matched, strict=True)]
 
 
 def _sensor_hypotheses(profile: Profile, frame: AlignedFrame, matching: Matching,

@@ -81,7 +81,11 @@ class AlignedFrame:
     @property
     def drive(self) -> np.ndarray:
         """What the model is driven by: the commands, then the measured inputs."""
-        return np.hstack([self.commands, self.inputs]) if self.input_names else self.commands
+        return self.drive_with(self.commands)
+
+    def drive_with(self, commands: np.ndarray) -> np.ndarray:
+        """`drive`, with other commands (a fault assumed) and this log's measured inputs."""
+        return np.hstack([commands, self.inputs]) if self.input_names else commands
 
 
 def _unjump(series: Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.resample import AlignedFrame
-from models.rollouts import plan_rollouts, replay_plan
+from models.rollouts import plan_rollouts, replay_trials
 from models.store import LoadedModel
 
 
@@ -53,15 +53,31 @@ def match(model: LoadedModel, frame: AlignedFrame, full_scale: dict[str, float],
     ``restarts`` (grid indices), and every horizon of the model inside them. Only g from
     step ``since`` on is wanted: rollouts that end a window or more before it are not run
     (SM and g stay NaN there)."""
+    return match_trials(model, frame, [frame.commands], full_scale, window, restarts, since)[0]
+
+
+def match_trials(model: LoadedModel, frame: AlignedFrame, trials: Sequence[np.ndarray],
+                 full_scale: dict[str, float], window: int, restarts: Sequence[int] = (),
+                 since: int = 0) -> list[Matching]:
+    """`match` for each of several command histories (``trials``) of the log of
+    ``frame``, replayed together (`models.rollouts.replay_trials`)."""
     measured = frame.sensors
     scales = np.asarray([full_scale[name] for name in frame.sensor_names])
     plan = [r for r in plan_rollouts(measured, [*frame.restarts, *restarts],
                                      model.horizon_steps) if r.end > since - window]
-    modelled = replay_plan(model.dynamics, frame.drive, measured, plan,
-                           np.asarray(model.normaliser.command_scale),
-                           np.asarray(model.normaliser.state_scale))
+    replays = replay_trials(model.dynamics, [frame.drive_with(c) for c in trials],
+                            measured, plan, np.asarray(model.normaliser.command_scale),
+                            np.asarray(model.normaliser.state_scale))
+    stretches = sorted({(r.stretch_begin, r.stretch_end) for r in plan})
+    return [Matching(measured, modelled, _g_within(stretches, measured, modelled, scales,
+                                                   window)) for modelled in replays]
+
+
+def _g_within(stretches: Sequence[tuple[int, int]], measured: np.ndarray,
+              modelled: np.ndarray, scales: np.ndarray, window: int) -> np.ndarray:
+    """g where something was replayed; its window runs on across the model's own
+    re-starts, never across a stretch's edge."""
     g = np.full_like(measured, np.nan)
-    # g's window runs on across the model's own re-starts, never across a stretch's edge.
-    for begin, end in sorted({(r.stretch_begin, r.stretch_end) for r in plan}):
+    for begin, end in stretches:
         g[begin:end] = residual_index(measured[begin:end], modelled[begin:end], scales, window)
-    return Matching(measured, modelled, g)
+    return g
