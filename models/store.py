@@ -14,7 +14,6 @@ import json
 import os
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -202,7 +201,8 @@ class LoadedModel:
 
 def default_model_dir(vehicle: str = "twin-burger") -> Path:
     """Where the shipped model of a vehicle (the profile's ``vehicle.name``) lives."""
-    return Path(str(resources.files("models") / vehicle.replace("-", "_")))
+    # The package is installed as files (see auvdiag_cli.vehicle.profile.BUILTIN_FOLDER).
+    return Path(__file__).parent / vehicle.replace("-", "_")
 
 
 def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normaliser,

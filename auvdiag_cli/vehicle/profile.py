@@ -3,7 +3,6 @@
 import math
 import tomllib
 from dataclasses import dataclass, fields
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -335,9 +334,14 @@ def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
     return DiagnosisSequence(name, reader.get("description", str, ""), tuple(steps))
 
 
+# The package is installed as files: its folder is found without importlib.resources,
+# whose import (tempfile, zipfile, ...) was a tenth of a diagnosis's imports.
+BUILTIN_FOLDER = Path(__file__).parent / "profiles"
+
+
 def builtin_profiles() -> tuple[str, ...]:
     """The names of the profiles shipped with auvdiag (auvdiag_cli/vehicle/profiles)."""
-    folder = resources.files("auvdiag_cli.vehicle") / "profiles"
+    folder = BUILTIN_FOLDER
     return tuple(sorted(entry.name.removesuffix(".toml") for entry in folder.iterdir()
                         if entry.name.endswith(".toml")))
 
@@ -347,7 +351,7 @@ def profile_text(path: Path | None = None) -> tuple[str, str]:
     (see `builtin_profiles`); None is the Twin-Burger of the paper."""
     name = "twin_burger" if path is None else str(path)
     if path is None or (name in builtin_profiles() and not path.exists()):
-        resource = resources.files("auvdiag_cli.vehicle") / "profiles" / f"{name}.toml"
+        resource = BUILTIN_FOLDER / f"{name}.toml"
         return resource.read_text(encoding="utf-8"), f"builtin:{name}"
     try:
         return path.read_text(encoding="utf-8"), str(path)
