@@ -231,6 +231,9 @@ class TopicBatches:
         self.collector, self.msgtypes, self.cdr = collector, msgtypes, cdr
         self.typestore, self.deserialize = typestore, deserialize
         self.pending: dict[str, RawMessages] = {}
+        self.decoded: set[str] = set()      # topics with a message read
+        # Per topic, messages left out as undecodable since the last flush, and why.
+        self.left_out: dict[str, tuple[int, Exception]] = {}
 
     def append(self, topic: str, time_ns: int, raw: bytes | memoryview) -> None:
         if not self.collector.accepts_time(time_ns):
@@ -282,6 +285,12 @@ class TopicBatches:
                 raise
             except Exception as error:  # damaged data surfaces as several unrelated types
                 failure = failure or error
+        for topic, (count, first) in self.left_out.items():
+            reason = (f"{count} message(s) of {topic} left out: their bytes do not match "
+                      f"the topic's definition (first: {first})")
+            self.collector.notes.append(reason)
+            self.collector.damaged(reason)
+        self.left_out.clear()
         if failure is not None:
             raise failure
 
@@ -319,8 +328,30 @@ class TopicBatches:
             columns = {path: reader.column(path)
                        for path in self.collector.field_paths(topic)}
         except (NotColumnar, KeyError, IndexError):
-            for time_ns, raw in zip(batch.times_ns.tolist(), batch.messages(), strict=True):
-                self.collector.add(topic, time_ns, self.deserialize(raw, msgtype))
+            self._add_one_by_one(topic, msgtype, batch)
             return
         self.collector.add_columns(topic, batch.times_ns, columns.__getitem__,
                                    ros_field_paths(self.typestore, msgtype))
+        self.decoded.add(topic)
+
+    def _add_one_by_one(self, topic: str, msgtype: str, batch: PlacedMessages) -> None:
+        """Each message deserialised alone. One that does not decode is left out and
+        counted, and the read goes on: every ROS storage frames its messages, so the next
+        one is whole. Where none has decoded yet for the topic, its definition may not
+        describe it at all: that is raised (the read ends there, as at any damage)."""
+        first: Exception | None = None
+        count = 0
+        for time_ns, raw in zip(batch.times_ns.tolist(), batch.messages(), strict=True):
+            try:
+                message = self.deserialize(raw, msgtype)
+            except Exception as error:  # damaged data surfaces as several unrelated types
+                first, count = first or error, count + 1
+                continue
+            self.collector.add(topic, time_ns, message)
+            self.decoded.add(topic)
+        if first is None:
+            return
+        if topic not in self.decoded:
+            raise first
+        earlier, earliest = self.left_out.get(topic, (0, first))
+        self.left_out[topic] = (earlier + count, earliest)

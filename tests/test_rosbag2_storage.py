@@ -150,19 +150,22 @@ def test_damaged_pages_in_a_db3_are_stepped_over(dive, tmp_path, profile):
     assert read.end_ns == whole.end_ns
 
 
-def test_a_damaged_message_in_one_topic_keeps_the_other_topics(dive, tmp_path, profile,
-                                                                monkeypatch):
-    """One IMU message cut short: the IMU's batch stops at it (the messages before it are
-    kept), and every other topic's batch still reaches the signals; the cut is the damage."""
+@pytest.mark.parametrize("path", ["sqlite", "pages"])
+def test_a_damaged_message_is_left_out_and_the_read_goes_on(dive, tmp_path, profile,
+                                                            monkeypatch, path):
+    """One IMU message cut short: that message alone is left out, counted and noted as the
+    damage; the IMU's messages after it and every other topic's are all read. Through
+    sqlite (batches wait per topic) and from the pages (a batch per group of pages)."""
     import sqlite3
 
     import adapters.rosbag2_pages
     from adapters.sqlite_pages import NotPlain
 
-    def refuse(*_: object) -> None:        # through sqlite, where batches wait per topic
+    def refuse(*_: object) -> None:
         raise NotPlain("refused for the test")
 
-    monkeypatch.setattr(adapters.rosbag2_pages, "SqliteFile", refuse)
+    if path == "sqlite":
+        monkeypatch.setattr(adapters.rosbag2_pages, "SqliteFile", refuse)
     damaged = tmp_path / "damaged"
     shutil.copytree(dive, damaged)
     storage = next(damaged.glob("*.db3"))
@@ -172,12 +175,15 @@ def test_a_damaged_message_in_one_topic_keeps_the_other_topics(dive, tmp_path, p
                    "WHERE t.name = '/imu/data' ORDER BY m.id LIMIT 1 OFFSET 100)")
     db.close()
     read, whole = read_log(damaged, profile.sources), read_log(dive, profile.sources)
-    assert read.damage is not None
+    assert read.damage is not None and "1 message(s) of /imu/data left out" in read.damage.reason
+    assert any("1 message(s) of /imu/data left out" in note for note in read.notes)
     imu_signals = {name for name, signal in profile.sources["ros"].signals.items()
                    if signal.topic == "/imu/data"}
     assert imu_signals and set(read.series) == set(whole.series)
     for name, series in whole.series.items():
+        kept = read.series[name]
         if name in imu_signals:
-            assert len(read.series[name]) == 100       # the messages before the cut one
+            assert len(kept) == len(series) - 1
+            assert np.array_equal(np.delete(series.times_ns, 100), kept.times_ns)
         else:
-            assert len(read.series[name]) == len(series)
+            assert len(kept) == len(series)
