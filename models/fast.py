@@ -138,7 +138,7 @@ class FastDynamics:
     @cached_property
     def fused(self) -> FusedStep:
         """The weights as the NumPy loop steps them (`models.numpy_step`)."""
-        return FusedStep.of(*(getattr(self, f.name) for f in fields(self)))
+        return FusedStep.of(**{f.name: getattr(self, f.name) for f in fields(self)})
 
     def rollout(self, commands: np.ndarray, initial_states: np.ndarray,
                 engine: Engine = "auto") -> np.ndarray:
