@@ -1,16 +1,15 @@
-"""Log adapters: one per format family, chosen by content, all producing `Signals`."""
+"""Log adapters: one per format, chosen by content, all producing `Signals`. A format's
+reader is imported only when a log of that format is read."""
 
 from collections.abc import Mapping
+from functools import cache
+from importlib import import_module
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, cast
 
-from adapters.csv_log import CsvAdapter
 from adapters.inventory import LogInventory, TopicInfo
-from adapters.mavlink import DataflashAdapter, TlogAdapter
-from adapters.mcap import McapAdapter
-from adapters.rosbag import RosbagAdapter
+from adapters.recognise import KNOWN_FORMATS, recognise
 from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSource, Signals
-from adapters.ulog import UlogAdapter
 from auvdiag_errors import LogError
 
 __all__ = [
@@ -28,47 +27,55 @@ __all__ = [
 
 
 class Adapter(Protocol):
-    """One format family: recognises its files by content and reads the needed signals."""
+    """One format's reader of the needed signals."""
 
     @property
     def family(self) -> str:
         """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash``, ``ulog`` or
         ``csv``."""
 
-    @property
-    def formats(self) -> tuple[str, ...]: ...
-
-    def sniff(self, path: Path) -> str | None: ...
-
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
-        """``fmt``: what `sniff` said, so that the log is recognised once."""
+        """``fmt``: what `recognise` said, so that the log is recognised once."""
         ...
 
     def inventory(self, path: Path, fmt: str) -> LogInventory: ...
 
 
-# Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
-# CSV last: it is recognised by being text with a header, which the binary formats are not.
-ADAPTERS: tuple[Adapter, ...] = (RosbagAdapter(), McapAdapter(), TlogAdapter(),
-                                 DataflashAdapter(), UlogAdapter(), CsvAdapter())
+# Each format's adapter as (module, class).
+_ADAPTERS: dict[str, tuple[str, str]] = {
+    "bag": ("adapters.rosbag", "RosbagAdapter"),
+    "db3": ("adapters.rosbag2_sqlite", "Db3Adapter"),
+    "ros2-mcap": ("adapters.mcap", "Ros2McapAdapter"),
+    "mcap": ("adapters.mcap", "McapAdapter"),
+    "tlog": ("adapters.mavlink", "TlogAdapter"),
+    "bin": ("adapters.mavlink", "DataflashAdapter"),
+    "ulog": ("adapters.ulog", "UlogAdapter"),
+    "csv": ("adapters.csv_log", "CsvAdapter"),
+}
 
 
-def _find_adapter(path: Path) -> tuple[Adapter, str]:
-    if not path.exists():
-        raise LogError(path, "no such file or directory")
-    if path.is_file() and path.stat().st_size == 0:
-        raise LogError(path, "empty file")
-    for adapter in ADAPTERS:
-        fmt = adapter.sniff(path)
-        if fmt is not None:
-            return adapter, fmt
-    kinds = ", ".join(fmt for adapter in ADAPTERS for fmt in adapter.formats)
-    raise LogError(path, f"not a log this tool reads (known formats: {kinds})")
+@cache
+def _adapter_of(fmt: str) -> Adapter:
+    module, name = _ADAPTERS[fmt]
+    return cast(Adapter, getattr(import_module(module), name)())
 
 
 def detect_format(path: Path) -> str:
     """Return the format name of the log at ``path`` from its content."""
-    return _find_adapter(path)[1]
+    if not path.exists():
+        raise LogError(path, "no such file or directory")
+    if path.is_file() and path.stat().st_size == 0:
+        raise LogError(path, "empty file")
+    fmt = recognise(path)
+    if fmt is None:
+        raise LogError(path, f"not a log this tool reads (known formats: "
+                             f"{', '.join(KNOWN_FORMATS)})")
+    return fmt
+
+
+def _find_adapter(path: Path) -> tuple[Adapter, str]:
+    fmt = detect_format(path)
+    return _adapter_of(fmt), fmt
 
 
 def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:

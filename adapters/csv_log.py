@@ -19,38 +19,12 @@ import numpy as np
 from adapters.collect import ColumnSource, SignalCollector
 from adapters.fieldnames import closest_first
 from adapters.inventory import LogInventory, TopicInfo
+from adapters.recognise import csv_delimiter, is_number
 from adapters.signals import LogSources, Signals, TimeColumn
 from auvdiag_errors import LogError
 
-DELIMITERS = (",", ";", "\t")
-SNIFF_BYTES = 8192
 UNIT_NS = {"s": 1e9, "ms": 1e6, "us": 1e3, "ns": 1.0}
 SECONDS_PER_DAY = 86_400
-
-
-def _delimiter(line: str) -> str:
-    return max(DELIMITERS, key=line.count)
-
-
-def is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _head_lines(path: Path) -> list[str] | None:
-    with path.open("rb") as stream:
-        head = stream.read(SNIFF_BYTES)
-    if b"\0" in head:
-        return None
-    try:   # the read may end inside a line (or a character): keep whole lines only
-        text = head.decode("utf-8") if len(head) < SNIFF_BYTES else head[
-            :head.rfind(b"\n") + 1].decode("utf-8")
-    except UnicodeDecodeError:
-        return None
-    return text.splitlines()
 
 
 def csv_rows(path: Path) -> Iterator[list[str]]:
@@ -58,7 +32,7 @@ def csv_rows(path: Path) -> Iterator[list[str]]:
     with path.open(newline="", encoding="utf-8", errors="replace") as stream:
         first = stream.readline()
         stream.seek(0)
-        yield from csv.reader(stream, delimiter=_delimiter(first))
+        yield from csv.reader(stream, delimiter=csv_delimiter(first))
 
 
 class _Parsed:
@@ -163,20 +137,6 @@ class CsvAdapter:
     """A CSV log with a header row (comma, semicolon or tab separated)."""
 
     family = "csv"
-    formats = ("csv",)
-
-    def sniff(self, path: Path) -> str | None:
-        if not path.is_file():
-            return None
-        lines = _head_lines(path)
-        if not lines or len(lines) < 2:
-            return None
-        delimiter = _delimiter(lines[0])
-        header = [cell.strip() for cell in lines[0].split(delimiter)]
-        row = [cell.strip() for cell in lines[1].split(delimiter)]
-        named = len(header) >= 2 and all(header) and not any(map(is_number, header))
-        return "csv" if named and len(row) == len(header) and any(map(is_number, row)) \
-            else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         if sources.time is None:

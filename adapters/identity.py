@@ -23,7 +23,8 @@ from adapters.mavlink_scan import (
 )
 from adapters.mcap import summary_topics
 from adapters.namespace import resolve
-from adapters.rosbag import bag_storages, bag_topics
+from adapters.recognise import bag_storages
+from adapters.rosbag import bag_topics
 from adapters.rosbag2_sqlite import db3_topics
 from auvdiag_errors import LogError
 

@@ -6,7 +6,6 @@ pymavlink's message definitions for MAVLink and the log's FMT records for DataFl
 tlog's times are the ground station's receive times; a DataFlash log's are the autopilot's
 TimeUS (µs since boot)."""
 
-import struct
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -26,24 +25,9 @@ from adapters.mavlink_scan import NO_TIME, RecordIndex, index_file
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
-MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
-PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
-DATAFLASH_HEADER = b"\xa3\x95\x80"       # record header + FMT type
-
 
 class TlogAdapter:
     family = "mavlink"
-    formats = ("tlog",)
-
-    def sniff(self, path: Path) -> str | None:
-        if not path.is_file():
-            return None
-        with path.open("rb") as stream:
-            head = stream.read(9)
-        if len(head) < 9 or head[8] not in MAVLINK_MAGICS:
-            return None
-        (time_us,) = struct.unpack(">Q", head[:8])
-        return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
@@ -73,13 +57,6 @@ class TlogAdapter:
 
 class DataflashAdapter:
     family = "dataflash"
-    formats = ("bin",)
-
-    def sniff(self, path: Path) -> str | None:
-        if not path.is_file():
-            return None
-        with path.open("rb") as stream:
-            return "bin" if stream.read(3) == DATAFLASH_HEADER else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)

@@ -1,17 +1,16 @@
-"""Standalone MCAP files through the `mcap` library, with ros2 (CDR), ros1 and JSON
-message encodings. Only the profile's channels are decoded. With a complete summary the
-chunks holding wanted channels are read straight from their index; a file without one (the
-specification makes summaries, indexes and statistics optional) or a damaged file is read
-front to back, up to the damage."""
+"""MCAP files, standalone or a ROS 2 bag's storage, through the `mcap` library, with ros2
+(CDR), ros1 and JSON message encodings. Only the profile's channels are decoded. With a
+complete summary the chunks holding wanted channels are read straight from their index; a
+file without one (the specification makes summaries, indexes and statistics optional) or a
+damaged file is read front to back, up to the damage."""
 
 from pathlib import Path
 from typing import Any, BinaryIO
 
 from adapters.collect import SignalCollector
-from adapters.inventory import LogInventory, TopicInfo
+from adapters.inventory import LogInventory, TopicInfo, merged_inventory
 from adapters.mcap_index import RECORD_HEAD, IndexUnusable, chunk_data, locate, read_index_entries
 from adapters.mcap_records import (
-    MCAP_MAGIC,
     ChannelRouter,
     Progress,
     decompressed,
@@ -19,10 +18,11 @@ from adapters.mcap_records import (
     schema_fields,
     walk_records,
 )
+from adapters.rosbag2 import Rosbag2Adapter
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
-__all__ = ["MCAP_MAGIC", "McapAdapter", "read_mcap"]
+__all__ = ["McapAdapter", "Ros2McapAdapter", "read_mcap"]
 
 
 def _problem(error: BaseException) -> str:
@@ -104,13 +104,6 @@ class McapAdapter:
     """A standalone .mcap file (any profile: ros2, ros1 or JSON-encoded channels)."""
 
     family = "ros"
-    formats = ("mcap",)
-
-    def sniff(self, path: Path) -> str | None:
-        if not path.is_file():
-            return None
-        with path.open("rb") as stream:
-            return "mcap" if stream.read(len(MCAP_MAGIC)) == MCAP_MAGIC else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         return read_mcap([path], path, sources, fmt)
@@ -130,6 +123,18 @@ class McapAdapter:
                                     sorted(topics, key=lambda t: t.name))
             stream.seek(0)
             return _scanned_inventory(stream, path.stat().st_size)
+
+
+class Ros2McapAdapter(Rosbag2Adapter):
+    """A ROS 2 bag in MCAP storage: each storage file read as a standalone MCAP file is."""
+
+    def read_storages(self, storages: list[Path], path: Path, sources: LogSources, fmt: str
+                      ) -> Signals:
+        return read_mcap(storages, path, sources, fmt)
+
+    def storages_inventory(self, storages: list[Path], path: Path, fmt: str) -> LogInventory:
+        return merged_inventory(fmt, [McapAdapter().inventory(storage, "mcap")
+                                      for storage in storages])
 
 
 def read_mcap(storages: list[Path], path: Path, sources: LogSources, fmt: str) -> Signals:

@@ -19,7 +19,6 @@ from adapters.mcap_index import LocatedMessages, chunk_data
 from adapters.ros_columns import TopicBatches
 from auvdiag_errors import LogError
 
-MCAP_MAGIC = b"\x89MCAP0\r\n"
 _READ_STEP = 1 << 20
 
 

@@ -21,8 +21,9 @@ from adapters.fieldnames import ros_field_paths
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.limits import MAX_CHUNK_BYTES
 from adapters.ros_columns import TopicBatches
+from adapters.rosbag2 import Rosbag2Adapter
 from adapters.rosbag2_pages import Span, read_pages
-from adapters.signals import Signals
+from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
 ROWS_AT_ONCE = 20_000          # rows fetched per round trip: bounds memory on long bags
@@ -62,6 +63,17 @@ def db3_topics(storages: list[Path]) -> set[str] | None:
     except SQLITE_FAILURES:
         return None
     return names
+
+
+class Db3Adapter(Rosbag2Adapter):
+    """A ROS 2 bag in sqlite3 storage."""
+
+    def read_storages(self, storages: list[Path], path: Path, sources: LogSources, fmt: str
+                      ) -> Signals:
+        return Db3Bag(path, storages).read(SignalCollector(path, sources))
+
+    def storages_inventory(self, storages: list[Path], path: Path, fmt: str) -> LogInventory:
+        return Db3Bag(path, storages).inventory()
 
 
 class Db3Bag:

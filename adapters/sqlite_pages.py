@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from adapters.packed import gather_words
+from adapters.recognise import SQLITE_MAGIC
 
-MAGIC = b"SQLite format 3\x00"
 INTERIOR_TABLE, LEAF_TABLE = 0x05, 0x0D
 INTERIOR_HEADER, LEAF_HEADER = 12, 8
 MAX_DEPTH = 24                 # far more levels than 2**63 rows need at the smallest page
@@ -82,7 +82,7 @@ class SqliteFile:
         self.buffer = np.empty(0, np.uint8)
         self.file = open(path, "rb")     # noqa: SIM115 - closed by `close`
         header = self.file.read(100)
-        if len(header) < 100 or header[:16] != MAGIC:
+        if len(header) < 100 or header[:16] != SQLITE_MAGIC:
             self.close()
             raise NotPlain("not an SQLite file")
         size = int.from_bytes(header[16:18], "big")

@@ -24,7 +24,6 @@ from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
 from adapters.ulog_decode import (
     HEADER_BYTES,
-    MAGIC,
     TIMESTAMP,
     AppendedData,
     DecodedUlog,
@@ -100,13 +99,6 @@ def _column_source(columns: dict[str, np.ndarray]) -> ColumnSource:
 
 class UlogAdapter:
     family = "ulog"
-    formats = ("ulog",)
-
-    def sniff(self, path: Path) -> str | None:
-        if not path.is_file():
-            return None
-        with path.open("rb") as stream:
-            return "ulog" if stream.read(len(MAGIC)) == MAGIC else None
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from adapters.packed import gather_words
+from adapters.recognise import ULOG_MAGIC
 
-MAGIC = b"ULog\x01\x12\x35"
 SYNC = b"\x2f\x73\x13\x20\x25\x0c\xbb\x12"
 HEADER_BYTES = 16
 TYPES = {"int8_t": "<i1", "uint8_t": "<u1", "int16_t": "<i2", "uint16_t": "<u2",
@@ -147,7 +147,7 @@ def _definitions(data: Any, size: int) -> tuple[int, dict[str, Any]]:
 def decode_ulog(data: Any, wanted: set[str] | None) -> DecodedUlog:
     """Decode ``data`` (the whole file's bytes); only topics in ``wanted`` (None: all)."""
     size = len(data)
-    if size < HEADER_BYTES or bytes(data[:len(MAGIC)]) != MAGIC:
+    if size < HEADER_BYTES or bytes(data[:len(ULOG_MAGIC)]) != ULOG_MAGIC:
         raise ValueError("not a ULog file")
     decoded = DecodedUlog(struct.unpack_from("<Q", data, 8)[0])
     at, formats = _definitions(data, size)

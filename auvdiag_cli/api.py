@@ -22,48 +22,38 @@ Every failure is an `auvdiag_errors.AuvdiagError` (`LogError`, `ProfileError`, `
 file and the problem. Nothing here prints or imports a terminal library; long work reports
 through ``progress`` (a function taking one line of text) where it is given."""
 
-from collections.abc import Callable, Sequence
-from pathlib import Path
-from typing import Any
+from __future__ import annotations
 
-from adapters import detect_format
-from adapters import read_log as _read_signals
-from adapters.signals import Signals
-from auvdiag_cli.audit.discovery import expand_logs
-from auvdiag_cli.audit.job import AuditOptions, AuditResult, run_audit
-from auvdiag_cli.audit.progress import Reporter, SilentReporter
-from auvdiag_cli.audit.record import AuditRecord
-from auvdiag_cli.audit.trend import FleetTrend, trend_of_audit
-from auvdiag_cli.engine.results import Diagnosis, Verdict
-from auvdiag_cli.engine.signatures import DerivedTable
-from auvdiag_cli.jobs.budget import FalseAlarmBudget
-from auvdiag_cli.jobs.calibrate import DEFAULT_CALIBRATION, CalibrateOptions, CalibrationResult
-from auvdiag_cli.jobs.calibrate import calibrate as _calibrate
-from auvdiag_cli.jobs.inspect import Inspection, inspect_log
-from auvdiag_cli.jobs.profile_draft import draft_profile as _draft_profile
-from auvdiag_cli.jobs.profile_like import draft_like
-from auvdiag_cli.jobs.relate import relate_model
-from auvdiag_cli.jobs.train import (
-    DEFAULT_TRAINING,
-    TrainingResult,
-    TrainOptions,
-    score_model,
-    train_from_logs,
-)
-from auvdiag_cli.jobs.truth import diagnose_with_truth
-from auvdiag_cli.reports.json_report import diagnosis_to_dict
-from auvdiag_cli.reports.saved import redraw_report, write_diagnosis_files
-from auvdiag_cli.simulator.run import LOG_EPOCH_NS, SimulatedDive
-from auvdiag_cli.simulator.scenarios import Scenario
-from auvdiag_cli.vehicle.profile import Profile
-from auvdiag_cli.vehicle.profile import load_profile as _load_profile
+from collections.abc import Callable, Sequence
+from importlib import import_module
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
 from auvdiag_errors import UsageError
-from models.card import ModelCard, Refused, StartReference
-from models.command_relations import CommandRelations
-from models.effort_model import EffortModel
-from models.skill import HorizonScore
-from models.store import LoadedModel, write_model
-from models.store import load_model as _load_model
+
+if TYPE_CHECKING:
+    from adapters.signals import Signals
+    from auvdiag_cli.audit.job import AuditResult
+    from auvdiag_cli.audit.progress import Reporter
+    from auvdiag_cli.audit.record import AuditRecord
+    from auvdiag_cli.audit.trend import FleetTrend
+    from auvdiag_cli.engine.results import Diagnosis, Verdict
+    from auvdiag_cli.engine.signatures import DerivedTable
+    from auvdiag_cli.jobs.budget import FalseAlarmBudget
+    from auvdiag_cli.jobs.calibrate import CalibrateOptions, CalibrationResult
+    from auvdiag_cli.jobs.inspect import Inspection
+    from auvdiag_cli.jobs.train import TrainingResult, TrainOptions
+    from auvdiag_cli.reports.saved import redraw_report
+    from auvdiag_cli.simulator.run import SimulatedDive
+    from auvdiag_cli.simulator.scenarios import Scenario
+    from auvdiag_cli.vehicle.profile import Profile
+    from models.card import ModelCard, Refused, StartReference
+    from models.command_relations import CommandRelations
+    from models.effort_model import EffortModel
+    from models.skill import HorizonScore
+    from models.store import LoadedModel
+
+    AuditProgress = Reporter
 
 __all__ = [
     "AuditProgress", "AuditRecord", "AuditResult", "CalibrateOptions", "CalibrationResult",
@@ -76,7 +66,42 @@ __all__ = [
     "to_json", "train", "trend", "write_reports",
 ]
 
-AuditProgress = Reporter    # start(total, reused), done(record), stop(): an audit's progress
+
+# The classes (and one function) this module hands out, each imported from its home
+# ("module.name") on first use, so that a diagnosis imports no training, audit or simulator.
+_EXPORTED = {name: f"{module}.{name}" for module, names in {
+    "adapters.signals": ["Signals"],
+    "auvdiag_cli.audit.job": ["AuditResult"],
+    "auvdiag_cli.audit.record": ["AuditRecord"],
+    "auvdiag_cli.audit.trend": ["FleetTrend"],
+    "auvdiag_cli.engine.results": ["Diagnosis", "Verdict"],
+    "auvdiag_cli.engine.signatures": ["DerivedTable"],
+    "auvdiag_cli.jobs.budget": ["FalseAlarmBudget"],
+    "auvdiag_cli.jobs.calibrate": ["CalibrateOptions", "CalibrationResult"],
+    "auvdiag_cli.jobs.inspect": ["Inspection"],
+    "auvdiag_cli.jobs.train": ["TrainOptions", "TrainingResult"],
+    "auvdiag_cli.reports.saved": ["redraw_report"],
+    "auvdiag_cli.simulator.run": ["SimulatedDive"],
+    "auvdiag_cli.simulator.scenarios": ["Scenario"],
+    "auvdiag_cli.vehicle.profile": ["Profile"],
+    "models.card": ["ModelCard", "Refused", "StartReference"],
+    "models.command_relations": ["CommandRelations"],
+    "models.effort_model": ["EffortModel"],
+    "models.skill": ["HorizonScore"],
+    "models.store": ["LoadedModel"],
+}.items() for name in names}
+# start(total, reused), done(record), stop(): an audit's progress
+_EXPORTED["AuditProgress"] = "auvdiag_cli.audit.progress.Reporter"
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _EXPORTED:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    module, _, attribute = _EXPORTED[name].rpartition(".")
+    value = getattr(import_module(module), attribute)
+    globals()[name] = value
+    return value
+
 
 Progress = Callable[[str], None]
 
@@ -88,36 +113,48 @@ def _quiet(_: str) -> None:
 def load_profile(profile: str | Path | None = None) -> Profile:
     """A built-in profile by name (`auvdiag scenarios`' vehicles: twin_burger, bluerov2, …),
     a profile TOML file, or None for the Twin-Burger of the paper."""
-    return _load_profile(None if profile is None else Path(profile))
+    from auvdiag_cli.vehicle.profile import load_profile as read_profile
+
+    return read_profile(None if profile is None else Path(profile))
 
 
 def load_model(directory: Path | None = None, profile: Profile | None = None) -> LoadedModel:
     """A model directory (never runs code from it); None is the model shipped for the
     profile's vehicle (the Twin-Burger's without a profile), as the CLI picks it. Its typed
     model card is ``model.card``."""
-    return _load_model(directory, profile.name if profile is not None else "twin-burger")
+    from models.store import load_model as read_model
+
+    return read_model(directory, profile.name if profile is not None else "twin-burger")
 
 
 def save_model(model: LoadedModel, directory: Path) -> None:
     """Write a model that `calibrate`, `relate` or `score` updated (atomically); a directory
     other than its own gets its weights too."""
+    from models.store import write_model
+
     write_model(model, directory)
 
 
 def log_format(path: Path) -> str:
     """The format of the log at ``path`` by its content (bag, db3, mcap, tlog, bin, ulog,
     csv, …); a `LogError` naming the file where it is not a log this tool reads."""
+    from adapters import detect_format
+
     return detect_format(path)
 
 
 def read_log(path: Path, profile: Profile) -> Signals:
     """The profile's signals as the log holds them (each at its own rate, not resampled)."""
-    return _read_signals(path, profile.sources)
+    from adapters import read_log as read_signals
+
+    return read_signals(path, profile.sources)
 
 
 def inspect(path: Path, profile: Profile) -> Inspection:
     """What the log holds (topics, rates, span) and which of the profile's signals resolve
     in it: `auvdiag inspect`."""
+    from auvdiag_cli.jobs.inspect import inspect_log
+
     return inspect_log(path, profile)
 
 
@@ -126,18 +163,26 @@ def draft_profile(path: Path, name: str | None = None, like: str | Path | None =
     (fields it cannot place are marked CHECK; ``name`` defaults to the log's), or with
     ``like`` that profile (a file or a built-in name) with its mapping fitted to the log:
     `auvdiag init-profile`."""
+    from auvdiag_cli.jobs.profile_draft import draft_profile as draft
+    from auvdiag_cli.jobs.profile_like import draft_like
+
     if like is not None:
         return draft_like(path, Path(like))
-    return _draft_profile(path, name or path.stem)
+    return draft(path, name or path.stem)
 
 
 def train(logs: Sequence[Path], output: Path, profile: Profile,
-          options: TrainOptions = DEFAULT_TRAINING, progress: Progress = _quiet
+          options: TrainOptions | None = None, progress: Progress = _quiet
           ) -> TrainingResult:
     """Train on normal ``logs`` (files or folders of them) and write the model directory
     ``output`` where it judges anything (``options.keep_unskilled``: always). The result
-    holds each signal's skill, the horizon and the predictor chosen: `auvdiag train`."""
-    return train_from_logs(expand_logs(logs, progress), output, profile, options, progress)
+    holds each signal's skill, the horizon and the predictor chosen: `auvdiag train`.
+    ``options``: None for `TrainOptions()`."""
+    from auvdiag_cli.audit.discovery import expand_logs
+    from auvdiag_cli.jobs.train import DEFAULT_TRAINING, train_from_logs
+
+    return train_from_logs(expand_logs(logs, progress), output, profile,
+                           DEFAULT_TRAINING if options is None else options, progress)
 
 
 def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
@@ -146,6 +191,8 @@ def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
     """Measure the model's skill on normal logs it was not trained on, and record it in the
     model (write it with `save_model`); returns every horizon tried, with every signal's
     skill, and the one chosen: `auvdiag score`."""
+    from auvdiag_cli.jobs.train import score_model
+
     return score_model(model, profile, logs, horizon_s, progress)
 
 
@@ -156,18 +203,27 @@ def relate(model: LoadedModel, profile: Profile, logs: Sequence[Path],
     (write it with `save_model`): `auvdiag relate`. Returns both; a `Refused` relation or a
     start with ``refused`` set says why nothing was learned, and the model keeps what it
     had there."""
+    from auvdiag_cli.jobs.relate import relate_model
+
     return relate_model(model, profile, logs, holdout, progress)
 
 
 def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
-              faulty_logs: Sequence[Path] = (), options: CalibrateOptions = DEFAULT_CALIBRATION,
+              faulty_logs: Sequence[Path] = (), options: CalibrateOptions | None = None,
               progress: Progress = _quiet) -> CalibrationResult:
     """Set the model's thresholds from normal logs (files or folders of them), by
     ``options.margin`` x the largest g or to a false-alarm ``options.budget``; the model is
     updated (write it with `save_model`). ``faulty_logs`` are diagnosed with the new
-    thresholds to show the margin: `auvdiag calibrate`."""
-    return _calibrate(model, profile, expand_logs(normal_logs, progress),
-                      expand_logs(faulty_logs, progress), options, progress)
+    thresholds to show the margin: `auvdiag calibrate`. ``options``: None for
+    `CalibrateOptions()`."""
+    from auvdiag_cli.audit.discovery import expand_logs
+    from auvdiag_cli.jobs.calibrate import DEFAULT_CALIBRATION
+    from auvdiag_cli.jobs.calibrate import calibrate as set_thresholds
+
+    return set_thresholds(model, profile, expand_logs(normal_logs, progress),
+                          expand_logs(faulty_logs, progress),
+                          DEFAULT_CALIBRATION if options is None else options,
+                          progress)
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
@@ -175,11 +231,15 @@ def diagnose(path: Path, profile: Profile, model: LoadedModel,
     """Diagnose one log. ``companions``: other logs of the same vehicle and day whose test
     sequences may decide between candidates; ``mission``: the mission plan for the
     closed-loop replay (default: NAME.mission.json beside the log)."""
+    from auvdiag_cli.jobs.truth import diagnose_with_truth
+
     return diagnose_with_truth(path, profile, model, companions, mission)
 
 
 def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
     """The JSON report (docs/reports.md, the JSON report) as a dict."""
+    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+
     return diagnosis_to_dict(diagnosis)
 
 
@@ -187,6 +247,8 @@ def write_reports(diagnosis: Diagnosis, json: Path | None = None, pdf: Path | No
                   mcap: Path | None = None) -> None:
     """Write the diagnosis as a JSON report (with its time histories beside it, which
     `redraw_report` draws from), a PDF and an MCAP for Foxglove, as many as are asked."""
+    from auvdiag_cli.reports.saved import write_diagnosis_files
+
     write_diagnosis_files(diagnosis, json, pdf, mcap)
 
 
@@ -210,6 +272,8 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
     and the counts; it is marked ``interrupted`` (with what finished saved) when the work is
     interrupted."""
     from auvdiag_cli.audit.fleet_pdf import render_fleet_report
+    from auvdiag_cli.audit.job import AuditOptions, run_audit
+    from auvdiag_cli.audit.progress import SilentReporter
 
     if model is not None and model.directory is None:
         raise UsageError("audit needs a model read from a directory (api.load_model)")
@@ -225,13 +289,15 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
 
 def simulate(scenario: str | Scenario, profile: Profile, output: Path,
              log_format: str = "ros2-mcap", seed: int = 0, fault_at_s: float | None = None,
-             start_ns: int = LOG_EPOCH_NS, namespace: str = "") -> SimulatedDive:
+             start_ns: int | None = None, namespace: str = "") -> SimulatedDive:
     """Fly one of the profile's ``scenarios`` (by name, or a `Scenario` built from the
     simulator's steps) with its [simulation] physics and write it to
     ``output`` in ``log_format`` (bag, db3, ros2-mcap, mcap, tlog, bin, ulog, csv) with
     its ground truth beside it (NAME.truth.json, NAME.truth.csv); an existing ``output``
-    is never overwritten: `auvdiag simulate`. ``namespace``: the ROS namespace the
-    vehicle publishes under (ROS formats)."""
+    is never overwritten: `auvdiag simulate`. ``start_ns``: the log's first clock reading
+    (None: 2026-11-22T10:00:00Z); ``namespace``: the ROS namespace the vehicle publishes
+    under (ROS formats)."""
+    from auvdiag_cli.simulator.run import LOG_EPOCH_NS
     from auvdiag_cli.simulator.run import simulate as fly
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import LOG_FORMATS, write_log
@@ -246,7 +312,7 @@ def simulate(scenario: str | Scenario, profile: Profile, output: Path,
         raise UsageError(str(error).strip("'\"")) from None
     if output.exists():
         raise UsageError(f"{output}: exists already, not overwriting")
-    dive = fly(chosen, profile, seed, start_ns)
+    dive = fly(chosen, profile, seed, LOG_EPOCH_NS if start_ns is None else start_ns)
     write_log(dive, profile, output, log_format, namespace=namespace)
     return dive
 
@@ -273,4 +339,6 @@ def derive_table(model: LoadedModel, profile: Profile, log: Path | None = None) 
 def trend(audit_dir: Path, last: int = 8, alpha: float = 0.05) -> FleetTrend:
     """Per vehicle and signal, whether the margin to the thresholds shrinks over the last
     ``last`` dives of an audit (Mann-Kendall at ``alpha``): `auvdiag trend`."""
+    from auvdiag_cli.audit.trend import trend_of_audit
+
     return trend_of_audit(audit_dir, last, alpha)

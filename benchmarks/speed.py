@@ -6,9 +6,11 @@ flow at 10 Hz, IMU at 50 Hz) and writes it in every format. Then, each in a fres
   diagnose    `auvdiag diagnose` of the one-hour log, end to end, per format: wall time and
               peak RSS, split into reading the log, replaying the model (matching) and the
               rest (segments, detection, reports); and the command as a user runs it, in a
-              process of its own (interpreter and CLI start-up included, median of 3);
+              process of its own (interpreter and CLI start-up included);
   raw read    the raw library decoding the same topics (benchmarks/ingest.py's reader);
               each reader finds the log's files in the page cache (read once before);
+              diagnose, command and raw read are each the median of --runs runs (default
+              3), alternated, so that a slow moment of the machine lands on all of them;
   replay      the model over 36 000 steps: torch module, NumPy path, and the NumPy path
               batched over 16 logs; the model's FLOPs per step against one core's float32
               matrix-multiply rate.
@@ -176,15 +178,31 @@ def child_replay() -> dict:
             "compiled_gflops": rates["compiled_steps_per_s"] * flops_per_step / 1e9}
 
 
-def command_seconds(path: Path, runs: int = 3) -> float:
-    """``auvdiag diagnose PATH --quiet`` as a user runs it: the median wall time."""
-    times = []
+def command_seconds(path: Path) -> float:
+    """``auvdiag diagnose PATH --quiet`` as a user runs it: the wall time."""
+    begun = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "auvdiag_cli", "diagnose", str(path), "--quiet"],
+                   env=ONE_THREAD, check=False, capture_output=True)
+    return time.perf_counter() - begun
+
+
+def median_of(runs: list[dict], key: str) -> dict:
+    """The run whose ``key`` is the median (its other figures stay those of one run)."""
+    return sorted(runs, key=lambda run: run[key])[len(runs) // 2]
+
+
+def measure_format(path: Path, fmt: str, runs: int) -> dict:
+    diagnosed, raw, commands = [], [], []
     for _ in range(runs):
-        begun = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "auvdiag_cli", "diagnose", str(path), "--quiet"],
-                       env=ONE_THREAD, check=False, capture_output=True)
-        times.append(time.perf_counter() - begun)
-    return sorted(times)[len(times) // 2]
+        warm_cache(path)
+        diagnosed.append(in_child("diagnose", str(path)))
+        warm_cache(path)
+        raw.append(in_child("raw", str(path), fmt.split(",")[0]))
+        commands.append({"seconds": command_seconds(path)})
+    raw_read = median_of(raw, "seconds")
+    return {**median_of(diagnosed, "total_s"), "raw_read_s": raw_read["seconds"],
+            "raw_messages": raw_read["messages"],
+            "command_s": median_of(commands, "seconds")["seconds"], "runs": runs}
 
 
 def warm_cache(path: Path) -> None:
@@ -208,6 +226,7 @@ def main() -> None:
     parser.add_argument("--workdir", type=Path)
     parser.add_argument("--formats", default=",".join(FORMATS))
     parser.add_argument("--json", type=Path)
+    parser.add_argument("--runs", type=int, default=3, help="runs per figure (the median)")
     parser.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -229,13 +248,7 @@ def main() -> None:
     report["replay"] = in_child("replay")
     report["formats"] = {}
     for fmt, path in paths.items():
-        warm_cache(path)
-        diagnosed = in_child("diagnose", str(path))
-        warm_cache(path)
-        raw = in_child("raw", str(path), fmt.split(",")[0])
-        report["formats"][fmt] = {**diagnosed, "raw_read_s": raw["seconds"],
-                                  "raw_messages": raw["messages"],
-                                  "command_s": command_seconds(path)}
+        report["formats"][fmt] = measure_format(path, fmt, args.runs)
         print(fmt, json.dumps(report["formats"][fmt]), file=sys.stderr, flush=True)
     print(render(report))
     if args.json:
@@ -246,7 +259,8 @@ def render(report: dict) -> str:
     r = report["replay"]
     lines = [
         f"Measured {report['date']} on {report['machine']}, {report['cores']} cores, Python "
-        f"{report['python']}, one thread per process.",
+        f"{report['python']}, one thread per process; each figure of a format is the median "
+        f"of {next(iter(report['formats'].values()))['runs']} runs.",
         "",
         f"Startup: importing the CLI {report['startup']['cli']:.2f} s (torch is imported only "
         f"when a model is loaded: {report['startup']['torch']:.2f} s on its own).",

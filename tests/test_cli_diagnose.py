@@ -10,7 +10,7 @@ from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.simulator.writers import truth_paths
+from auvdiag_cli.simulator.truth_files import truth_paths
 
 runner = CliRunner()
 

@@ -15,7 +15,8 @@ from auvdiag_cli.cli import app
 from auvdiag_cli.engine.missions import mission_path
 from auvdiag_cli.simulator.run import simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import truth_paths, write_log
+from auvdiag_cli.simulator.truth_files import truth_paths
+from auvdiag_cli.simulator.writers import write_log
 from auvdiag_cli.vehicle.profile import load_profile
 from auvdiag_errors import ProfileError
 

@@ -46,7 +46,8 @@ def simulate(
     onset) and NAME.truth.csv (true velocities, heading, position and depth at 10 Hz); a
     mission's plan to NAME.mission.json."""
     from auvdiag_cli import api
-    from auvdiag_cli.simulator.writers import LOG_FORMATS, truth_paths
+    from auvdiag_cli.simulator.truth_files import truth_paths
+    from auvdiag_cli.simulator.writers import LOG_FORMATS
 
     if log_format not in LOG_FORMATS:
         fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from adapters import LogInventory, inventory, read_log
-from adapters.csv_log import csv_rows, is_number
+from adapters.csv_log import csv_rows
+from adapters.recognise import is_number
 from adapters.signals import OPERATING, FieldSource, LogSources, TimeColumn
 from auvdiag_errors import LogError, UsageError
 

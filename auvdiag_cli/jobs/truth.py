@@ -12,7 +12,7 @@ import numpy as np
 from auvdiag_cli.engine.diagnosis import diagnose
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.substitution import Track, rms
-from auvdiag_cli.simulator.writers import truth_paths
+from auvdiag_cli.simulator.truth_files import truth_paths
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from auvdiag_cli.engine.missions import mission_path
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
+from auvdiag_cli.simulator.truth_files import truth_paths
 from auvdiag_cli.simulator.writers.csv_log import write_csv
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
@@ -15,15 +16,9 @@ from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosb
 from auvdiag_cli.simulator.writers.ulog import write_ulog
 from auvdiag_cli.vehicle.profile import Profile
 
-__all__ = ["LOG_FORMATS", "ExtraTopic", "truth_paths", "write_log"]
+__all__ = ["LOG_FORMATS", "ExtraTopic", "write_log"]
 
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv")
-
-
-def truth_paths(log_path: Path) -> tuple[Path, Path]:
-    """Where the ground truth of a log lives: ``NAME.truth.json`` and ``NAME.truth.csv``."""
-    stem = log_path.name.split(".")[0]
-    return (log_path.with_name(stem + ".truth.json"), log_path.with_name(stem + ".truth.csv"))
 
 
 def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,

@@ -1,0 +1,148 @@
+"""Which format a log is, from its content alone (and, for a ROS 2 bag, the metadata.yaml
+beside its storage files), without importing any reader: a diagnosis then loads only the
+reader of its own format."""
+
+import re
+import struct
+from collections.abc import Callable
+from pathlib import Path
+
+ROS1_MAGIC = b"#ROSBAG V2.0"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+ULOG_MAGIC = b"ULog\x01\x12\x35"
+DATAFLASH_HEADER = b"\xa3\x95\x80"       # record header + FMT type
+MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
+PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
+CSV_DELIMITERS = (",", ";", "\t")
+CSV_SNIFF_BYTES = 8192
+
+
+def _head(path: Path, size: int) -> bytes:
+    with path.open("rb") as stream:
+        return stream.read(size)
+
+
+def _recording_order(path: Path) -> list[str | int]:
+    """rosbag2 numbers split files ``NAME_0``, ``NAME_1``, … ``NAME_10``: numbers as numbers."""
+    return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
+
+
+def _storage_kind(path: Path) -> str | None:
+    """``.mcap`` or ``.db3`` for a storage file, also one rosbag2 compressed whole
+    (compression mode ``file``: ``NAME_0.db3.zstd``)."""
+    suffixes = path.suffixes[-2:]
+    if suffixes[-1:] == [".zstd"]:
+        suffixes = suffixes[:-1]
+    kind = suffixes[-1] if suffixes else None
+    return kind if kind in (".mcap", ".db3") else None
+
+
+def _storage_files(directory: Path) -> list[Path]:
+    return sorted((p for p in directory.iterdir() if _storage_kind(p)), key=_recording_order)
+
+
+def bag_storages(path: Path) -> list[Path]:
+    """A ROS 2 bag's storage files in recording order (a file given alone: itself)."""
+    return _storage_files(path) if path.is_dir() else [path]
+
+
+def bag_metadata(path: Path) -> Path:
+    """Where a ROS 2 bag (its folder, or one storage file) keeps its metadata.yaml."""
+    return (path if path.is_dir() else path.parent) / "metadata.yaml"
+
+
+def csv_delimiter(line: str) -> str:
+    return max(CSV_DELIMITERS, key=line.count)
+
+
+def is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _head_lines(path: Path) -> list[str] | None:
+    head = _head(path, CSV_SNIFF_BYTES)
+    if b"\0" in head:
+        return None
+    try:   # the read may end inside a line (or a character): keep whole lines only
+        text = head.decode("utf-8") if len(head) < CSV_SNIFF_BYTES else head[
+            :head.rfind(b"\n") + 1].decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    return text.splitlines()
+
+
+def _ros2_bag_folder(path: Path) -> str | None:
+    storage = _storage_files(path)
+    if (path / "metadata.yaml").is_file() and storage:
+        return "ros2-mcap" if _storage_kind(storage[0]) == ".mcap" else "db3"
+    return None
+
+
+def _ros_bag(path: Path) -> str | None:
+    head = _head(path, 16)
+    if head.startswith(ROS1_MAGIC):
+        return "bag"
+    if head.startswith(SQLITE_MAGIC):
+        return "db3"
+    if head.startswith(MCAP_MAGIC) and bag_metadata(path).is_file():
+        return "ros2-mcap"
+    return None
+
+
+def _mcap(path: Path) -> str | None:
+    return "mcap" if _head(path, len(MCAP_MAGIC)) == MCAP_MAGIC else None
+
+
+def _tlog(path: Path) -> str | None:
+    head = _head(path, 9)
+    if len(head) < 9 or head[8] not in MAVLINK_MAGICS:
+        return None
+    (time_us,) = struct.unpack(">Q", head[:8])
+    return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
+
+
+def _dataflash(path: Path) -> str | None:
+    return "bin" if _head(path, len(DATAFLASH_HEADER)) == DATAFLASH_HEADER else None
+
+
+def _ulog(path: Path) -> str | None:
+    return "ulog" if _head(path, len(ULOG_MAGIC)) == ULOG_MAGIC else None
+
+
+def _csv(path: Path) -> str | None:
+    """Text whose first line names columns and whose next has as many cells, some numbers."""
+    lines = _head_lines(path)
+    if not lines or len(lines) < 2:
+        return None
+    delimiter = csv_delimiter(lines[0])
+    header = [cell.strip() for cell in lines[0].split(delimiter)]
+    row = [cell.strip() for cell in lines[1].split(delimiter)]
+    named = len(header) >= 2 and all(header) and not any(map(is_number, header))
+    return "csv" if named and len(row) == len(header) and any(map(is_number, row)) else None
+
+
+# Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
+# CSV last: it is recognised by being text with a header, which the binary formats are not.
+_RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path], str | None]], ...] = (
+    (("bag", "db3", "ros2-mcap"), _ros_bag), (("mcap",), _mcap), (("tlog",), _tlog),
+    (("bin",), _dataflash), (("ulog",), _ulog), (("csv",), _csv))
+KNOWN_FORMATS = tuple(fmt for formats, _ in _RECOGNISERS for fmt in formats)
+
+
+def recognise(path: Path) -> str | None:
+    """The format of the log at ``path`` (a file, or a ROS 2 bag's folder); None if no
+    format this tool reads."""
+    if path.is_dir():
+        return _ros2_bag_folder(path)
+    if not path.is_file():
+        return None
+    for _, recogniser in _RECOGNISERS:
+        fmt = recogniser(path)
+        if fmt is not None:
+            return fmt
+    return None
