@@ -268,8 +268,9 @@ def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
 
 def test_a_diagnosis_loads_no_data_frame_library_and_no_compiler_for_a_short_log(tmp_path):
     """Start-up follows what a diagnosis uses: a field log (no simulator truth beside it) is
-    read, replayed and judged without pandas, a short one without numba, and a DataFlash log
-    without any other format's reader."""
+    read, replayed and judged without pandas, a short one without numba, a DataFlash log
+    without any other format's reader, and through the library without its audit, training
+    or log writers."""
     import shutil
     import subprocess
     import sys
@@ -277,7 +278,8 @@ def test_a_diagnosis_loads_no_data_frame_library_and_no_compiler_for_a_short_log
     log = shutil.copy(ROOT / "sample_logs" / "mission-large-ccw.bin", tmp_path / "dive.bin")
     unused = ["pandas", "numba", "torch", "matplotlib", "rosbags", "mcap", "adapters.rosbag",
               "adapters.rosbag1_index", "adapters.rosbag2_sqlite", "adapters.mcap",
-              "adapters.ulog", "adapters.csv_log"]
+              "adapters.ulog", "adapters.csv_log", "auvdiag_cli.audit", "auvdiag_cli.jobs.train",
+              "auvdiag_cli.simulator.writers"]
     loaded = subprocess.run(
         [sys.executable, "-c", "import sys; from pathlib import Path; from auvdiag_cli import "
          "api; p = api.load_profile(None); d = api.diagnose(Path(sys.argv[1]), p, "
