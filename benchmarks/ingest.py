@@ -13,7 +13,6 @@ Usage: python benchmarks/ingest.py [--workdir DIR] [--image-gb 1.0] [--keep]
 import argparse
 import json
 import platform
-import resource
 import shutil
 import subprocess
 import sys
@@ -123,19 +122,12 @@ def read_raw(path: Path, fmt: str) -> int:
     return count
 
 
-def peak_rss_mb() -> float:
-    """This process's own high-water RSS (VmHWM resets at exec; ru_maxrss would carry the
-    parent's peak across fork)."""
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("VmHWM:"):
-            return int(line.split()[1]) / 1024
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-
-
 def child(mode: str, fmt: str, path: Path) -> None:
     started = time.perf_counter()
     count = read_adapter(path) if mode == "adapter" else read_raw(path, fmt)
     seconds = time.perf_counter() - started
+    from auvdiag_cli.peak_memory import peak_rss_mb  # imported after the timed read
+
     peak_mb = peak_rss_mb()
     print(json.dumps({"messages": count, "seconds": seconds, "peak_mb": peak_mb}))
 

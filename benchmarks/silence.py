@@ -27,14 +27,13 @@ import json, sys, time
 from pathlib import Path
 from auvdiag_cli import api
 from auvdiag_cli.fuzz.harness import exercise
+from auvdiag_cli.peak_memory import peak_rss_mb
 profile = api.load_profile(None)
 model = api.load_model(profile=profile)
 started = time.perf_counter()
 outcome, detail = exercise(Path(sys.argv[1]), profile, model)
 seconds = time.perf_counter() - started
-peak = next(int(line.split()[1]) / 1024 for line in open("/proc/self/status")
-            if line.startswith("VmHWM:"))
-print(json.dumps({"outcome": outcome, "seconds": seconds, "peak_rss_mb": peak}))
+print(json.dumps({"outcome": outcome, "seconds": seconds, "peak_rss_mb": peak_rss_mb()}))
 """
 
 

@@ -38,13 +38,6 @@ REPLAY_STEPS, BATCH = 36_000, 16
 FAULTY = "mcap, faulty"
 
 
-def peak_rss_mb() -> float:
-    for line in Path("/proc/self/status").read_text().splitlines():
-        if line.startswith("VmHWM:"):
-            return int(line.split()[1]) / 1024
-    return float("nan")
-
-
 def make_logs(workdir: Path, formats: list[str]) -> dict[str, Path]:
     """The one-hour dive in every format, and (key ``mcap, faulty``) the same hour with
     thruster 0 dead from minute 30, whose diagnosis also runs the isolation steps."""
@@ -112,6 +105,8 @@ def child_diagnose(path: Path) -> dict:
     result = diagnose(path, profile, model)
     diagnosis_to_dict(result)
     total = time.perf_counter() - started
+    from auvdiag_cli.peak_memory import peak_rss_mb
+
     return {"total_s": total, "imports_s": imported, **{f"{k}_s": v for k, v in stages.items()},
             "rest_s": total - imported - sum(stages.values()), "peak_mb": peak_rss_mb(),
             "steps": int(result.histories.time_s.size), "verdict": result.verdict}

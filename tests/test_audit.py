@@ -206,3 +206,19 @@ def test_unreachable_scheduler_is_one_line(fleet, tmp_path):
                        "tcp://127.0.0.1:9")
     assert code == 2
     assert "cannot reach the Dask scheduler at tcp://127.0.0.1:9" in text
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").is_file(), reason="needs Linux's VmHWM")
+def test_a_worker_started_by_a_large_program_reports_its_own_memory():
+    """The peak memory an audit records for a log is its worker's own, not that of the
+    program that started it (ru_maxrss carries the parent's peak across the exec)."""
+    import resource
+
+    held = bytearray(400 << 20)
+    held[::4096] = b"\1" * len(held[::4096])            # resident, not merely reserved
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024 > 400
+    reported = subprocess.run(
+        [sys.executable, "-c", "from auvdiag_cli.peak_memory import peak_rss_mb; "
+         "print(peak_rss_mb())"], capture_output=True, text=True, check=True).stdout
+    del held
+    assert 1 < float(reported) < 100

@@ -2,8 +2,6 @@
 Tasks and outcomes are plain picklable values; the model is loaded once per worker process."""
 
 import os
-import resource
-import sys
 import time
 from dataclasses import dataclass, field
 from functools import cache
@@ -12,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from auvdiag_cli.peak_memory import peak_rss_mb
 from auvdiag_errors import AuvdiagError
 
 
@@ -42,11 +41,6 @@ def _profile_and_model(profile: str | None, model: str | None) -> tuple[Any, Any
     return vehicle, load_model(None if model is None else Path(model), vehicle.name)
 
 
-def _peak_rss_mb() -> float:
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return peak / (1 << 20) if sys.platform == "darwin" else peak / 1024
-
-
 def analyse(task: AuditTask) -> AuditOutcome:
     """Diagnose one log; never raises (a failure is the outcome's ``error``)."""
     from auvdiag_cli.jobs.truth import diagnose_with_truth
@@ -72,5 +66,5 @@ def analyse(task: AuditTask) -> AuditOutcome:
         outcome.error = f"{task.log}: unexpected {type(error).__name__}: {error}"
         outcome.final = False
     outcome.seconds = round(time.perf_counter() - started, 3)
-    outcome.peak_rss_mb = round(_peak_rss_mb(), 1)
+    outcome.peak_rss_mb = round(peak_rss_mb(), 1)
     return outcome
