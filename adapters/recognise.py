@@ -18,11 +18,6 @@ CSV_DELIMITERS = (",", ";", "\t")
 CSV_SNIFF_BYTES = 8192
 
 
-def _head(path: Path, size: int) -> bytes:
-    with path.open("rb") as stream:
-        return stream.read(size)
-
-
 def _recording_order(path: Path) -> list[str | int]:
     """rosbag2 numbers split files ``NAME_0``, ``NAME_1``, … ``NAME_10``: numbers as numbers."""
     return [int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name)]
@@ -64,8 +59,7 @@ def is_number(text: str) -> bool:
     return True
 
 
-def _head_lines(path: Path) -> list[str] | None:
-    head = _head(path, CSV_SNIFF_BYTES)
+def _head_lines(head: bytes) -> list[str] | None:
     if b"\0" in head:
         return None
     try:   # the read may end inside a line (or a character): keep whole lines only
@@ -83,8 +77,7 @@ def _ros2_bag_folder(path: Path) -> str | None:
     return None
 
 
-def _ros_bag(path: Path) -> str | None:
-    head = _head(path, 16)
+def _ros_bag(path: Path, head: bytes) -> str | None:
     if head.startswith(ROS1_MAGIC):
         return "bag"
     if head.startswith(SQLITE_MAGIC):
@@ -94,29 +87,28 @@ def _ros_bag(path: Path) -> str | None:
     return None
 
 
-def _mcap(path: Path) -> str | None:
-    return "mcap" if _head(path, len(MCAP_MAGIC)) == MCAP_MAGIC else None
+def _mcap(path: Path, head: bytes) -> str | None:
+    return "mcap" if head.startswith(MCAP_MAGIC) else None
 
 
-def _tlog(path: Path) -> str | None:
-    head = _head(path, 9)
+def _tlog(path: Path, head: bytes) -> str | None:
     if len(head) < 9 or head[8] not in MAVLINK_MAGICS:
         return None
     (time_us,) = struct.unpack(">Q", head[:8])
     return "tlog" if PLAUSIBLE_EPOCH_US[0] < time_us < PLAUSIBLE_EPOCH_US[1] else None
 
 
-def _dataflash(path: Path) -> str | None:
-    return "bin" if _head(path, len(DATAFLASH_HEADER)) == DATAFLASH_HEADER else None
+def _dataflash(path: Path, head: bytes) -> str | None:
+    return "bin" if head.startswith(DATAFLASH_HEADER) else None
 
 
-def _ulog(path: Path) -> str | None:
-    return "ulog" if _head(path, len(ULOG_MAGIC)) == ULOG_MAGIC else None
+def _ulog(path: Path, head: bytes) -> str | None:
+    return "ulog" if head.startswith(ULOG_MAGIC) else None
 
 
-def _csv(path: Path) -> str | None:
+def _csv(path: Path, head: bytes) -> str | None:
     """Text whose first line names columns and whose next has as many cells, some numbers."""
-    lines = _head_lines(path)
+    lines = _head_lines(head)
     if not lines or len(lines) < 2:
         return None
     delimiter = csv_delimiter(lines[0])
@@ -128,7 +120,8 @@ def _csv(path: Path) -> str | None:
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
 # CSV last: it is recognised by being text with a header, which the binary formats are not.
-_RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path], str | None]], ...] = (
+# Each is given the file and its first CSV_SNIFF_BYTES bytes.
+_RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path, bytes], str | None]], ...] = (
     (("bag", "db3", "ros2-mcap"), _ros_bag), (("mcap",), _mcap), (("tlog",), _tlog),
     (("bin",), _dataflash), (("ulog",), _ulog), (("csv",), _csv))
 KNOWN_FORMATS = tuple(fmt for formats, _ in _RECOGNISERS for fmt in formats)
@@ -141,8 +134,10 @@ def recognise(path: Path) -> str | None:
         return _ros2_bag_folder(path)
     if not path.is_file():
         return None
+    with path.open("rb") as stream:
+        head = stream.read(CSV_SNIFF_BYTES)
     for _, recogniser in _RECOGNISERS:
-        fmt = recogniser(path)
+        fmt = recogniser(path, head)
         if fmt is not None:
             return fmt
     return None
