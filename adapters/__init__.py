@@ -51,6 +51,7 @@ _ADAPTERS: dict[str, tuple[str, str]] = {
     "bin": ("adapters.mavlink", "DataflashAdapter"),
     "ulog": ("adapters.ulog", "UlogAdapter"),
     "csv": ("adapters.csv_log", "CsvAdapter"),
+    "topic-csv": ("adapters.topic_csv", "TopicCsvAdapter"),
 }
 
 

@@ -16,6 +16,11 @@ MAVLINK_MAGICS = (0xFE, 0xFD)            # MAVLink 1 and 2 frame start
 PLAUSIBLE_EPOCH_US = (946_684_800_000_000, 4_102_444_800_000_000)   # years 2000 … 2100
 CSV_DELIMITERS = (",", ";", "\t")
 CSV_SNIFF_BYTES = 8192
+# The clock column that names a per-topic CSV (one topic's messages, a row each): `%time`
+# (ns since 1970) from `rostopic echo -p`; `Time` (s) from bag-to-CSV exports such as bagpy,
+# taken only beside field-path columns (`header.seq`).
+TOPIC_CSV_CLOCKS = {"%time": 1, "Time": 1_000_000_000}
+TOPIC_CSV_FIELD_PREFIX = "field."
 
 
 def _recording_order(path: Path) -> list[str | int]:
@@ -70,6 +75,39 @@ def _head_lines(head: bytes) -> list[str] | None:
     return text.splitlines()
 
 
+def topic_csv_clock(header: list[str]) -> str | None:
+    """The clock column of a per-topic CSV's header (`TOPIC_CSV_CLOCKS`), or None."""
+    if len(header) < 2 or header[0] not in TOPIC_CSV_CLOCKS:
+        return None
+    if header[0] == "%time" or any("." in name for name in header[1:]):
+        return header[0]
+    return None
+
+
+def csv_header(line: str) -> list[str]:
+    return [cell.strip() for cell in line.split(csv_delimiter(line))]
+
+
+def first_line(path: Path) -> str:
+    """The first line of a text file ('' for one that is not text or cannot be read)."""
+    try:
+        with path.open("rb") as stream:
+            head = stream.readline(CSV_SNIFF_BYTES)
+    except OSError:
+        return ""
+    try:
+        return "" if b"\0" in head else head.decode("utf-8").rstrip("\r\n")
+    except UnicodeDecodeError:
+        return ""
+
+
+def topic_csv_files(folder: Path) -> list[Path]:
+    """The per-topic CSVs of a folder (its other files are not part of that log)."""
+    return sorted(entry for entry in folder.iterdir()
+                  if entry.suffix.lower() == ".csv" and entry.is_file()
+                  and topic_csv_clock(csv_header(first_line(entry))) is not None)
+
+
 def _ros2_bag_folder(path: Path) -> str | None:
     storage = _storage_files(path)
     if (path / "metadata.yaml").is_file() and storage:
@@ -115,7 +153,9 @@ def _csv(path: Path, head: bytes) -> str | None:
     header = [cell.strip() for cell in lines[0].split(delimiter)]
     row = [cell.strip() for cell in lines[1].split(delimiter)]
     named = len(header) >= 2 and all(header) and not any(map(is_number, header))
-    return "csv" if named and len(row) == len(header) and any(map(is_number, row)) else None
+    if not (named and len(row) == len(header) and any(map(is_number, row))):
+        return None
+    return "topic-csv" if topic_csv_clock(header) is not None else "csv"
 
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
@@ -123,15 +163,15 @@ def _csv(path: Path, head: bytes) -> str | None:
 # Each is given the file and its first CSV_SNIFF_BYTES bytes.
 _RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path, bytes], str | None]], ...] = (
     (("bag", "db3", "ros2-mcap"), _ros_bag), (("mcap",), _mcap), (("tlog",), _tlog),
-    (("bin",), _dataflash), (("ulog",), _ulog), (("csv",), _csv))
+    (("bin",), _dataflash), (("ulog",), _ulog), (("csv", "topic-csv"), _csv))
 KNOWN_FORMATS = tuple(fmt for formats, _ in _RECOGNISERS for fmt in formats)
 
 
 def recognise(path: Path) -> str | None:
-    """The format of the log at ``path`` (a file, or a ROS 2 bag's folder); None if no
-    format this tool reads."""
+    """The format of the log at ``path`` (a file; a ROS 2 bag's folder; a folder of
+    per-topic CSVs, or one such CSV alone); None if no format this tool reads."""
     if path.is_dir():
-        return _ros2_bag_folder(path)
+        return _ros2_bag_folder(path) or ("topic-csv" if topic_csv_files(path) else None)
     if not path.is_file():
         return None
     with path.open("rb") as stream:

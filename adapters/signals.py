@@ -174,3 +174,14 @@ class Signals:
     damage: Damage | None = None          # None: the whole file was read
     messages_read: int = 0                # messages of the profile's topics
     namespace: str = ""                   # the ROS namespace the topics were read under
+
+    def cropped(self, start_ns: int | None, end_ns: int | None) -> "Signals":
+        """The part of the log from ``start_ns`` to ``end_ns`` (None: its own start or end),
+        on the same clock: every signal's and marker's samples outside it left out."""
+        low = self.start_ns if start_ns is None else max(self.start_ns, start_ns)
+        high = self.end_ns if end_ns is None else min(self.end_ns, end_ns)
+        return replace(
+            self, start_ns=low, end_ns=high,
+            series={name: s.where((s.times_ns >= low) & (s.times_ns <= high))
+                    for name, s in self.series.items()},
+            markers=[m for m in self.markers if low <= m.time_ns <= high])

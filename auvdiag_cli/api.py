@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from auvdiag_cli.engine.signatures import DerivedTable
     from auvdiag_cli.jobs.budget import FalseAlarmBudget
     from auvdiag_cli.jobs.calibrate import CalibrateOptions, CalibrationResult
+    from auvdiag_cli.jobs.healthy import HealthyParts, read_healthy_parts
     from auvdiag_cli.jobs.inspect import Inspection
     from auvdiag_cli.jobs.train import TrainingResult, TrainOptions
     from auvdiag_cli.reports.saved import redraw_report
@@ -58,11 +59,13 @@ if TYPE_CHECKING:
 __all__ = [
     "AuditProgress", "AuditRecord", "AuditResult", "CalibrateOptions", "CalibrationResult",
     "CommandRelations", "DerivedTable", "Diagnosis", "EffortModel", "FalseAlarmBudget",
-    "FleetTrend", "HorizonScore", "Inspection", "LoadedModel", "ModelCard", "Profile",
+    "FleetTrend", "HealthyParts", "HorizonScore", "Inspection", "LoadedModel", "ModelCard",
+    "Profile",
     "Refused", "Scenario", "Signals", "SimulatedDive", "StartReference", "TrainOptions",
     "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
     "diagnose", "draft_profile", "inspect", "load_model", "load_profile", "log_format",
-    "read_log", "redraw_report", "relate", "save_model", "scenarios", "score", "simulate",
+    "read_healthy_parts", "read_log", "redraw_report", "relate", "save_model", "scenarios",
+    "score", "simulate",
     "to_json", "train", "trend", "write_reports",
 ]
 
@@ -78,6 +81,7 @@ _EXPORTED = {name: f"{module}.{name}" for module, names in {
     "auvdiag_cli.engine.signatures": ["DerivedTable"],
     "auvdiag_cli.jobs.budget": ["FalseAlarmBudget"],
     "auvdiag_cli.jobs.calibrate": ["CalibrateOptions", "CalibrationResult"],
+    "auvdiag_cli.jobs.healthy": ["HealthyParts", "read_healthy_parts"],
     "auvdiag_cli.jobs.inspect": ["Inspection"],
     "auvdiag_cli.jobs.train": ["TrainOptions", "TrainingResult"],
     "auvdiag_cli.reports.saved": ["redraw_report"],

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from adapters import detect_format
+from adapters.recognise import topic_csv_files
 from auvdiag_cli.audit.copies import copies
 from auvdiag_errors import LogError, UsageError
 
@@ -86,8 +87,13 @@ def _walk(folder: Path, found: Discovery, exclude: set[Path]) -> None:
     if (folder / ROS2_METADATA).is_file():
         found.logs.append(folder)        # a ROS 2 bag: one log, its files are not walked
         return
+    # A folder of per-topic CSVs is one log; other files beside them (the bag they were
+    # exported from) are logs of their own.
+    topics = set(topic_csv_files(folder))
+    if topics:
+        found.logs.append(folder)
     for entry in sorted(folder.iterdir()):
-        if entry.name.startswith(".") or entry.resolve() in exclude:
+        if entry.name.startswith(".") or entry.resolve() in exclude or entry in topics:
             continue
         if entry.is_dir():
             _walk(entry, found, exclude)
@@ -121,7 +127,7 @@ def expand_logs(paths: Sequence[Path], progress: Callable[[str], None]) -> list[
     one log); what a folder holds that is not a log is reported through ``progress``."""
     expanded: list[Path] = []
     for path in paths:
-        if not path.is_dir() or (path / ROS2_METADATA).is_file():
+        if not path.is_dir() or (path / ROS2_METADATA).is_file() or topic_csv_files(path):
             expanded.append(path)
             continue
         found = discover([str(path)])

@@ -49,6 +49,12 @@ HoldoutOption = Annotated[list[Path] | None, typer.Option(
     "--holdout", help="Held-out normal log: the skill figures and the command relations' and "
                       "start's allowances are measured on it (repeatable; default: every "
                       "fifth log, or the last 20 % of a single log).")]
+HealthyOption = Annotated[Path | None, typer.Option(
+    "--healthy", metavar="FILE", exists=True, dir_okay=False,
+    help="A CSV with columns log,start,end: use only that part of each listed log (its path "
+         "or name as given; times on the log's own clock as 'auvdiag inspect' prints its "
+         "span, in seconds or ISO 8601; empty: from its start / to its end). Logs not listed "
+         "are used whole: a flight that failed late still gives its healthy beginning.")]
 HorizonOption = Annotated[str | None, typer.Option(
     "--horizon", help="How long the model predicts before the replay re-starts from the "
                       "measured state: 'auto' (chosen on the held-out data), 'free' (the "

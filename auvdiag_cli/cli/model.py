@@ -1,13 +1,14 @@
 """`train`, `score`, `relate` and `calibrate`: making a model and its thresholds."""
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from auvdiag_cli.cli.app import (
     EXIT_FAULT,
     CopyOutputOption,
+    HealthyOption,
     HoldoutOption,
     HorizonOption,
     ModelToUpdateOption,
@@ -20,10 +21,19 @@ from auvdiag_cli.cli.app import (
 )
 from auvdiag_errors import UsageError
 
+if TYPE_CHECKING:
+    from auvdiag_cli.jobs.healthy import HealthyParts
+
 PredictorOption = Annotated[list[str] | None, typer.Option(
     "--predictor", help="A predictor each signal may be read from: linear, linear-replay, "
                         "network, network-on-linear (repeatable; default: all four, the best "
                         "per signal on the held-out data).")]
+
+
+def healthy_parts(path: Path | None) -> "HealthyParts":
+    from auvdiag_cli import api
+
+    return api.HealthyParts() if path is None else api.read_healthy_parts(path)
 
 
 @app.command()
@@ -45,6 +55,7 @@ def train(
         help="Multiply every stage's iteration count (e.g. 0.1 for a quick model).",
         min=0.001)] = 1.0,
     predictor: PredictorOption = None,
+    healthy: HealthyOption = None,
 ) -> None:
     """Train the healthy-vehicle dynamics model on normal logs and write a model directory.
 
@@ -70,9 +81,10 @@ def train(
             raise UsageError(f"unknown predictor {', '.join(unknown)} (known: "
                              f"{', '.join(PREDICTOR_KINDS)})")
         vehicle = api.load_profile(profile)
-        options = api.TrainOptions(tuple(log_paths(holdout or [])), hidden, seed,
-                                   iterations_scale, horizon_option(horizon, vehicle.horizon_s),
-                                   keep_unskilled, tuple(predictor or PREDICTOR_KINDS))
+        options = api.TrainOptions(
+            tuple(log_paths(holdout or [])), hidden, seed, iterations_scale,
+            horizon_option(horizon, vehicle.horizon_s), keep_unskilled,
+            tuple(predictor or PREDICTOR_KINDS), healthy_parts(healthy))
         result = api.train(logs, output, vehicle, options, report_progress)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
                                vehicle.sensor_names):
@@ -173,6 +185,7 @@ def calibrate(
         "--false-alarm-rate", metavar="RATE",
         help="Set every threshold for this false-alarm rate instead of the margin rule: a "
              "share of normal logs (0.05) or alarms per hour of operation (0.5/h).")] = None,
+    healthy: HealthyOption = None,
 ) -> None:
     """Set the model's thresholds from the g it reaches on normal logs.
 
@@ -199,7 +212,8 @@ def calibrate(
         vehicle = api.load_profile(profile)
         loaded = api.load_model(model, vehicle)
         result = api.calibrate(loaded, vehicle, logs, faulty or (),
-                               api.CalibrateOptions(margin, budget, floor_at_profile),
+                               api.CalibrateOptions(margin, budget, floor_at_profile,
+                                                    healthy_parts(healthy)),
                                report_progress)
         api.save_model(loaded, output or model)
     for line in calibration_lines(result):

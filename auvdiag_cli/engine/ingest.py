@@ -16,9 +16,27 @@ class IngestedLog:
     frame: AlignedFrame
 
 
-def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
-    """Read ``path`` with the profile's mapping and resample it to the profile's Δt."""
+# A stretch of a log on its own clock, in ns: (start, end), None for open at that end.
+Part = tuple[int | None, int | None]
+WHOLE: Part = (None, None)
+
+
+def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WHOLE
+           ) -> IngestedLog:
+    """Read ``path`` with the profile's mapping and resample it to the profile's Δt; with
+    ``part``, only that stretch of it (the healthy part of a log that failed later)."""
     signals = read_log(path, profile.sources)
+    if part != WHOLE:
+        whole = signals
+        signals = signals.cropped(*part)
+        empty = [name for name in (*profile.drive_names, *profile.sensor_names)
+                 if not len(signals.series[name])]
+        if empty:
+            raise LogError(path, f"its healthy part ({_seconds(part[0], 'its start')} to "
+                                 f"{_seconds(part[1], 'its end')}) holds no sample of "
+                                 f"{', '.join(empty)}; the log spans "
+                                 f"{_seconds(whole.start_ns)} to {_seconds(whole.end_ns)} on "
+                                 "its own clock")
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
                          max_gap_s, profile.idle_after_s, profile.input_names)
@@ -29,3 +47,7 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0) -> IngestedLog:
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
                                  profile.full_scales)
     return IngestedLog(signals, frame)
+
+
+def _seconds(ns: int | None, open_end: str = "") -> str:
+    return open_end if ns is None else f"{ns / 1e9:.3f} s"

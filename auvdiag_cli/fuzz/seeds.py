@@ -51,8 +51,12 @@ def _cropped(dive: SimulatedDive, seconds: float) -> SimulatedDive:
 
 
 def _storage(path: Path) -> Path:
+    """The file that is damaged: a ROS 2 bag's storage, a per-topic CSV folder's largest
+    topic."""
     if path.is_dir():
-        return next(p for p in sorted(path.iterdir()) if p.suffix in (".db3", ".mcap"))
+        files = sorted(path.iterdir())
+        storage = [p for p in files if p.suffix in (".db3", ".mcap")]
+        return storage[0] if storage else max(files, key=lambda p: p.stat().st_size)
     return path
 
 

@@ -33,6 +33,7 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
 )
 from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
+from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.numeric import peak
@@ -171,6 +172,7 @@ class CalibrateOptions:
     margin: float = 1.5
     budget: FalseAlarmBudget | None = None
     floor_at_profile: bool = False
+    healthy: HealthyParts = NO_HEALTHY_PARTS     # only these parts of the logs listed
 
 
 DEFAULT_CALIBRATION = CalibrateOptions()
@@ -185,8 +187,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     margin, budget, floor_at_profile = options.margin, options.budget, options.floor_at_profile
     if margin < 1.0:
         raise UsageError("--margin below 1 would raise alarms on the calibration logs")
-    kept = read_operating(normal_logs, lambda path: ingest(path, profile), progress,
-                          "calibrate with")
+    announce_healthy_parts(options.healthy, normal_logs, progress)
+    kept = read_operating(normal_logs, lambda path: ingest(
+        path, profile, part=options.healthy.of(path)), progress, "calibrate with")
     normal_logs, ingested = list(kept), list(kept.values())
     in_sample = _in_sample(model, normal_logs)
     # Judge the calibration logs without any earlier calibration: raw g is what counts.

@@ -13,10 +13,11 @@ import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.engine.ingest import WHOLE, Part, ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.jobs.candidates import fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
+from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
@@ -72,6 +73,7 @@ class TrainOptions:
     horizon_s: float | None = None     # None: chosen by validation; inf: the free run
     keep_unskilled: bool = False       # write the model even when nothing can be judged
     predictors: tuple[str, ...] = PREDICTOR_KINDS   # the kinds a signal may be read from
+    healthy: HealthyParts = NO_HEALTHY_PARTS        # only these parts of the logs listed
 
 
 DEFAULT_TRAINING = TrainOptions()
@@ -114,9 +116,11 @@ class _ReadLog:
     rates_hz: dict[str, float]          # the rate each signal was logged at (median)
 
 
-def _read(path: Path, profile: Profile, progress: Callable[[str], None]) -> _ReadLog:
-    """The log on the model grid, for the network and for the command relations."""
-    log = ingest(path, profile)
+def _read(path: Path, profile: Profile, progress: Callable[[str], None],
+          part: Part = WHOLE) -> _ReadLog:
+    """The log (or its ``part``) on the model grid, for the network and for the command
+    relations."""
+    log = ingest(path, profile, part=part)
     frame = log.frame
     for note in frame.slow_commands:
         progress(f"warning: {path.name}: {note}")
@@ -151,12 +155,15 @@ def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
 
 
 def _read_and_split(logs: Sequence[Path], holdout: Sequence[Path], profile: Profile,
-                    progress: Callable[[str], None]
+                    progress: Callable[[str], None], healthy: HealthyParts = NO_HEALTHY_PARTS
                     ) -> tuple[list[Path], list[Path], dict[Path, _ReadLog]]:
-    """Training and held-out logs among those in which the vehicle operates, each read."""
+    """Training and held-out logs among those in which the vehicle operates, each read
+    (only its healthy part where ``healthy`` lists one)."""
     progress(f"reading {len(logs)} training and {len(holdout)} held-out log(s)")
-    every = read_operating(list(dict.fromkeys([*logs, *holdout])),
-                           lambda path: _read(path, profile, progress), progress, "train on")
+    paths = list(dict.fromkeys([*logs, *holdout]))
+    announce_healthy_parts(healthy, paths, progress)
+    every = read_operating(paths, lambda path: _read(path, profile, progress,
+                                                     healthy.of(path)), progress, "train on")
     training_paths, heldout_paths = split_holdout([p for p in logs if p in every],
                                                   [p for p in holdout if p in every])
     if not training_paths:
@@ -184,7 +191,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
     training_paths, heldout_paths, every = _read_and_split(logs, options.holdout, profile,
-                                                           progress)
+                                                           progress, options.healthy)
     read = [every[p] for p in training_paths]
     training = [r.scoring for r in read]
     rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,

@@ -13,12 +13,13 @@ from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
 from auvdiag_cli.simulator.writers.records import first_message_s
 from auvdiag_cli.simulator.writers.ros import ExtraTopic, write_mcap, write_rosbag
+from auvdiag_cli.simulator.writers.topic_csv import write_topic_csvs
 from auvdiag_cli.simulator.writers.ulog import write_ulog
 from auvdiag_cli.vehicle.profile import Profile
 
 __all__ = ["LOG_FORMATS", "ExtraTopic", "write_log"]
 
-LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv")
+LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv")
 
 
 def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
@@ -42,6 +43,8 @@ def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
         write_tlog(dive, profile, path)
     elif fmt == "csv":
         write_csv(dive, profile, path)
+    elif fmt == "topic-csv":
+        write_topic_csvs(dive, profile, path, tuple(extra))
     elif fmt == "ulog":
         write_ulog(dive, profile, path)
     else:
