@@ -107,8 +107,9 @@ def _times_ns(texts: list[str], ns_per_unit: int) -> np.ndarray:
     read exactly (a float64 would round 2018's times to 256 ns)."""
     out = np.full(len(texts), -1, np.int64)
     for at, text in enumerate(texts):
-        if ns_per_unit == 1 and text.isdigit() and len(text) < 19:
-            out[at] = int(text)
+        if ns_per_unit == 1 and text.isdigit() and len(text) < 25:
+            exact = int(text)
+            out[at] = exact if exact < 2**62 else -1
         elif is_number(text):
             value = float(text) * ns_per_unit
             if np.isfinite(value) and 0 <= value < 2.0**62:

@@ -1,0 +1,155 @@
+"""A ROS log exported as per-topic CSVs (`rostopic echo -p`): a folder of them is one log,
+read with the profile's [sources.ros] mapping, with the same result as the bag it came from;
+damaged, cut or shuffled topic files and a missing topic are handled like any log's; an
+audit root of such folders audits each as one log. The real ALFA flights read the same from
+their bag and from their CSV folder."""
+
+import csv
+import json
+import random
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from shared_data import SHARED_DATA
+from typer.testing import CliRunner
+
+from adapters import detect_format, inventory, read_log
+from auvdiag_cli import api
+from auvdiag_cli.audit.discovery import discover
+from auvdiag_cli.cli import app
+from auvdiag_cli.simulator.writers import write_log
+
+runner = CliRunner()
+SCENARIO, SEED = "paper-flow-sensor-covered", 31
+ALFA = SHARED_DATA / "alfa"
+# The flights kept in both forms (a bag beside its CSVs); one placeholder where there is no
+# data, for the shared_data mark to skip.
+ALFA_WITH_BAGS = sorted(bag.parent.name for bag in ALFA.glob("*/*.bag")) or ["absent"]
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory, dive_cache, profile):
+    """One simulated dive as a ROS 1 bag and as that bag's per-topic CSV export."""
+    folder = tmp_path_factory.mktemp("export")
+    dive = dive_cache(SCENARIO, SEED)
+    write_log(dive, profile, folder / "dive.bag", "bag")
+    write_log(dive, profile, folder / "flight", "topic-csv")
+    return folder / "dive.bag", folder / "flight"
+
+
+def _diagnosis(log: Path):
+    return api.diagnose(log, api.load_profile(None), api.load_model(None))
+
+
+def _summary(diagnosis) -> tuple:
+    return (diagnosis.verdict, diagnosis.component, diagnosis.onset_s, diagnosis.detected_at_s,
+            dict(diagnosis.segments[0].max_g))
+
+
+def test_a_bag_and_its_topic_csv_export_give_the_same_diagnosis(exported):
+    bag, folder = exported
+    assert detect_format(folder) == "topic-csv"
+    header = (folder / "flight-thrusters-command.csv").read_text().splitlines()[0]
+    assert header.startswith("%time,") and "field.data0" in header
+    from_bag, from_csv = _diagnosis(bag), _diagnosis(folder)
+    assert from_csv.verdict == "fault" and from_csv.component == "flow_sensor"
+    assert _summary(from_csv) == _summary(from_bag)
+
+
+def test_one_topic_csv_alone_is_a_log_of_its_topic(exported):
+    _, folder = exported
+    single = folder / "flight-imu-data.csv"
+    held, family = inventory(single)
+    assert family == "ros" and held.format == "topic-csv"
+    assert [t.name for t in held.topics] == ["/imu/data"]
+    assert "angular_velocity.z" in held.topics[0].fields and held.duration_s > 100
+
+
+def test_a_missing_topic_is_one_line_naming_the_folder_and_topic(exported, tmp_path):
+    _, folder = exported
+    damaged = tmp_path / "flight"
+    shutil.copytree(folder, damaged)
+    (damaged / "flight-flow-velocity.csv").unlink()
+    result = runner.invoke(app, ["diagnose", str(damaged), "--quiet"])
+    assert result.exit_code == 2
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and str(damaged) in lines[0] and "/flow/velocity" in lines[0]
+
+
+def test_cut_and_shuffled_topic_files_still_read(exported, tmp_path):
+    bag, folder = exported
+    damaged = tmp_path / "flight"
+    shutil.copytree(folder, damaged)
+    imu = damaged / "flight-imu-data.csv"
+    text = imu.read_bytes()
+    imu.write_bytes(text[:len(text) - 40])                # the last row cut in half
+    commands = damaged / "flight-thrusters-command.csv"
+    header, *rows = commands.read_text().splitlines()
+    random.Random(3).shuffle(rows)                        # clocks out of order
+    commands.write_text("\n".join([header, *rows]) + "\n")
+    diagnosis = _diagnosis(damaged)
+    assert any("1 row(s) with the wrong number of cells" in note for note in diagnosis.notes)
+    assert (diagnosis.verdict, diagnosis.component) == ("fault", "flow_sensor")
+    assert diagnosis.onset_s == pytest.approx(_diagnosis(bag).onset_s, abs=0.2)
+
+
+def test_an_unreadable_clock_cell_is_counted_not_fatal(exported, tmp_path):
+    _, folder = exported
+    damaged = tmp_path / "flight"
+    shutil.copytree(folder, damaged)
+    flow = damaged / "flight-flow-velocity.csv"
+    header, first, *rest = flow.read_text().splitlines()
+    flow.write_text("\n".join([header, "x" + first[1:], *rest]) + "\n")
+    signals = read_log(damaged, api.load_profile(None).sources)
+    assert any("1 row(s) whose time does not read" in note for note in signals.notes)
+
+
+def test_an_audit_root_holds_each_folder_as_one_log(exported, tmp_path):
+    bag, folder = exported
+    root = tmp_path / "flights"
+    for name in ("a", "b"):
+        copy = root / name
+        shutil.copytree(folder, copy)
+        for file in copy.iterdir():
+            file.rename(copy / file.name.replace("flight-", f"{name}-"))
+    shutil.copyfile(bag, root / "b" / "b.bag")           # the bag it was exported from
+    found = discover([str(root)])
+    assert sorted(p.relative_to(root).as_posix() for p in found.logs) == ["a", "b", "b/b.bag"]
+    result = runner.invoke(app, ["audit", str(root), "--output", str(tmp_path / "audit"),
+                                 "--jobs", "1", "--fail-on", "none"])
+    assert result.exit_code == 0, result.output
+    with (tmp_path / "audit" / "audit.csv").open(newline="") as stream:
+        rows = list(csv.DictReader(stream))
+    assert sorted(row["format"] for row in rows) == ["bag", "topic-csv", "topic-csv"]
+    assert all((row["verdict"], row["component"]) == ("fault", "flow_sensor") for row in rows)
+
+
+@pytest.mark.shared_data("alfa")
+@pytest.mark.parametrize("sequence", ALFA_WITH_BAGS)
+def test_alfa_flights_read_the_same_from_bag_and_csv_folder(sequence):
+    profile = api.load_profile("arduplane_carbonz")
+    folder = ALFA / sequence
+    from_csv = read_log(folder, profile.sources)
+    from_bag = read_log(folder / f"{sequence}.bag", profile.sources)
+    assert from_csv.format == "topic-csv" and from_bag.format == "bag"
+    assert set(from_csv.series) == set(from_bag.series) == {
+        *profile.command_names, *profile.sensor_names}
+    for name, series in from_bag.series.items():
+        other = from_csv.series[name]
+        assert np.array_equal(series.times_ns, other.times_ns), name
+        np.testing.assert_allclose(other.values, series.values, rtol=1e-9, err_msg=name)
+    assert abs(from_csv.start_ns - from_bag.start_ns) < 5_000_000
+
+
+@pytest.mark.shared_data("alfa")
+def test_alfa_labels_name_folders_that_read():
+    with (ALFA / "labels.csv").open(newline="") as stream:
+        sequences = [row["sequence"] for row in csv.DictReader(stream)]
+    assert len(sequences) >= 20
+    assert all(detect_format(ALFA / s) == "topic-csv" for s in sequences)
+    result = runner.invoke(app, ["inspect", str(ALFA / sequences[1]), "--profile",
+                                 "arduplane_carbonz"])
+    assert result.exit_code == 0, result.output
+    assert "MISSING" not in result.output and json.dumps("topic-csv")[1:-1] in result.output
