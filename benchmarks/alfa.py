@@ -30,11 +30,18 @@ from collections import defaultdict
 from dataclasses import dataclass
 from datetime import date
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from auvdiag_cli.engine.results import Diagnosis
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "alfa"
 FALSE_ALARM_RATE = 0.05
 # Keipour et al., ICRA 2019, Table II: per kind, average detection delay (s).
 PUBLISHED_DELAY_S = {"engine": 2.28, "rudder": 0.21, "elevator": 0.36, "aileron": 3.31}
+# The part a failure of each kind should be named as (the profile's actuators).
+EXPECTED_PART = {"engine": {"engine"}, "aileron": {"ailerons"}, "elevator": {"elevator"},
+                 "rudder": {"rudder"}, "aileron+rudder": {"ailerons", "rudder"}}
 PUBLISHED_SUMMARY = ("published RLS detector (22 flights): precision 88.2 %, recall 88.2 %, "
                      "detection 2.02 s on average, 5.6 s at worst")
 
@@ -58,6 +65,11 @@ class Outcome:
     onset_s: float | None        # the true onset, after the log's start
     component: str | None
     seconds: float
+    judge: str | None            # which judge's alarm made the verdict
+
+    @property
+    def named_right(self) -> bool:
+        return self.found and self.component in EXPECTED_PART.get(self.flight.kind, set())
 
     @property
     def alarmed(self) -> bool:
@@ -125,8 +137,23 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
         onset_s = None if flight.onset_ns is None else (flight.onset_ns
                                                         - diagnosis.start_ns) / 1e9
         outcomes.append(Outcome(flight, str(diagnosis.verdict), diagnosis.detected_at_s,
-                                onset_s, diagnosis.component, time.perf_counter() - started))
+                                onset_s, diagnosis.component, time.perf_counter() - started,
+                                _judge(diagnosis)))
     return outcomes, judged
+
+
+def _judge(diagnosis: "Diagnosis") -> str | None:
+    """Which judge raised the alarm the verdict rests on."""
+    if str(diagnosis.verdict) != "fault" or diagnosis.detected_at_s is None:
+        return None
+    change = diagnosis.change_check
+    if change is not None and change.alarm_s == diagnosis.detected_at_s:
+        return "change test"
+    for name, check in (("effort", diagnosis.effort_check),
+                        ("commands", diagnosis.command_check)):
+        if check is not None and check.alarm_s == diagnosis.detected_at_s:
+            return name
+    return "replay"
 
 
 def _seconds(values: list[float]) -> str:
@@ -137,22 +164,24 @@ def _seconds(values: list[float]) -> str:
 
 def table(outcomes: list[Outcome]) -> list[str]:
     rows = ["| kind | flights | found after onset | false alarms | delay median / worst (s) "
-            "| components named | published mean delay (s) |", "|---|---|---|---|---|---|---|"]
+            "| right part named | found first by | published mean delay (s) |",
+            "|---|---|---|---|---|---|---|---|"]
     by_kind: dict[str, list[Outcome]] = defaultdict(list)
     for outcome in outcomes:
         by_kind[outcome.flight.kind].append(outcome)
     for kind in sorted(by_kind, key=lambda k: (k == "normal", k)):
         group = by_kind[kind]
         false_alarms = sum(o.early or (o.alarmed and o.onset_s is None) for o in group)
-        named: dict[str, int] = defaultdict(int)
+        judges: dict[str, int] = defaultdict(int)
         for o in group:
             if o.found:
-                named[o.component or "none"] += 1
+                judges[o.judge or "?"] += 1
         rows.append(
             f"| {kind} | {len(group)} | "
             f"{'–' if kind == 'normal' else sum(o.found for o in group)} | {false_alarms} | "
             f"{_seconds([d for o in group if (d := o.delay_s) is not None])} | "
-            f"{', '.join(f'{c} {n}' for c, n in sorted(named.items())) or '–'} | "
+            f"{'–' if kind == 'normal' else sum(o.named_right for o in group)} | "
+            f"{', '.join(f'{j} {n}' for j, n in sorted(judges.items())) or '–'} | "
             f"{PUBLISHED_DELAY_S.get(kind, '–')} |")
     return rows
 
@@ -162,13 +191,15 @@ def summary(outcomes: list[Outcome]) -> list[str]:
     alarms = [o for o in outcomes if o.alarmed]
     true_alarms = [o for o in alarms if o.found]
     delays = [d for o in failed if (d := o.delay_s) is not None]
+    named = sum(o.named_right for o in true_alarms)
     precision = len(true_alarms) / len(alarms) if alarms else float("nan")
     recall = len(true_alarms) / len(failed) if failed else float("nan")
     return [f"auvdiag: precision {precision:.1%}, recall {recall:.1%} "
             f"({len(true_alarms)} of {len(failed)} failed flights found after their onset; "
             f"{len(alarms) - len(true_alarms)} false alarm(s) in {len(outcomes)} flights), "
             f"delay median {statistics.median(delays) if delays else float('nan'):.1f} s, "
-            f"worst {max(delays, default=float('nan')):.1f} s; "
+            f"worst {max(delays, default=float('nan')):.1f} s; the right part named in "
+            f"{named} of {len(true_alarms)} found; "
             f"{PUBLISHED_SUMMARY}."]
 
 
@@ -202,13 +233,14 @@ def main() -> None:
     print()
     print("\n".join(notes))
     print("\nPer flight:\n")
-    print("| flight | kind | verdict | onset (s) | detected (s) | component |")
-    print("|---|---|---|---|---|---|")
+    print("| flight | kind | verdict | onset (s) | detected (s) | component | judge |")
+    print("|---|---|---|---|---|---|---|")
     for o in outcomes:
         def when(value: float | None) -> str:
             return "–" if value is None else f"{value:.1f}"
         print(f"| {o.flight.folder.name} | {o.flight.kind} | {o.verdict} | "
-              f"{when(o.onset_s)} | {when(o.detected_s)} | {o.component or '–'} |")
+              f"{when(o.onset_s)} | {when(o.detected_s)} | {o.component or '–'} | "
+              f"{o.judge or '–'} |")
 
 
 if __name__ == "__main__":

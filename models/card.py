@@ -4,7 +4,7 @@ the parsed relations and effort beside it), never through the JSON document; a m
 takes the value a model from before that key existed means."""
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
@@ -156,6 +156,9 @@ class ModelCard:
     start_state: StartReference
     relations_refused: str | None                          # why no command relations
     effort_refused: str | None                             # why no effort model
+    # The change test's threshold on z per signal (`engine.change_check`); empty: calibrate
+    # has not set them, and the test is not run.
+    change_thresholds: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -219,4 +222,6 @@ class ModelCard:
                                        meta.get("training", {}).get("logs", [])),
             start_state=StartReference.from_json(meta.get("start_state") or {}),
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
-            effort_refused=(meta.get("effort") or {}).get("refused"))
+            effort_refused=(meta.get("effort") or {}).get("refused"),
+            change_thresholds=_frozen({str(k): float(v) for k, v in (
+                meta.get("change_test") or {}).get("thresholds", {}).items()}))

@@ -65,7 +65,7 @@ def test_a_part_on_the_logs_clock_crops_it_in_seconds_or_iso(make_log, tmp_path)
 def test_a_part_outside_the_log_is_one_error_with_its_span(make_log, tmp_path):
     log = make_log(FAULTY, 31)
     parts = api.read_healthy_parts(_healthy(tmp_path, f"{log.name},1,2"))
-    with pytest.raises(LogError, match="holds no sample of .* the log spans"):
+    with pytest.raises(LogError, match=r"holds no sample of .* the log spans"):
         ingest(log, api.load_profile(None), part=parts.of(log))
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
+from auvdiag_cli.engine.change_check import ChangeCheck, check_change
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -22,7 +23,12 @@ from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.isolation import apply_other_evidence, isolate
+from auvdiag_cli.engine.isolation import (
+    apply_change_alarm,
+    apply_other_evidence,
+    isolate,
+    names_a_mover,
+)
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.residuals import Matching, match
@@ -158,7 +164,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         command_check=_check_commands(log, segments, profile, model, notes),
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s),
-        effort_check=_check_effort(log, segments, profile, model, notes))
+        effort_check=_check_effort(log, segments, profile, model, notes),
+        change_check=_check_change(matching, judging, frame.time_s, profile, model))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
     return Diagnosis.of(seen, _conclude(seen, normal, detection, judging, log, matching,
@@ -177,13 +184,39 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
         if any(other is not None and other.judged for other in others):
             return apply_other_evidence(seen, normal, profile, model)
         return replace(normal, verdict=Verdict.UNDETERMINED, case=None)
+    frame = log.frame
+    change = seen.change_check
+    if change is not None and change.alarm_s is not None and change.onset_s is not None and (
+            detection is None or change.alarm_s < frame.time_s[detection.alarm_index]):
+        if names_a_mover(change, profile):
+            return apply_change_alarm(seen, normal, change, profile, model)
+        # The change came first: its b and times, named as the replay's alarm would be.
+        b = {name: int(name in change.flagged) for name in frame.sensor_names}
+        onset = int(np.searchsorted(frame.time_s, change.onset_s))
+        test = weigh_hypotheses(model, judging, frame, matching, thresholds, onset,
+                                dms_starts)
+        return isolate(seen, normal.noted(f"found by the change test: {change.describe()}"),
+                       b, change.alarm_s, change.onset_s, test, companion_runs, profile,
+                       model)
     if detection is None:
         return apply_other_evidence(seen, normal, profile, model)
-    frame = log.frame
     test = weigh_hypotheses(model, judging, frame, matching, thresholds,
                             detection.onset_index, dms_starts)
     return isolate(seen, normal, detection.b, frame.time_s[detection.alarm_index],
                    frame.time_s[detection.onset_index], test, companion_runs, profile, model)
+
+
+def _check_change(matching: Matching, judging: Judging, time_s: np.ndarray,
+                  profile: Profile, model: LoadedModel) -> ChangeCheck | None:
+    """The log against its own beginning, for the judged signals calibrate set a change
+    threshold for (None: no such threshold)."""
+    names = profile.sensor_names
+    thresholds = {name: value for name, value in model.card.change_thresholds.items()
+                  if name in names and judging.judged_mask[names.index(name)]}
+    if not thresholds:
+        return None
+    return check_change(matching.measured - matching.modelled, names, thresholds, time_s,
+                        judging.window, profile.dt_s)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,

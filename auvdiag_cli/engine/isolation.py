@@ -7,6 +7,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
+from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
@@ -63,6 +64,52 @@ def apply_other_evidence(seen: Observations, finding: Finding, profile: Profile,
     if check is not None and check.alarm_s is not None:
         return _apply_command_alarm(seen, finding, check, profile, model)
     return finding
+
+
+def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck,
+                       profile: Profile, model: LoadedModel) -> Finding:
+    """The log changed against its own beginning before the replay's thresholds were
+    crossed, in signals the profile says which parts move: the signals that changed make
+    b; a row of the pattern table names the part, else the part that moves most of what
+    changed (`change_suspects`)."""
+    b = {name: int(name in change.flagged) for name in finding.b}
+    finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
+                      onset_s=change.onset_s)
+    note = f"found by the change test: {change.describe()}"
+    row = look_up(profile.pattern, b)
+    if row is not None and row.components:
+        return _found(seen, replace(finding, case=row.case), list(row.components), note,
+                      profile, model)
+    ranked = change_suspects(change.flagged, profile)
+    if len(ranked) > 1:
+        note += "; the part that moves most of what changed is named, before " + ", ".join(
+            ranked[1:])
+    return _found(seen, replace(finding, case=None), ranked[:1], note, profile, model)
+
+
+def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
+    """Whether the profile says which parts move what changed (`moved_by`): those name the
+    part; otherwise the replay's isolation does (pattern table, hypotheses)."""
+    return any(s.moved_by for s in profile.sensors if s.name in change.flagged)
+
+
+def change_suspects(flagged: Mapping[str, float], profile: Profile) -> list[str]:
+    """The parts that could explain the signals that changed, likeliest first: each signal
+    counts (by how far past its threshold) for its own sensor and for the parts that move
+    what it measures; a part moving several of them gathers their weight. On a tie the
+    part that moves comes first: a vehicle that stops following its set points the same
+    way has first changed in what moves it."""
+    weight: dict[str, float] = {}
+    movers: set[str] = set()
+    for sensor in profile.sensors:
+        ratio = flagged.get(sensor.name)
+        if ratio is None:
+            continue
+        for part in sensor.moved_by:
+            weight[part] = weight.get(part, 0.0) + ratio
+            movers.add(part)
+        weight[sensor.component] = weight.get(sensor.component, 0.0) + ratio
+    return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
 
 
 def _found(seen: Observations, finding: Finding, candidates: Sequence[str], note: str,

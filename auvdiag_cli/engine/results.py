@@ -7,6 +7,7 @@ from enum import StrEnum
 from pathlib import Path
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
+from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
 from auvdiag_cli.engine.coverage import Coverage, coverage_of
@@ -68,6 +69,7 @@ class Observations:
     command_check: CommandCheck | None = None   # the commands judged against the motion
     start_check: StartCheck | None = None       # the log's start against normal starts
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
+    change_check: ChangeCheck | None = None     # the log against its own beginning
 
 
 @dataclass(frozen=True, kw_only=True)

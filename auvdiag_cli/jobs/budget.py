@@ -66,7 +66,7 @@ class FalseAlarmBudget:
 class Judge:
     """One judge and its statistic per calibration log (NaN: none in that log)."""
 
-    kind: str                    # "g", "start" or "command"
+    kind: str                    # "g", "start", "command" or "change"
     name: str                    # the signal or the command
     mode: str | None             # g's mode
     values: tuple[float, ...]
@@ -188,6 +188,12 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
         judges.append(Judge("command", command_names[k], None, tuple(
             float("nan") if r is None else r * allowed for r in ratios)))
     return judges
+
+
+def change_judges(peaks: Sequence[dict[str, float]], judged: Sequence[str]) -> list[Judge]:
+    """Each judged signal's largest change-test z per log (NaN: the log is too short)."""
+    return [Judge("change", name, None, tuple(p.get(name, float("nan")) for p in peaks))
+            for name in judged]
 
 
 def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,

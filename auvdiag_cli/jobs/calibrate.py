@@ -10,7 +10,7 @@ The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_peaks
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -28,6 +29,7 @@ from auvdiag_cli.jobs.budget import (
     BudgetThresholds,
     FalseAlarmBudget,
     budget_thresholds,
+    change_judges,
     command_judges,
     g_judges,
     start_judges,
@@ -106,6 +108,9 @@ class CalibrationResult:
     effort: EffortModel | Refused | None = None    # the refitted effort model, if any
     effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
     budget: BudgetThresholds | None = None         # --false-alarm-rate: the fitted judges
+    # The change test: signal -> (largest z on these logs, its threshold); empty where no
+    # log is long enough to judge it.
+    change: dict[str, tuple[float, float]] = field(default_factory=dict)
 
 
 def _mode_key(segment_name: str) -> str:
@@ -216,9 +221,12 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start.to_json())
+    change_peaks = [_change_peaks(d, judged, model, profile) for d in diagnoses]
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
-        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested])
+        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested],
+        change_peaks)
+    change = _set_change_thresholds(model, change_peaks, judged, margin, fitted)
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -232,7 +240,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
-        fitted)
+        fitted, change)
     model.update_entries(calibration=_record(result, normal_logs, floor_at_profile))
     return result
 
@@ -267,14 +275,16 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                   per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[ModeCalibration],
                   readings: Sequence[StartReading | None],
                   checks: Sequence[CommandCheck | None], judged: Sequence[str],
-                  log_hours: Sequence[float]) -> BudgetThresholds:
+                  log_hours: Sequence[float], change_peaks: Sequence[dict[str, float]]
+                  ) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
     model's entries (g's go into the modes, `_with_budget`)."""
     start, relations = model.card.start_state, model.relations
     judges = [*g_judges(per_log, [m.mode for m in modes if not m.kept_default], judged,
                         profile.sensor_names),
               *start_judges(start, readings, profile.sensor_names),
-              *command_judges(relations, checks, profile.command_names)]
+              *command_judges(relations, checks, profile.command_names),
+              *change_judges(change_peaks, judged)]
     actuators = sum(len(group.members) for group in profile.effort_groups)
     fitted = budget_thresholds(judges, actuators, budget, log_hours)
     if start.usable:
@@ -288,6 +298,48 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
             extra[profile.command_names.index(name)] = value
         model.update_entries(command_relations=replace(relations, thresholds=extra).to_json())
     return fitted
+
+
+# The change test's thresholds are never set below this z: over an hour's windows even
+# Gaussian window means reach about 4 (sqrt(2 ln 2N)), residuals have heavier tails, and
+# the largest of a handful of normal logs' peaks understates the next log's.
+MIN_CHANGE_THRESHOLD_Z = 6.0
+
+
+def _change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedModel,
+                  profile: Profile) -> dict[str, float]:
+    """Each judged signal's largest change-test z in one normal log (NaN: too short)."""
+    matching = diagnosis.histories.matching
+    assert matching is not None
+    names = list(profile.sensor_names)
+    columns = [names.index(name) for name in judged]
+    window = model.card.window_samples or profile.window_samples
+    return change_peaks((matching.measured - matching.modelled)[:, columns], list(judged),
+                        window, profile.dt_s)
+
+
+def _set_change_thresholds(model: LoadedModel, peaks: Sequence[dict[str, float]],
+                           judged: Sequence[str], margin: float,
+                           fitted: BudgetThresholds | None) -> dict[str, tuple[float, float]]:
+    """The change test's thresholds into the model's entries: margin x the largest z on
+    the normal logs, or the budget's where it fitted the judge, never below
+    `MIN_CHANGE_THRESHOLD_Z`. A signal no log is long enough to judge gets none (the test
+    leaves it out)."""
+    budgeted = {} if fitted is None else {name: value for (_, name), value in
+                                          fitted.thresholds("change").items()}
+    result: dict[str, tuple[float, float]] = {}
+    for name in judged:
+        values = [p[name] for p in peaks if np.isfinite(p.get(name, np.nan))]
+        if not values:
+            continue
+        largest = max(values)
+        result[name] = (round(largest, 3), round(max(
+            budgeted.get(name, margin * largest), MIN_CHANGE_THRESHOLD_Z), 3))
+    model.update_entries(change_test={
+        "thresholds": {name: threshold for name, (_, threshold) in result.items()},
+        "largest_normal_z": {name: largest for name, (largest, _) in result.items()},
+        "reference_s": REFERENCE_MIN_S})
+    return result
 
 
 def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,

@@ -5,6 +5,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from auvdiag_cli import __version__
+from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.coverage import normal_verdict_text
@@ -56,6 +57,7 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "hypotheses": _hypotheses(diagnosis),
         "commands_check": _command_check(diagnosis.command_check),
         "start_check": _start_check(diagnosis),
+        "change_check": _change_check(diagnosis.change_check),
         "actuators": _actuators(diagnosis.effort_check),
         "active_diagnosis": _active(diagnosis),
         "substitution": _substitution(diagnosis.substitution),
@@ -172,6 +174,16 @@ def _command_check(check: CommandCheck | None) -> dict[str, Any] | None:
             "alarm_s": check.alarm_s, "onset_s": check.onset_s, "named": list(check.named),
             "explained": check.explained,
             "extra_effort": check.extra_effort}
+
+
+def _change_check(check: ChangeCheck | None) -> dict[str, Any] | None:
+    """The log against its own beginning (null: the model has no change thresholds)."""
+    if check is None:
+        return None
+    return {"summary": check.describe(), "judged": check.judged,
+            "judged_from_s": check.judged_from_s, "thresholds": dict(check.thresholds),
+            "peak_z": dict(check.peak_z), "alarm_s": check.alarm_s, "onset_s": check.onset_s,
+            "onset_error_s": check.onset_error_s, "flagged": dict(check.flagged)}
 
 
 def _actuators(check: EffortCheck | None) -> dict[str, Any] | None:

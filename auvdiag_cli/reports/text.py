@@ -56,6 +56,8 @@ def summary_lines(diagnosis: Diagnosis) -> list[str]:
         lines += [f"    {name}: {why}" for name, why in check.not_judged.items()]
     if d.start_check is not None:
         lines.append("  start: " + d.start_check.describe(d.sensor_units))
+    if d.change_check is not None:
+        lines.append("  change test: " + d.change_check.describe())
     lines += effort_lines(d.effort_check)
     for result in d.segments:
         seg = result.segment

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from adapters.signals import OPERATING, LogSources
+from auvdiag_cli.vehicle.actuators import Actuator, parse_actuators, parse_moved_by
 from auvdiag_cli.vehicle.controller import (
     CONTROLLER_KINDS,
     EFFORTS,
@@ -50,6 +51,8 @@ class Sensor:
     full_scale: float
     description: str
     truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
+    # The actuators (or command components) that move what it measures ([[actuators]]).
+    moved_by: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,8 @@ class Profile:
     effort_groups: tuple[EffortGroup, ...] = ()
     # Measured inputs of the model beside the commands ([[inputs]]).
     inputs: tuple[Input, ...] = ()
+    # The parts that move the vehicle where they are not its commands ([[actuators]]).
+    actuators: tuple[Actuator, ...] = ()
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -154,16 +159,17 @@ def _horizon(matching: TableReader) -> float | None:
     return float(value)
 
 
-def _signals(top: TableReader
+def _signals(top: TableReader, actuators: tuple[Actuator, ...]
              ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...]]:
     commands = tuple(
         Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
         for r in top.items("commands")
     )
+    movers = {a.name for a in actuators} | {c.component for c in commands}
     sensors = tuple(
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
-               r.get("truth_column", str, None))
+               r.get("truth_column", str, None), parse_moved_by(r, movers))
         for r in top.items("sensors")
     )
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
@@ -200,7 +206,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     """Validate a parsed TOML document into a `Profile`."""
     top = TableReader(data, "")
     vehicle = top.sub("vehicle")
-    commands, sensors, inputs = _signals(top)
+    actuators = parse_actuators(top.items("actuators")) if "actuators" in data else ()
+    commands, sensors, inputs = _signals(top, actuators)
     sensor_names = [s.name for s in sensors]
     signal_names = [c.name for c in commands] + sensor_names + [i.name for i in inputs]
     matching = top.sub("matching")
@@ -208,7 +215,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     if window < 1:
         raise ProfileError("key 'matching.window_samples' must be at least 1")
     thresholds = _thresholds(top.sub("thresholds"), sensor_names)
-    components = {c.component for c in commands} | {s.component for s in sensors}
+    components = ({c.component for c in commands} | {s.component for s in sensors}
+                  | {a.name for a in actuators})
     pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
 
@@ -246,6 +254,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
                             for r in top.items("effort"))
         if "effort" in data else (),
         inputs=inputs,
+        actuators=actuators,
     )
 
 

@@ -115,6 +115,9 @@ def summary_facts(document: dict[str, Any]) -> list[tuple[str, str]]:
     start = document.get("start_check")
     if start and start.get("judged"):
         facts.append(("Start", start["summary"]))
+    change = document.get("change_check")
+    if change:
+        facts.append(("Against its beginning", change["summary"]))
     weak = document.get("degradation")
     if weak:
         facts.append(("Partial failure", f"{weak['component'].replace('_', ' ')} gives about "

@@ -1,0 +1,55 @@
+"""The parts that move a vehicle, beside the signals that drive its model: on a vehicle
+whose model is driven by its controller's set points, the thrusters, rotors, control
+surfaces and engines are not commands, yet they are what fails. A profile lists them in
+`[[actuators]]` (name, kind, description) and says, per sensor, which of them move the
+quantity it measures (`moved_by`): a relation that changes then names its part."""
+
+from dataclasses import dataclass
+
+from auvdiag_cli.vehicle.toml_reader import TableReader
+from auvdiag_errors import ProfileError
+
+# Each kind, and how its failure is said.
+ACTUATOR_KINDS = {
+    "thruster": "a damaged or fouled propeller, a weak motor, or a load near it",
+    "rotor": "a damaged propeller or a weak motor",
+    "control_surface": "a surface stuck, loose or damaged, or its servo failing",
+    "engine": "lost or reduced thrust",
+}
+
+
+@dataclass(frozen=True)
+class Actuator:
+    name: str
+    kind: str
+    description: str = ""
+
+    @property
+    def failure(self) -> str:
+        return ACTUATOR_KINDS[self.kind]
+
+
+def parse_actuators(rows: list[TableReader]) -> tuple[Actuator, ...]:
+    actuators = []
+    for reader in rows:
+        kind = reader.get("kind", str)
+        if kind not in ACTUATOR_KINDS:
+            raise ProfileError(f"key '{reader.key('kind')}' must be one of "
+                               f"{', '.join(ACTUATOR_KINDS)}, got {kind!r}")
+        actuators.append(Actuator(reader.get("name", str), kind,
+                                  reader.get("description", str, "")))
+    names = [a.name for a in actuators]
+    if len(set(names)) != len(names):
+        raise ProfileError("actuator names in 'actuators' must be unique")
+    return tuple(actuators)
+
+
+def parse_moved_by(reader: TableReader, known: set[str]) -> tuple[str, ...]:
+    """A sensor's `moved_by`: actuators or command components, each known."""
+    names = tuple(str(n) for n in reader.get("moved_by", list, []))
+    strangers = [n for n in names if n not in known]
+    if strangers:
+        raise ProfileError(f"key '{reader.key('moved_by')}' names {strangers[0]!r}, which is "
+                           f"no actuator or command component (known: "
+                           f"{', '.join(sorted(known))})")
+    return names

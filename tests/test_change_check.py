@@ -1,0 +1,97 @@
+"""The change test: each log judged against its own beginning. Its statistic on residuals
+with a known step, its thresholds set by calibrate from normal logs, and on simulated dives
+whose fault begins mid-log: found after the onset and not before, no alarm on a normal
+dive it was not calibrated on; the part that moves what changed is named."""
+
+import numpy as np
+import pytest
+
+from auvdiag_cli import api
+from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistic, check_change
+from auvdiag_cli.engine.isolation import change_suspects
+from auvdiag_cli.jobs.calibrate import MIN_CHANGE_THRESHOLD_Z
+from auvdiag_cli.reports.training import calibration_lines
+
+DT_S, WINDOW = 0.1, 10
+
+
+def _noise(seconds: float, signals: int = 2, seed: int = 0) -> np.ndarray:
+    return np.random.default_rng(seed).normal(0.0, 1.0, (round(seconds / DT_S), signals))
+
+
+def test_the_statistic_waits_for_its_reference_and_rises_at_a_step():
+    residual = _noise(120.0)
+    residual[800:, 1] += 3.0                         # signal 1 shifts at 80 s
+    z = change_statistic(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))
+    assert np.isnan(z[:round(REFERENCE_MIN_S / DT_S), :]).all()
+    assert np.nanmax(z[:800]) < 6.0                  # noise alone
+    assert np.nanmax(z[800:810, 1]) > 8.0            # the shift, within a window
+    assert np.nanmax(z[800:, 0]) < 6.0               # the other signal is untouched
+
+
+def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
+    residual = _noise(120.0, seed=1)
+    residual[800:, 0] -= 3.0
+    time_s = np.arange(residual.shape[0]) * DT_S
+    check = check_change(residual, ["speed", "yaw"], {"speed": 7.0, "yaw": 7.0}, time_s,
+                         WINDOW, DT_S)
+    assert check.judged and check.judged_from_s == pytest.approx(
+        REFERENCE_MIN_S + 2 * WINDOW * DT_S, abs=0.2)   # its first window, then one more
+    assert 80.0 <= check.alarm_s <= 81.0
+    assert check.onset_s == pytest.approx(80.0, abs=check.onset_error_s)
+    assert list(check.flagged) == ["speed"]
+    assert "changed against the log's own beginning" in check.describe()
+
+
+def test_a_log_shorter_than_its_reference_is_not_judged():
+    residual = _noise(REFERENCE_MIN_S - 5.0)
+    check = check_change(residual, ["a", "b"], {"a": 5.0, "b": 5.0},
+                         np.arange(residual.shape[0]) * DT_S, WINDOW, DT_S)
+    assert not check.judged and check.alarm_s is None and "too short" in check.describe()
+
+
+def test_the_part_moving_most_of_what_changed_comes_first():
+    profile = api.load_profile("arduplane_carbonz")
+    assert change_suspects({"yaw_rate": 2.0}, profile)[:2] == ["rudder", "gyro"]
+    assert change_suspects({"pitch": 1.5, "pitch_rate": 1.2}, profile)[0] == "elevator"
+    assert change_suspects({"climb": 1.1, "accel_x": 1.3, "roll": 1.5}, profile)[0] == "engine"
+
+
+@pytest.fixture(scope="module")
+def calibrated(make_log, tmp_path_factory):
+    """The built-in model calibrated on three normal dives: the change test's thresholds."""
+    model = api.load_model(None)
+    normal = [make_log("paper-normal", seed) for seed in (3, 4, 5)]
+    result = api.calibrate(model, api.load_profile(None), normal)
+    return model, result
+
+
+def test_calibrate_sets_a_change_threshold_per_judged_signal(calibrated):
+    model, result = calibrated
+    assert set(result.change) == {"flow", "yaw_rate"}
+    for name, (largest, threshold) in result.change.items():
+        assert threshold == pytest.approx(max(1.5 * largest, MIN_CHANGE_THRESHOLD_Z), rel=1e-3)
+        assert model.card.change_thresholds[name] == pytest.approx(threshold)
+    assert any(line.startswith("  change test") for line in calibration_lines(result))
+
+
+def test_a_normal_dive_it_was_not_calibrated_on_raises_no_change(calibrated, make_log):
+    model, _ = calibrated
+    diagnosis = api.diagnose(make_log("paper-normal", 9), api.load_profile(None), model)
+    check = diagnosis.change_check
+    assert check is not None and check.judged and check.alarm_s is None
+    assert diagnosis.verdict == "normal"
+
+
+def test_a_sensor_bias_from_mid_log_is_found_by_the_change_test_and_named(calibrated,
+                                                                          make_log):
+    model, _ = calibrated
+    diagnosis = api.diagnose(make_log("mission-flow-sensor-bias", 11), api.load_profile(None),
+                             model)
+    check = diagnosis.change_check
+    assert check is not None and check.alarm_s is not None
+    assert 60.0 <= check.alarm_s <= 62.0 and list(check.flagged) == ["flow"]
+    assert check.onset_s == pytest.approx(60.0, abs=check.onset_error_s)
+    assert (diagnosis.verdict, diagnosis.component) == ("fault", "flow_sensor")
+    assert diagnosis.detected_at_s == check.alarm_s
+    assert any(note.startswith("found by the change test") for note in diagnosis.notes)
