@@ -5,11 +5,11 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples bench-silence test model \
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-shipped bench-samples bench-silence test model \
 	samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-silence bench-fuzz \
-	bench-train bench-train-busy bench-real bench-hidden bench-effort bench-shipped bench-samples
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-shipped bench-samples
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -67,6 +67,11 @@ bench-samples:
 	$(PYTHON) benchmarks/readme.py sample_facts $(OUT)/sample_facts.md
 	$(PYTHON) benchmarks/sample_facts.py --catalogue > $(OUT)/sample_logs.md
 	$(PYTHON) benchmarks/readme.py sample_logs $(OUT)/sample_logs.md
+
+bench-alfa:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/alfa.py > $(OUT)/alfa.md
+	$(PYTHON) benchmarks/readme.py alfa $(OUT)/alfa.md
 
 bench-real:
 	@mkdir -p $(OUT)

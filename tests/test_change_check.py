@@ -9,7 +9,7 @@ import pytest
 from auvdiag_cli import api
 from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistic, check_change
 from auvdiag_cli.engine.isolation import change_suspects
-from auvdiag_cli.jobs.calibrate import MIN_CHANGE_THRESHOLD_Z
+from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLD_Z
 from auvdiag_cli.reports.training import calibration_lines
 
 DT_S, WINDOW = 0.1, 10

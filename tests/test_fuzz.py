@@ -10,7 +10,7 @@ import pytest
 
 from auvdiag_cli.fuzz.mutations import MUTATIONS, mutate
 
-FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv")
+FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv")
 
 
 def test_mutations_are_reproducible_and_damage_the_bytes():

@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_peaks
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -33,6 +32,11 @@ from auvdiag_cli.jobs.budget import (
     command_judges,
     g_judges,
     start_judges,
+)
+from auvdiag_cli.jobs.change_calibration import (
+    change_entry,
+    change_thresholds,
+    log_change_peaks,
 )
 from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
@@ -221,12 +225,12 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start.to_json())
-    change_peaks = [_change_peaks(d, judged, model, profile) for d in diagnoses]
+    peaks = [log_change_peaks(d, judged, model, profile) for d in diagnoses]
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
-        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested],
-        change_peaks)
-    change = _set_change_thresholds(model, change_peaks, judged, margin, fitted)
+        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], peaks)
+    model.update_entries(change_test=change_entry(
+        change := change_thresholds(peaks, judged, margin, fitted)))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -298,48 +302,6 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
             extra[profile.command_names.index(name)] = value
         model.update_entries(command_relations=replace(relations, thresholds=extra).to_json())
     return fitted
-
-
-# The change test's thresholds are never set below this z: over an hour's windows even
-# Gaussian window means reach about 4 (sqrt(2 ln 2N)), residuals have heavier tails, and
-# the largest of a handful of normal logs' peaks understates the next log's.
-MIN_CHANGE_THRESHOLD_Z = 6.0
-
-
-def _change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedModel,
-                  profile: Profile) -> dict[str, float]:
-    """Each judged signal's largest change-test z in one normal log (NaN: too short)."""
-    matching = diagnosis.histories.matching
-    assert matching is not None
-    names = list(profile.sensor_names)
-    columns = [names.index(name) for name in judged]
-    window = model.card.window_samples or profile.window_samples
-    return change_peaks((matching.measured - matching.modelled)[:, columns], list(judged),
-                        window, profile.dt_s)
-
-
-def _set_change_thresholds(model: LoadedModel, peaks: Sequence[dict[str, float]],
-                           judged: Sequence[str], margin: float,
-                           fitted: BudgetThresholds | None) -> dict[str, tuple[float, float]]:
-    """The change test's thresholds into the model's entries: margin x the largest z on
-    the normal logs, or the budget's where it fitted the judge, never below
-    `MIN_CHANGE_THRESHOLD_Z`. A signal no log is long enough to judge gets none (the test
-    leaves it out)."""
-    budgeted = {} if fitted is None else {name: value for (_, name), value in
-                                          fitted.thresholds("change").items()}
-    result: dict[str, tuple[float, float]] = {}
-    for name in judged:
-        values = [p[name] for p in peaks if np.isfinite(p.get(name, np.nan))]
-        if not values:
-            continue
-        largest = max(values)
-        result[name] = (round(largest, 3), round(max(
-            budgeted.get(name, margin * largest), MIN_CHANGE_THRESHOLD_Z), 3))
-    model.update_entries(change_test={
-        "thresholds": {name: threshold for name, (_, threshold) in result.items()},
-        "largest_normal_z": {name: largest for name, (largest, _) in result.items()},
-        "reference_s": REFERENCE_MIN_S})
-    return result
 
 
 def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,
