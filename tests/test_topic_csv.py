@@ -153,3 +153,17 @@ def test_alfa_labels_name_folders_that_read():
                                  "arduplane_carbonz"])
     assert result.exit_code == 0, result.output
     assert "MISSING" not in result.output and json.dumps("topic-csv")[1:-1] in result.output
+
+
+def test_report_times_line_up_with_other_records_in_utc(exported):
+    from datetime import datetime, timedelta
+
+    _, folder = exported
+    result = runner.invoke(app, ["diagnose", str(folder), "--quiet", "--json", "-"])
+    report = json.loads(result.stdout)
+    start = datetime.fromisoformat(report["start_time_utc"])
+    assert report["start_time_utc"].endswith("+00:00") and "." in report["start_time_utc"]
+    for seconds, utc in ((report["onset_s"], report["onset_utc"]),
+                         (report["detected_at_s"], report["detected_at_utc"])):
+        assert datetime.fromisoformat(utc) - start == pytest.approx(
+            timedelta(seconds=seconds), abs=timedelta(milliseconds=1))

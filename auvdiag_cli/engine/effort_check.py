@@ -50,6 +50,10 @@ class EffortSeries:
     band: np.ndarray            # (members,) σ of one window's share about normal
 
 
+# How a weakness is said where the profile does not give the actuators' kind.
+MARINE_FAILURE = "a damaged or fouled propeller, a weak motor, or a load near it"
+
+
 @dataclass(frozen=True)
 class EffortCheck:
     actuators: tuple[ActuatorEffort, ...]
@@ -58,6 +62,7 @@ class EffortCheck:
     onset_s: float | None
     named: tuple[str, ...]       # components of the actuators driven harder
     series: tuple[EffortSeries, ...]
+    failure: str = ""            # how the suspects' kind of failure is said ("": marine words)
 
     @property
     def judged(self) -> bool:
@@ -81,8 +86,7 @@ class EffortCheck:
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
-        return ("; ".join(parts) + ": a damaged or fouled propeller, a weak motor, or a load "
-                "near it")
+        return "; ".join(parts) + ": " + (self.failure or MARINE_FAILURE)
 
 
 def _cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
@@ -193,6 +197,9 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
             onsets.append((alarm, onset, float(ratio.max()), setup.group.name))
     named = tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder))
     first = min(onsets, default=None)
+    kinds = {c.name: c.failure for c in profile.commands}
+    failure = next((kinds[a.name] for a in actuators if a.driven_harder), "")
     return EffortCheck(tuple(actuators), model.false_alarm_rate,
                        None if first is None else round(first[0], 3),
-                       None if first is None else round(first[1], 3), named, tuple(series))
+                       None if first is None else round(first[1], 3), named, tuple(series),
+                       failure)

@@ -29,6 +29,7 @@ from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match_trials
 from auvdiag_cli.numeric import peak
+from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
@@ -115,9 +116,12 @@ def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
 
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
                          judge: _Judge, restarts: Sequence[int]) -> list[Hypothesis]:
-    components = dict.fromkeys(c.component for c in profile.commands)
+    # A set point drives the model but is no part that can weaken.
+    components = dict.fromkeys(c.component for c in profile.commands if c.kind != SET_POINT)
     trials = [(component, fraction) for component in components
               for fraction in THRUST_FRACTIONS]
+    if not trials:
+        return []
     histories = []
     for component, fraction in trials:
         columns = [i for i, c in enumerate(profile.commands) if c.component == component]

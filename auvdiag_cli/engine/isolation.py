@@ -292,9 +292,9 @@ def apply_detection(seen: Observations, finding: Finding, b: Mapping[str, int],
         candidates = list(row.components)
     else:
         candidates, finding = _predicted_on_dms(seen, finding, b, alarm_s, profile, model)
-    if not candidates and not profile.pattern:
-        finding = finding.noted(f"the profile has no pattern table to read b = {dict(b)} in")
-    elif not candidates:
+    # A profile without a table naming parts (none, or only its "nothing" row) is not
+    # reminded of it on every log: the other evidence names the part there.
+    if not candidates and any(r.components for r in profile.pattern):
         finding = finding.noted(f"b = {dict(b)} fits no row of the pattern table: more than "
                                 "one fault, or one the table does not describe")
     finding = replace(finding, candidates=tuple(candidates))

@@ -12,6 +12,7 @@ from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.segments import mission_steps, segments_of
 from auvdiag_cli.engine.start_check import StartReading, learn_start_state, start_reading
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
+from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
 from models.card import Refused, StartReference
@@ -48,6 +49,9 @@ def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationL
                     profile: Profile) -> CommandRelations | Refused:
     """The relation, or why the logs could not teach one. One
     training log and no held-out one: its last 20 % (in time) sets the thresholds."""
+    if all(command.kind == SET_POINT for command in profile.commands):
+        return Refused("the commands are the controller's set points, not actuators: no "
+                       "actuator's effort to judge against the motion")
     if not heldout and len(training) == 1:
         head, tail = _split_in_time(training[0])
         training, heldout = [head], [tail]

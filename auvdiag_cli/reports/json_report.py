@@ -42,7 +42,9 @@ def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, Any]:
         "detected_at_s": diagnosis.detected_at_s,
         "onset_s": diagnosis.onset_s,
         "duration_s": _seconds(diagnosis.histories.duration_s),
-        "start_time_utc": utc_text(diagnosis.start_ns),
+        "start_time_utc": utc_text(diagnosis.start_ns, "milliseconds"),
+        "onset_utc": _utc_after(diagnosis.start_ns, diagnosis.onset_s),
+        "detected_at_utc": _utc_after(diagnosis.start_ns, diagnosis.detected_at_s),
         "completeness": None if diagnosis.completeness is None
         else diagnosis.completeness.to_dict(),
         "not_operating_s": diagnosis.not_operating_s,
@@ -130,6 +132,12 @@ def utc_text(time_ns: int, timespec: str = "seconds") -> str | None:
         return datetime.fromtimestamp(time_ns / 1e9, UTC).isoformat(timespec=timespec)
     except (OverflowError, ValueError, OSError):  # a damaged clock is no date
         return None
+
+
+def _utc_after(start_ns: int, seconds: float | None) -> str | None:
+    """A report time as UTC to the millisecond, where the log's clock is Unix time."""
+    return None if seconds is None else utc_text(start_ns + round(seconds * 1e9),
+                                                 "milliseconds")
 
 
 def _closed_loop(replay: ClosedLoopReplay | None) -> dict[str, Any] | None:

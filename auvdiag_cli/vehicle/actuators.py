@@ -9,7 +9,9 @@ from dataclasses import dataclass
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
 
-# Each kind, and how its failure is said.
+# Each kind, and how its failure is said. A command may also be a controller's set point
+# (SET_POINT): it drives the model, but nothing fails in it.
+SET_POINT = "set_point"
 ACTUATOR_KINDS = {
     "thruster": "a damaged or fouled propeller, a weak motor, or a load near it",
     "rotor": "a damaged propeller or a weak motor",
@@ -29,13 +31,18 @@ class Actuator:
         return ACTUATOR_KINDS[self.kind]
 
 
+def parse_kind(reader: TableReader, default: str, allowed: tuple[str, ...]) -> str:
+    kind = reader.get("kind", str, default)
+    if kind not in allowed:
+        raise ProfileError(f"key '{reader.key('kind')}' must be one of {', '.join(allowed)}, "
+                           f"got {kind!r}")
+    return str(kind)
+
+
 def parse_actuators(rows: list[TableReader]) -> tuple[Actuator, ...]:
     actuators = []
     for reader in rows:
-        kind = reader.get("kind", str)
-        if kind not in ACTUATOR_KINDS:
-            raise ProfileError(f"key '{reader.key('kind')}' must be one of "
-                               f"{', '.join(ACTUATOR_KINDS)}, got {kind!r}")
+        kind = parse_kind(reader, "", tuple(ACTUATOR_KINDS))
         actuators.append(Actuator(reader.get("name", str), kind,
                                   reader.get("description", str, "")))
     names = [a.name for a in actuators]

@@ -7,7 +7,14 @@ from pathlib import Path
 from typing import Any
 
 from adapters.signals import OPERATING, LogSources
-from auvdiag_cli.vehicle.actuators import Actuator, parse_actuators, parse_moved_by
+from auvdiag_cli.vehicle.actuators import (
+    ACTUATOR_KINDS,
+    SET_POINT,
+    Actuator,
+    parse_actuators,
+    parse_kind,
+    parse_moved_by,
+)
 from auvdiag_cli.vehicle.controller import (
     CONTROLLER_KINDS,
     EFFORTS,
@@ -30,6 +37,12 @@ class Command:
     name: str
     component: str
     description: str
+    kind: str = "thruster"       # an actuator kind (ACTUATOR_KINDS) or a set point
+
+    @property
+    def failure(self) -> str:
+        """How a failure of what it commands is said."""
+        return ACTUATOR_KINDS.get(self.kind, "")
 
 
 @dataclass(frozen=True)
@@ -162,7 +175,8 @@ def _horizon(matching: TableReader) -> float | None:
 def _signals(top: TableReader, actuators: tuple[Actuator, ...]
              ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...]]:
     commands = tuple(
-        Command(r.get("name", str), r.get("component", str), r.get("description", str, ""))
+        Command(r.get("name", str), r.get("component", str), r.get("description", str, ""),
+                parse_kind(r, "thruster", (*ACTUATOR_KINDS, SET_POINT)))
         for r in top.items("commands")
     )
     movers = {a.name for a in actuators} | {c.component for c in commands}
@@ -250,12 +264,26 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         source_path=source_path,
         idle_after_s=positive(top.sub("operating"), "idle_after_s")
         if "operating" in data else None,
-        effort_groups=tuple(parse_effort_group(r, [c.name for c in commands])
-                            for r in top.items("effort"))
-        if "effort" in data else (),
+        effort_groups=_effort_groups(top, commands) if "effort" in data else (),
         inputs=inputs,
         actuators=actuators,
     )
+
+
+def _effort_groups(top: TableReader, commands: tuple[Command, ...]
+                   ) -> tuple[EffortGroup, ...]:
+    """The [[effort]] groups, each of actuators of one kind (their shares compare like with
+    like, and a departure is worded for that kind)."""
+    kinds = {c.name: c.kind for c in commands}
+    groups = []
+    for reader in top.items("effort"):
+        group = parse_effort_group(reader, [c.name for c in commands])
+        found = sorted({kinds[m] for m in group.members})
+        if len(found) > 1 or SET_POINT in found:
+            raise ProfileError(f"key '{reader.key('actuators')}' mixes kinds {', '.join(found)}:"
+                               " an effort group holds actuators of one kind, never set points")
+        groups.append(group)
+    return tuple(groups)
 
 
 def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
