@@ -103,6 +103,9 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
     assert all(a["departure"] < 0 for n, a in actuators["shares"].items() if n != "motor_3")
     assert 10.0 <= report["onset_s"] <= 20.0 <= report["detected_at_s"] <= 30.0
     assert "carries" in output and "more of the effort" in output
+    # The profile's rotors are worded as rotors, not a marine vehicle's thrusters.
+    assert "a damaged propeller or a weak motor" in actuators["summary"]
+    assert "fouled" not in actuators["summary"]
     from pypdf import PdfReader
 
     text = "".join(page.extract_text() for page in PdfReader(tmp_path / "d.pdf").pages)

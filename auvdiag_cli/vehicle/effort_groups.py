@@ -1,6 +1,7 @@
 """``[[effort]]`` in a profile: actuators that act alike, whose shares of their effort are
 judged (`models.effort`)."""
 
+from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
@@ -27,3 +28,18 @@ def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
             raise ProfileError(f"key '{reader.key(key)}' must be positive, got {value}")
     return EffortGroup(reader.get("name", str), tuple(str(m) for m in members),
                        tuple(abs(float(f)) for f in factors), min_level, window)
+
+
+def parse_effort_groups(rows: list[TableReader], kinds: dict[str, str]
+                        ) -> tuple[EffortGroup, ...]:
+    """The [[effort]] groups (``kinds``: each command's kind), each of actuators of one kind:
+    their shares compare like with like, and a departure is worded for that kind."""
+    groups = []
+    for reader in rows:
+        group = parse_effort_group(reader, list(kinds))
+        found = sorted({kinds[m] for m in group.members})
+        if len(found) > 1 or SET_POINT in found:
+            raise ProfileError(f"key '{reader.key('actuators')}' mixes kinds {', '.join(found)}:"
+                               " an effort group holds actuators of one kind, never set points")
+        groups.append(group)
+    return tuple(groups)

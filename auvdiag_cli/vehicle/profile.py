@@ -21,7 +21,7 @@ from auvdiag_cli.vehicle.controller import (
     ControllerGains,
     ControllerSpec,
 )
-from auvdiag_cli.vehicle.effort_groups import parse_effort_group
+from auvdiag_cli.vehicle.effort_groups import parse_effort_groups
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
@@ -264,26 +264,11 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         source_path=source_path,
         idle_after_s=positive(top.sub("operating"), "idle_after_s")
         if "operating" in data else None,
-        effort_groups=_effort_groups(top, commands) if "effort" in data else (),
+        effort_groups=parse_effort_groups(top.items("effort"), {c.name: c.kind for c in commands})
+        if "effort" in data else (),
         inputs=inputs,
         actuators=actuators,
     )
-
-
-def _effort_groups(top: TableReader, commands: tuple[Command, ...]
-                   ) -> tuple[EffortGroup, ...]:
-    """The [[effort]] groups, each of actuators of one kind (their shares compare like with
-    like, and a departure is worded for that kind)."""
-    kinds = {c.name: c.kind for c in commands}
-    groups = []
-    for reader in top.items("effort"):
-        group = parse_effort_group(reader, [c.name for c in commands])
-        found = sorted({kinds[m] for m in group.members})
-        if len(found) > 1 or SET_POINT in found:
-            raise ProfileError(f"key '{reader.key('actuators')}' mixes kinds {', '.join(found)}:"
-                               " an effort group holds actuators of one kind, never set points")
-        groups.append(group)
-    return tuple(groups)
 
 
 def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
