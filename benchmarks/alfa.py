@@ -113,8 +113,11 @@ def _healthy_file(training: list[Flight], work: Path, guard_s: float) -> Path:
     return path
 
 
+WITH, WITHOUT = "with the change test", "without it (the replay's thresholds alone)"
+
+
 def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: float
-              ) -> tuple[list[Outcome], str]:
+              ) -> tuple[dict[str, list[Outcome]], str]:
     from auvdiag_cli import api
 
     profile = api.load_profile("arduplane_carbonz")
@@ -130,15 +133,18 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
     model = api.load_model(model_dir, profile)
     api.calibrate(model, profile, logs, options=api.CalibrateOptions(
         budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
-    outcomes = []
+    # The same model without the change test: the judges as they were before it.
+    without = model.with_entries(change_test={})
+    outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
     for flight in (f for f in every if f.day == day):
-        started = time.perf_counter()
-        diagnosis = api.diagnose(flight.folder, profile, model)
-        onset_s = None if flight.onset_ns is None else (flight.onset_ns
-                                                        - diagnosis.start_ns) / 1e9
-        outcomes.append(Outcome(flight, str(diagnosis.verdict), diagnosis.detected_at_s,
-                                onset_s, diagnosis.component, time.perf_counter() - started,
-                                _judge(diagnosis)))
+        for variant, judged_by in ((WITH, model), (WITHOUT, without)):
+            started = time.perf_counter()
+            diagnosis = api.diagnose(flight.folder, profile, judged_by)
+            onset_s = None if flight.onset_ns is None else (flight.onset_ns
+                                                            - diagnosis.start_ns) / 1e9
+            outcomes[variant].append(Outcome(
+                flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
+                diagnosis.component, time.perf_counter() - started, _judge(diagnosis)))
     return outcomes, judged
 
 
@@ -194,13 +200,12 @@ def summary(outcomes: list[Outcome]) -> list[str]:
     named = sum(o.named_right for o in true_alarms)
     precision = len(true_alarms) / len(alarms) if alarms else float("nan")
     recall = len(true_alarms) / len(failed) if failed else float("nan")
-    return [f"auvdiag: precision {precision:.1%}, recall {recall:.1%} "
+    return [f"precision {precision:.1%}, recall {recall:.1%} "
             f"({len(true_alarms)} of {len(failed)} failed flights found after their onset; "
             f"{len(alarms) - len(true_alarms)} false alarm(s) in {len(outcomes)} flights), "
             f"delay median {statistics.median(delays) if delays else float('nan'):.1f} s, "
             f"worst {max(delays, default=float('nan')):.1f} s; the right part named in "
-            f"{named} of {len(true_alarms)} found; "
-            f"{PUBLISHED_SUMMARY}."]
+            f"{named} of {len(true_alarms)} found."]
 
 
 def main() -> None:
@@ -217,25 +222,27 @@ def main() -> None:
           f"Python {platform.python_version()}; data from {args.data} (ALFA, Keipour et al. "
           "2021, doi 10.1184/R1/12707963).\n")
     every = flights(args.data)
-    outcomes: list[Outcome] = []
+    outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
     notes = []
     with tempfile.TemporaryDirectory() as work:
         for day in sorted({f.day for f in every}):
             started = time.perf_counter()
             day_outcomes, judged = judge_day(day, every, Path(work), args.iterations_scale,
                                              args.guard)
-            outcomes += day_outcomes
-            notes.append(f"- {day} left out ({len(day_outcomes)} flights): signals judged "
+            for variant, found in day_outcomes.items():
+                outcomes[variant] += found
+            notes.append(f"- {day} left out ({len(day_outcomes[WITH])} flights): signals judged "
                          f"(skill) {judged}; {time.perf_counter() - started:.0f} s")
-    print("\n".join(table(outcomes)))
-    print()
-    print("\n".join(summary(outcomes)))
-    print()
+    print(f"Beside it, the {PUBLISHED_SUMMARY}.\n")
+    for variant, found in outcomes.items():
+        print(f"**{variant[0].upper()}{variant[1:]}**: " + summary(found)[0] + "\n")
+        print("\n".join(table(found)))
+        print()
     print("\n".join(notes))
     print("\nPer flight:\n")
     print("| flight | kind | verdict | onset (s) | detected (s) | component | judge |")
     print("|---|---|---|---|---|---|---|")
-    for o in outcomes:
+    for o in outcomes[WITH]:
         def when(value: float | None) -> str:
             return "–" if value is None else f"{value:.1f}"
         print(f"| {o.flight.folder.name} | {o.flight.kind} | {o.verdict} | "
