@@ -27,12 +27,29 @@ UNIT_NS = {"s": 1e9, "ms": 1e6, "us": 1e3, "ns": 1.0}
 SECONDS_PER_DAY = 86_400
 
 
+class CsvRows:
+    """The rows of a CSV file, the header first (the delimiter found in it). A row the csv
+    module cannot parse (a stray quote that runs a field past its size limit) ends the
+    rows there; ``stopped`` then says where and why: the file is damaged from there on."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.stopped: str | None = None
+
+    def __iter__(self) -> Iterator[list[str]]:
+        with self.path.open(newline="", encoding="utf-8", errors="replace") as stream:
+            first = stream.readline()
+            stream.seek(0)
+            reader = csv.reader(stream, delimiter=csv_delimiter(first))
+            try:
+                yield from reader
+            except csv.Error as error:
+                self.stopped = f"unreadable from line {reader.line_num} ({error})"
+
+
 def csv_rows(path: Path) -> Iterator[list[str]]:
-    """The rows of a CSV log, the header first (the delimiter found in it)."""
-    with path.open(newline="", encoding="utf-8", errors="replace") as stream:
-        first = stream.readline()
-        stream.seek(0)
-        yield from csv.reader(stream, delimiter=csv_delimiter(first))
+    """The rows of a CSV log up to any damage (`CsvRows`)."""
+    return iter(CsvRows(path))
 
 
 class _Parsed:
@@ -42,10 +59,12 @@ class _Parsed:
         self.times: list[str] = []
         self.cells: dict[str, list[str]] = {}
         self.wrong_width = self.blank = 0
+        self.stopped: str | None = None        # where the file became unreadable
 
 
 def _parse(path: Path, wanted: list[str], time_column: str) -> tuple[_Parsed, list[str]]:
-    rows = csv_rows(path)
+    table = CsvRows(path)
+    rows = iter(table)
     header = [name.strip() for name in next(rows, [])]
     missing = [name for name in dict.fromkeys([time_column, *wanted]) if name not in header]
     if missing:
@@ -66,6 +85,7 @@ def _parse(path: Path, wanted: list[str], time_column: str) -> tuple[_Parsed, li
         parsed.times.append(row[time_at].strip())
         for name, at in where.items():
             parsed.cells[name].append(row[at].strip())
+    parsed.stopped = table.stopped
     return parsed, header
 
 
@@ -161,6 +181,9 @@ class CsvAdapter:
             bad_values += int((~readable).sum())
             collector.add_columns(name, times[present][readable], _constant(numbers), header)
         self._count_losses(collector, parsed, int((~timed).sum()), bad_values)
+        if parsed.stopped is not None:
+            collector.damaged(f"CSV {parsed.stopped}")
+            collector.notes.append(f"read up to the damage: {parsed.stopped}")
         return collector.finish("csv", None, None, {name: "CSV column" for name in header})
 
     @staticmethod

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from adapters.collect import SignalCollector
+from adapters.csv_log import CsvRows
 from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import (
@@ -76,6 +77,7 @@ class _Table:
     columns: dict[str, list[str]]
     wrong_width: int
     bad_times: int
+    stopped: str | None          # where the file became unreadable (`CsvRows`)
 
 
 def _read_table(path: Path, wanted: set[str]) -> _Table:
@@ -88,18 +90,18 @@ def _read_table(path: Path, wanted: set[str]) -> _Table:
     texts: list[str] = []
     cells: dict[str, list[str]] = {name: [] for name in picked}
     wrong_width = 0
-    with path.open(newline="", encoding="utf-8", errors="replace") as stream:
-        rows = csv.reader(stream, delimiter=csv_delimiter(",".join(header)))
-        next(rows, None)
-        for row in rows:
-            if len(row) != len(header):
-                wrong_width += bool(any(cell.strip() for cell in row))
-                continue
-            texts.append(row[0].strip())
-            for name, at in picked.items():
-                cells[name].append(row[at].strip())
+    table = CsvRows(path)
+    rows = iter(table)
+    next(rows, None)
+    for row in rows:
+        if len(row) != len(header):
+            wrong_width += bool(any(cell.strip() for cell in row))
+            continue
+        texts.append(row[0].strip())
+        for name, at in picked.items():
+            cells[name].append(row[at].strip())
     times = _times_ns(texts, TOPIC_CSV_CLOCKS[clock])
-    return _Table(header, times, cells, wrong_width, int((times < 0).sum()))
+    return _Table(header, times, cells, wrong_width, int((times < 0).sum()), table.stopped)
 
 
 def _times_ns(texts: list[str], ns_per_unit: int) -> np.ndarray:
@@ -153,6 +155,10 @@ class TopicCsvAdapter:
                             ("row(s) whose time does not read", table.bad_times)):
             if count:
                 lost[what] = lost.get(what, 0) + count
+        if table.stopped is not None:
+            collector.damaged(f"{file.name}: {table.stopped}")
+            collector.notes.append(f"{topic} read up to the damage in {file.name}: "
+                                   f"{table.stopped}")
         timed = table.times_ns >= 0
         fields = [_path_of(name) for name in table.header[1:]]
 
@@ -213,5 +219,13 @@ def _end_rows(path: Path, width: int) -> tuple[str, str]:
         size = stream.seek(0, 2)
         stream.seek(max(0, size - 16384))
         tail = stream.read().decode("utf-8", "replace").splitlines()
-    whole = [row for row in tail[-3:] if len(next(csv.reader([row]), [])) == width]
+    whole = [row for row in tail[-3:] if _cells(row) == width]
     return first, (whole[-1] if whole else "")
+
+
+def _cells(row: str) -> int:
+    """How many cells one CSV line holds (0 for one the csv module cannot parse)."""
+    try:
+        return len(next(csv.reader([row]), []))
+    except csv.Error:
+        return 0

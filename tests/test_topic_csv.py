@@ -167,3 +167,22 @@ def test_report_times_line_up_with_other_records_in_utc(exported):
                          (report["detected_at_s"], report["detected_at_utc"])):
         assert datetime.fromisoformat(utc) - start == pytest.approx(
             timedelta(seconds=seconds), abs=timedelta(milliseconds=1))
+
+
+def test_a_stray_quote_ends_that_topic_as_damage_not_a_crash(exported, tmp_path):
+    """A quote the recorder never wrote runs the rest of the file into one field past the
+    csv module's limit (found by the fuzzer): the topic is read up to it."""
+    _, folder = exported
+    damaged = tmp_path / "flight"
+    shutil.copytree(folder, damaged)
+    commands = damaged / "flight-thrusters-command.csv"
+    lines = commands.read_text().splitlines()
+    cut = len(lines) * 3 // 4
+    filler = [lines[-1]] * (200_000 // len(lines[-1]))   # more than the limit after it
+    commands.write_text("\n".join([*lines[:cut], '"' + lines[cut], *filler]) + "\n")
+    result = runner.invoke(app, ["diagnose", str(damaged), "--quiet", "--json", "-"])
+    assert result.exit_code in (0, 1), result.output
+    report = json.loads(result.stdout)
+    assert report["completeness"]["status"] == "partial"
+    assert "flight-thrusters-command.csv: unreadable from line" in (
+        report["completeness"]["reason"])
