@@ -95,3 +95,28 @@ def test_a_sensor_bias_from_mid_log_is_found_by_the_change_test_and_named(calibr
     assert (diagnosis.verdict, diagnosis.component) == ("fault", "flow_sensor")
     assert diagnosis.detected_at_s == check.alarm_s
     assert any(note.startswith("found by the change test") for note in diagnosis.notes)
+
+
+def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
+    from types import SimpleNamespace
+
+    from auvdiag_cli.engine.isolation import failure_effect
+
+    time_s = np.arange(1000) * DT_S
+    measured = np.zeros((1000, 2))
+    measured[600:, 1] = 0.2                               # yaw rate off from 60 s
+    modelled = np.zeros((1000, 2))
+    seen = SimpleNamespace(
+        histories=SimpleNamespace(time_s=time_s, sensor_names=("roll", "yaw_rate"),
+                                  matching=SimpleNamespace(measured=measured,
+                                                           modelled=modelled)),
+        sensor_units={"yaw_rate": "rad/s"})
+    check = check_change(measured - modelled + _noise(100.0, seed=2) * 0.01,
+                         ["roll", "yaw_rate"], {"roll": 8.0, "yaw_rate": 8.0}, time_s,
+                         WINDOW, DT_S)
+    assert list(check.flagged) == ["yaw_rate"]
+    effect = failure_effect(seen, check)
+    assert effect.startswith("from the onset, the vehicle departs from what the model of "
+                             "the healthy vehicle says it would have done by yaw_rate ")
+    gap = float(effect.split("yaw_rate ")[1].split()[0])
+    assert 0.18 <= gap <= 0.2 and effect.endswith("rad/s rms (before: 0)")

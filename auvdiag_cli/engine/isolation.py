@@ -6,6 +6,8 @@ returns the next; the observations are read, never changed."""
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
@@ -84,7 +86,35 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if len(ranked) > 1:
         note += "; the part that moves most of what changed is named, before " + ", ".join(
             ranked[1:])
+    effect = failure_effect(seen, change)
+    if effect:
+        note += "; " + effect
     return _found(seen, replace(finding, case=None), ranked[:1], note, profile, model)
+
+
+def failure_effect(seen: Observations, change: ChangeCheck) -> str:
+    """What the vehicle did against what the model of the healthy vehicle says it would
+    have done, from the onset on, in each signal that changed: the failure's effect."""
+    histories, onset = seen.histories, change.onset_s
+    matching = histories.matching
+    if matching is None or onset is None:
+        return ""
+    after = histories.time_s >= onset
+    before = ~after
+    gaps = []
+    for name in change.flagged:
+        column = histories.sensor_names.index(name)
+        gap = matching.measured[:, column] - matching.modelled[:, column]
+        unit = seen.sensor_units.get(name, "")
+        gaps.append(f"{name} {_rms(gap[after]):.3g} {unit} rms (before: "
+                    f"{_rms(gap[before]):.3g})")
+    return ("from the onset, the vehicle departs from what the model of the healthy vehicle "
+            "says it would have done by " + ", ".join(gaps))
+
+
+def _rms(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    return float(np.sqrt(np.mean(finite ** 2))) if finite.size else float("nan")
 
 
 def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
