@@ -156,9 +156,9 @@ class ModelCard:
     start_state: StartReference
     relations_refused: str | None                          # why no command relations
     effort_refused: str | None                             # why no effort model
-    # The change test's threshold on z per signal (`engine.change_check`); empty: calibrate
-    # has not set them, and the test is not run.
-    change_thresholds: Mapping[str, float] = field(default_factory=dict)
+    # The change test's thresholds, statistic -> signal (`engine.change_check`); empty:
+    # calibrate has not set them, and the test is not run.
+    change_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -223,5 +223,7 @@ class ModelCard:
             start_state=StartReference.from_json(meta.get("start_state") or {}),
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"),
-            change_thresholds=_frozen({str(k): float(v) for k, v in (
-                meta.get("change_test") or {}).get("thresholds", {}).items()}))
+            change_thresholds=_frozen({
+                str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
+                for statistic, values in (meta.get("change_test") or {}).get(
+                    "thresholds", {}).items()}))

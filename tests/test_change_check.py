@@ -7,12 +7,24 @@ import numpy as np
 import pytest
 
 from auvdiag_cli import api
-from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistic, check_change
+from auvdiag_cli.engine.change_check import (
+    REFERENCE_MIN_S,
+    SUM,
+    change_statistics,
+    check_change,
+)
+from auvdiag_cli.engine.change_check import (
+    WINDOW as WINDOW_Z,
+)
 from auvdiag_cli.engine.isolation import change_suspects
-from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLD_Z
+from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS
 from auvdiag_cli.reports.training import calibration_lines
 
 DT_S, WINDOW = 0.1, 10
+
+
+def _limits(value: float) -> dict[str, dict[str, float]]:
+    return {WINDOW_Z: {"speed": value, "yaw": value}, SUM: {"speed": 3 * value, "yaw": 3 * value}}
 
 
 def _noise(seconds: float, signals: int = 2, seed: int = 0) -> np.ndarray:
@@ -22,21 +34,30 @@ def _noise(seconds: float, signals: int = 2, seed: int = 0) -> np.ndarray:
 def test_the_statistic_waits_for_its_reference_and_rises_at_a_step():
     residual = _noise(120.0)
     residual[800:, 1] += 3.0                         # signal 1 shifts at 80 s
-    z = change_statistic(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))
+    z = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[WINDOW_Z]
     assert np.isnan(z[:round(REFERENCE_MIN_S / DT_S), :]).all()
     assert np.nanmax(z[:800]) < 6.0                  # noise alone
     assert np.nanmax(z[800:810, 1]) > 8.0            # the shift, within a window
     assert np.nanmax(z[800:, 0]) < 6.0               # the other signal is untouched
 
 
+def test_a_shift_no_single_window_shows_builds_up_window_after_window():
+    residual = _noise(150.0, seed=4)
+    residual[800:, 0] += 0.6              # about two spreads of a window mean, for good
+    statistics = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))
+    sums, z = statistics[SUM][:, 0], statistics[WINDOW_Z][:, 0]
+    assert np.nanmax(sums[:800]) < 5.0 and np.nanmax(z[800:]) < 4.5   # no window stands out
+    assert sums[829] < sums[859] < sums[899] and sums[899] > 5.0
+
+
 def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
     residual = _noise(120.0, seed=1)
     residual[800:, 0] -= 3.0
     time_s = np.arange(residual.shape[0]) * DT_S
-    check = check_change(residual, ["speed", "yaw"], {"speed": 7.0, "yaw": 7.0}, time_s,
-                         WINDOW, DT_S)
+    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    # The first window whose earlier windows hold the reference: judged from its end.
     assert check.judged and check.judged_from_s == pytest.approx(
-        REFERENCE_MIN_S + 2 * WINDOW * DT_S, abs=0.2)   # its first window, then one more
+        REFERENCE_MIN_S + (WINDOW - 1) * DT_S, abs=0.05)
     assert 80.0 <= check.alarm_s <= 81.0
     assert check.onset_s == pytest.approx(80.0, abs=check.onset_error_s)
     assert list(check.flagged) == ["speed"]
@@ -45,7 +66,7 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
 
 def test_a_log_shorter_than_its_reference_is_not_judged():
     residual = _noise(REFERENCE_MIN_S - 5.0)
-    check = check_change(residual, ["a", "b"], {"a": 5.0, "b": 5.0},
+    check = check_change(residual, ["a", "b"], {WINDOW_Z: {"a": 5.0, "b": 5.0}},
                          np.arange(residual.shape[0]) * DT_S, WINDOW, DT_S)
     assert not check.judged and check.alarm_s is None and "too short" in check.describe()
 
@@ -68,10 +89,13 @@ def calibrated(make_log, tmp_path_factory):
 
 def test_calibrate_sets_a_change_threshold_per_judged_signal(calibrated):
     model, result = calibrated
-    assert set(result.change) == {"flow", "yaw_rate"}
-    for name, (largest, threshold) in result.change.items():
-        assert threshold == pytest.approx(max(1.5 * largest, MIN_CHANGE_THRESHOLD_Z), rel=1e-3)
-        assert model.card.change_thresholds[name] == pytest.approx(threshold)
+    assert set(result.change) == {WINDOW_Z, SUM}
+    for statistic, values in result.change.items():
+        assert set(values) == {"flow", "yaw_rate"}
+        for name, (largest, threshold) in values.items():
+            assert threshold == pytest.approx(
+                max(1.5 * largest, MIN_CHANGE_THRESHOLDS[statistic]), rel=1e-3)
+            assert model.card.change_thresholds[statistic][name] == pytest.approx(threshold)
     assert any(line.startswith("  change test") for line in calibration_lines(result))
 
 
@@ -83,17 +107,21 @@ def test_a_normal_dive_it_was_not_calibrated_on_raises_no_change(calibrated, mak
     assert diagnosis.verdict == "normal"
 
 
-def test_a_sensor_bias_from_mid_log_is_found_by_the_change_test_and_named(calibrated,
-                                                                          make_log):
+def test_a_thruster_weakening_mid_log_is_found_first_by_the_change_test(calibrated,
+                                                                        make_log):
+    """Thruster 0 gives half its power from 60 s: the replay's thresholds alone find it at
+    74 s; the log against its own beginning, seconds sooner. The hypotheses name it."""
     model, _ = calibrated
-    diagnosis = api.diagnose(make_log("mission-flow-sensor-bias", 11), api.load_profile(None),
-                             model)
+    log = make_log("mission-thruster-0-weak", 11)
+    diagnosis = api.diagnose(log, api.load_profile(None), model)
     check = diagnosis.change_check
     assert check is not None and check.alarm_s is not None
-    assert 60.0 <= check.alarm_s <= 62.0 and list(check.flagged) == ["flow"]
-    assert check.onset_s == pytest.approx(60.0, abs=check.onset_error_s)
-    assert (diagnosis.verdict, diagnosis.component) == ("fault", "flow_sensor")
+    without = api.diagnose(log, api.load_profile(None), model.with_entries(change_test={}))
+    assert without.change_check is None and without.detected_at_s > 70.0
+    assert 60.0 < check.alarm_s < without.detected_at_s - 4.0
     assert diagnosis.detected_at_s == check.alarm_s
+    assert (diagnosis.verdict, diagnosis.component) == ("fault", "thruster_0")
+    assert check.onset_s - check.onset_error_s <= 60.0 <= check.onset_s + check.onset_error_s
     assert any(note.startswith("found by the change test") for note in diagnosis.notes)
 
 
@@ -112,8 +140,8 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
                                                            modelled=modelled)),
         sensor_units={"yaw_rate": "rad/s"})
     check = check_change(measured - modelled + _noise(100.0, seed=2) * 0.01,
-                         ["roll", "yaw_rate"], {"roll": 8.0, "yaw_rate": 8.0}, time_s,
-                         WINDOW, DT_S)
+                         ["roll", "yaw_rate"], {WINDOW_Z: {"roll": 8.0, "yaw_rate": 8.0}},
+                         time_s, WINDOW, DT_S)
     assert list(check.flagged) == ["yaw_rate"]
     effect = failure_effect(seen, check)
     assert effect.startswith("from the onset, the vehicle departs from what the model of "

@@ -2,17 +2,26 @@
 
 The thresholds learnt across logs must allow for the scatter between logs (wind, payload,
 trim, a model better on some logs than others). A failure that starts mid-log is seen
-sooner against the same log's earlier residuals: at every step, each judged signal's
-residual (measured less modelled) averaged over the last window is compared with the same
-averages over everything the log showed before it (less one window, so that the change
-itself does not enter its reference), in units of their spread there:
+sooner against the same log's earlier residuals. For each judged signal, window by window
+(the profile's `window_samples`, not overlapping), the residual (measured less modelled)
+averaged over the window is compared with the same averages over everything the log showed
+before it, in units of their spread there:
 
-    z(t) = |mean of the last window - mean of the reference| / spread of the reference
+    z = (mean of this window - mean of the earlier windows) / spread of the earlier windows
 
-It is judged once the reference holds `REFERENCE_MIN_S` of residuals. Its thresholds (one
-per signal, on z) are set by `auvdiag calibrate` from the largest z of normal logs, like
-the other judges; a model without them does not run the test. The change begins within the
-window that first crosses: the onset is that window's start, give or take a window.
+Two statistics judge it, each with its own threshold per signal: the window's |z| itself
+("window": an abrupt change, seen in the window it happens), and a two-sided CUSUM that adds
+up what goes beyond the allowance `DRIFT_ALLOWANCE` window after window ("sum"):
+
+    S+ = max(0, S+ + z - k),  S- = max(0, S- - z - k),  S = max(S+, S-)
+
+so that a shift that lasts (an engine that stopped pushing, a surface that stuck) builds
+up even when no single window stands out, while noise within the allowance does not. A
+signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
+are set by `auvdiag calibrate` from the largest of each statistic on normal logs, like the
+other judges; a model without them does not run the test. The onset is the start of the
+window that crossed, or, for the sum, of the window where it last left zero; give or take
+a window.
 """
 
 from collections.abc import Mapping, Sequence
@@ -21,30 +30,40 @@ from dataclasses import dataclass, field
 import numpy as np
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
+# k: a window mean within one spread of its reference adds nothing; a shift of two spreads
+# adds one a window.
+DRIFT_ALLOWANCE = 1.0
+WINDOW, SUM = "window", "sum"
+STATISTICS = (WINDOW, SUM)
 
 
 @dataclass(frozen=True)
 class ChangeCheck:
     """The change test on one log."""
 
-    thresholds: Mapping[str, float]    # judged signal -> threshold on z
-    peak_z: Mapping[str, float]        # judged signal -> its largest z in the log
+    thresholds: Mapping[str, Mapping[str, float]]   # statistic -> judged signal -> threshold
+    peaks: Mapping[str, Mapping[str, float]]        # statistic -> judged signal -> largest
     judged_from_s: float | None        # when the reference was long enough; None: never
     alarm_s: float | None = None       # the first step over a threshold
     onset_s: float | None = None       # the start of the window that crossed
     onset_error_s: float = 0.0         # give or take
-    flagged: Mapping[str, float] = field(default_factory=dict)   # signal -> z / threshold
+    # Signal -> its statistic over its threshold at the alarm (the larger of the two).
+    flagged: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def judged(self) -> bool:
-        return self.judged_from_s is not None and bool(self.thresholds)
+        return self.judged_from_s is not None and any(self.thresholds.values())
 
     def describe(self) -> str:
         if not self.judged:
             return (f"not judged (the log is too short: needs {REFERENCE_MIN_S:.0f} s of its "
                     "own residuals as its reference)")
-        ratios = {n: self.peak_z[n] / t for n, t in self.thresholds.items()
-                  if n in self.peak_z and t > 0}
+        ratios: dict[str, float] = {}
+        for statistic, limits in self.thresholds.items():
+            for name, limit in limits.items():
+                value = self.peaks.get(statistic, {}).get(name)
+                if value is not None and limit > 0:
+                    ratios[name] = max(ratios.get(name, 0.0), value / limit)
         if self.alarm_s is None:
             worst = max(ratios, key=lambda n: ratios[n], default=None)
             return "no change against the log's own beginning" + (
@@ -52,7 +71,8 @@ class ChangeCheck:
                                          "threshold)")
         which = ", ".join(f"{n} {r:.1f}x its threshold" for n, r in self.flagged.items())
         return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
-                f"(± {self.onset_error_s:.1f} s), detected at {self.alarm_s:.1f} s: {which}")
+                f"(up to {self.onset_error_s:.1f} s either way), detected at "
+                f"{self.alarm_s:.1f} s: {which}")
 
 
 def _windowed_means(values: np.ndarray, window: int) -> np.ndarray:
@@ -72,60 +92,98 @@ def _windowed_means(values: np.ndarray, window: int) -> np.ndarray:
     return means
 
 
-def change_statistic(residual: np.ndarray, window: int, reference_min: int) -> np.ndarray:
-    """z per step and signal (NaN until the reference holds ``reference_min`` window
-    means, and where the window has no mean)."""
-    means = _windowed_means(residual, window)
+def _standardised(residual: np.ndarray, window: int, reference_min: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """z of each whole window (its last step's index, and z per signal: NaN until the
+    earlier windows hold ``reference_min`` steps, and where a window has no mean)."""
+    ends = np.arange(window - 1, residual.shape[0], window)
+    means = _windowed_means(residual, window)[ends]
     finite = np.isfinite(means)
     values = np.where(finite, means, 0.0)
-    first = np.cumsum(values, axis=0)
-    second = np.cumsum(values * values, axis=0)
-    counts = np.cumsum(finite, axis=0)
-    lag = window                         # the reference ends before the current window
-    z = np.full(residual.shape, np.nan)
-    if residual.shape[0] <= lag:
-        return z
-    n = counts[:-lag].astype(float)
+    # The reference of window b: windows 0 .. b-1.
+    first = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values, axis=0)])[:-1]
+    second = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values ** 2, axis=0)])[:-1]
+    counts = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(finite, axis=0)])[:-1]
     with np.errstate(invalid="ignore", divide="ignore"):
-        mean = first[:-lag] / n
-        spread = np.sqrt(np.maximum(second[:-lag] / n - mean * mean, 0.0))
-        current = means[lag:]
-        score = np.abs(current - mean) / spread
-    score[(n < reference_min) | ~(spread > 0) | ~np.isfinite(current)] = np.nan
-    z[lag:] = score
-    return z
+        mean = first / counts
+        spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
+        z = (means - mean) / spread
+    z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
+    return ends, z
+
+
+def change_statistics(residual: np.ndarray, window: int, reference_min: int
+                      ) -> dict[str, np.ndarray]:
+    """Each statistic per step and signal, as of the last whole window (NaN until the
+    reference is long enough)."""
+    ends, z = _standardised(residual, window, reference_min)
+    sums = np.full(z.shape, np.nan)
+    high = np.zeros(z.shape[1])
+    low = np.zeros(z.shape[1])
+    for block, row in enumerate(z):
+        known = np.isfinite(row)
+        high[known] = np.maximum(0.0, high[known] + row[known] - DRIFT_ALLOWANCE)
+        low[known] = np.maximum(0.0, low[known] - row[known] - DRIFT_ALLOWANCE)
+        sums[block] = np.where(known | (high + low > 0), np.maximum(high, low), np.nan)
+
+    def on_steps(per_window: np.ndarray) -> np.ndarray:
+        out = np.full(residual.shape, np.nan)
+        for block, end in enumerate(ends):
+            out[end:end + window] = per_window[block]
+        return out
+
+    return {WINDOW: on_steps(np.abs(z)), SUM: on_steps(sums)}
 
 
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float
-                 ) -> dict[str, float]:
-    """Each signal's largest z in a log (NaN where it is never judged): what calibrate
-    sets the thresholds from."""
-    z = change_statistic(residual, window, round(REFERENCE_MIN_S / dt_s))
-    return {name: float(np.nanmax(z[:, i])) if np.isfinite(z[:, i]).any() else float("nan")
-            for i, name in enumerate(names)}
+                 ) -> dict[str, dict[str, float]]:
+    """Each statistic's largest value per signal in a log (NaN where it is never judged):
+    what calibrate sets the thresholds from."""
+    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s))
+    return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
+                        else float("nan") for i, name in enumerate(names)}
+            for statistic, values in statistics.items()}
 
 
-def check_change(residual: np.ndarray, names: Sequence[str], thresholds: Mapping[str, float],
-                 time_s: np.ndarray, window: int, dt_s: float) -> ChangeCheck:
+def check_change(residual: np.ndarray, names: Sequence[str],
+                 thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
+                 window: int, dt_s: float) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
-    threshold."""
-    judged = [i for i, name in enumerate(names) if name in thresholds]
-    z = change_statistic(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s))
+    threshold (``thresholds``: statistic -> signal -> threshold)."""
+    judged = [i for i, name in enumerate(names)
+              if any(name in limits for limits in thresholds.values())]
     names_judged = [names[i] for i in judged]
-    limits = np.array([thresholds[n] for n in names_judged])
-    started = np.flatnonzero(np.isfinite(z).any(axis=1))
-    peak_z = {n: round(float(np.nanmax(z[:, k])), 3) for k, n in enumerate(names_judged)
-              if np.isfinite(z[:, k]).any()}
-    check = ChangeCheck(dict(zip(names_judged, limits.tolist(), strict=True)), peak_z,
+    statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s))
+    kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
+            for s in STATISTICS}
+    ratios = {}
+    for statistic, values in statistics.items():
+        limits = np.array([kept[statistic].get(n, np.inf) for n in names_judged])
+        with np.errstate(invalid="ignore"):
+            ratios[statistic] = values / limits
+    combined = np.fmax(ratios[WINDOW], ratios[SUM])
+    started = np.flatnonzero(np.isfinite(statistics[WINDOW]).any(axis=1))
+    peaks = {s: {n: round(float(np.nanmax(values[:, k])), 3)
+                 for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
+             for s, values in statistics.items()}
+    check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None)
     with np.errstate(invalid="ignore"):
-        over = np.flatnonzero((z > limits).any(axis=1))
+        over = np.flatnonzero((combined > 1).any(axis=1))
     if not over.size:
         return check
     at = int(over[0])
-    flagged = {n: round(float(z[at, k] / limits[k]), 2) for k, n in enumerate(names_judged)
-               if z[at, k] > limits[k]}
-    return ChangeCheck(check.thresholds, peak_z, check.judged_from_s,
-                       round(float(time_s[at]), 3),
-                       round(float(time_s[max(at - window + 1, 0)]), 3), round(window * dt_s, 3),
+    flagged = {n: round(float(combined[at, k]), 2) for k, n in enumerate(names_judged)
+               if combined[at, k] > 1}
+    strongest = names_judged.index(max(flagged, key=lambda n: flagged[n]))
+    start = at
+    if not ratios[WINDOW][at, strongest] > 1:     # the sum crossed: from where it rose
+        rest = np.flatnonzero(~(statistics[SUM][:at, strongest] > 0))
+        start = 0 if not rest.size else int(rest[-1]) + 1
+    onset = float(time_s[max(start - window + 1, 0)])
+    # The change began after the window that crossed started, or after the sum last left
+    # zero: the later it crossed after that, the less sure the start.
+    error = max(window * dt_s, float(time_s[at]) - onset - window * dt_s)
+    return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
+                       round(onset, 3), round(error, 3),
                        dict(sorted(flagged.items(), key=lambda item: -item[1])))

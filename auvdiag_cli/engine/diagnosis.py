@@ -211,9 +211,10 @@ def _check_change(matching: Matching, judging: Judging, time_s: np.ndarray,
     """The log against its own beginning, for the judged signals calibrate set a change
     threshold for (None: no such threshold)."""
     names = profile.sensor_names
-    thresholds = {name: value for name, value in model.card.change_thresholds.items()
-                  if name in names and judging.judged_mask[names.index(name)]}
-    if not thresholds:
+    thresholds = {statistic: {name: value for name, value in limits.items()
+                              if name in names and judging.judged_mask[names.index(name)]}
+                  for statistic, limits in model.card.change_thresholds.items()}
+    if not any(thresholds.values()):
         return None
     return check_change(matching.measured - matching.modelled, names, thresholds, time_s,
                         judging.window, profile.dt_s)

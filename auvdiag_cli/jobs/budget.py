@@ -3,8 +3,9 @@ statistic on the normal logs, the budget shared among the judges (`models.false_
 
 The judges are each judged signal's g in each mode with enough data (statistic: the log's
 peak g), each sensor whose start is judged (the start's deviation from the normal start),
-each actuator whose commands are judged against the motion (the log's peak extra effort)
-and the actuators of the effort groups (their own budget, `models.effort`). A normal log
+each actuator whose commands are judged against the motion (the log's peak extra effort),
+each judged signal's change test (the log's largest window |z| and largest sum) and the
+actuators of the effort groups (their own budget, `models.effort`). A normal log
 alarms when any judge does: with k judges each gets 1 - (1 - R)^(1/k). A start judge's law
 is fitted to the training logs' starts as well as the calibration logs': the start is not
 fitted by the model, so those are fair normal data, and more of them steady the law."""
@@ -190,10 +191,14 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
     return judges
 
 
-def change_judges(peaks: Sequence[dict[str, float]], judged: Sequence[str]) -> list[Judge]:
-    """Each judged signal's largest change-test z per log (NaN: the log is too short)."""
-    return [Judge("change", name, None, tuple(p.get(name, float("nan")) for p in peaks))
-            for name in judged]
+def change_judges(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence[str]
+                  ) -> list[Judge]:
+    """Each judged signal's largest change-test statistic per log, a judge per statistic
+    (its ``mode``; NaN: the log is too short)."""
+    statistics = sorted({statistic for p in peaks for statistic in p})
+    return [Judge("change", name, statistic, tuple(
+        p.get(statistic, {}).get(name, float("nan")) for p in peaks))
+        for statistic in statistics for name in judged]
 
 
 def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,

@@ -34,6 +34,7 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
 )
 from auvdiag_cli.jobs.change_calibration import (
+    ChangeThresholds,
     change_entry,
     change_thresholds,
     log_change_peaks,
@@ -112,9 +113,9 @@ class CalibrationResult:
     effort: EffortModel | Refused | None = None    # the refitted effort model, if any
     effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
     budget: BudgetThresholds | None = None         # --false-alarm-rate: the fitted judges
-    # The change test: signal -> (largest z on these logs, its threshold); empty where no
-    # log is long enough to judge it.
-    change: dict[str, tuple[float, float]] = field(default_factory=dict)
+    # The change test: statistic -> signal -> (largest on these logs, its threshold);
+    # empty where no log is long enough to judge it.
+    change: ChangeThresholds = field(default_factory=dict)
 
 
 def _mode_key(segment_name: str) -> str:
@@ -279,8 +280,8 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                   per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[ModeCalibration],
                   readings: Sequence[StartReading | None],
                   checks: Sequence[CommandCheck | None], judged: Sequence[str],
-                  log_hours: Sequence[float], change_peaks: Sequence[dict[str, float]]
-                  ) -> BudgetThresholds:
+                  log_hours: Sequence[float],
+                  change_peaks: Sequence[dict[str, dict[str, float]]]) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
     model's entries (g's go into the modes, `_with_budget`)."""
     start, relations = model.card.start_state, model.relations

@@ -189,8 +189,10 @@ def _change_check(check: ChangeCheck | None) -> dict[str, Any] | None:
     if check is None:
         return None
     return {"summary": check.describe(), "judged": check.judged,
-            "judged_from_s": check.judged_from_s, "thresholds": dict(check.thresholds),
-            "peak_z": dict(check.peak_z), "alarm_s": check.alarm_s, "onset_s": check.onset_s,
+            "judged_from_s": check.judged_from_s,
+            "thresholds": {s: dict(v) for s, v in check.thresholds.items()},
+            "peaks": {s: dict(v) for s, v in check.peaks.items()},
+            "alarm_s": check.alarm_s, "onset_s": check.onset_s,
             "onset_error_s": check.onset_error_s, "flagged": dict(check.flagged)}
 
 

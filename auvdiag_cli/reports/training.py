@@ -221,10 +221,10 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
     if result.effort is not None:
         lines += effort_lines(result.effort)
         lines += [f"  left out: {note}" for note in result.effort_notes]
-    if result.change:
-        lines.append("  change test (each log against its own beginning): largest z on these "
-                     "logs -> threshold: " + ", ".join(
+    for statistic, values in result.change.items():
+        lines.append(f"  change test ({statistic}; each log against its own beginning): "
+                     "largest on these logs -> threshold: " + ", ".join(
                          f"{name} {largest:g} -> {threshold:g}"
-                         for name, (largest, threshold) in result.change.items()))
+                         for name, (largest, threshold) in values.items()))
     lines += [f"warning: {warning}" for warning in result.warnings]
     return lines
