@@ -186,3 +186,18 @@ def test_a_stray_quote_ends_that_topic_as_damage_not_a_crash(exported, tmp_path)
     assert report["completeness"]["status"] == "partial"
     assert "flight-thrusters-command.csv: unreadable from line" in (
         report["completeness"]["reason"])
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_profile_drafted_from_an_alfa_folder_takes_set_points_as_set_points(tmp_path):
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    folder = next(p for p in sorted(ALFA.iterdir()) if p.is_dir())
+    drafted = tmp_path / "plane.toml"
+    result = runner.invoke(app, ["init-profile", str(folder), "--output", str(drafted)])
+    assert result.exit_code == 0, result.output
+    profile = load_profile(drafted)
+    set_points = [c for c in profile.commands if c.description.endswith(" commanded")]
+    assert set_points and all(c.kind == "set_point" for c in set_points)
+    assert not any(set(g.members) & {c.name for c in profile.commands
+                                     if c.kind == "set_point"} for g in profile.effort_groups)

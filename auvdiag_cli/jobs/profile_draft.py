@@ -29,6 +29,10 @@ SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_vel
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
                           r"^EKF_|^REQUEST_|^PARAM)", re.IGNORECASE)
+# A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
+# it drives a model of the closed loop, but it is no actuator.
+SET_POINT_NAME = re.compile(r"(commanded|desired|^des|setpoint|set_point|target)",
+                            re.IGNORECASE)
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNORECASE)
 MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
@@ -55,7 +59,7 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
     """Commands that look like actuators acting alike: all one-way or all two-way, with
     typical levels within ALIKE_LEVELS of each other (rotors; a ROV's thrusters), and not
     one command logged several times (``identical``: sets of names with equal values)."""
-    ordered = sorted((p for p in commands if p.level > NEUTRAL),
+    ordered = sorted((p for p in commands if p.level > NEUTRAL and not is_set_point(p)),
                      key=lambda p: (p.two_way, p.level))
     groups: list[list[Proposal]] = []
     for proposal in ordered:
@@ -67,6 +71,10 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
             groups.append([proposal])
     names = [[p.name for p in group] for group in groups if len(group) > 1]
     return [group for group in names if frozenset(group) not in identical]
+
+
+def is_set_point(proposal: Proposal) -> bool:
+    return bool(SET_POINT_NAME.search(proposal.source.field.rsplit(".", 1)[-1]))
 
 
 def _signal_name(topic: str, field: str) -> str:
@@ -310,8 +318,12 @@ def _render(path: Path, name: str, family: str, commands: list[Proposal],
              "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
              "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
     for proposal in commands:
+        kind = ('kind = "set_point"   # CHECK: a controller\'s set point (drives a model of '
+                'the closed loop; no actuator)' if is_set_point(proposal) else
+                'kind = "thruster"   # CHECK: thruster, rotor, control_surface, engine or '
+                'set_point')
         lines += ["[[commands]]", f'name = "{proposal.name}"',
-                  f'component = "{proposal.name}"   # CHECK: the part that fails',
+                  f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
     for proposal in sensors:
         lines += ["[[sensors]]", f'name = "{proposal.name}"',
