@@ -122,3 +122,11 @@ def test_help_lists_every_built_in_profile():
     assert "px4_uuv" in builtin_profiles()
     for name in builtin_profiles():
         assert name in text, name
+
+
+def test_a_model_driven_by_set_points_counts_signals_only():
+    """Set points drive the model but are no actuators: nothing to count of them."""
+    from auvdiag_cli.engine.coverage import coverage_of
+
+    coverage = coverage_of(["roll", "yaw_rate"], ["yaw_rate"], [], None, None, None)
+    assert coverage.describe() == "1 of 2 signals judged (not judged: yaw_rate); start not judged"

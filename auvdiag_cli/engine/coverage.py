@@ -45,9 +45,12 @@ class Coverage:
         return tuple(a for a in self.actuators if a not in self.actuators_judged)
 
     def counts(self) -> str:
-        """"1 of 6 signals and 0 of 4 actuators judged"."""
-        return (f"{_count(self.signals_judged, self.signals, 'signal')} and "
-                f"{_count(self.actuators_judged, self.actuators, 'actuator')} judged")
+        """"1 of 6 signals and 0 of 4 actuators judged" (no actuators: the signals only,
+        as for a model driven by set points)."""
+        signals = _count(self.signals_judged, self.signals, "signal")
+        if not self.actuators:
+            return f"{signals} judged"
+        return f"{signals} and {_count(self.actuators_judged, self.actuators, 'actuator')} judged"
 
     def describe(self) -> str:
         """The counts with the names left out, and the start."""

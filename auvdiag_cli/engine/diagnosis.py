@@ -50,6 +50,7 @@ from auvdiag_cli.engine.segments import (
 )
 from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.numeric import peak
+from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import CompanionError, ModelError
 from models.fast import new_replay_budget
@@ -165,7 +166,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s),
         effort_check=_check_effort(log, segments, profile, model, notes),
-        change_check=_check_change(matching, judging, frame.time_s, profile, model))
+        change_check=_check_change(matching, judging, frame.time_s, profile, model),
+        set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
     return Diagnosis.of(seen, _conclude(seen, normal, detection, judging, log, matching,

@@ -70,6 +70,7 @@ class Observations:
     start_check: StartCheck | None = None       # the log's start against normal starts
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
     change_check: ChangeCheck | None = None     # the log against its own beginning
+    set_points: tuple[str, ...] = ()            # commands that are set points, no actuator
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -105,9 +106,9 @@ class Diagnosis(Observations, Finding):
     @property
     def coverage(self) -> Coverage:
         """What the verdict looked at: signals, actuators, the start."""
+        actuators = [c for c in self.histories.command_names if c not in self.set_points]
         return coverage_of(self.histories.sensor_names or tuple(self.b), list(self.not_judged),
-                           self.histories.command_names, self.command_check,
-                           self.effort_check, self.start_check)
+                           actuators, self.command_check, self.effort_check, self.start_check)
 
 
 def dms_runs(diagnosis: Observations) -> list[DmsRun]:
