@@ -174,13 +174,14 @@ class TopicCsvAdapter:
         collector.add_columns(topic, table.times_ns[timed], column, fields)
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
+        files = topic_files(path)
         topics = []
-        for topic, file in sorted(topic_files(path).items()):
+        for topic, file in sorted(files.items()):
             header = csv_header(first_line(file))
             rows = max(_line_count(file) - 1, 0)
             topics.append(TopicInfo(topic, TOPIC_TYPE, rows,
                                     tuple(_path_of(name) for name in header[1:])))
-        start, end = _span(topic_files(path).values())
+        start, end = _span(files.values())
         return LogInventory(fmt, start, end, topics)
 
 

@@ -75,14 +75,17 @@ class ChangeCheck:
                 f"{self.alarm_s:.1f} s: {which}")
 
 
+def _running(values: np.ndarray) -> np.ndarray:
+    """Running sums down the columns, with a zero row in front (row i: the first i rows)."""
+    return np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values, axis=0)])
+
+
 def _windowed_means(values: np.ndarray, window: int) -> np.ndarray:
     """Each step's mean over the last ``window`` steps (NaN where fewer than half are
     finite), per column."""
     finite = np.isfinite(values)
-    sums = np.cumsum(np.where(finite, values, 0.0), axis=0)
-    counts = np.cumsum(finite, axis=0)
-    sums = np.vstack([np.zeros((1, values.shape[1])), sums])
-    counts = np.vstack([np.zeros((1, values.shape[1]), int), counts])
+    sums = _running(np.where(finite, values, 0.0))
+    counts = _running(finite.astype(float))
     means = np.full(values.shape, np.nan)
     if values.shape[0] >= window:
         total = sums[window:] - sums[:-window]
@@ -101,9 +104,8 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int
     finite = np.isfinite(means)
     values = np.where(finite, means, 0.0)
     # The reference of window b: windows 0 .. b-1.
-    first = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values, axis=0)])[:-1]
-    second = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(values ** 2, axis=0)])[:-1]
-    counts = np.vstack([np.zeros((1, values.shape[1])), np.cumsum(finite, axis=0)])[:-1]
+    first, second = _running(values)[:-1], _running(values ** 2)[:-1]
+    counts = _running(finite.astype(float))[:-1]
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = first / counts
         spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))

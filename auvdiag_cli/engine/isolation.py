@@ -6,8 +6,6 @@ returns the next; the observations are read, never changed."""
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-import numpy as np
-
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
@@ -19,7 +17,7 @@ from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
-from auvdiag_cli.engine.substitution import substitute
+from auvdiag_cli.engine.substitution import rms, substitute
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
@@ -106,15 +104,14 @@ def failure_effect(seen: Observations, change: ChangeCheck) -> str:
         column = histories.sensor_names.index(name)
         gap = matching.measured[:, column] - matching.modelled[:, column]
         unit = seen.sensor_units.get(name, "")
-        gaps.append(f"{name} {_rms(gap[after]):.3g} {unit} rms (before: "
-                    f"{_rms(gap[before]):.3g})")
+        gaps.append(f"{name} {_number(rms(gap[after]))} {unit} rms (before: "
+                    f"{_number(rms(gap[before]))})")
     return ("from the onset, the vehicle departs from what the model of the healthy vehicle "
             "says it would have done by " + ", ".join(gaps))
 
 
-def _rms(values: np.ndarray) -> float:
-    finite = values[np.isfinite(values)]
-    return float(np.sqrt(np.mean(finite ** 2))) if finite.size else float("nan")
+def _number(value: float | None) -> str:
+    return "?" if value is None else f"{value:.3g}"
 
 
 def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
