@@ -148,3 +148,13 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
                              "the healthy vehicle says it would have done by yaw_rate ")
     gap = float(effect.split("yaw_rate ")[1].split()[0])
     assert 0.18 <= gap <= 0.2 and effect.endswith("rad/s rms (before: 0)")
+
+
+def test_change_judges_no_log_is_long_enough_for_take_no_share_of_the_budget():
+    from auvdiag_cli.jobs.budget import change_judges
+
+    short = {WINDOW_Z: {"depth": float("nan")}, SUM: {"depth": float("nan")}}
+    long = {WINDOW_Z: {"depth": 3.0}, SUM: {"depth": float("nan")}}
+    assert change_judges([short, short], ["depth"]) == []
+    assert [(j.name, j.mode) for j in change_judges([short, long], ["depth"])] == [
+        ("depth", WINDOW_Z)]

@@ -196,9 +196,12 @@ def change_judges(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence
     """Each judged signal's largest change-test statistic per log, a judge per statistic
     (its ``mode``; NaN: the log is too short)."""
     statistics = sorted({statistic for p in peaks for statistic in p})
-    return [Judge("change", name, statistic, tuple(
+    judges = [Judge("change", name, statistic, tuple(
         p.get(statistic, {}).get(name, float("nan")) for p in peaks))
         for statistic in statistics for name in judged]
+    # A judge no calibration log is long enough for gets no threshold and never alarms:
+    # it takes no share of the budget from the others.
+    return [j for j in judges if np.isfinite(j.values).any()]
 
 
 def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
