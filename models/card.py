@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
+from models.ahead import AheadPredictor
 from models.fast import NETWORK
 
 
@@ -37,6 +38,12 @@ class FalseAlarmSetting:
 
     def as_dict(self) -> dict[str, float | str]:
         return {"rate": self.rate, "per": self.per}
+
+
+def _ahead(meta: Mapping[str, Any], n_commands: int, n_sensors: int) -> AheadPredictor | None:
+    entry = meta.get("ahead_predictor") or {}
+    return None if "weights" not in entry else AheadPredictor.from_json(entry, n_commands,
+                                                                        n_sensors)
 
 
 def _optional_float(value: object) -> float | None:
@@ -159,6 +166,9 @@ class ModelCard:
     # The change test's thresholds, statistic -> signal (`engine.change_check`); empty:
     # calibrate has not set them, and the test is not run.
     change_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
+    # without it, whose change test judges the replay's error.
+    ahead: AheadPredictor | None = None
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -226,4 +236,5 @@ class ModelCard:
             change_thresholds=_frozen({
                 str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
                 for statistic, values in (meta.get("change_test") or {}).get(
-                    "thresholds", {}).items()}))
+                    "thresholds", {}).items()}),
+            ahead=_ahead(meta, len(signals["commands"]), len(sensors)))

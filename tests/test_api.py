@@ -4,6 +4,7 @@ import json
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from auvdiag_cli import api
@@ -65,6 +66,8 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
                                                                    "yaw_rate": "linear"}
     model = api.load_model(tmp_path / "model", profile)
     assert model.card.predictors == trained.chosen.predictors and not model.card.calibrated
+    # The change test's predictor a moment ahead, fitted beside the network.
+    assert model.card.ahead is not None and set(model.card.ahead.skill) == {"flow", "yaw_rate"}
     before = model.dynamics
     model.update_entries(predictors={"per_signal": {"flow": "linear", "yaw_rate": "linear"}})
     assert model.dynamics is not before            # the replay follows the entries
@@ -76,6 +79,12 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
     assert dict(saved.card.thresholds["mission"]) == calibration.thresholds["mission"]
     assert not api.load_model(tmp_path / "model", profile).card.calibrated   # untouched
     diagnosis = api.diagnose(make_log("paper-flow-sensor-covered", 11), profile, saved)
+    judged = diagnosis.histories.change_residual
+    assert judged is not None and saved.card.ahead is not None
+    uncut = saved.card.ahead.residual(diagnosis.histories.commands,
+                                      diagnosis.histories.matching.measured)
+    known = np.isfinite(judged)        # the diagnosis also leaves out its re-starts
+    assert known.mean() > 0.8 and np.array_equal(judged[known], uncut[known])
     api.write_reports(diagnosis, json=tmp_path / "d.json", pdf=tmp_path / "d.pdf",
                       mcap=tmp_path / "d.mcap")
     assert (tmp_path / "d.pdf").read_bytes().startswith(b"%PDF")

@@ -2,10 +2,12 @@
 
 The thresholds learnt across logs must allow for the scatter between logs (wind, payload,
 trim, a model better on some logs than others). A failure that starts mid-log is seen
-sooner against the same log's earlier residuals. For each judged signal, window by window
-(the profile's `window_samples`, not overlapping), the residual (measured less modelled)
-averaged over the window is compared with the same averages over everything the log showed
-before it, in units of their spread there:
+sooner against the same log's earlier residuals. The residual judged is the error of the
+model's predictor a moment ahead (`models.ahead`: small and steady on a healthy log, where
+the replay's error swings with every manoeuvre), or the replay's for a model without one.
+For each judged signal, window by window (the profile's `window_samples`, not overlapping),
+the residual averaged over the window is compared with the same averages over everything
+the log showed before it, in units of their spread there:
 
     z = (mean of this window - mean of the earlier windows) / spread of the earlier windows
 
@@ -28,6 +30,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from auvdiag_cli.engine.residuals import Matching
+from models.store import LoadedModel
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
@@ -112,6 +117,16 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int
         z = (means - mean) / spread
     z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
     return ends, z
+
+
+def change_residual(model: LoadedModel, commands: np.ndarray, matching: Matching,
+                    cuts: Sequence[int] = ()) -> np.ndarray:
+    """What the test judges: the error of the model's predictor a moment ahead
+    (`models.ahead`), or the replay's where the model has none (trained before it)."""
+    ahead = model.card.ahead
+    if ahead is None:
+        return matching.measured - matching.modelled
+    return ahead.residual(commands, matching.measured, cuts)
 
 
 def change_statistics(residual: np.ndarray, window: int, reference_min: int

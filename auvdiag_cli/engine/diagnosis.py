@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
-from auvdiag_cli.engine.change_check import ChangeCheck, check_change
+from auvdiag_cli.engine.change_check import ChangeCheck, change_residual, check_change
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -136,6 +136,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     dms_starts = [int(np.searchsorted(frame.time_s, s.start_s)) for s in segments
                   if s.mode == ROUTINE_MODE]
     matching = match(model, frame, judging.full_scale, judging.window, dms_starts)
+    change_errors = change_residual(model, frame.commands, matching,
+                                   [*frame.restarts, *dms_starts])
     thresholds = threshold_matrix(segments, frame.time_s, frame.sensor_names)
     b_series = binary_vector(matching.g_percent, thresholds)
     b_series[:, ~judging.judged_mask] = 0   # a signal the model cannot predict raises no alarm
@@ -157,7 +159,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         decision_window_s=profile.decision_window_s,
         sensor_units={s.name: s.unit for s in profile.sensors},
         histories=Histories(frame.time_s, frame.commands, frame.command_names,
-                            frame.sensor_names, matching, thresholds, b_series),
+                            frame.sensor_names, matching, thresholds, b_series,
+                            change_errors),
         start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
@@ -166,7 +169,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s),
         effort_check=_check_effort(log, segments, profile, model, notes),
-        change_check=_check_change(matching, judging, frame.time_s, profile, model),
+        change_check=_check_change(change_errors, judging, frame.time_s, profile, model),
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
@@ -208,7 +211,7 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
                    frame.time_s[detection.onset_index], test, companion_runs, profile, model)
 
 
-def _check_change(matching: Matching, judging: Judging, time_s: np.ndarray,
+def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray,
                   profile: Profile, model: LoadedModel) -> ChangeCheck | None:
     """The log against its own beginning, for the judged signals calibrate set a change
     threshold for (None: no such threshold)."""
@@ -218,7 +221,7 @@ def _check_change(matching: Matching, judging: Judging, time_s: np.ndarray,
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None
-    return check_change(matching.measured - matching.modelled, names, thresholds, time_s,
+    return check_change(residual, names, thresholds, time_s,
                         judging.window, profile.dt_s)
 
 

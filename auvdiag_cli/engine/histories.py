@@ -19,6 +19,9 @@ class Histories:
     matching: Matching | None = None          # SS, SM and g
     thresholds: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     b_series: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    # What the change test judged: the moment-ahead predictor's error where the model has
+    # one, else the replay's (`engine.change_check.change_residual`).
+    change_residual: np.ndarray | None = None
 
     @property
     def duration_s(self) -> float | None:

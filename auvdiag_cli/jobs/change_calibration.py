@@ -32,12 +32,12 @@ def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedM
                      profile: Profile) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per judged signal in one normal log (NaN: too
     short)."""
-    matching = diagnosis.histories.matching
-    assert matching is not None
+    residual = diagnosis.histories.change_residual
+    assert residual is not None
     names = list(profile.sensor_names)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
-    return change_peaks((matching.measured - matching.modelled)[:, columns], list(judged),
+    return change_peaks(residual[:, columns], list(judged),
                         window, profile.dt_s)
 
 

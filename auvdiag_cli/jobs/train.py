@@ -23,6 +23,7 @@ from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
+from models.ahead import fit_ahead
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations, RelationLog
 from models.effort_model import EffortModel
@@ -234,7 +235,8 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, options.seed)
         metadata |= {"command_relations": relations.to_json(),
-                     "start_state": start_state.to_json(), "effort": effort.to_json()}
+                     "start_state": start_state.to_json(), "effort": effort.to_json(),
+                     "ahead_predictor": _fit_ahead(training, heldout, profile, progress)}
         save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     return result
 
@@ -252,6 +254,22 @@ def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_Re
         [start_reading(r.scoring.commands[:, :actuators], r.scoring.sensors, profile.dt_s)
          for r in read_heldout], [profile.full_scales[n] for n in profile.sensor_names])
     return relations, start_state
+
+
+def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
+               profile: Profile, progress: Callable[[str], None]) -> dict[str, Any]:
+    """model.json's `ahead_predictor`: the change test's predictor a moment ahead, or why
+    there is none."""
+    commands = len(profile.commands)     # the logs' model drive ends with measured inputs
+    ahead = fit_ahead([t.commands[:, :commands] for t in training],
+                      [t.sensors for t in training],
+                      [t.commands[:, :commands] for t in heldout], [t.sensors for t in heldout],
+                      profile.sensor_names, profile.dt_s, [t.cuts for t in training])
+    if ahead is None:
+        return {"refused": "too few complete samples to fit it"}
+    progress("the change test's predictor a moment ahead, held-out skill: " + ", ".join(
+        f"{name} {skill:.2f}" for name, skill in ahead.skill.items()))
+    return ahead.to_json()
 
 
 def _complete_steps(log: ScoringLog) -> int:

@@ -1,0 +1,114 @@
+"""The next moment predicted from the present: what the change test judges.
+
+The replay predicts how the vehicle answers its commands over a horizon of seconds; its error
+grows along each rollout and swings with every manoeuvre, which hides a failure that shifts a
+signal by two or three spreads. A vehicle under a controller is far better predicted a moment
+ahead from its measured state: per signal, least squares on
+
+    x(k+h) - x(k) = [x(k), x(k) - x(k-l), c(k), c(k+h/2), c(k+h), 1] @ W
+
+(every measured signal, its recent change over l = h/2 steps, the commands or set points over
+the interval; h = `AHEAD_S`). Its error is small and steady on a healthy log, so a failure
+that changes how the vehicle moves — an engine that stops pushing, a surface that sticks —
+stands out against the log's own beginning within seconds (docs/results.md measures both
+on the ALFA flights). This is the recursive-least-squares idea of the fault-detection
+literature in its simplest form: one fit to the normal logs, judged within each log.
+"""
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+AHEAD_S = 0.5
+
+
+@dataclass(frozen=True)
+class AheadPredictor:
+    """Each signal predicted ``steps`` ahead (`fit_ahead`)."""
+
+    steps: int
+    weights: np.ndarray       # (features, n_sensors), physical units
+    skill: Mapping[str, float]   # per signal on held-out data: 1 - rms error / rms change
+
+    @property
+    def lag(self) -> int:
+        return max(1, self.steps // 2)
+
+    def residual(self, commands: np.ndarray, sensors: np.ndarray, cuts: Sequence[int] = ()
+                 ) -> np.ndarray:
+        """Measured less predicted, on the steps of ``sensors`` (NaN where the prediction
+        lacks a sample or reaches across one of ``cuts``)."""
+        rows, features, change = _design(commands, sensors, self.steps, self.lag, cuts)
+        out = np.full(sensors.shape, np.nan)
+        out[rows + self.steps] = change - features @ self.weights
+        return out
+
+    def to_json(self) -> dict[str, Any]:
+        return {"ahead_s_steps": self.steps, "lag_steps": self.lag,
+                "features": "x(k), x(k)-x(k-lag), c(k), c(k+steps//2), c(k+steps), 1",
+                "weights": np.round(self.weights, 9).tolist(),
+                "heldout_skill": {n: round(v, 4) for n, v in self.skill.items()}}
+
+    @classmethod
+    def from_json(cls, entry: Mapping[str, Any], n_commands: int, n_sensors: int
+                  ) -> "AheadPredictor":
+        """Raises ValueError where the entry does not fit the model's signals."""
+        weights = np.asarray(entry["weights"], dtype=float)
+        if weights.shape != (2 * n_sensors + 3 * n_commands + 1, n_sensors):
+            raise ValueError(f"ahead predictor weights of shape {weights.shape} do not fit "
+                             f"{n_commands} commands and {n_sensors} signals")
+        return cls(int(entry["ahead_s_steps"]), weights,
+                   {str(k): float(v) for k, v in entry.get("heldout_skill", {}).items()})
+
+
+def _design(commands: np.ndarray, sensors: np.ndarray, steps: int, lag: int,
+            cuts: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows k that can be predicted (every sample known, no cut inside [k-lag, k+steps]),
+    their features and the change x(k+steps) - x(k)."""
+    length = len(sensors)
+    k = np.arange(lag, max(lag, length - steps))
+    features = np.hstack([sensors[k], sensors[k] - sensors[k - lag], commands[k],
+                          commands[k + steps // 2], commands[k + steps],
+                          np.ones((len(k), 1))])
+    change = sensors[k + steps] - sensors[k]
+    known = np.isfinite(features).all(axis=1) & np.isfinite(change).all(axis=1)
+    for cut in cuts:
+        known &= ~((k - lag < cut) & (cut <= k + steps))
+    return k[known], features[known], change[known]
+
+
+def fit_ahead(commands: Sequence[np.ndarray], sensors: Sequence[np.ndarray],
+              heldout_commands: Sequence[np.ndarray], heldout_sensors: Sequence[np.ndarray],
+              names: Sequence[str], dt_s: float,
+              cuts: Sequence[Sequence[int]] | None = None) -> AheadPredictor | None:
+    """Least squares on the normal logs (one array per log); None where they hold too few
+    complete rows to fit it."""
+    steps = max(1, round(AHEAD_S / dt_s))
+    lag = max(1, steps // 2)
+    every_cut = cuts or [()] * len(sensors)
+    parts = [_design(c, x, steps, lag, q)
+             for c, x, q in zip(commands, sensors, every_cut, strict=True)]
+    features = np.vstack([p[1] for p in parts])
+    change = np.vstack([p[2] for p in parts])
+    if len(features) < 10 * features.shape[1]:
+        return None
+    weights, *_ = np.linalg.lstsq(features, change, rcond=None)
+    fitted = AheadPredictor(steps, weights, {})
+    errors = [fitted.residual(c, x) for c, x in zip(heldout_commands, heldout_sensors,
+                                                    strict=True)]
+    return AheadPredictor(steps, weights, _skill(errors, heldout_sensors, steps, names))
+
+
+def _skill(errors: Sequence[np.ndarray], sensors: Sequence[np.ndarray], steps: int,
+           names: Sequence[str]) -> dict[str, float]:
+    """1 - rms error / rms change over ``steps``, per signal (NaN where nothing held out)."""
+    if not errors:
+        return {}
+    error = np.vstack(errors)
+    change = np.vstack([x[steps:] - x[:-steps] for x in sensors])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        skill = 1.0 - np.sqrt(np.nanmean(error ** 2, axis=0)) / np.sqrt(
+            np.nanmean(change ** 2, axis=0))
+    return {n: float(s) for n, s in zip(names, skill, strict=True) if np.isfinite(s)}

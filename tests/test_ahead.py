@@ -1,0 +1,83 @@
+"""The change test's predictor a moment ahead: fitted by least squares on normal logs, it
+recovers a known linear closed loop, its error stays at the noise on a normal log and moves
+when the loop changes, it never predicts across a cut, and it travels through model.json."""
+
+import json
+
+import numpy as np
+import pytest
+
+from models.ahead import AheadPredictor, fit_ahead
+
+DT_S = 0.1
+NAMES = ["attitude", "rate"]
+
+
+def _closed_loop(seconds: float, seed: int, gain: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """A second-order loop following a set point; ``gain`` scales what its actuator
+    achieves (1: healthy)."""
+    rng = np.random.default_rng(seed)
+    steps = round(seconds / DT_S)
+    set_point = np.repeat(rng.uniform(-1, 1, steps // 50 + 1), 50)[:steps, None]
+    state = np.zeros((steps, 2))
+    for k in range(steps - 1):
+        attitude, rate = state[k]
+        push = gain * (4.0 * (set_point[k, 0] - attitude) - 2.5 * rate)
+        state[k + 1] = attitude + DT_S * rate, rate + DT_S * push + rng.normal(0, 0.01)
+    return set_point, state + rng.normal(0, 0.002, state.shape)
+
+
+def _fitted() -> AheadPredictor:
+    logs = [_closed_loop(120.0, seed) for seed in range(3)]
+    held = _closed_loop(60.0, 9)
+    ahead = fit_ahead([c for c, _ in logs], [x for _, x in logs], [held[0]], [held[1]],
+                      NAMES, DT_S)
+    assert ahead is not None
+    return ahead
+
+
+def test_a_known_loop_is_predicted_a_moment_ahead_to_its_noise():
+    ahead = _fitted()
+    assert ahead.steps == 5 and ahead.lag == 2
+    assert ahead.skill["attitude"] > 0.9 and ahead.skill["rate"] > 0.7
+    commands, sensors = _closed_loop(60.0, 11)
+    error = ahead.residual(commands, sensors)
+    assert np.isnan(error[:ahead.steps + ahead.lag]).all()     # nothing to predict from yet
+    assert np.nanstd(error[:, 0]) < 0.02      # half a second of the rate's noise
+
+
+def test_its_error_moves_when_the_loop_weakens():
+    ahead = _fitted()
+    healthy = ahead.residual(*_closed_loop(60.0, 12))
+    weak = ahead.residual(*_closed_loop(60.0, 12, gain=0.4))
+    assert np.nanstd(weak[:, 0]) > 3 * np.nanstd(healthy[:, 0])
+
+
+def test_no_prediction_reaches_across_a_cut_or_a_missing_sample():
+    ahead = _fitted()
+    commands, sensors = _closed_loop(30.0, 13)
+    sensors[100, 1] = np.nan
+    error = ahead.residual(commands, sensors, cuts=[200])
+    # Predicted from k to k + 5 with the change over k - 2 .. k: the sample missing at 100
+    # leaves out the targets that use it (k = 100, 102 and 95); a cut at 200, every
+    # prediction whose span holds it (targets 200 .. 206).
+    assert np.isnan(error[[100, 105, 107]]).all()
+    assert np.isfinite(error[[99, 101, 104, 106, 108]]).all()
+    assert np.isnan(error[200:207, 0]).all() and np.isfinite(error[207, 0])
+
+
+def test_too_little_data_fits_no_predictor():
+    commands, sensors = _closed_loop(2.0, 1)
+    assert fit_ahead([commands], [sensors], [], [], NAMES, DT_S) is None
+
+
+def test_the_predictor_travels_through_model_json_as_numbers():
+    ahead = _fitted()
+    entry = json.loads(json.dumps(ahead.to_json()))
+    again = AheadPredictor.from_json(entry, n_commands=1, n_sensors=2)
+    commands, sensors = _closed_loop(20.0, 14)
+    np.testing.assert_allclose(again.residual(commands, sensors),
+                               ahead.residual(commands, sensors), atol=1e-6)
+    with pytest.raises(ValueError, match="do not fit 2 commands"):
+        AheadPredictor.from_json(entry, n_commands=2, n_sensors=2)
+
