@@ -35,6 +35,9 @@ from auvdiag_cli.engine.residuals import Matching
 from models.store import LoadedModel
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
+# A signal the predictor a moment ahead barely beats "no change" on is left out: its error
+# is the signal's own motion, and every manoeuvre would move it.
+MIN_AHEAD_SKILL = 0.1
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
@@ -117,6 +120,16 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int
         z = (means - mean) / spread
     z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
     return ends, z
+
+
+def change_judged(model: LoadedModel, replay_judged: Sequence[str]) -> list[str]:
+    """The signals the test judges: those the predictor a moment ahead predicts better than
+    "no change" on held-out data, or, for a model without one, those the replay judges."""
+    ahead = model.card.ahead
+    if ahead is None:
+        return list(replay_judged)
+    return [name for name in model.card.sensor_names
+            if ahead.skill.get(name, 0.0) >= MIN_AHEAD_SKILL]
 
 
 def change_residual(model: LoadedModel, commands: np.ndarray, matching: Matching,

@@ -8,7 +8,12 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
-from auvdiag_cli.engine.change_check import ChangeCheck, change_residual, check_change
+from auvdiag_cli.engine.change_check import (
+    ChangeCheck,
+    change_judged,
+    change_residual,
+    check_change,
+)
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -213,11 +218,12 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
 
 def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray,
                   profile: Profile, model: LoadedModel) -> ChangeCheck | None:
-    """The log against its own beginning, for the judged signals calibrate set a change
-    threshold for (None: no such threshold)."""
+    """The log against its own beginning, for the signals the test judges
+    (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
     names = profile.sensor_names
-    thresholds = {statistic: {name: value for name, value in limits.items()
-                              if name in names and judging.judged_mask[names.index(name)]}
+    judged = change_judged(model, [n for n, j in zip(names, judging.judged_mask, strict=True)
+                                   if j])
+    thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None

@@ -6,9 +6,12 @@ leaves after the onset (on the judged signals, from one window after the onset, 
 covers only faulty time). Below 1 the hypothesis *explains* the log: with that fault
 assumed, no signal would have alarmed.
 
-- an actuator (the commands of one component) dead, or giving a fraction of its thrust:
-  the commands are replayed scaled from the onset (thrust grows as command·|command|, so a
-  fraction f of thrust is sqrt(f) of the command);
+- a thruster, rotor or engine (the commands of one component) dead, or giving a fraction
+  of its thrust: the commands are replayed scaled from the onset (thrust grows as
+  command·|command|, so a fraction f of thrust is sqrt(f) of the command);
+- a control surface stuck from the onset: at its trim (its median command before the
+  onset), where it was (its command just before), or hard over (the least and the largest
+  command before the onset): the commands are replayed held there;
 - a sensor (the signals of one component) dead (reads 0), stuck (at its value just before
   the onset), biased (a constant offset from the model, fitted) or drifting (an offset
   growing linearly from the onset, fitted).
@@ -21,7 +24,7 @@ log where the table's sensor cannot.
 """
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -29,13 +32,16 @@ from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match_trials
 from auvdiag_cli.numeric import peak
-from auvdiag_cli.vehicle.actuators import SET_POINT
+from auvdiag_cli.vehicle.actuators import CONTROL_SURFACE, SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
 THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
 SENSOR_FAULTS = ("dead", "stuck", "biased", "drifting")
-STUCK_FROM_SAMPLES = 5       # a stuck sensor's value: the median of the samples before onset
+STUCK_FROM_SAMPLES = 5       # a stuck part's value: the median of the samples before onset
+TRIM, WHERE_IT_WAS, LOW_LIMIT, HIGH_LIMIT = ("at its trim", "where it was",
+                                             "hard over at its least command",
+                                             "hard over at its largest command")
 
 
 @dataclass(frozen=True)
@@ -43,7 +49,9 @@ class Hypothesis:
     component: str
     kind: str                            # dead, weakened, stuck, biased, drifting
     peak_g_ratio: float                  # largest g / threshold after the onset, assumed
-    thrust_fraction: float | None = None  # actuators: 0 dead, else weakened to this
+    thrust_fraction: float | None = None  # pushing parts: 0 dead, else weakened to this
+    part: str | None = None              # an actuator's kind (`vehicle.actuators`); None: a sensor
+    stuck_at: str | None = None          # a control surface's: where it stuck
 
     @property
     def explains(self) -> bool:
@@ -51,10 +59,15 @@ class Hypothesis:
 
     @property
     def is_actuator(self) -> bool:
-        return self.thrust_fraction is not None
+        return self.part is not None
 
     def describe(self) -> str:
         name = self.component.replace("_", " ")
+        if self.stuck_at is not None:
+            return f"{name} stuck {self.stuck_at}"
+        if self.part == "engine" and self.thrust_fraction is not None:
+            return (f"{name} lost its thrust" if self.thrust_fraction == 0
+                    else f"{name} at {self.thrust_fraction:.0%} of its thrust")
         if self.kind == "weakened":
             return f"{name} weakened to {self.thrust_fraction:.0%} thrust"
         return f"{name} {self.kind}"
@@ -116,24 +129,54 @@ def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
 
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,
                          judge: _Judge, restarts: Sequence[int]) -> list[Hypothesis]:
-    # A set point drives the model but is no part that can weaken.
-    components = dict.fromkeys(c.component for c in profile.commands if c.kind != SET_POINT)
-    trials = [(component, fraction) for component in components
-              for fraction in THRUST_FRACTIONS]
+    # A set point drives the model but is no part that can fail.
+    parts = {c.component: c.kind for c in profile.commands if c.kind != SET_POINT}
+    trials: list[tuple[Hypothesis, np.ndarray]] = []
+    for component, part in parts.items():
+        columns = [i for i, c in enumerate(profile.commands) if c.component == component]
+        trials += (_stuck_surfaces if part == CONTROL_SURFACE else _weakened)(
+            component, part, columns, frame.commands, judge.onset)
     if not trials:
         return []
-    histories = []
-    for component, fraction in trials:
-        columns = [i for i, c in enumerate(profile.commands) if c.component == component]
-        commands = frame.commands.copy()
-        commands[judge.onset:, columns] *= np.sqrt(fraction)
-        histories.append(commands)
     # Every trial replays the log from the onset, all of them together.
-    matched = match_trials(model, frame, histories, judge.judging.full_scale,
-                           judge.judging.window, restarts, since=judge.onset)
-    return [Hypothesis(component, "dead" if fraction == 0 else "weakened",
-                       judge.ratio(trial.g_percent[judge.onset:]), fraction)
-            for (component, fraction), trial in zip(trials, matched, strict=True)]
+    matched = match_trials(model, frame, [commands for _, commands in trials],
+                           judge.judging.full_scale, judge.judging.window, restarts,
+                           since=judge.onset)
+    return [replace(hypothesis, peak_g_ratio=judge.ratio(trial.g_percent[judge.onset:]))
+            for (hypothesis, _), trial in zip(trials, matched, strict=True)]
+
+
+def _weakened(component: str, part: str, columns: list[int], commands: np.ndarray,
+              onset: int) -> list[tuple[Hypothesis, np.ndarray]]:
+    """A part that pushes, dead or giving a fraction of its thrust from the onset."""
+    trials = []
+    for fraction in THRUST_FRACTIONS:
+        trial = commands.copy()
+        trial[onset:, columns] *= np.sqrt(fraction)
+        trials.append((Hypothesis(component, "dead" if fraction == 0 else "weakened",
+                                  float("inf"), fraction, part), trial))
+    return trials
+
+
+def _stuck_surfaces(component: str, part: str, columns: list[int], commands: np.ndarray,
+                    onset: int) -> list[tuple[Hypothesis, np.ndarray]]:
+    """A control surface held from the onset where it may have stuck (none where nothing
+    before the onset says where that is)."""
+    before = commands[:onset, columns]
+    known = np.isfinite(before).all(axis=1)
+    if not known.any():
+        return []
+    before = before[known]
+    positions = {TRIM: np.median(before, axis=0),
+                 WHERE_IT_WAS: np.median(before[-STUCK_FROM_SAMPLES:], axis=0),
+                 LOW_LIMIT: before.min(axis=0), HIGH_LIMIT: before.max(axis=0)}
+    trials = []
+    for where, held in positions.items():
+        trial = commands.copy()
+        trial[onset:, columns] = held
+        trials.append((Hypothesis(component, "stuck", float("inf"), part=part, stuck_at=where),
+                       trial))
+    return trials
 
 
 def _sensor_hypotheses(profile: Profile, frame: AlignedFrame, matching: Matching,

@@ -221,6 +221,9 @@ def apply_weakened_thruster(finding: Finding, weak: Hypothesis, profile: Profile
                       substitution=None)
     explained = (f"the pattern table reads b as {table_says}, but the log is explained by "
                  f"{weak.component} ")
+    if weak.stuck_at is not None:
+        return finding.noted(explained + f"stuck {weak.stuck_at} from the onset (g then stays "
+                             f"at {weak.peak_g_ratio:.0%} of its threshold at most)")
     if weak.thrust_fraction == 0.0:
         # A thruster dying in a turn or at low speed raises one bit before the other: the
         # decision window saw only that one, and it is a sensor's row.

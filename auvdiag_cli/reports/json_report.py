@@ -155,7 +155,9 @@ def _rounded(value: float | None) -> float | None:
 
 def _hypothesis(h: Hypothesis | None) -> dict[str, Any] | None:
     return None if h is None else {"component": h.component, "kind": h.kind,
+                                   "description": h.describe(),
                                    "thrust_fraction": h.thrust_fraction,
+                                   "stuck_at": h.stuck_at,
                                    "peak_g_over_threshold": _finite(h.peak_g_ratio),
                                    "explains": h.explains}
 

@@ -12,10 +12,11 @@ from auvdiag_errors import ProfileError
 # Each kind, and how its failure is said. A command may also be a controller's set point
 # (SET_POINT): it drives the model, but nothing fails in it.
 SET_POINT = "set_point"
+CONTROL_SURFACE = "control_surface"
 ACTUATOR_KINDS = {
     "thruster": "a damaged or fouled propeller, a weak motor, or a load near it",
     "rotor": "a damaged propeller or a weak motor",
-    "control_surface": "a surface stuck, loose or damaged, or its servo failing",
+    CONTROL_SURFACE: "a surface stuck, loose or damaged, or its servo failing",
     "engine": "lost or reduced thrust",
 }
 

@@ -65,11 +65,13 @@ def _substitution(s: dict[str, Any]) -> list[tuple[str, str]]:
 
 
 def _hypothesis(h: dict[str, Any]) -> str:
-    what = h["component"].replace("_", " ")
-    kind = (f"weakened to {h['thrust_fraction']:.0%} thrust" if h["kind"] == "weakened"
-            else h["kind"])
+    described = h.get("description")      # reports saved before it: rebuilt from the kind
+    if described is None:
+        kind = (f"weakened to {h['thrust_fraction']:.0%} thrust" if h["kind"] == "weakened"
+                else h["kind"])
+        described = f"{h['component'].replace('_', ' ')} {kind}"
     ratio = h.get("peak_g_over_threshold")
-    return f"{what} {kind}" + ("" if ratio is None else f" ({ratio:.0%} of threshold)")
+    return described + ("" if ratio is None else f" ({ratio:.0%} of threshold)")
 
 
 def _hypotheses(test: dict[str, Any]) -> str:
