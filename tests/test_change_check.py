@@ -74,8 +74,20 @@ def test_a_log_shorter_than_its_reference_is_not_judged():
 def test_the_part_moving_most_of_what_changed_comes_first():
     profile = api.load_profile("arduplane_carbonz")
     assert change_suspects({"yaw_rate": 2.0}, profile)[:2] == ["rudder", "gyro"]
-    assert change_suspects({"pitch": 1.5, "pitch_rate": 1.2}, profile)[0] == "elevator"
-    assert change_suspects({"climb": 1.1, "accel_x": 1.3, "roll": 1.5}, profile)[0] == "engine"
+    assert change_suspects({"pitch": 1.5, "pitch_rate": 1.2}, profile) == ["elevator"]
+    # A part moving several signals far past their thresholds gathers their weight ...
+    assert change_suspects({"climb": 1.6, "accel_x": 1.5, "roll": 1.8}, profile)[0] == "engine"
+    # ... but one that moved a signal far outweighs one that nudged several.
+    assert change_suspects({"yaw_rate": 1.9, "climb": 1.75, "roll": 1.27, "roll_rate": 1.07},
+                           profile)[:3] == ["rudder", "engine", "ailerons"]
+
+
+def test_a_sensor_is_suspected_only_where_every_change_is_its_own():
+    profile = api.load_profile("arduplane_carbonz")
+    # yaw and roll rate are the gyro's, the climb the GPS's: no one sensor reads them all.
+    spread = change_suspects({"yaw_rate": 1.5, "climb": 1.12, "roll_rate": 1.08}, profile)
+    assert spread == ["rudder", "engine", "ailerons"]
+    assert change_suspects({"yaw_rate": 1.5, "roll_rate": 1.4}, profile)[0] == "gyro"
 
 
 @pytest.fixture(scope="module")

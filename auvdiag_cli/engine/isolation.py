@@ -122,20 +122,24 @@ def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
 
 def change_suspects(flagged: Mapping[str, float], profile: Profile) -> list[str]:
     """The parts that could explain the signals that changed, likeliest first: each signal
-    counts (by how far past its threshold) for its own sensor and for the parts that move
-    what it measures; a part moving several of them gathers their weight. On a tie the
-    part that moves comes first: a vehicle that stops following its set points the same
-    way has first changed in what moves it."""
+    counts, by how far it went past its threshold, for the parts that move what it
+    measures, and a part moving several of them gathers their weight; a signal barely over
+    its threshold is weak evidence, so a part that moved one signal far outweighs one that
+    nudged several. A sensor is a suspect only where every signal that changed is its own:
+    a sensor's fault shows in its own readings, while a part that moves the vehicle changes
+    what other sensors measure too. On a tie the part that moves comes first: a vehicle
+    that stops following its set points the same way has first changed in what moves it."""
     weight: dict[str, float] = {}
     movers: set[str] = set()
-    for sensor in profile.sensors:
-        ratio = flagged.get(sensor.name)
-        if ratio is None:
-            continue
+    sensors = [s for s in profile.sensors if s.name in flagged]
+    own = {s.component for s in sensors}
+    for sensor in sensors:
+        excess = flagged[sensor.name] - 1.0
         for part in sensor.moved_by:
-            weight[part] = weight.get(part, 0.0) + ratio
+            weight[part] = weight.get(part, 0.0) + excess
             movers.add(part)
-        weight[sensor.component] = weight.get(sensor.component, 0.0) + ratio
+        if len(own) == 1:
+            weight[sensor.component] = weight.get(sensor.component, 0.0) + excess
     return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
 
 
