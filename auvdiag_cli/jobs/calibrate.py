@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.change_check import change_judged
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -35,10 +34,11 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
 )
 from auvdiag_cli.jobs.change_calibration import (
+    ChangeEvidence,
     ChangeThresholds,
     change_entry,
+    change_evidence,
     change_thresholds,
-    log_change_peaks,
 )
 from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
@@ -227,14 +227,12 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start.to_json())
-    judged_by_change = change_judged(model, judged)
-    peaks = [log_change_peaks(d, judged_by_change, model, profile) for d in diagnoses]
+    evidence = change_evidence(diagnoses, judged, model, profile)
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
-        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested],
-        (judged_by_change, peaks))
+        [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
     model.update_entries(change_test=change_entry(
-        change := change_thresholds(peaks, judged_by_change, margin, fitted)))
+        change := change_thresholds(evidence, margin, fitted)))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -283,9 +281,7 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                   per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[ModeCalibration],
                   readings: Sequence[StartReading | None],
                   checks: Sequence[CommandCheck | None], judged: Sequence[str],
-                  log_hours: Sequence[float],
-                  change: tuple[Sequence[str], Sequence[dict[str, dict[str, float]]]]
-                  ) -> BudgetThresholds:
+                  log_hours: Sequence[float], change: ChangeEvidence) -> BudgetThresholds:
     """Fit the judges to the budget and set the start and command thresholds they give in
     model's entries (g's go into the modes, `_with_budget`)."""
     start, relations = model.card.start_state, model.relations
@@ -293,7 +289,7 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                         profile.sensor_names),
               *start_judges(start, readings, profile.sensor_names),
               *command_judges(relations, checks, profile.command_names),
-              *change_judges(change[1], change[0])]
+              *change_judges(change.peaks, change.judged)]
     actuators = sum(len(group.members) for group in profile.effort_groups)
     fitted = budget_thresholds(judges, actuators, budget, log_hours)
     if start.usable:

@@ -2,6 +2,7 @@
 each judged signal's largest S on the normal logs."""
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -10,6 +11,7 @@ from auvdiag_cli.engine.change_check import (
     STATISTICS,
     SUM,
     WINDOW,
+    change_judged,
     change_peaks,
 )
 from auvdiag_cli.engine.results import Diagnosis
@@ -41,8 +43,23 @@ def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedM
                         window, profile.dt_s)
 
 
-def change_thresholds(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence[str],
-                      margin: float, fitted: BudgetThresholds | None) -> ChangeThresholds:
+@dataclass(frozen=True)
+class ChangeEvidence:
+    """The signals the change test judges, and each normal log's largest statistics."""
+
+    judged: list[str]
+    peaks: list[dict[str, dict[str, float]]]
+
+
+def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
+                    model: LoadedModel, profile: Profile) -> ChangeEvidence:
+    judged = change_judged(model, replay_judged)
+    return ChangeEvidence(judged, [log_change_peaks(d, judged, model, profile)
+                                   for d in diagnoses])
+
+
+def change_thresholds(evidence: ChangeEvidence, margin: float,
+                      fitted: BudgetThresholds | None) -> ChangeThresholds:
     """Each statistic's threshold per signal: margin x its largest value on the normal
     logs, or the budget's where it fitted the judge, never below
     `MIN_CHANGE_THRESHOLDS`. A signal no log is long enough to judge gets none (the test
@@ -50,8 +67,8 @@ def change_thresholds(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequ
     budgeted = {} if fitted is None else fitted.thresholds("change")
     result: ChangeThresholds = {}
     for statistic in STATISTICS:
-        for name in judged:
-            values = [p[statistic][name] for p in peaks
+        for name in evidence.judged:
+            values = [p[statistic][name] for p in evidence.peaks
                       if np.isfinite(p.get(statistic, {}).get(name, np.nan))]
             if not values:
                 continue
