@@ -15,8 +15,9 @@ Noise model of a span's departure from normal (share − normal share): a betwee
 (spread σ_b, measured between normal logs) plus within-log noise that averages out over the
 span (σ_w for one window of W seconds, measured between a log's windows). For a span of T
 seconds: σ(T)² = σ_b² + σ_w² · W · (1/T − 1/T_typ), where σ_b is measured on logs of the
-typical steady time T_typ. A new log's z = departure / (σ(T) √(1 + 1/n)) is Student-t with
-n − 1 degrees of freedom under normal operation (n normal logs)."""
+typical steady time T_typ, each member's drawn towards the group's (`between_spread`). A new
+log's z = departure / (σ(T) √(1 + 1/n)) is Student-t under normal operation, with the
+degrees of freedom of that estimate: (n − 1)·m for n normal logs and m members."""
 
 import math
 from collections.abc import Sequence
@@ -179,16 +180,13 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     conditioned = bool(np.sqrt((_departures(logs, True, True) ** 2).mean())
                        <= CONDITIONED_GAIN * pooled)
     n = len(logs)
-    departures = _departures(logs, conditioned, False)
-    between = np.sqrt((departures ** 2).sum(axis=0) / (n - 1))
     windows = sum(g.windows for g in logs)
     within = np.sqrt(np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0)
                      / max(1, windows - n))
     typical = float(np.median([g.steady_s for g in logs]))
-    floor = within * math.sqrt(window_s / typical)
     # With few logs, the windows inside them say how much a log's share wanders at least.
-    spread = np.maximum(between, floor)
-    dof = float(n - 1) if (between >= floor).all() else float(max(n - 1, windows - n))
+    floor = within * math.sqrt(window_s / typical)
+    spread, dof = between_spread(_departures(logs, conditioned, False), floor)
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
                    spread, within, typical, n, dof, np.zeros((n, len(group.members))))
     loo = []
@@ -202,13 +200,35 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
 
 def fit_group_fixed(fit: GroupFit, logs: Sequence[GroupLog]) -> GroupFit:
     """``fit`` refitted on other logs with its choices (conditioning, bins) kept."""
-    n = len(logs)
-    departures = _departures(logs, fit.conditioned, False)
-    between = np.sqrt((departures ** 2).sum(axis=0) / max(1, n - 1))
     typical = float(np.median([g.steady_s for g in logs]))
-    spread = np.maximum(between, fit.within * math.sqrt(fit.window_s / typical))
+    spread, _ = between_spread(_departures(logs, fit.conditioned, False),
+                               fit.within * math.sqrt(fit.window_s / typical))
     return replace(fit, means=_bin_means(logs, fit.conditioned), spread=spread,
-                   typical_s=typical, logs=n)
+                   typical_s=typical, logs=len(logs))
+
+
+def between_spread(departures: np.ndarray, floor: np.ndarray, pool: bool = True
+                   ) -> tuple[np.ndarray, float]:
+    """Each member's spread between logs, from the logs' departures (logs, members), and the
+    degrees of freedom of the estimate; never below ``floor``.
+
+    One member's spread from n logs rests on n - 1 degrees of freedom: with three or four
+    logs it is as likely to come out half as twice its true value, so a member that happened
+    to vary little alarms on the next normal log, and one that varied much hides a fault.
+    The members of a group share most of what changes between logs (battery, trim, payload,
+    the air or water that day), so each member's variance is drawn towards the group's,
+    weighted by what each rests on: (nu s_i^2 + nu_g s_g^2) / (nu + nu_g), with nu = n - 1
+    and nu_g = (n - 1)(m - 1) for m members (their shares average to one: m - 1 are free),
+    on nu + nu_g degrees of freedom. ``pool`` False: each member's own (the yardstick)."""
+    logs, members = departures.shape
+    own_dof = max(1, logs - 1)
+    own = (departures ** 2).sum(axis=0) / own_dof
+    if not pool or members < 2:
+        return np.maximum(np.sqrt(own), floor), float(own_dof)
+    group_dof = own_dof * (members - 1)
+    group = float((departures ** 2).sum()) / group_dof
+    shrunk = (own_dof * own + group_dof * group) / (own_dof + group_dof)
+    return np.maximum(np.sqrt(shrunk), floor), float(own_dof + group_dof)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,83 @@
+"""The effort check with the handful of normal logs a user has: each member's spread between
+logs drawn towards its group's keeps the false-alarm budget on new normal logs and judges a
+departure of six spreads that one member's own spread from four logs would hide; on the
+real quadrotor, four normal flights are enough to find a cut propeller and name it."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from shared_data import SHARED_DATA
+
+from models.effort import between_spread
+from models.student_t import quantile
+
+RATE, MEMBERS, LOGS, SIGMA = 0.01, 4, 4, 0.02
+
+
+def _alarms(departure: np.ndarray, pool: bool, seed: int, trials: int = 4000) -> float:
+    """The share of new logs with ``departure`` (per member, in σ) that alarm, the spread
+    learnt each time from LOGS normal logs of a group whose members vary alike."""
+    rng = np.random.default_rng(seed)
+    floor = np.zeros(MEMBERS)
+    alarmed = 0
+    for _ in range(trials):
+        normal = rng.normal(0.0, SIGMA, (LOGS, MEMBERS))
+        spread, dof = between_spread(normal - normal.mean(axis=0), floor, pool)
+        new = rng.normal(0.0, SIGMA, MEMBERS) + departure * SIGMA
+        z = (new - normal.mean(axis=0)) / (spread * np.sqrt(1 + 1 / LOGS))
+        alarmed += bool((z > quantile(1 - RATE / MEMBERS, dof)).any())
+    return alarmed / trials
+
+
+def test_pooled_spreads_rest_on_every_members_logs():
+    departures = np.array([[0.01, -0.02, 0.0, 0.01], [-0.01, 0.02, 0.01, -0.02],
+                           [0.0, 0.0, -0.01, 0.01]])
+    spread, dof = between_spread(departures, np.zeros(4))
+    own, own_dof = between_spread(departures, np.zeros(4), pool=False)
+    assert (own_dof, dof) == (2.0, 8.0)
+    group = np.sqrt((departures ** 2).sum() / 6)
+    assert np.all(np.abs(spread - group) <= np.abs(own - group))     # drawn towards it
+    floored, _ = between_spread(departures, np.full(4, 0.05))
+    assert np.allclose(floored, 0.05)
+
+
+def test_four_normal_logs_keep_the_budget_and_judge_six_spreads():
+    # Normal logs: the budget is kept (within the sampling error of 4000 trials).
+    assert _alarms(np.zeros(MEMBERS), pool=True, seed=1) < 1.5 * RATE
+    # One member six spreads up: a member's own spread (3 degrees of freedom) hides it
+    # most of the time; drawn towards the group's, it is judged most of the time.
+    weak = np.array([6.0, 0.0, 0.0, 0.0])
+    own = _alarms(weak, pool=False, seed=2, trials=1000)
+    pooled = _alarms(weak, pool=True, seed=2, trials=1000)
+    assert own < 0.45 and pooled > 0.8
+
+
+@pytest.mark.shared_data("crazypad/labels.csv")
+def test_four_normal_crazypad_flights_find_a_cut_propeller_and_name_motor_3():
+    from auvdiag_cli.engine.effort_check import check_effort
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.effort import effort_log
+    from auvdiag_cli.jobs.relate import relation_log
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.effort_model import learn_effort
+
+    profile = load_profile(Path("crazyflie"))
+    root = SHARED_DATA / "crazypad" / "E8"
+
+    def read(folder: str) -> list:
+        return [relation_log(ingest(p, profile), profile)
+                for p in sorted((root / folder).glob("*.csv"))]
+
+    normal = read("normal_flight")
+    model, _ = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in normal[:4]],
+                            profile.dt_s)
+    assert model is not None
+
+    def named(log) -> tuple[str, ...]:  # type: ignore[no-untyped-def]
+        return check_effort(model, profile, log.commands, log.usable,
+                            profile.dt_s * np.arange(len(log.commands))).named
+
+    assert [named(log) for log in normal[4:]] == [()] * (len(normal) - 4)
+    cut = read("cut_propeller_M3_3mm_3mm_41mm") + read("cut_propeller_M3_3.5mm_3.5mm_40mm")
+    assert cut and all(named(log) == ("motor_3",) for log in cut)
