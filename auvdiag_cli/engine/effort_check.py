@@ -4,21 +4,30 @@ on normal logs, the mark of a damaged or fouled propeller, a weak motor or a loa
 which the controller hides from the motion. A share that falls while another rises is the
 normalisation (the shares of a group average to one), never a fault of its own.
 
-Two tests share the false-alarm budget: the departure over the whole log's steady time,
-and (for a fault that begins during the log) over the span from each later window start to
-the end. The onset is the earliest start whose departure comes within ONSET_TIE of the
-largest; the detection, the first moment the departure from that start crosses its
-threshold."""
+Two tests share the false-alarm budget: the departure over the whole log's steady time from
+the normal logs' share, and (for a fault that begins during the log) the departure of the
+span from each later start to the end from the log's own span before that start. The second
+is blind to the log's own offset from the normal logs (its battery, trim, payload), which is
+in both spans, and so sees a weakness that begins mid-log far sooner. The onset is the start
+that departs most (the change point's likeliest place); the detection, the first moment the
+span from it crosses its threshold."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.vehicle.profile import Profile
-from models.effort import MIN_WINDOWS, GroupFit, Thresholds, expected_share, window_shares
+from models.effort import (
+    MIN_WINDOWS,
+    SPREAD_FLOOR,
+    GroupFit,
+    Thresholds,
+    expected_share,
+    window_shares,
+)
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 
-ONSET_TIE = 0.9
+STARTS_PER_WINDOW = 8
 
 
 @dataclass(frozen=True)
@@ -108,15 +117,31 @@ class _Spans:
     level_sum: np.ndarray
     dt_s: float
 
-    def z(self, start: int, end: np.ndarray | int) -> np.ndarray:
-        ends = np.atleast_1d(end)
+    def _departure(self, start: int, ends: np.ndarray) -> np.ndarray:
+        """(ends, members): the share of [start, end) less its normal share."""
         effort = self.effort_sum[ends] - self.effort_sum[start]
         level = self.level_sum[ends] - self.level_sum[start]
         total = level.sum(axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
-            share = effort / total[:, None]
-            normal = level @ self.fit.means / total[:, None]
-        return np.asarray((share - normal) / self.fit.sigma((ends - start) * self.dt_s))
+            return np.asarray((effort - level @ self.fit.means) / total[:, None])
+
+    def z(self, start: int, end: np.ndarray | int) -> np.ndarray:
+        """Against the normal logs: the span's departure in units of its σ."""
+        ends = np.atleast_1d(end)
+        return self._departure(start, ends) / self.fit.sigma((ends - start) * self.dt_s)
+
+    def changed(self, start: int, end: np.ndarray | int) -> np.ndarray:
+        """Against the log's own beginning: how far the departure of [start, end) lies from
+        that of [0, start), in units of σ. The log's own offset from the normal logs (its
+        battery, trim, payload) is in both and cancels; what is left is the windows' noise,
+        σ_w √(W (1/T_after + 1/T_before))."""
+        ends = np.atleast_1d(end)
+        before = self._departure(0, np.array([start]))
+        after_s = (ends - start) * self.dt_s
+        spread = self.fit.within * np.sqrt(self.fit.window_s * (
+            1 / after_s[:, None] + 1 / (start * self.dt_s)))
+        return np.asarray((self._departure(start, ends) - before)
+                          / np.maximum(spread, SPREAD_FLOOR))
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
@@ -129,10 +154,15 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     spans = _Spans(fit, *_cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
     whole_threshold = thresholds.whole_log(fit)
-    starts = list(range(window, n - MIN_WINDOWS * window + 1, window))
+    # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
+    # window (a sixth of a typical log); each start still has a window of the log before it
+    # and MIN_WINDOWS after it, and the threshold allows for every start tried.
+    stride = max(1, window // STARTS_PER_WINDOW)
+    starts = list(range(window, n - MIN_WINDOWS * window + 1, stride))
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
-    z = np.array([spans.z(s, n)[0] for s, _ in candidates])            # (starts, members)
+    # The whole log against the normal logs; each later start against the log before it.
+    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts])
     ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
@@ -143,13 +173,12 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
         return per_actuator, None, None, series, figures
-    # The span that departs most from normal starts near the onset; earlier starts dilute
-    # it with normal time, later ones lose fault time. The earliest near the most wins ties.
-    start, threshold = candidates[int(np.flatnonzero(
-        z[:, top] >= ONSET_TIE * z[:, top].max())[0])]
-    running = spans.z(start, np.arange(start + window, n + 1))[:, top]
+    start, threshold = candidates[int(np.argmax(ratios[:, top]))]
+    # When it was seen: the first end, a stride on from the start, where the span crossed.
+    first = start + (window if start == 0 else stride)
+    running = (spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))[:, top]
     crossed = np.flatnonzero(running > threshold)
-    alarm = start + window + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
+    alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
     return per_actuator, float(times[start]), float(times[alarm]), series, figures
 
 
