@@ -98,6 +98,8 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
     assert report["component"] == "motor_3"
     actuators = report["actuators"]
     assert [n for n, a in actuators["shares"].items() if a["driven_harder"]] == ["motor_3"]
+    assert actuators["signatures"][0]["actuator"] == "motor_3"
+    assert actuators["signatures"][0]["match"] > 0.9
     assert actuators["shares"]["motor_3"]["departure"] > 0.03
     # The others fell: the normalisation, never a second fault.
     assert all(a["departure"] < 0 for n, a in actuators["shares"].items() if n != "motor_3")

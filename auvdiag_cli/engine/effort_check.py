@@ -12,6 +12,7 @@ in both spans, and so sees a weakness that begins mid-log far sooner. The onset 
 that departs most (the change point's likeliest place); the detection, the first moment the
 span from it crosses its threshold."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +29,7 @@ from models.effort import (
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 
 STARTS_PER_WINDOW = 8
+CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 
 
 @dataclass(frozen=True)
@@ -72,6 +74,9 @@ class EffortCheck:
     named: tuple[str, ...]       # components of the actuators driven harder
     series: tuple[EffortSeries, ...]
     failure: str = ""            # how the suspects' kind of failure is said ("": marine words)
+    # After an alarm, how well the departure of the suspect's group matches each member's
+    # weakness (`signature_matches`), best first.
+    matches: tuple[tuple[str, float], ...] = ()
 
     @property
     def judged(self) -> bool:
@@ -95,7 +100,39 @@ class EffortCheck:
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
-        return "; ".join(parts) + ": " + (self.failure or MARINE_FAILURE)
+        return "; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
+
+    def _pattern(self) -> str:
+        if len(self.matches) < 2:
+            return ""
+        (best, match), (second, other) = self.matches[:2]
+        if match < CLEAR_MATCH:
+            return (f"; the shares match no one actuator's weakness well (closest {best}, "
+                    f"{match:.2f}): more than one, or a load between them")
+        return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
+
+
+def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, float], ...]:
+    """How well the departures of the strongest suspect's group, in units of their spreads,
+    match each member's weakness, best first: the cosine between them and the signature
+    of member i, its own share up and the others' down alike (the shares average to one:
+    e_i - 1/m). One weak actuator matches its own near 1; a load shared between two, or
+    two weak ones, matches none well."""
+    suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
+    if not suspects:
+        return ()
+    group = [a for a in actuators if a.group == suspects[0].group and a.spread]
+    if len(group) < 2:
+        return ()
+    z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
+                  for a in group])
+    signatures = np.eye(len(group)) - 1.0 / len(group)
+    signatures /= np.linalg.norm(signatures, axis=1, keepdims=True)
+    length = float(np.linalg.norm(z))
+    matches = signatures @ z / length if length > 0 else np.zeros(len(group))
+    return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
+                                                                     strict=True)),
+                        key=lambda item: -item[1]))
 
 
 def _cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
@@ -231,4 +268,4 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
     return EffortCheck(tuple(actuators), model.false_alarm_rate,
                        None if first is None else round(first[0], 3),
                        None if first is None else round(first[1], 3), named, tuple(series),
-                       failure)
+                       failure, signature_matches(actuators))

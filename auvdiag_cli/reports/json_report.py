@@ -206,6 +206,7 @@ def _actuators(check: EffortCheck | None) -> dict[str, Any] | None:
     return {"summary": check.describe(), "judged": check.judged,
             "false_alarm_rate": check.false_alarm_rate, "alarm_s": check.alarm_s,
             "onset_s": check.onset_s, "named": list(check.named),
+            "signatures": [{"actuator": n, "match": m} for n, m in check.matches],
             "shares": {a.name: {"group": a.group, "component": a.component, "share": a.share,
                                 "normal_share": a.normal_share, "spread": a.spread,
                                 "departure": a.departure, "over_threshold": a.ratio,

@@ -1,0 +1,40 @@
+"""The pattern of the shares: one weak actuator matches its own signature (its share up,
+the others' down alike); a load shared by two matches none well, and the report says so."""
+
+from auvdiag_cli.engine.effort_check import (
+    CLEAR_MATCH,
+    ActuatorEffort,
+    EffortCheck,
+    signature_matches,
+)
+
+
+def _group(departures: list[float], harder: int) -> tuple[ActuatorEffort, ...]:
+    return tuple(ActuatorEffort(f"motor_{i + 1}", f"motor_{i + 1}", "rotors", 1.0 + d, 1.0,
+                                0.01, d, 2.0 if i == harder else 0.5, None)
+                 for i, d in enumerate(departures))
+
+
+def _check(actuators: tuple[ActuatorEffort, ...]) -> EffortCheck:
+    return EffortCheck(actuators, 0.01, 20.0, 15.0, ("motor_3",), (),
+                       "a damaged propeller or a weak motor", signature_matches(actuators))
+
+
+def test_one_weak_rotor_matches_its_own_signature():
+    check = _check(_group([-0.02, -0.01, 0.06, -0.03], harder=2))
+    (best, match), (_, other) = check.matches[:2]
+    assert best == "motor_3" and match > 0.95 and other < 0.1
+    assert "the shares match motor_3 weak (0.9" in check.describe()
+
+
+def test_a_load_between_two_rotors_matches_none_well():
+    check = _check(_group([-0.04, -0.04, 0.04, 0.04], harder=2))
+    assert check.matches[0][1] < CLEAR_MATCH
+    assert "match no one actuator's weakness well" in check.describe()
+
+
+def test_no_alarm_no_pattern():
+    quiet = tuple(ActuatorEffort(a.name, a.component, a.group, a.share, a.normal_share,
+                                 a.spread, a.departure, 0.5, None)
+                  for a in _group([0.0, 0.0, 0.01, -0.01], harder=0))
+    assert signature_matches(quiet) == ()
