@@ -4,13 +4,17 @@ on normal logs, the mark of a damaged or fouled propeller, a weak motor or a loa
 which the controller hides from the motion. A share that falls while another rises is the
 normalisation (the shares of a group average to one), never a fault of its own.
 
-Two tests share the false-alarm budget: the departure over the whole log's steady time from
-the normal logs' share, and (for a fault that begins during the log) the departure of the
-span from each later start to the end from the log's own span before that start. The second
-is blind to the log's own offset from the normal logs (its battery, trim, payload), which is
-in both spans, and so sees a weakness that begins mid-log far sooner. The onset is the start
-that departs most (the change point's likeliest place); the detection, the first moment the
-span from it crosses its threshold."""
+Each test judges, per actuator, the group's departures (each in units of its σ) projected
+on that actuator's signature (`_signatures`): a weak actuator's own share rises while the
+others fall, and the projection gathers both, where its own departure alone would leave
+the others' evidence out. Two tests share the false-alarm budget: the departure over the
+whole log's steady time from the normal logs' share, and (for a fault that begins during
+the log) the departure of the span from each later start to the end from the log's own
+span before that start. The second is blind to the log's own offset from the normal logs
+(its battery, trim, payload), which is in both spans, and so sees a weakness that begins
+mid-log far sooner. The onset is the start that departs most (the change point's
+likeliest place); the detection, the first moment the span from it crosses its
+threshold."""
 
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -112,6 +116,15 @@ class EffortCheck:
         return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
 
 
+def _signatures(members: int) -> np.ndarray:
+    """(members, members): row i, the unit direction in which member i's weakness moves the
+    group's departures: its own share up, the others' down alike (they average to one)."""
+    if members < 2:
+        return np.eye(members)
+    directions = np.eye(members) - 1.0 / members
+    return np.asarray(directions / np.linalg.norm(directions, axis=1, keepdims=True))
+
+
 def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, float], ...]:
     """How well the departures of the strongest suspect's group, in units of their spreads,
     match each member's weakness, best first: the cosine between them and the signature
@@ -126,10 +139,8 @@ def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, f
         return ()
     z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
                   for a in group])
-    signatures = np.eye(len(group)) - 1.0 / len(group)
-    signatures /= np.linalg.norm(signatures, axis=1, keepdims=True)
     length = float(np.linalg.norm(z))
-    matches = signatures @ z / length if length > 0 else np.zeros(len(group))
+    matches = _signatures(len(group)) @ z / length if length > 0 else np.zeros(len(group))
     return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
                                                                      strict=True)),
                         key=lambda item: -item[1]))
@@ -190,6 +201,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     window = setup.window_steps(dt_s)
     spans = _Spans(fit, *_cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
+    toward = _signatures(len(setup.group.members))
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
@@ -199,7 +211,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.
-    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts])
+    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts]) @ toward.T
     ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
@@ -213,7 +225,8 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     start, threshold = candidates[int(np.argmax(ratios[:, top]))]
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
-    running = (spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))[:, top]
+    running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
+               @ toward.T)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
     return per_actuator, float(times[start]), float(times[alarm]), series, figures
