@@ -170,3 +170,16 @@ def test_change_judges_no_log_is_long_enough_for_take_no_share_of_the_budget():
     assert change_judges([short, short], ["depth"]) == []
     assert [(j.name, j.mode) for j in change_judges([short, long], ["depth"])] == [
         ("depth", WINDOW_Z)]
+
+
+def test_one_normal_log_that_alone_sets_a_change_threshold_is_named():
+    from auvdiag_cli.jobs.change_calibration import ChangeEvidence, dominated_by_one_log
+
+    peaks = [{WINDOW_Z: {"climb": 3.0}, SUM: {"climb": 4.0}},
+             {WINDOW_Z: {"climb": 3.5}, SUM: {"climb": 30.0}},
+             {WINDOW_Z: {"climb": float("nan")}, SUM: {"climb": 5.0}}]
+    warnings = dominated_by_one_log(ChangeEvidence(["climb"], peaks), ["a", "odd", "b"])
+    assert warnings == [
+        "odd alone sets the change test's thresholds of climb (sum: 30.0, 6.0x the next "
+        "log's): check that log for a failure or a disturbance; if it was not normal, "
+        "calibrate without it"]

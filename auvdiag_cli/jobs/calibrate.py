@@ -34,11 +34,13 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
 )
 from auvdiag_cli.jobs.change_calibration import (
+    DOMINANCE_WARNING,
     ChangeEvidence,
     ChangeThresholds,
     change_entry,
     change_evidence,
     change_thresholds,
+    dominated_by_one_log,
 )
 from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
@@ -54,7 +56,6 @@ from models.store import LoadedModel
 
 MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshold is kept
 # One log's peak g this many times the next log's: that log alone sets the threshold.
-DOMINANCE_WARNING = 2.0
 # Logs the model was trained on give a g that is too low (the model has seen them): their g
 # counts only widened by the ratio of the model's held-out error to its error on these logs,
 # per signal, and at least by this factor.
@@ -244,7 +245,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks_faulty,
         [p.name for p in in_sample], widening,
-        _warnings(modes, in_sample, len(in_sample) == len(normal_logs), widening),
+        _warnings(modes, in_sample, normal_logs, widening, evidence),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
         fitted, change)
     model.update_entries(calibration=_record(result, normal_logs, floor_at_profile))
@@ -338,10 +339,11 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
 
 
 def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
-              all_in_sample: bool, widening: dict[str, float]) -> list[str]:
-    warnings = []
+              normal_logs: Sequence[Path], widening: dict[str, float],
+              change: ChangeEvidence) -> list[str]:
+    warnings = dominated_by_one_log(change, [p.name for p in normal_logs])
     if in_sample:
-        which = ("every calibration log was" if all_in_sample
+        which = ("every calibration log was" if len(in_sample) == len(normal_logs)
                  else f"{len(in_sample)} of the calibration logs were")
         warnings.append(
             f"{which} used to train the model: their g is in-sample (too low) and counts "

@@ -26,6 +26,8 @@ from models.store import LoadedModel
 # paper's mission one reached 6.1 where three others peaked at 3.3. And the largest of a
 # handful of normal logs' peaks understates the next log's.
 MIN_CHANGE_THRESHOLDS = {WINDOW: 6.0, SUM: 8.0}
+# One normal log whose largest value is this many times the next log's is worth a warning.
+DOMINANCE_WARNING = 2.0
 # statistic -> signal -> (its largest value on the normal logs, its threshold)
 ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 
@@ -77,6 +79,30 @@ def change_thresholds(evidence: ChangeEvidence, margin: float,
                             MIN_CHANGE_THRESHOLDS[statistic])
             result.setdefault(statistic, {})[name] = (round(largest, 3), round(threshold, 3))
     return result
+
+
+def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[str]:
+    """A warning for each normal log whose largest value of a statistic on a signal is
+    DOMINANCE_WARNING times the next log's or more: that log alone sets those thresholds, and
+    a log that is not normal (a real failure, a disturbance) blinds the test on every later
+    log."""
+    dominated: dict[str, list[str]] = {}
+    for statistic in STATISTICS:
+        for name in evidence.judged:
+            ranked = sorted(((p.get(statistic, {}).get(name, np.nan), log)
+                             for p, log in zip(evidence.peaks, logs, strict=True)
+                             if np.isfinite(p.get(statistic, {}).get(name, np.nan))),
+                            reverse=True)
+            if len(ranked) < 2 or ranked[1][0] <= 0:
+                continue
+            (largest, log), (following, _) = ranked[:2]
+            if largest >= DOMINANCE_WARNING * following:
+                dominated.setdefault(log, []).append(
+                    f"{name} ({statistic}: {largest:.1f}, {largest / following:.1f}x the next "
+                    "log's)")
+    return [f"{log} alone sets the change test's thresholds of {', '.join(which)}: check "
+            "that log for a failure or a disturbance; if it was not normal, calibrate without "
+            "it" for log, which in dominated.items()]
 
 
 def change_entry(thresholds: ChangeThresholds) -> dict[str, object]:
