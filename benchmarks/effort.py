@@ -142,6 +142,7 @@ def crazypad_few(root: Path) -> list[str]:
              + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 4) + "|"]
     for label, spread in (("drawn towards the group's", pooled),
                           ("each member's own", functools.partial(pooled, pool=False))):
+        # The yardstick swaps the spread estimate itself, everything else as shipped.
         models.effort.between_spread = spread   # type: ignore[assignment]
         try:
             for k in (3, 4):
