@@ -20,13 +20,17 @@ def _alarms(departure: np.ndarray, pool: bool, seed: int, trials: int = 4000) ->
     learnt each time from LOGS normal logs of a group whose members vary alike."""
     rng = np.random.default_rng(seed)
     floor = np.zeros(MEMBERS)
+    limits: dict[float, float] = {}       # the quantile of each degrees of freedom, once
     alarmed = 0
     for _ in range(trials):
         normal = rng.normal(0.0, SIGMA, (LOGS, MEMBERS))
         spread, dof = between_spread(normal - normal.mean(axis=0), floor, pool)
+        if dof not in limits:
+            limits[dof] = quantile(1 - RATE / MEMBERS, dof)
+        limit = limits[dof]
         new = rng.normal(0.0, SIGMA, MEMBERS) + departure * SIGMA
         z = (new - normal.mean(axis=0)) / (spread * np.sqrt(1 + 1 / LOGS))
-        alarmed += bool((z > quantile(1 - RATE / MEMBERS, dof)).any())
+        alarmed += bool((z > limit).any())
     return alarmed / trials
 
 
