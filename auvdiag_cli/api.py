@@ -154,9 +154,9 @@ def read_log(path: Path, profile: Profile) -> Signals:
     return read_signals(path, profile.sources)
 
 
-def inspect(path: Path, profile: Profile) -> Inspection:
+def inspect(path: Path, profile: Profile | None = None) -> Inspection:
     """What the log holds (topics, rates, span) and which of the profile's signals resolve
-    in it: `auvdiag inspect`."""
+    in it (None: what it holds only): `auvdiag inspect`."""
     from auvdiag_cli.jobs.inspect import inspect_log
 
     return inspect_log(path, profile)

@@ -1,6 +1,7 @@
 """`auvdiag init-profile`: a starting profile drafted from a log loads, and every signal it
 proposes resolves on that log; what the log cannot tell is marked CHECK."""
 
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -118,10 +119,14 @@ def test_a_csv_whose_sensor_names_are_unknown_gets_every_varying_column_to_check
     assert text.count("CHECK: not recognised by its name") == 2
     profile = load_profile(draft)
     assert profile.sensor_names == ("stateestimate_vz", "stateestimate_az")
-    shown = runner.invoke(app, ["inspect", str(log)])      # the default profile: no fit
-    assert shown.exit_code == 2 and "MISSING" in shown.stdout
-    assert "span      9.000 s since boot … 12.990 s since boot  (4.0 s)" in shown.stdout
+    shown = runner.invoke(app, ["inspect", str(log)])      # no profile: described only
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout
+    assert "profile signals: not checked" in shown.stdout
+    clock = "s (the log's clock, not a date)"
+    assert f"span      9.000 {clock} … 12.990 {clock}  (4.0 s)" in shown.stdout
     assert "clock: column time_us read in us (guessed" in shown.stdout
+    checked = runner.invoke(app, ["inspect", str(log), "--profile", "twin_burger"])
+    assert checked.exit_code == 2 and "MISSING" in checked.stdout
 
 
 def test_a_csv_whose_command_names_are_unknown_proposes_the_held_columns_as_commands(
@@ -165,3 +170,17 @@ def test_the_documented_minimal_profile_loads_and_reads_a_log(tmp_path):
                                              f"{0.01 * k:.2f}\n" for k in range(300)))
     shown = runner.invoke(app, ["inspect", str(log), "--profile", str(profile_path)])
     assert shown.exit_code == 0 and "MISSING" not in shown.stdout, shown.stdout
+
+
+def test_a_speed_is_drafted_in_metres_per_second_and_a_turn_rate_in_radians(tmp_path):
+    """A ground speed is no angular rate: the draft's units follow what each name says."""
+    from auvdiag_cli.api import draft_profile
+
+    log = tmp_path / "flight.csv"
+    rows = ["time_s,motor_1,yawspeed,groundspeed"]
+    rows += [f"{0.1 * k:.1f},{0.2 + 0.1 * (k // 20 % 3)},{0.01 * (k % 7)},{12 + 0.1 * (k % 9)}"
+             for k in range(400)]
+    log.write_text("\n".join(rows) + "\n")
+    text = draft_profile(log)
+    units = {sensor["name"]: sensor["unit"] for sensor in tomllib.loads(text)["sensors"]}
+    assert units.get("yawspeed") == "rad/s" and units.get("groundspeed") == "m/s", text

@@ -19,7 +19,8 @@ FAMILY = {"bag": "ros", "db3": "ros", "ros2-mcap": "ros", "mcap": "ros", "tlog":
 
 @pytest.mark.parametrize("fmt", list(FAMILY))
 def test_inspect_lists_topics_counts_rates_and_signals(make_log, fmt):
-    result = runner.invoke(app, ["inspect", str(make_log("routine-and-mission", 41, fmt))])
+    result = runner.invoke(app, ["inspect", str(make_log("routine-and-mission", 41, fmt)),
+                                  "--profile", "twin_burger"])
     assert result.exit_code == 0, result.output
     out = result.stdout
     assert f"format    {fmt} " in out

@@ -33,7 +33,7 @@ def _thin_commands(source, target, keep_every=5):
 
 def test_slow_commands_are_reported_by_inspect_and_diagnose(make_log, tmp_path):
     log = _thin_commands(make_log("paper-normal", 11, "tlog"), tmp_path / "slow.tlog")
-    shown = runner.invoke(app, ["inspect", str(log)])
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", "twin_burger"])
     assert shown.exit_code == 0
     warnings = [line for line in shown.stdout.splitlines() if "warning:" in line]
     assert len(warnings) == 1 and "thruster_0, thruster_1 are logged at 2.0 Hz" in warnings[0]
@@ -43,5 +43,6 @@ def test_slow_commands_are_reported_by_inspect_and_diagnose(make_log, tmp_path):
 
 
 def test_commands_at_the_model_rate_raise_no_warning(make_log):
-    shown = runner.invoke(app, ["inspect", str(make_log("paper-normal", 11, "tlog"))])
+    shown = runner.invoke(app, ["inspect", str(make_log("paper-normal", 11, "tlog")),
+                                "--profile", "twin_burger"])
     assert shown.exit_code == 0 and "warning:" not in shown.stdout

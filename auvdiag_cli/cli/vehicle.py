@@ -63,18 +63,18 @@ def inspect(
     log: Annotated[Path, typer.Argument(help="Log of any supported format.")],
     profile: ProfileOption = None,
 ) -> None:
-    """Show what a log holds and which of the profile's signals resolve in it.
+    """Show what a log holds and, with --profile, which of the profile's signals resolve in it.
 
     Lists the format, time span, topics or message types with their types, counts and rates,
-    and for each profile signal whether it resolved (or why not, with the closest topics).
-    Exit status 0 when every signal resolves, 2 otherwise (also when the log holds none of
-    them, or the profile has no mapping for its format: the listing still shows what the
-    log holds)."""
+    and with --profile for each of its signals whether it resolved (or why not, with the
+    closest topics). Exit status 0 when the log reads (with --profile: when every signal
+    resolves), 2 otherwise (also when the log holds none of them, or the profile has no
+    mapping for its format: the listing still shows what the log holds)."""
     from auvdiag_cli import api
     from auvdiag_cli.reports.text import inspection_lines
 
     with user_errors(log):
-        result = api.inspect(log, api.load_profile(profile))
+        result = api.inspect(log, None if profile is None else api.load_profile(profile))
     for line in inspection_lines(result):
         typer.echo(line)
     if not result.usable:

@@ -35,11 +35,13 @@ class Inspection:
     markers: list[str]
     mapped: bool = True          # False: the profile says nothing about this format family
     warnings: list[str] = field(default_factory=list)
+    checked: bool = True         # False: no profile given, the log described only
 
     @property
     def usable(self) -> bool:
-        """Every signal the diagnosis needs resolves in this log."""
-        return self.mapped and all(s.resolved for s in self.signals)
+        """Every signal the diagnosis needs resolves in this log (True where no profile
+        was given: there is nothing to miss)."""
+        return not self.checked or (self.mapped and all(s.resolved for s in self.signals))
 
 
 def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
@@ -81,9 +83,16 @@ def _guessed_span(path: Path, contents: LogInventory) -> tuple[LogInventory, str
             "map this log's clock)")
 
 
-def inspect_log(path: Path, profile: Profile) -> Inspection:
-    """Inventory the log, then read each of the profile's signals that its topics offer."""
+def inspect_log(path: Path, profile: Profile | None) -> Inspection:
+    """Inventory the log, then read each of the profile's signals that its topics offer
+    (None: describe the log only, its span from a column named like a clock for a CSV)."""
     contents, family = inventory(path)
+    if profile is None:
+        notes: list[str | None] = [None]
+        if contents.start_ns is None and family == "csv":
+            contents, notes[0] = _guessed_span(path, contents)
+        return Inspection(path, family, contents, [], [], mapped=False, checked=False,
+                          warnings=[n for n in notes if n is not None])
     sources = profile.sources.get(family)
     if sources is None:
         return Inspection(path, family, contents, [], [], mapped=False)

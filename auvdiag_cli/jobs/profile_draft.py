@@ -130,6 +130,17 @@ UNIT_SUFFIX = re.compile(r"_(s|ms|us|ns)$", re.IGNORECASE)
 SECONDS_PER = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 
+def _sensor_unit(field: str) -> str:
+    """The unit a motion field's name says: angular rates (ATTITUDE rollspeed, IMU GyrX,
+    angular_velocity) in rad/s, speeds and velocities (VFR_HUD groundspeed, twist.linear)
+    in m/s; "?" where the name says nothing."""
+    if re.search(r"(roll|pitch|yaw)speed$|^Gyr|angular|gyro", field, re.IGNORECASE):
+        return "rad/s"
+    if re.search(r"speed$|velocity|linear\.|^v[xyz]$|^V[NED]$", field, re.IGNORECASE):
+        return "m/s"
+    return "?"
+
+
 def _clock_unit(name: str, numbers: np.ndarray) -> str:
     """The unit the column's name says (time_us); else an epoch's by its size; else the one
     that puts the median sample interval between 0.1 ms and 10 s (a clock since boot)."""
@@ -205,7 +216,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                                      two_way=bool((value < -NEUTRAL).any())))
             command_values.append(value)
         else:
-            unit = "rad/s" if re.search(r"speed$|^Gyr|angular|gyro", source.field) else "?"
+            unit = _sensor_unit(source.field)
             check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
             if not SENSOR_NAME.search(source.field):
                 check = ("not recognised by its name: keep it only if it measures the "

@@ -160,8 +160,10 @@ def _read_and_split(logs: Sequence[Path], holdout: Sequence[Path], profile: Prof
                     ) -> tuple[list[Path], list[Path], dict[Path, _ReadLog]]:
     """Training and held-out logs among those in which the vehicle operates, each read
     (only its healthy part where ``healthy`` lists one)."""
-    progress(f"reading {len(logs)} training and {len(holdout)} held-out log(s)")
     paths = list(dict.fromkeys([*logs, *holdout]))
+    # How many are held out is known only once the logs are read (see `split_holdout`).
+    progress(f"reading {len(paths)} log(s)"
+             + (f", {len(holdout)} of them held out as asked" if holdout else ""))
     announce_healthy_parts(healthy, paths, progress)
     every = read_operating(paths, lambda path: _read(path, profile, progress,
                                                      healthy.of(path)), progress, "train on")

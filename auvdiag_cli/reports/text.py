@@ -150,8 +150,8 @@ def _hypotheses_line(test: HypothesisTest) -> str:
 def _utc(time_ns: int | None) -> str:
     if time_ns is None:
         return "?"
-    if time_ns <= EPOCH_CLOCK_NS:  # a clock since boot, not since the epoch
-        return f"{time_ns / 1e9:.3f} s since boot"
+    if time_ns <= EPOCH_CLOCK_NS:  # since boot, or since whatever the log counts from
+        return f"{time_ns / 1e9:.3f} s (the log's clock, not a date)"
     return utc_text(time_ns, "milliseconds") or f"{time_ns} ns (not a date)"
 
 
@@ -196,7 +196,9 @@ def inspection_lines(inspection: Inspection) -> list[str]:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
         lines.append(f"  {topic.name:<32} {topic.type:<34} {topic.count:>8} {rate:>9}")
         lines += _topic_details(topic)
-    if not inspection.mapped:
+    if not inspection.checked:
+        lines.append("  profile signals: not checked (add --profile to see which resolve)")
+    elif not inspection.mapped:
         lines.append(f"  profile signals: none to look for: the profile has no "
                      f"[sources.{inspection.family}] mapping for {inv.format} logs")
     else:
