@@ -65,7 +65,7 @@ __all__ = [
     "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
     "diagnose", "draft_profile", "inspect", "load_model", "load_profile", "log_format",
     "read_healthy_parts", "read_log", "redraw_report", "relate", "save_model", "scenarios",
-    "score", "simulate",
+    "score", "simulate", "summary_text",
     "to_json", "train", "trend", "write_reports",
 ]
 
@@ -245,6 +245,14 @@ def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
 
     return diagnosis_to_dict(diagnosis)
+
+
+def summary_text(diagnosis: Diagnosis) -> str:
+    """The terminal summary `auvdiag diagnose` prints: verdict, onset and detection, each
+    check's finding, notes (lines joined by newlines)."""
+    from auvdiag_cli.reports.text import summary_lines
+
+    return "\n".join(summary_lines(diagnosis))
 
 
 def write_reports(diagnosis: Diagnosis, json: Path | None = None, pdf: Path | None = None,

@@ -60,7 +60,6 @@ def diagnose(
     leaves several candidates the DMS runs (in this log or the --with logs) decide."""
     from auvdiag_cli import api
     from auvdiag_cli.jobs.profile_fit import with_profile_hint
-    from auvdiag_cli.reports.text import summary_lines
     from auvdiag_errors import LogError
 
     with user_errors(log):
@@ -76,8 +75,7 @@ def diagnose(
         api.write_reports(result, None if json_path in (None, "-") else Path(json_path),
                           pdf_path, mcap_path)
         if not quiet:
-            for line in summary_lines(result):
-                typer.echo(line, err=json_path == "-")
+            typer.echo(api.summary_text(result), err=json_path == "-")
     raise typer.Exit(EXIT_FAULT if result.verdict == api.Verdict.FAULT else EXIT_NORMAL)
 
 
