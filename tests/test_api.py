@@ -104,7 +104,8 @@ def test_everything_public_is_named_in_one_place():
                and getattr(value, "__module__", None) == api.__name__}
     assert defined == {"audit", "calibrate", "derive_table", "diagnose", "draft_profile",
                        "inspect", "load_model", "load_profile", "log_format", "read_log",
-                       "relate", "save_model", "scenarios", "score", "simulate", "to_json",
+                       "relate", "save_model", "scenarios", "score", "simulate", "summary_text",
+                       "to_json",
                        "train", "trend", "write_reports"}
     assert defined <= set(api.__all__) and all(hasattr(api, name) for name in api.__all__)
 
@@ -138,3 +139,16 @@ def test_a_program_simulates_its_own_scenario_and_redraws_a_saved_report(tmp_pat
     assert not api.redraw_report(tmp_path / "d.json", tmp_path / "summary-only.pdf")
     with pytest.raises(AuvdiagError, match="not an auvdiag JSON report"):
         api.redraw_report(log.with_suffix(".truth.json"), tmp_path / "t.pdf")
+
+
+def test_the_summary_text_is_what_diagnose_prints():
+    from typer.testing import CliRunner
+
+    from auvdiag_cli.cli import app
+
+    log = SAMPLES / "paper-flow-sensor-covered"
+    profile = api.load_profile()
+    diagnosis = api.diagnose(log, profile, api.load_model(profile=profile))
+    printed = CliRunner().invoke(app, ["diagnose", str(log)]).stdout
+    assert printed == api.summary_text(diagnosis) + "\n"
+    assert api.summary_text(diagnosis).startswith(f"{log}  (") and "verdict: FAULT" in printed
