@@ -10,6 +10,7 @@ Matches the torch module to float32 rounding (see tests/test_fast_replay.py)."""
 import importlib.util
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, fields
 from functools import cache, cached_property
 from typing import Literal
@@ -35,16 +36,32 @@ def compiled_available() -> bool:
     return importlib.util.find_spec("numba") is not None
 
 
-_expected_steps = 0     # sequential steps announced since `new_replay_budget`
-_many_logs = False      # within `replaying_many_logs`: every replay is compiled
+@dataclass
+class _ReplayBudget:
+    """Which loop replays, for the work under way in this thread (or task)."""
+
+    expected_steps: int = 0     # sequential steps announced since `new_replay_budget`
+    many_logs: bool = False     # within `replaying_many_logs`: every replay is compiled
+
+
+# Per thread and per asyncio task, never shared: one thread's audit of many logs must not
+# change how a diagnosis running beside it replays.
+_budget: ContextVar[_ReplayBudget | None] = ContextVar("replay_budget", default=None)
+
+
+def _current() -> _ReplayBudget:
+    budget = _budget.get()
+    if budget is None:
+        budget = _ReplayBudget()
+        _budget.set(budget)
+    return budget
 
 
 def new_replay_budget() -> None:
     """A new piece of work (one log's diagnosis) begins: which loop replays follows the
-    steps it announces, never what the process ran before. The two loops agree to float32
+    steps it announces, never what this thread ran before. The two loops agree to float32
     rounding only, and a log's figures must not depend on the logs diagnosed before it."""
-    global _expected_steps
-    _expected_steps = 0
+    _budget.set(_ReplayBudget(many_logs=_current().many_logs))
 
 
 @contextmanager
@@ -52,21 +69,20 @@ def replaying_many_logs() -> Iterator[None]:
     """Within: one of many logs replayed in a row (an audit's task): the compiled loop,
     loaded once a process, replays every log, so that each log of the audit is replayed
     the same way whatever came before it (the NumPy loop would take short logs otherwise)."""
-    global _many_logs
-    before, _many_logs = _many_logs, True
+    token = _budget.set(_ReplayBudget(_current().expected_steps, many_logs=True))
     try:
         yield
     finally:
-        _many_logs = before
+        _budget.reset(token)
 
 
 def expect_steps(steps: int) -> None:
     """Say that about ``steps`` sequential steps are coming in several calls (batches of
     rollouts, each as long as its longest): the compiled loop is loaded now, and used from
     now on, once the steps announced (a diagnosis replays once per hypothesis) pay for it."""
-    global _expected_steps
-    _expected_steps += steps
-    if compiled_available() and _expected_steps >= COMPILED_PAYS_FROM_STEPS:
+    budget = _current()
+    budget.expected_steps += steps
+    if compiled_available() and budget.expected_steps >= COMPILED_PAYS_FROM_STEPS:
         importlib.import_module("models.compiled")
 
 
@@ -77,8 +93,10 @@ def _use_compiled(engine: Engine, rollout_steps: int) -> bool:
         if not compiled_available():
             raise RuntimeError("the compiled replay needs numba (pip install numba)")
         return True
+    budget = _current()
     return compiled_available() and (
-        _many_logs or max(rollout_steps, _expected_steps) >= COMPILED_PAYS_FROM_STEPS)
+        budget.many_logs
+        or max(rollout_steps, budget.expected_steps) >= COMPILED_PAYS_FROM_STEPS)
 
 
 @dataclass(frozen=True)

@@ -121,3 +121,35 @@ def test_an_audit_task_is_replayed_on_the_compiled_loop(monkeypatch, make_log):
     assert outcome.error is None and calls                # a 175 s log: NumPy alone
     fast.new_replay_budget()
     assert not fast._use_compiled("auto", 600)
+
+
+def test_a_thread_replaying_many_logs_leaves_another_threads_diagnosis_alone(make_log,
+                                                                              profile):
+    """Which loop replays belongs to the work under way in its own thread: while one thread
+    audits (every replay compiled), a diagnosis in another replays as it would alone."""
+    import threading
+
+    from auvdiag_cli.engine.diagnosis import diagnose
+    from models import fast
+
+    model = load_model()
+    log = make_log("paper-normal", 11)
+    alone = diagnose(log, profile, model)
+    auditing, done = threading.Event(), threading.Event()
+
+    def audit() -> None:
+        with fast.replaying_many_logs():
+            auditing.set()
+            done.wait(60)
+
+    other = threading.Thread(target=audit)
+    other.start()
+    try:
+        assert auditing.wait(60)
+        assert not fast._use_compiled("auto", 600)
+        beside = diagnose(log, profile, model)
+    finally:
+        done.set()
+        other.join()
+    assert np.array_equal(alone.histories.matching.g_percent,
+                          beside.histories.matching.g_percent, equal_nan=True)
