@@ -231,13 +231,17 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
-             companions: Sequence[Path] = (), mission: Path | None = None) -> Diagnosis:
+             companions: Sequence[Path] = (), mission: Path | None = None, *,
+             truth: Path | None = None) -> Diagnosis:
     """Diagnose one log. ``companions``: other logs of the same vehicle and day whose test
     sequences may decide between candidates; ``mission``: the mission plan for the
-    closed-loop replay (default: NAME.mission.json beside the log)."""
-    from auvdiag_cli.jobs.truth import diagnose_with_truth
+    closed-loop replay (default: NAME.mission.json beside the log); ``truth``: the log's
+    ground truth (a simulator's NAME.truth.csv), to lay the substitution against."""
+    from auvdiag_cli.engine.diagnosis import diagnose as diagnose_log
+    from auvdiag_cli.jobs.truth import compare_with_truth
 
-    return diagnose_with_truth(path, profile, model, companions, mission)
+    diagnosis = diagnose_log(path, profile, model, companions, mission)
+    return diagnosis if truth is None else compare_with_truth(diagnosis, profile, truth)
 
 
 def to_json(diagnosis: Diagnosis) -> dict[str, Any]:

@@ -144,8 +144,10 @@ def samples(folder: Path) -> None:
     for scenario, fmt, name in SAMPLES:
         log = folder / name
         auvdiag("simulate", scenario, "--seed", "1", "--format", fmt, "--output", log)
-        auvdiag("diagnose", log, "--quiet", "--json", "-", allowed=(0, 1),
-                stdout=folder / f"{name.split('.')[0]}.expected.json")
+        stem = name.split(".")[0]
+        auvdiag("diagnose", log, "--quiet", "--json", "-", "--truth",
+                folder / f"{stem}.truth.csv", allowed=(0, 1),
+                stdout=folder / f"{stem}.expected.json")
 
 
 def main(argv: Sequence[str] | None = None) -> None:

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 from auvdiag_cli.engine.substitution import dead_reckon
+from auvdiag_cli.simulator.truth_files import truth_paths
 
 
 def test_dead_reckoning_straight_and_turning():
@@ -25,8 +26,9 @@ def test_dead_reckoning_straight_and_turning():
 @pytest.mark.parametrize(("scenario", "signal"), [("paper-flow-sensor-covered", "flow"),
                                                   ("mission-yaw-rate-sensor-dead", "yaw_rate")])
 def test_substitution_beats_the_failed_sensor(make_log, scenario, signal):
-    result = CliRunner().invoke(app, ["diagnose", str(make_log(scenario, 71, "bag")),
-                                      "--json", "-", "-q"])
+    log = make_log(scenario, 71, "bag")
+    result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "-q",
+                                      "--truth", str(truth_paths(log)[1])])
     report = json.loads(result.stdout)
     substitution = report["substitution"]
     assert substitution["signal"] == signal
@@ -45,10 +47,13 @@ def test_substitution_beats_the_failed_sensor(make_log, scenario, signal):
 
 
 def test_no_truth_no_truth_figures(make_log, tmp_path):
+    """Truth beside the log is not looked for: only a caller's --truth lays it against."""
     import shutil
 
     log = tmp_path / "alone.bag"
     shutil.copy(make_log("paper-flow-sensor-covered", 71, "bag"), log)
+    _, report = diagnose_json(make_log("paper-flow-sensor-covered", 71, "bag"))
+    assert report["substitution"]["truth_error_rms"] is None
     _, report = diagnose_json(log)
     substitution = report["substitution"]
     assert substitution["truth_error_rms"] is None

@@ -43,7 +43,7 @@ def _profile_and_model(profile: str | None, model: str | None) -> tuple[Any, Any
 
 def analyse(task: AuditTask) -> AuditOutcome:
     """Diagnose one log; never raises (a failure is the outcome's ``error``)."""
-    from auvdiag_cli.jobs.truth import diagnose_with_truth
+    from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.reports.json_report import diagnosis_to_dict
     from auvdiag_cli.reports.series import series_from_diagnosis
     from models.fast import replaying_many_logs
@@ -53,7 +53,7 @@ def analyse(task: AuditTask) -> AuditOutcome:
     try:
         profile, model = _profile_and_model(task.profile, task.model)
         with replaying_many_logs():
-            result = diagnose_with_truth(Path(task.log), profile, model)
+            result = diagnose(Path(task.log), profile, model)
         outcome.document = diagnosis_to_dict(result)
         outcome.series = series_from_diagnosis(result)
     except AuvdiagError as error:

@@ -52,6 +52,11 @@ def diagnose(
     companions: Annotated[list[Path] | None, typer.Option(
         "--with", help="Another log of the same vehicle and day whose Diagnosis Motion "
                        "Sequences may decide between candidates (repeatable).")] = None,
+    truth: Annotated[Path | None, typer.Option(
+        "--truth", help="The log's ground truth (CSV with a t_s column and true values, as "
+                        "`auvdiag simulate` writes NAME.truth.csv): the substituted signal "
+                        "and the failed sensor are laid against it.", dir_okay=False)
+    ] = None,
 ) -> None:
     """Diagnose one log. Exit status: 0 no fault, 1 fault found, 2 log not analysable.
 
@@ -67,7 +72,7 @@ def diagnose(
         vehicle = api.load_profile(profile)
         try:
             result = api.diagnose(log, vehicle, api.load_model(model, vehicle),
-                                  companions or (), mission)
+                                  companions or (), mission, truth=truth)
         except LogError as error:
             raise with_profile_hint(error, vehicle.name) from None
         if json_path == "-":
