@@ -274,6 +274,24 @@ def _reference(profile: Profile) -> Path:
     return Path(where.removeprefix("builtin:"))
 
 
+def _refuse_unsaved(profile: Profile | None, model: LoadedModel | None) -> None:
+    """An audit's workers read the profile from its file and the model from its directory:
+    one changed in memory and not saved would be audited as it was on disk."""
+    import json
+
+    if profile is not None and load_profile(_reference(profile)) != profile:
+        raise UsageError(f"audit: the profile differs from {profile.source_path}, which the "
+                         "audit reads: save it to a file and load that")
+    if model is None:
+        return
+    if model.directory is None:
+        raise UsageError("audit needs a model read from a directory (api.load_model)")
+    saved = model.directory / "model.json"
+    if json.loads(saved.read_text("utf-8")) != model.model_json:
+        raise UsageError(f"audit: the model has changes not saved to {model.directory}, "
+                         "which the audit reads: api.save_model it first")
+
+
 def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = None,
           model: LoadedModel | None = None, jobs: int = 1, mcap: bool = False,
           scheduler: str | None = None, progress: AuditProgress | None = None,
@@ -291,8 +309,7 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
     from auvdiag_cli.audit.job import AuditOptions, run_audit
     from auvdiag_cli.audit.progress import SilentReporter
 
-    if model is not None and model.directory is None:
-        raise UsageError("audit needs a model read from a directory (api.load_model)")
+    _refuse_unsaved(profile, model)
     options = AuditOptions([str(p) for p in paths], output,
                            None if profile is None else _reference(profile),
                            None if model is None or model.shipped else model.directory,

@@ -1,5 +1,6 @@
 """The public Python face: everything a program needs, from one module."""
 
+import dataclasses
 import json
 import shutil
 from pathlib import Path
@@ -95,6 +96,13 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
     assert len(fleet.records) == 2 and all(r.model_path == str(tmp_path / "calibrated")
                                            for r in fleet.records)
     assert api.trend(tmp_path / "audit").short         # two dives: too few for a trend
+    # An audit reads the model from its directory: one changed in memory is refused.
+    api.calibrate(saved, profile, [make_log("paper-normal", 13)])
+    with pytest.raises(AuvdiagError, match="changes not saved to"):
+        api.audit([make_log("paper-normal", 13)], tmp_path / "audit2", profile, saved)
+    changed = dataclasses.replace(profile, dt_s=0.2)
+    with pytest.raises(AuvdiagError, match="the profile differs from builtin:twin_burger"):
+        api.audit([make_log("paper-normal", 13)], tmp_path / "audit2", changed, model)
     with pytest.raises(AuvdiagError, match="not an audit folder"):
         api.trend(tmp_path)
 
