@@ -11,11 +11,14 @@ inside auvdiag_cli may move between releases.
     print(diagnosis.verdict, diagnosis.component, diagnosis.detected_at_s)
     api.write_reports(diagnosis, pdf=Path("dive.pdf"), json=Path("dive.json"))
 
-    result = api.train([Path("day1")], Path("my_model"), profile)    # a folder of dives
+    result = api.train([Path("day1")], profile, Path("my_model"))    # a folder of dives
     model = api.load_model(Path("my_model"), profile)
     budget = api.CalibrateOptions(budget=api.FalseAlarmBudget(0.05))
-    api.calibrate(model, profile, [Path("day2")], options=budget)
+    api.calibrate([Path("day2")], profile, model, options=budget)
     api.save_model(model, Path("my_model"))
+
+Every function takes what it reads first (a log, logs), then the vehicle (profile, model),
+then where it writes; options are keywords.
 
 Every failure is an `auvdiag_errors.AuvdiagError` (`LogError`, `ProfileError`, `ModelError`,
 `UsageError`, …; import them from `auvdiag_errors`, their one home) whose message names the
@@ -175,7 +178,7 @@ def draft_profile(path: Path, name: str | None = None, like: str | Path | None =
     return draft(path, name or path.stem)
 
 
-def train(logs: Sequence[Path], output: Path, profile: Profile,
+def train(logs: Sequence[Path], profile: Profile, output: Path, *,
           options: TrainOptions | None = None, progress: Progress = _quiet
           ) -> TrainingResult:
     """Train on normal ``logs`` (files or folders of them) and write the model directory
@@ -189,7 +192,7 @@ def train(logs: Sequence[Path], output: Path, profile: Profile,
                            DEFAULT_TRAINING if options is None else options, progress)
 
 
-def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
+def score(logs: Sequence[Path], profile: Profile, model: LoadedModel, *,
           horizon_s: float | None = None, progress: Progress = _quiet
           ) -> tuple[list[HorizonScore], HorizonScore]:
     """Measure the model's skill on normal logs it was not trained on, and record it in the
@@ -200,7 +203,7 @@ def score(model: LoadedModel, profile: Profile, logs: Sequence[Path],
     return score_model(model, profile, logs, horizon_s, progress)
 
 
-def relate(model: LoadedModel, profile: Profile, logs: Sequence[Path],
+def relate(logs: Sequence[Path], profile: Profile, model: LoadedModel, *,
            holdout: Sequence[Path] = (), progress: Progress = _quiet
            ) -> tuple[CommandRelations | Refused, StartReference]:
     """Learn how the commands follow the motion and where normal logs start, into the model
@@ -212,7 +215,7 @@ def relate(model: LoadedModel, profile: Profile, logs: Sequence[Path],
     return relate_model(model, profile, logs, holdout, progress)
 
 
-def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
+def calibrate(normal_logs: Sequence[Path], profile: Profile, model: LoadedModel, *,
               faulty_logs: Sequence[Path] = (), options: CalibrateOptions | None = None,
               progress: Progress = _quiet) -> CalibrationResult:
     """Set the model's thresholds from normal logs (files or folders of them), by
@@ -230,8 +233,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                           progress)
 
 
-def diagnose(path: Path, profile: Profile, model: LoadedModel,
-             companions: Sequence[Path] = (), mission: Path | None = None, *,
+def diagnose(path: Path, profile: Profile, model: LoadedModel, *,
+             companions: Sequence[Path] = (), mission: Path | None = None,
              truth: Path | None = None) -> Diagnosis:
     """Diagnose one log. ``companions``: other logs of the same vehicle and day whose test
     sequences may decide between candidates; ``mission``: the mission plan for the
@@ -259,7 +262,7 @@ def summary_text(diagnosis: Diagnosis) -> str:
     return "\n".join(summary_lines(diagnosis))
 
 
-def write_reports(diagnosis: Diagnosis, json: Path | None = None, pdf: Path | None = None,
+def write_reports(diagnosis: Diagnosis, *, json: Path | None = None, pdf: Path | None = None,
                   mcap: Path | None = None) -> None:
     """Write the diagnosis as a JSON report (with its time histories beside it, which
     `redraw_report` draws from), a PDF and an MCAP for Foxglove, as many as are asked."""
@@ -277,8 +280,6 @@ def _reference(profile: Profile) -> Path:
 def _refuse_unsaved(profile: Profile | None, model: LoadedModel | None) -> None:
     """An audit's workers read the profile from its file and the model from its directory:
     one changed in memory and not saved would be audited as it was on disk."""
-    import json
-
     if profile is not None and load_profile(_reference(profile)) != profile:
         raise UsageError(f"audit: the profile differs from {profile.source_path}, which the "
                          "audit reads: save it to a file and load that")
@@ -286,16 +287,14 @@ def _refuse_unsaved(profile: Profile | None, model: LoadedModel | None) -> None:
         return
     if model.directory is None:
         raise UsageError("audit needs a model read from a directory (api.load_model)")
-    saved = model.directory / "model.json"
-    if json.loads(saved.read_text("utf-8")) != model.model_json:
+    if model.unsaved:
         raise UsageError(f"audit: the model has changes not saved to {model.directory}, "
                          "which the audit reads: api.save_model it first")
 
 
-def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = None,
-          model: LoadedModel | None = None, jobs: int = 1, mcap: bool = False,
-          scheduler: str | None = None, progress: AuditProgress | None = None,
-          vehicle_from: str = "log") -> AuditResult:
+def audit(paths: Sequence[Path | str], profile: Profile | None, model: LoadedModel | None,
+          output: Path, *, jobs: int = 1, mcap: bool = False, scheduler: str | None = None,
+          progress: AuditProgress | None = None, vehicle_from: str = "log") -> AuditResult:
     """Diagnose every log under ``paths`` (folders and globs) into ``output`` (one JSON
     report per log under logs/, audit.csv, audit.parquet and the fleet PDF audit.pdf),
     resuming a finished part. ``model``: a model read from a directory (None: the profile's
@@ -320,7 +319,7 @@ def audit(paths: Sequence[Path | str], output: Path, profile: Profile | None = N
     return result
 
 
-def simulate(scenario: str | Scenario, profile: Profile, output: Path,
+def simulate(scenario: str | Scenario, profile: Profile, output: Path, *,
              log_format: str = "ros2-mcap", seed: int = 0, fault_at_s: float | None = None,
              start_ns: int | None = None, namespace: str = "") -> SimulatedDive:
     """Fly one of the profile's ``scenarios`` (by name, or a `Scenario` built from the
@@ -357,7 +356,7 @@ def scenarios(profile: Profile) -> dict[str, Scenario]:
     return scenarios_for(profile)
 
 
-def derive_table(model: LoadedModel, profile: Profile, log: Path | None = None) -> DerivedTable:
+def derive_table(log: Path | None, profile: Profile, model: LoadedModel) -> DerivedTable:
     """Every single-component fault simulated on the model, its b signatures and the pattern
     table they imply, compared with the profile's; with ``log`` (a normal log) the faults
     are replayed open loop on its commands: `auvdiag derive-table`."""
@@ -369,7 +368,7 @@ def derive_table(model: LoadedModel, profile: Profile, log: Path | None = None) 
     return derive(model, profile, open_loop=open_loop)
 
 
-def trend(audit_dir: Path, last: int = 8, alpha: float = 0.05) -> FleetTrend:
+def trend(audit_dir: Path, *, last: int = 8, alpha: float = 0.05) -> FleetTrend:
     """Per vehicle and signal, whether the margin to the thresholds shrinks over the last
     ``last`` dives of an audit (Mann-Kendall at ``alpha``): `auvdiag trend`."""
     from auvdiag_cli.audit.trend import trend_of_audit

@@ -129,13 +129,13 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
     healthy = api.read_healthy_parts(_healthy_file(training, work, guard_s))
     model_dir = work / f"model-{day}"
     logs = [f.folder for f in training]
-    result = api.train(logs, model_dir, profile,
-                       api.TrainOptions(iterations_scale=scale, healthy=healthy,
+    result = api.train(logs, profile, model_dir,
+                       options=api.TrainOptions(iterations_scale=scale, healthy=healthy,
                                         keep_unskilled=True))
     judged = ", ".join(f"{name} {s.skill:.2f}" for name, s in result.chosen.signals.items()
                        if s.judged) or "none"
     model = api.load_model(model_dir, profile)
-    api.calibrate(model, profile, logs, options=api.CalibrateOptions(
+    api.calibrate(logs, profile, model, options=api.CalibrateOptions(
         budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
     # The same model without the change test: the judges as they were before it.
     without = model.with_entries(change_test={})

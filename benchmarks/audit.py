@@ -48,7 +48,7 @@ def make_fleet(folder: Path, logs: int, distinct: int) -> None:
                             run_after_fault_s=3600.0)
         path = folder / f"source-{index}.mcap"
         namespace = VEHICLES[(index // 2) % len(VEHICLES)]
-        dive = api.simulate(scenario, profile, path, "mcap", seed=100 + index,
+        dive = api.simulate(scenario, profile, path, log_format="mcap", seed=100 + index,
                             start_ns=LOG_EPOCH_NS + index * 86_400 * 10**9,
                             namespace=namespace)
         sources.append((path, f"ros-{namespace[1:]}"))

@@ -104,7 +104,7 @@ def build_cases(profile: "Profile", seeds: int, normal_seeds: int, workdir: Path
         phases = _mission(**spec)  # type: ignore[arg-type]
         healthy = Scenario(f"{mission}", "normal", phases)
         probe = workdir / f"probe-{mission}.mcap"
-        api.simulate(healthy, profile, probe, "mcap", seed=0)
+        api.simulate(healthy, profile, probe, log_format="mcap", seed=0)
         times = phase_times(probe.with_name(f"probe-{mission}.truth.csv"))
         for seed in range(1, normal_seeds + 1):
             cases.append(Case(f"{mission} normal", healthy, 1000 + seed, None, None, False))
@@ -131,7 +131,7 @@ def diagnose_case(case: Case, profile: "Profile", models: dict[str, "LoadedModel
 
     path = workdir / "case.mcap"
     path.unlink(missing_ok=True)
-    dive = api.simulate(case.scenario, profile, path, "mcap", seed=case.seed)
+    dive = api.simulate(case.scenario, profile, path, log_format="mcap", seed=case.seed)
     result: dict[str, Any] = {"case": case.name, "truth": case.truth,
                               "hours": dive.duration_s / 3600}
     for name, model in models.items():
@@ -202,13 +202,13 @@ def main() -> None:
     for scenario in ("paper-normal", "mission-ccw", "mission-large-cw", "all-dms-and-mission",
                      "excitation"):
         path = workdir / f"train-{scenario}.mcap"
-        api.simulate(scenario, profile, path, "mcap", seed=7)
+        api.simulate(scenario, profile, path, log_format="mcap", seed=7)
         training.append(ingest(path, profile).frame)
         training_paths.append(path)
     baseline = baseline_model(learned, training)
     # Its residuals are larger than the learned model's: give it thresholds of its own,
     # calibrated (margin 1.5) on the normal dives it was fitted on, as a user would.
-    api.calibrate(baseline, profile, training_paths[:4], options=api.CalibrateOptions(1.5))
+    api.calibrate(training_paths[:4], profile, baseline, options=api.CalibrateOptions(1.5))
     models = {"learned": learned, "baseline": baseline}
     cases = build_cases(profile, args.seeds, args.normal_seeds, workdir)
     results = []

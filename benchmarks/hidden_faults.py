@@ -43,7 +43,7 @@ def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
             scenario.fault, severity=fraction))
     with tempfile.TemporaryDirectory() as work:
         log = Path(work) / "dive"
-        api.simulate(scenario, profile, log, VEHICLES[vehicle], seed)
+        api.simulate(scenario, profile, log, log_format=VEHICLES[vehicle], seed=seed)
         d = api.diagnose(log, profile, api.load_model(profile=profile))
     check = d.command_check
     return {"vehicle": vehicle, "truth": truth, "fraction": fraction, "fault": d.verdict == "fault",

@@ -116,18 +116,18 @@ def _haizhe_folds(normal: list[Path], faulty: dict[str, list[Path]], work: Path,
         calibration = [p for i, p in enumerate(normal) if i % folds == (fold + 1) % folds]
         training = [p for p in normal if p not in judged and p not in calibration]
         started = time.perf_counter()
-        result = api.train(training, work / f"haizhe{fold}", profile, api.TrainOptions(
+        result = api.train(training, profile, work / f"haizhe{fold}", options=api.TrainOptions(
             tuple(calibration), iterations_scale=scale, keep_unskilled=True))
         out.seconds += time.perf_counter() - started
         out.results.append(result)
         if profile.inputs:
             out.without_inputs.append(api.train(
-                training, work / f"haizhe{fold}-without-inputs", replace(profile, inputs=()),
-                api.TrainOptions(tuple(calibration), keep_unskilled=True,
+                training, replace(profile, inputs=()), work / f"haizhe{fold}-without-inputs",
+                options=api.TrainOptions(tuple(calibration), keep_unskilled=True,
                                  predictors=("linear", "linear-replay"))))
         out.horizons.append(_horizon(result))
         model = api.load_model(work / f"haizhe{fold}", profile)
-        budget = api.calibrate(model, profile, calibration, options=api.CalibrateOptions(
+        budget = api.calibrate(calibration, profile, model, options=api.CalibrateOptions(
             budget=api.FalseAlarmBudget(FALSE_ALARM_RATE))).budget
         assert budget is not None
         out.loo.append((budget.loo_logs_alarmed, budget.logs))
@@ -264,8 +264,8 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
     from auvdiag_errors import AuvdiagError
 
     profile = api.load_profile("bluerov2_standard")
-    result = api.train([folder / "small.BIN"], work / "rov", profile,
-                       api.TrainOptions(iterations_scale=scale, keep_unskilled=True))
+    result = api.train([folder / "small.BIN"], profile, work / "rov",
+                       options=api.TrainOptions(iterations_scale=scale, keep_unskilled=True))
     model = api.load_model(work / "rov", profile)
     lines = [f"**ArduSub** (profile bluerov2_standard; trained on the armed time of small.BIN "
              f"alone, {result.operating_hours * 3600:.0f} s, held out: {result.heldout_split}). "
@@ -329,7 +329,7 @@ def crazypad(root: Path, work: Path, scale: float) -> list[str]:
     normal = [root / row["file"] for row in rows if row["kind"] == "normal"]
     defects = [root / row["file"] for row in rows if row["kind"] != "normal"]
     profile = api.load_profile(_crazypad_profile(work))
-    result = api.train(normal[:4], work / "crazypad", profile, api.TrainOptions(
+    result = api.train(normal[:4], profile, work / "crazypad", options=api.TrainOptions(
         tuple(normal[4:]), iterations_scale=scale, keep_unskilled=True))
     return [f"**CrazyPAD E8** nano-quadrotor (Masalimov K. et al., Data 2024, 9, 79, doi "
             f"10.3390/data9060079; MIT), normal flights: {len(normal[:4])} to train, "

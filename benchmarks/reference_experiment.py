@@ -34,7 +34,7 @@ def main() -> None:
             delays, onset_errors, outcomes, max_g = [], [], [], []
             for seed in range(1000, 1000 + args.seeds):
                 path = Path(work) / f"{name}-{seed}"
-                api.simulate(name, profile, path, "ros2-mcap", seed)
+                api.simulate(name, profile, path, log_format="ros2-mcap", seed=seed)
                 truth = json.loads(path.with_name(f"{path.name}.truth.json").read_text())
                 result = api.diagnose(path, profile, model)
                 outcomes.append((result.verdict, result.component or "/".join(result.candidates),

@@ -41,7 +41,7 @@ def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
     while total_s < minutes * 60:
         for name in SCENARIOS:
             path = work / f"{name}-s{seed}"
-            dive = api.simulate(name, profile, path, "ros2-mcap", seed)
+            dive = api.simulate(name, profile, path, log_format="ros2-mcap", seed=seed)
             training.append(path)
             total_s += dive.duration_s
             if total_s >= minutes * 60:
@@ -50,7 +50,7 @@ def simulated_logs(work: Path, minutes: float) -> tuple[list[Path], list[Path]]:
     heldout = []
     for name in SCENARIOS:
         path = work / f"heldout-{name}"
-        api.simulate(name, profile, path, "ros2-mcap", 901)
+        api.simulate(name, profile, path, log_format="ros2-mcap", seed=901)
         heldout.append(path)
     return training, heldout
 

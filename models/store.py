@@ -69,6 +69,15 @@ class LoadedModel:
         given by the user)."""
         return self.path.startswith("builtin:")
 
+    @property
+    def unsaved(self) -> bool:
+        """model.json in its directory no longer holds what this model does (changed in
+        memory by calibrate, relate or score, and not saved); False without a directory."""
+        if self.directory is None:
+            return False
+        saved = json.loads((self.directory / "model.json").read_text("utf-8"))
+        return bool(saved != self.model_json)
+
     def entry(self, key: str) -> dict[str, Any]:
         """A copy of one model.json entry, for a writer to edit and put back."""
         return copy.deepcopy(self.model_json.get(key) or {})

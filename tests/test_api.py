@@ -49,7 +49,7 @@ def test_a_program_audits_a_folder(tmp_path):
             shutil.copytree(source, fleet / name)
         else:
             shutil.copy(source, fleet / name)
-    result = api.audit([fleet], tmp_path / "out")
+    result = api.audit([fleet], None, None, tmp_path / "out")
     assert len(result.records) == 2 and result.count("fault") == 1
     assert (tmp_path / "out" / "audit.csv").is_file()
     assert (tmp_path / "out" / "audit.pdf").read_bytes().startswith(b"%PDF")
@@ -62,7 +62,7 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
                                              "mission-large-ccw")]
     options = api.TrainOptions((make_log("mission-ccw", 12),), iterations_scale=0.05,
                                predictors=("linear",), keep_unskilled=True)
-    trained = api.train(logs, tmp_path / "model", profile, options)
+    trained = api.train(logs, profile, tmp_path / "model", options=options)
     assert trained.written and dict(trained.chosen.predictors) == {"flow": "linear",
                                                                    "yaw_rate": "linear"}
     model = api.load_model(tmp_path / "model", profile)
@@ -72,8 +72,8 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
     before = model.dynamics
     model.update_entries(predictors={"per_signal": {"flow": "linear", "yaw_rate": "linear"}})
     assert model.dynamics is not before            # the replay follows the entries
-    calibration = api.calibrate(model, profile, [make_log("paper-normal", 13),
-                                                 make_log("mission-ccw", 14)])
+    calibration = api.calibrate([make_log("paper-normal", 13), make_log("mission-ccw", 14)],
+                                profile, model)
     api.save_model(model, tmp_path / "calibrated")
     saved = api.load_model(tmp_path / "calibrated", profile)
     assert saved.card.calibrated and saved.card.thresholds is not None
@@ -92,17 +92,17 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
     assert json.loads((tmp_path / "d.json").read_text())["verdict"] == diagnosis.verdict
     assert (tmp_path / "d.mcap").stat().st_size > 0
     fleet = api.audit([make_log("paper-normal", 13), make_log("paper-flow-sensor-covered", 11)],
-                      tmp_path / "audit", profile, saved)
+                      profile, saved, tmp_path / "audit")
     assert len(fleet.records) == 2 and all(r.model_path == str(tmp_path / "calibrated")
                                            for r in fleet.records)
     assert api.trend(tmp_path / "audit").short         # two dives: too few for a trend
     # An audit reads the model from its directory: one changed in memory is refused.
-    api.calibrate(saved, profile, [make_log("paper-normal", 13)])
+    api.calibrate([make_log("paper-normal", 13)], profile, saved)
     with pytest.raises(AuvdiagError, match="changes not saved to"):
-        api.audit([make_log("paper-normal", 13)], tmp_path / "audit2", profile, saved)
+        api.audit([make_log("paper-normal", 13)], profile, saved, tmp_path / "audit2")
     changed = dataclasses.replace(profile, dt_s=0.2)
     with pytest.raises(AuvdiagError, match="the profile differs from builtin:twin_burger"):
-        api.audit([make_log("paper-normal", 13)], tmp_path / "audit2", changed, model)
+        api.audit([make_log("paper-normal", 13)], changed, model, tmp_path / "audit2")
     with pytest.raises(AuvdiagError, match="not an audit folder"):
         api.trend(tmp_path)
 
@@ -134,10 +134,10 @@ def test_a_program_simulates_its_own_scenario_and_redraws_a_saved_report(tmp_pat
     profile = api.load_profile()
     scenario = replace(api.scenarios(profile)["paper-flow-sensor-covered"], name="mine")
     log = tmp_path / "mine.mcap"
-    dive = api.simulate(scenario, profile, log, "mcap", seed=3)
+    dive = api.simulate(scenario, profile, log, log_format="mcap", seed=3)
     assert dive.scenario.name == "mine" and api.log_format(log) == "mcap"
     with pytest.raises(AuvdiagError, match="exists already"):
-        api.simulate(scenario, profile, log, "mcap")
+        api.simulate(scenario, profile, log, log_format="mcap")
     with pytest.raises(AuvdiagError, match="no-such-scenario"):
         api.simulate("no-such-scenario", profile, tmp_path / "x.mcap")
     api.write_reports(api.diagnose(log, profile, api.load_model()), json=tmp_path / "d.json")

@@ -95,7 +95,7 @@ def calibrated(make_log, tmp_path_factory):
     """The built-in model calibrated on three normal dives: the change test's thresholds."""
     model = api.load_model(None)
     normal = [make_log("paper-normal", seed) for seed in (3, 4, 5)]
-    result = api.calibrate(model, api.load_profile(None), normal)
+    result = api.calibrate(normal, api.load_profile(None), model)
     return model, result
 
 

@@ -81,12 +81,13 @@ def test_two_vehicles_in_one_folder_trend_apart(tmp_path):
     for vehicle in ("rovA", "rovB"):
         for number, sample in enumerate(("mission-large-cw.mcap", "mission-thruster-1-dead.mcap")):
             shutil.copy(SAMPLES / sample, fleet / f"{vehicle}-{number}.mcap")
-    result = api.audit([fleet], tmp_path / "out", vehicle_from=r"regex:^(rov\w)-")
+    result = api.audit([fleet], None, None, tmp_path / "out", vehicle_from=r"regex:^(rov\w)-")
     assert {r.fleet_vehicle for r in result.records} == {"rovA", "rovB"}
     assert api.trend(tmp_path / "out").short == {"rovA": 2, "rovB": 2}
     table = (tmp_path / "out" / "audit.csv").read_text().splitlines()
     assert "fleet_vehicle" in table[0] and sum("rovA" in row for row in table[1:]) == 2
-    again = api.audit([fleet], tmp_path / "out", vehicle_from="folder")   # reused, re-assigned
+    # Reused, re-assigned:
+    again = api.audit([fleet], None, None, tmp_path / "out", vehicle_from="folder")
     assert again.reused == 4 and api.trend(tmp_path / "out").short == {"fleet": 4}
 
 

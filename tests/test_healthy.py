@@ -77,7 +77,7 @@ def test_calibrating_with_the_healthy_part_leaves_the_fault_out(make_log, tmp_pa
 
     def flow_threshold(options: api.CalibrateOptions) -> float:
         model = api.load_model(None)
-        api.calibrate(model, profile, [log], options=options)
+        api.calibrate([log], profile, model, options=options)
         return model.card.thresholds["mission"]["flow"]
 
     whole, healthy_only = (flow_threshold(api.CalibrateOptions()),
@@ -93,10 +93,11 @@ def test_training_on_the_healthy_part_says_so_and_uses_only_it(make_log, tmp_pat
     options = api.TrainOptions(hidden=8, iterations_scale=0.02, keep_unskilled=True,
                                healthy=api.read_healthy_parts(_healthy(
                                    tmp_path, f"{log.name},,{end}", "gone.bag,,5")))
-    result = api.train([log, other], tmp_path / "m", api.load_profile(None), options,
-                       said.append)
-    whole = api.train([log, other], tmp_path / "w", api.load_profile(None),
-                      api.TrainOptions(hidden=8, iterations_scale=0.02, keep_unskilled=True))
+    result = api.train([log, other], api.load_profile(None), tmp_path / "m", options=options,
+                       progress=said.append)
+    whole = api.train([log, other], api.load_profile(None), tmp_path / "w",
+                      options=api.TrainOptions(hidden=8, iterations_scale=0.02,
+                                               keep_unskilled=True))
     assert any(f"{log.name}: only its healthy part" in line for line in said)
     assert any("1 listed log(s) not among those given: gone.bag" in line for line in said)
     skipped_s = (whole.operating_hours - result.operating_hours) * 3600

@@ -117,7 +117,7 @@ def test_a_fleet_folder_of_namespaced_logs_trends_per_vehicle(tmp_path, dive_cac
         for seed in (11, 12):
             _write(dive_cache("paper-normal", seed), profile,
                    fleet / f"{namespace[1:]}-{seed}.mcap", "mcap", namespace)
-    result = api.audit([fleet], tmp_path / "out")
+    result = api.audit([fleet], None, None, tmp_path / "out")
     assert {r.fleet_vehicle for r in result.records} == {"ros-rovA", "ros-rovB"}
     assert all(r.verdict == "normal" for r in result.records), [r.error for r in result.records]
     assert api.trend(tmp_path / "out").short == {"ros-rovA": 2, "ros-rovB": 2}

@@ -72,13 +72,13 @@ def diagnose(
         vehicle = api.load_profile(profile)
         try:
             result = api.diagnose(log, vehicle, api.load_model(model, vehicle),
-                                  companions or (), mission, truth=truth)
+                                  companions=companions or (), mission=mission, truth=truth)
         except LogError as error:
             raise with_profile_hint(error, vehicle.name) from None
         if json_path == "-":
             typer.echo(json.dumps(api.to_json(result), indent=2))
-        api.write_reports(result, None if json_path in (None, "-") else Path(json_path),
-                          pdf_path, mcap_path)
+        api.write_reports(result, json=None if json_path in (None, "-") else Path(json_path),
+                          pdf=pdf_path, mcap=mcap_path)
         if not quiet:
             typer.echo(api.summary_text(result), err=json_path == "-")
     raise typer.Exit(EXIT_FAULT if result.verdict == api.Verdict.FAULT else EXIT_NORMAL)
@@ -185,8 +185,9 @@ def audit(
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     with user_errors(output):
         vehicle = api.load_profile(profile)
-        result = api.audit(paths, output, vehicle, api.load_model(model, vehicle), jobs, mcap,
-                           scheduler, reporter_for_stderr(), vehicle_from)
+        result = api.audit(paths, vehicle, api.load_model(model, vehicle), output, jobs=jobs,
+                           mcap=mcap, scheduler=scheduler, progress=reporter_for_stderr(),
+                           vehicle_from=vehicle_from)
     typer.echo(result.summary(output))
     if result.interrupted:
         fail(f"audit interrupted after {result.computed} logs; run it again to finish")
@@ -213,7 +214,7 @@ def trend(
     from auvdiag_cli.audit.trend import trend_lines
 
     with user_errors(audit_dir):
-        result = api.trend(audit_dir, last, alpha)
+        result = api.trend(audit_dir, last=last, alpha=alpha)
     for line in trend_lines(result):
         typer.echo(line)
     raise typer.Exit(EXIT_FAULT if result.flagged else EXIT_NORMAL)

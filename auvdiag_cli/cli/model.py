@@ -85,7 +85,7 @@ def train(
             tuple(log_paths(holdout or [])), hidden, seed, iterations_scale,
             horizon_option(horizon, vehicle.horizon_s), keep_unskilled,
             tuple(predictor or PREDICTOR_KINDS), healthy_parts(healthy))
-        result = api.train(logs, output, vehicle, options, report_progress)
+        result = api.train(logs, vehicle, output, options=options, progress=report_progress)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
                                vehicle.sensor_names):
         typer.echo(line)
@@ -116,8 +116,9 @@ def score(
     with user_errors(model):
         vehicle = api.load_profile(profile)
         loaded = api.load_model(model, vehicle)
-        scores, chosen = api.score(loaded, vehicle, logs,
-                                   horizon_option(horizon, vehicle.horizon_s), report_progress)
+        scores, chosen = api.score(logs, vehicle, loaded,
+                                   horizon_s=horizon_option(horizon, vehicle.horizon_s),
+                                   progress=report_progress)
         api.save_model(loaded, output or model)
     for line in skill_lines(scores, chosen):
         typer.echo(line)
@@ -149,7 +150,8 @@ def relate(
     with user_errors(model):
         vehicle = api.load_profile(profile)
         loaded = api.load_model(model, vehicle)
-        relations, start = api.relate(loaded, vehicle, logs, holdout or (), report_progress)
+        relations, start = api.relate(logs, vehicle, loaded, holdout=holdout or (),
+                                      progress=report_progress)
         relations_refused = isinstance(relations, api.Refused)
         if not relations_refused or start.refused is None:
             api.save_model(loaded, output or model)
@@ -211,10 +213,10 @@ def calibrate(
                   else api.FalseAlarmBudget.parse(false_alarm_rate))
         vehicle = api.load_profile(profile)
         loaded = api.load_model(model, vehicle)
-        result = api.calibrate(loaded, vehicle, logs, faulty or (),
-                               api.CalibrateOptions(margin, budget, floor_at_profile,
-                                                    healthy_parts(healthy)),
-                               report_progress)
+        result = api.calibrate(logs, vehicle, loaded, faulty_logs=faulty or (),
+                               options=api.CalibrateOptions(margin, budget, floor_at_profile,
+                                                            healthy_parts(healthy)),
+                               progress=report_progress)
         api.save_model(loaded, output or model)
     for line in calibration_lines(result):
         typer.echo(line)

@@ -52,8 +52,9 @@ def simulate(
     if log_format not in LOG_FORMATS:
         fail(f"unknown --format {log_format!r} (choose from {', '.join(LOG_FORMATS)})")
     with user_errors(output):
-        dive = api.simulate(scenario, api.load_profile(profile), output, log_format, seed,
-                            fault_at, _unix_ns(start), namespace)
+        dive = api.simulate(scenario, api.load_profile(profile), output, log_format=log_format,
+                            seed=seed, fault_at_s=fault_at, start_ns=_unix_ns(start),
+                            namespace=namespace)
     typer.echo(f"wrote {output} ({log_format}, {dive.duration_s:.1f} s) and "
                f"{truth_paths(output)[0].name}")
 
@@ -156,7 +157,7 @@ def derive_table(
 
     with user_errors(log or model or "builtin model"):
         loaded_profile = api.load_profile(profile)
-        result = api.derive_table(api.load_model(model, loaded_profile), loaded_profile, log)
+        result = api.derive_table(log, loaded_profile, api.load_model(model, loaded_profile))
     for line in derivation_lines(result, loaded_profile.sensor_names):
         typer.echo(line)
     if json_path is not None:
