@@ -80,7 +80,7 @@ class TrainOptions:
 DEFAULT_TRAINING = TrainOptions()
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class TrainingResult:
     output: Path
     written: bool                 # False: no signal has skill and the model was not kept
@@ -229,9 +229,12 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
     effort, effort_notes = learn_effort_model([r.relation for r in [*read, *read_heldout]],
                                               profile)
-    result = TrainingResult(output, False, len(training), len(heldout), split, scores, chosen,
-                            hours, rates, relations, start_state, effort, tuple(effort_notes),
-                            fitted.by_kind, fitted.notes, profile.input_names)
+    result = TrainingResult(
+        output=output, written=False, training_logs=len(training), heldout_logs=len(heldout),
+        heldout_split=split, scores=scores, chosen=chosen, operating_hours=hours,
+        logged_rates_hz=rates, command_relations=relations, start_state=start_state,
+        effort=effort, effort_notes=tuple(effort_notes), by_predictor=fitted.by_kind,
+        predictor_notes=fitted.notes, input_names=profile.input_names)
     result = replace(result, written=result.judges_anything or options.keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
