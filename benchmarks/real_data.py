@@ -267,8 +267,9 @@ def ardusub(folder: Path, work: Path, scale: float) -> list[str]:
     result = api.train([folder / "small.BIN"], profile, work / "rov",
                        options=api.TrainOptions(iterations_scale=scale, keep_unskilled=True))
     model = api.load_model(work / "rov", profile)
-    lines = [f"**ArduSub** (profile bluerov2_standard; trained on the armed time of small.BIN "
-             f"alone, {result.operating_hours * 3600:.0f} s, held out: {result.heldout_split}). "
+    lines = [f"**ArduSub** (profile bluerov2_standard; trained on small.BIN alone: "
+             f"{result.operating_hours * 3600:.0f} s of its armed time, the rest held out "
+             f"({result.heldout_split})). "
              f"Horizon chosen: {_horizon(result)}.", "", *_skill_table(result), "",
              "| log | verdict | alarm from | alarm inside operating time | not judged |",
              "|---|---|---|---|---|"]
