@@ -222,3 +222,30 @@ def test_a_worker_started_by_a_large_program_reports_its_own_memory():
          "print(peak_rss_mb())"], capture_output=True, text=True, check=True).stdout
     del held
     assert 1 < float(reported) < 100
+
+
+@pytest.mark.parametrize(("starts", "widest_h"), [
+    (["2026-11-22T10:00:00+00:00"] * 5, 2.0),               # one time (simulated dives)
+    ([f"2026-11-22T10:0{i}:00+00:00" for i in range(5)], 2.0),   # minutes apart
+    ([f"2026-11-2{i}T10:00:00+00:00" for i in range(5)], 6 * 24.0)])
+def test_the_fleet_timeline_spans_the_logs_not_years(starts, widest_h):
+    """Logs of one day (or of one moment) are drawn across hours, not across the years of
+    matplotlib's margin for a date axis with no span."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.dates as mdates
+    import matplotlib.pyplot as plt
+
+    from auvdiag_cli.audit.fleet_pdf import _timeline
+    from auvdiag_cli.audit.record import AuditRecord
+
+    rows = [AuditRecord(log=f"dive{i}.mcap", verdict="normal", fleet_vehicle="rov",
+                        start_time_utc=start) for i, start in enumerate(starts)]
+    figure, ax = plt.subplots()
+    _timeline(ax, rows)
+    low, high = (mdates.num2date(x) for x in ax.get_xlim())
+    plt.close(figure)
+    first, last = (mdates.num2date(mdates.datestr2num(s)) for s in (starts[0], starts[-1]))
+    assert low <= first <= last <= high
+    assert (high - low).total_seconds() / 3600 <= widest_h

@@ -4,6 +4,7 @@ each vehicle's margin history."""
 
 from collections import Counter
 from collections.abc import Sequence
+from datetime import timedelta
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -20,6 +21,7 @@ if TYPE_CHECKING:
 VERDICTS = ("normal", "partial", "fault", "undetermined", "error")
 LABELS = {"partial": "normal, part judged"}
 WORST_SHOWN = 30
+TIMELINE_MIN_SPAN = timedelta(hours=1)    # a timeline of logs closer in time than this
 
 
 def _verdict(row: AuditRecord) -> str:
@@ -129,7 +131,15 @@ def _timeline(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     ax.set_ylim(-0.5, len(vehicles) - 0.5)
     ax.set_title("Timeline", loc="left", fontweight="bold")
     if dated:
-        ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(ax.xaxis.get_major_locator()))
+        starts = [pd.Timestamp(r.start_time_utc).to_pydatetime() for r in rows]
+        # Logs that all start within minutes (or at one time) would get matplotlib's
+        # two-year margin either side of a date axis with no span.
+        middle, span = min(starts) + (max(starts) - min(starts)) / 2, max(starts) - min(starts)
+        half = max(span * 0.55, TIMELINE_MIN_SPAN / 2)
+        ax.set_xlim(middle - half, middle + half)
+        locator = mdates.AutoDateLocator()
+        ax.xaxis.set_major_locator(locator)
+        ax.xaxis.set_major_formatter(mdates.ConciseDateFormatter(locator))
         ax.set_xlabel("log start (UTC)")
     else:
         ax.set_xlabel("log (in table order; not every log has a clock)")
