@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pypdf
 import pytest
@@ -249,3 +250,22 @@ def test_the_fleet_timeline_spans_the_logs_not_years(starts, widest_h):
     first, last = (mdates.num2date(mdates.datestr2num(s)) for s in (starts[0], starts[-1]))
     assert low <= first <= last <= high
     assert (high - low).total_seconds() / 3600 <= widest_h
+
+
+def test_a_short_fleet_summary_shares_its_page_with_the_charts(tmp_path):
+    """A few lines of summary are not a page of their own: the charts are drawn below."""
+    import pypdfium2
+
+    from auvdiag_cli.audit.fleet_pdf import render_fleet_report
+    from auvdiag_cli.audit.record import AuditRecord
+
+    rows = [AuditRecord(log=f"dive{i}.mcap", verdict="fault" if i == 2 else "normal",
+                        component="thruster_0" if i == 2 else None, fleet_vehicle="rov",
+                        start_time_utc=f"2026-11-22T1{i}:00:00+00:00", worst_g_ratio=0.5 + i)
+            for i in range(4)]
+    target = tmp_path / "fleet.pdf"
+    render_fleet_report(rows, [], target)
+    page = pypdfium2.PdfDocument(target)[0].render(scale=0.5).to_pil().convert("L")
+    pixels = np.asarray(page)
+    lower = pixels[pixels.shape[0] // 2:]
+    assert (lower < 128).mean() > 0.01, "the first page's lower half is empty"

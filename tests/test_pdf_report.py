@@ -49,8 +49,8 @@ def paper_report(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, 
 def test_paper_scenario_report_reads_right(paper_report):
     _, _, pdf = paper_report
     reader = pypdf.PdfReader(pdf)
-    # summary, segments, sensors, g and b, commands, Substituting Control
-    assert len(reader.pages) == 6
+    # summary and segments, sensors, g and b, commands, Substituting Control
+    assert len(reader.pages) == 5
     assert reader.metadata.title == "auvdiag report: paper.bag"
     assert reader.metadata.creator.startswith("auvdiag ")
     first = reader.pages[0].extract_text()
@@ -61,14 +61,16 @@ def test_paper_scenario_report_reads_right(paper_report):
     assert "Hypotheses:  best explained by flow sensor dead (" in first
     assert "the controller reaches the last waypoint" in first
     assert "At most one sensor or actuator is defective at a time." in first
-    assert "Residual index g" in reader.pages[3].extract_text()
-    assert "Substituting Control" in reader.pages[5].extract_text()
+    # The segments follow on the first page: no page of their own, nearly empty.
+    assert "Segments and evidence" in first and "MISSION" in first
+    assert "Residual index g" in reader.pages[2].extract_text()
+    assert "Substituting Control" in reader.pages[4].extract_text()
 
 
 def test_plot_pages_are_drawn_not_blank(paper_report):
     _, _, pdf = paper_report
-    curves = {2: [MEASURED_RGB, MODELLED_RGB], 3: [MEASURED_RGB], 4: [MEASURED_RGB],
-              5: [MODELLED_RGB]}
+    curves = {1: [MEASURED_RGB, MODELLED_RGB], 2: [MEASURED_RGB], 3: [MEASURED_RGB],
+              4: [MODELLED_RGB]}
     for page, colours in curves.items():
         pixels = page_pixels(pdf, page)
         assert inked_fraction(pixels) > 0.01, f"page {page + 1} is nearly blank"
@@ -95,7 +97,7 @@ def test_report_without_time_histories_has_summary_pages_only(paper_report, tmp_
     assert result.exit_code == 0, result.output
     assert "no time histories" in result.output
     reader = pypdf.PdfReader(tmp_path / "lone.pdf")
-    assert len(reader.pages) == 2
+    assert len(reader.pages) == 1
     assert "not checked (no time histories" in reader.pages[0].extract_text()
 
 
@@ -105,12 +107,11 @@ def test_normal_dive_report(make_log, tmp_path):
                                  "--pdf", str(pdf), "--quiet"])
     assert result.exit_code == 0, result.output
     reader = pypdf.PdfReader(pdf)
-    assert len(reader.pages) == 5                  # no Substituting Control page
+    assert len(reader.pages) == 4                  # no Substituting Control page
     first = reader.pages[0].extract_text()
     assert "NORMAL: no fault detected" in first
     assert "4 (3 Diagnosis Motion Sequences)" in first
-    segments = reader.pages[1].extract_text()
-    assert all(name in segments for name in ("ZA", "ZB", "ZC", "MISSION"))
+    assert all(name in first for name in ("ZA", "ZB", "ZC", "MISSION"))
 
 
 @pytest.mark.parametrize("content", ["{not json", '{"a": 1}'])

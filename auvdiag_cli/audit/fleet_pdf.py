@@ -9,10 +9,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from auvdiag_cli.audit.record import AuditRecord
-from auvdiag_cli.audit.trend import fleet_trend, trend_lines
+from auvdiag_cli.audit.trend import FleetTrend, fleet_trend, trend_lines
 from auvdiag_cli.audit.trend_pdf import trend_page
 from auvdiag_cli.reports.pdf.style import COLOURS, new_page, pdf_document
-from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
+from auvdiag_cli.reports.pdf.text import (
+    Line,
+    heading,
+    paragraph,
+    text_height,
+    text_page,
+    write_text_pages,
+)
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -22,6 +29,7 @@ VERDICTS = ("normal", "partial", "fault", "undetermined", "error")
 LABELS = {"partial": "normal, part judged"}
 WORST_SHOWN = 30
 TIMELINE_MIN_SPAN = timedelta(hours=1)    # a timeline of logs closer in time than this
+TEXT_ABOVE_CHARTS = 0.4    # of the page: a summary this short shares its page with the charts
 
 
 def _verdict(row: AuditRecord) -> str:
@@ -146,6 +154,8 @@ def _timeline(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
 
 
 def _worst_g(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
+    from matplotlib.ticker import NullFormatter
+
     ranked = sorted((r for r in rows if r.worst_g_ratio is not None),
                     key=lambda r: -(r.worst_g_ratio or 0.0))[:WORST_SHOWN]
     shown = f" (the {WORST_SHOWN} highest)" if len(ranked) == WORST_SHOWN else ""
@@ -159,18 +169,34 @@ def _worst_g(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     ax.axvline(1.0, color=COLOURS["threshold"], ls=":", lw=1.0)
     ax.invert_yaxis()
     ax.set_xscale("log")
+    ax.xaxis.set_minor_formatter(NullFormatter())     # the minor labels run into each other
     ax.set_xlabel("largest g / threshold (1 = alarm level)")
     ax.tick_params(axis="y", labelsize=max(4, 8 - len(ranked) // 10))
 
 
-def charts_page(rows: Sequence[AuditRecord]) -> "Figure":
-    figure = new_page()
-    grid = figure.subplots(2, 2)
+def charts_page(rows: Sequence[AuditRecord], figure: "Figure | None" = None,
+                top: float = 0.93) -> "Figure":
+    """The four charts, on a page of their own or below the text already on ``figure``
+    (from ``top`` down)."""
+    page = figure or new_page()
+    area = (page if figure is None else
+            page.subfigures(2, 1, height_ratios=[1 - top, top], squeeze=False)[1, 0])
+    grid = area.subplots(2, 2)
     _by_vehicle_and_date(grid[0][0], rows)
     _faults_by_component(grid[0][1], rows)
     _timeline(grid[1][0], rows)
     _worst_g(grid[1][1], rows)
-    return figure
+    return page
+
+
+def _trend_text(trend: FleetTrend) -> list[Line]:
+    """The trend test's lines, indented as the terminal shows them."""
+    text = heading("Health over time")
+    for line in trend_lines(trend):
+        depth = (len(line) - len(line.lstrip())) / 2
+        text += paragraph(line.strip(), size=9, indent=0.02 * depth,
+                          colour=COLOURS["fault"] if "SHRINKING" in line else COLOURS["text"])
+    return text
 
 
 def render_fleet_report(records: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str]],
@@ -178,17 +204,21 @@ def render_fleet_report(records: Sequence[AuditRecord], skipped: Sequence[tuple[
     rows = sorted(records, key=lambda r: r.log)
     title = "auvdiag fleet audit"
     trend = fleet_trend(records)
-    text = summary_lines(rows, skipped, companions, interrupted) + heading("Health over time")
-    for line in trend_lines(trend):
-        text += paragraph(line, family="monospace", size=7.5, colour=COLOURS["fault"]
-                          if "SHRINKING" in line else COLOURS["text"])
+    text = summary_lines(rows, skipped, companions, interrupted) + _trend_text(trend)
     with pdf_document(target, title, f"Audit of {len(rows)} logs") as pdf:
-        pages = write_text_pages(pdf, text, title, "Fleet audit")
-        if rows:
-            figure = charts_page(rows)
-            figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])
-            pdf.savefig(figure)
-            pages += 1
+        if rows and text_height(text) <= TEXT_ABOVE_CHARTS:
+            # A short summary shares its page with the charts, not an empty page's top.
+            figure, bottom = text_page(text, title, "Fleet audit")
+            pdf.savefig(charts_page(rows, figure, bottom - 0.03))
+            pages = 1
+        else:
+            pages = write_text_pages(pdf, text, title, "Fleet audit")
+            if rows:
+                figure = charts_page(rows)
+                figure.suptitle(title, x=0.99, ha="right", fontsize=8,
+                                color=COLOURS["muted"])
+                pdf.savefig(figure)
+                pages += 1
         health = trend_page(records, trend)
         if health is not None:
             pdf.savefig(health)

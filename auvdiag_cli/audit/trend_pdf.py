@@ -24,6 +24,8 @@ def trend_page(records: Sequence[AuditRecord], trend: FleetTrend) -> "Figure | N
     flagged = {(t.vehicle, t.signal) for t in trend.flagged}
     order = sorted(by_vehicle, key=lambda v: (v not in trend.flagged_vehicles, v))
     shown = order[:VEHICLES_SHOWN]
+    from matplotlib.ticker import MaxNLocator
+
     figure = new_page()
     axes = figure.subplots(len(shown), 1, squeeze=False)[:, 0]
     for ax, vehicle in zip(axes, shown, strict=True):
@@ -39,8 +41,11 @@ def trend_page(records: Sequence[AuditRecord], trend: FleetTrend) -> "Figure | N
         ax.set_ylabel("peak / threshold", fontsize=7)
         ax.set_title(f"{vehicle}: {len(dives)} dives, oldest first", fontsize=8, loc="left")
         ax.tick_params(labelsize=6)
-        ax.legend(fontsize=5, loc="upper left", ncols=3)
-    axes[-1].set_xlabel("dive (date order)", fontsize=7)
+        if ax.get_lines()[:-1]:           # the signals drawn (the last line: the threshold)
+            ax.legend(fontsize=5, loc="upper left", ncols=3)
+    for ax in axes:
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    axes[-1].set_xlabel("dive (oldest first)", fontsize=7)
     figure.suptitle(f"Health over time (trend test over the last {trend.last} dives; "
                     f"{len(order) - len(shown)} more vehicles not drawn)"
                     if len(order) > len(shown) else

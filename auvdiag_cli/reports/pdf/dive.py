@@ -44,7 +44,7 @@ def first_page_lines(document: dict[str, Any], series: Series | None) -> list[Li
         lines.append(Line(partial, size=13, bold=True, banner=COLOURS["error"]))
     lines.append(Line(""))
     for label, value in summary_facts(document):
-        lines += paragraph(f"{label}:  {value}", size=10.5)
+        lines += paragraph(f"{label}:  {value}", size=10)
     lines += heading("The paper's assumptions, and what they mean for this log")
     for number, (assumption, remark) in enumerate(assumption_remarks(document, series), 1):
         lines += paragraph(f"{number}. {assumption}", size=9.5, bold=True)
@@ -96,9 +96,11 @@ def render_dive_report(document: dict[str, Any], series: Series | None, target: 
     name = Path(document["log"]).name
     title = f"auvdiag report: {name}"
     with pdf_document(target, title, f"Fault diagnosis of {document['log']}") as pdf:
-        pages = write_text_pages(pdf, first_page_lines(document, series), title,
-                                 f"Diagnosis of {name}")
-        pages += write_text_pages(pdf, detail_lines(document), title, "Segments and evidence")
+        # One flow of text: the segments follow the summary on its page where they fit,
+        # rather than a page of their own that is mostly empty.
+        text = [*first_page_lines(document, series), *heading("Segments and evidence"),
+                *detail_lines(document)]
+        pages = write_text_pages(pdf, text, title, f"Diagnosis of {name}")
         if series is None or "measured" not in series:
             return pages
         for draw in (sensors_page, residual_page, commands_page, effort_page, substitution_page):

@@ -13,7 +13,7 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 LEFT, RIGHT, TOP, BOTTOM = 0.05, 0.95, 0.93, 0.05
-LINE_SPACING = 1.45
+LINE_SPACING = 1.35
 # Average advance of a character in em; wrapping with these never reaches the margin.
 CHAR_WIDTH_EM = {"sans-serif": 0.58, "monospace": 0.61}
 
@@ -58,6 +58,30 @@ def _start_page(title: str, page_title: str) -> "Figure":
     return figure
 
 
+def text_height(lines: Sequence[Line]) -> float:
+    """Figure fraction the lines occupy on one page."""
+    return sum(_height(line) for line in lines)
+
+
+def _draw(figure: "Figure", line: Line, y: float) -> None:
+    box = (None if line.banner is None else
+           {"facecolor": line.banner, "edgecolor": "none", "pad": 6.0})
+    figure.text(LEFT + line.indent, y, line.text, fontsize=line.size,
+                weight="bold" if line.bold else "normal",
+                color="white" if line.banner else line.colour, family=line.family,
+                va="bottom", bbox=box)
+
+
+def text_page(lines: Sequence[Line], title: str, page_title: str) -> tuple["Figure", float]:
+    """A page headed ``page_title`` with ``lines`` (which must fit: `text_height`) at its
+    top, and the figure fraction below them left free for charts."""
+    figure, y = _start_page(title, page_title), TOP
+    for line in lines:
+        y -= _height(line)
+        _draw(figure, line, y)
+    return figure, y
+
+
 def write_text_pages(pdf: "PdfPages", lines: Sequence[Line], title: str,
                      page_title: str) -> int:
     """Lay ``lines`` out on as many pages as they need; returns the number of pages."""
@@ -68,11 +92,6 @@ def write_text_pages(pdf: "PdfPages", lines: Sequence[Line], title: str,
             pdf.savefig(figure)
             figure, y, pages = _start_page(title, f"{page_title} (continued)"), TOP, pages + 1
         y -= height
-        box = (None if line.banner is None else
-               {"facecolor": line.banner, "edgecolor": "none", "pad": 6.0})
-        figure.text(LEFT + line.indent, y, line.text, fontsize=line.size,
-                    weight="bold" if line.bold else "normal",
-                    color="white" if line.banner else line.colour, family=line.family,
-                    va="bottom", bbox=box)
+        _draw(figure, line, y)
     pdf.savefig(figure)
     return pages
