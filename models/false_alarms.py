@@ -49,10 +49,40 @@ class LawFit:
             return tuple(bool(p <= share) for p in self.loo_tail)
 
 
-def judge_share(rate: float, judges: int) -> float:
+def judge_share(rate: float, judges: float) -> float:
     """Each of ``judges`` independent judges' share so that a normal log alarms on any of
     them at ``rate`` (Šidák)."""
-    return float(1.0 - (1.0 - rate) ** (1.0 / max(1, judges)))
+    return float(1.0 - (1.0 - rate) ** (1.0 / max(1.0, judges)))
+
+
+def effective_judges(values: np.ndarray) -> float:
+    """How many independent judges the judges with these statistics (judges x normal logs)
+    amount to.
+
+    Judges of one vehicle are not independent (a gust moves the roll, its rate and the
+    yaw together), and sharing the budget as if they were sets every threshold higher than
+    the budget needs. The count is Li and Ji's (Heredity 95, 2005): from the eigenvalues
+    of the judges' correlation over the logs, each counts one for being at least one and
+    its fraction besides (a group of judges that move as one counts about one). The
+    correlation is of ranks, so that one log far out (a disturbance) does not make judges
+    look alike; logs missing a judge's value are left out. At least one, at most the
+    number of judges; all of them where fewer than MIN_LOGS logs have every value."""
+    statistics = np.asarray(values, float)
+    judges = statistics.shape[0]
+    complete = statistics[:, np.isfinite(statistics).all(axis=0)]
+    if judges < 2 or complete.shape[1] < MIN_LOGS:
+        return float(judges)
+    ranks = complete.argsort(axis=1).argsort(axis=1).astype(float)
+    varied = ranks.std(axis=1) > 0
+    if varied.sum() < 2:
+        return float(judges)
+    with np.errstate(invalid="ignore"):
+        eigenvalues = np.linalg.eigvalsh(np.corrcoef(ranks[varied]))
+    count = float(np.sum((eigenvalues >= 1.0) + (eigenvalues - np.floor(eigenvalues))
+                         * (eigenvalues > 0)))
+    # n logs show at most n - 1 directions: judges beyond those count as independent.
+    unseen = max(0, int(varied.sum()) - (complete.shape[1] - 1))
+    return float(np.clip(count + unseen + judges - varied.sum(), 1.0, judges))
 
 
 def gumbel_fit(maxima: np.ndarray) -> tuple[float, float]:

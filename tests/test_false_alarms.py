@@ -11,7 +11,13 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 from auvdiag_cli.jobs.budget import FalseAlarmBudget, Judge, budget_thresholds
 from auvdiag_errors import UsageError
-from models.false_alarms import checked_share, fit_law, gumbel_fit, judge_share
+from models.false_alarms import (
+    checked_share,
+    effective_judges,
+    fit_law,
+    gumbel_fit,
+    judge_share,
+)
 from models.store import default_model_dir
 
 runner = CliRunner()
@@ -60,6 +66,34 @@ def test_the_share_is_lowered_only_for_a_judge_whose_left_out_logs_show_a_heavie
     lowered = checked_share(heavy, share)
     assert lowered < share
     assert sum(heavy.loo_alarms(lowered)) <= round(share * 40)
+
+
+def test_judges_that_move_together_share_the_budget_as_fewer_judges():
+    """Six judges of one disturbance (each log's peaks move together) count as about one
+    (Li and Ji's count gives two), six independent ones as about six: the together ones
+    get the larger share each, and a normal log still alarms on any of them at about the
+    budget."""
+    rng = np.random.default_rng(8)
+    common = rng.gumbel(1.0, 0.3, 40)
+    together = common + rng.normal(0.0, 0.01, (6, 40))
+    assert effective_judges(together) < 2.5
+    assert effective_judges(rng.gumbel(1.0, 0.3, (6, 40))) > 4.0
+    # One log far out on every judge does not make independent judges look alike.
+    apart = rng.gumbel(1.0, 0.3, (6, 40))
+    apart[:, 0] = 50.0
+    assert effective_judges(apart) > 4.0
+    # More judges than logs to tell them apart: those beyond count as independent.
+    assert effective_judges(rng.gumbel(1.0, 0.3, (26, 20))) >= 24.0
+    judges = [Judge("g", f"s{k}", "mission", tuple(common + rng.normal(0.0, 0.01, 40)))
+              for k in range(6)]
+    fitted = budget_thresholds(judges, 0, FalseAlarmBudget(0.05), [0.1] * 40)
+    assert fitted.share > judge_share(0.05, 3)
+    # New normal logs of the same kind alarm on any judge at about the budget.
+    fresh = rng.gumbel(1.0, 0.3, 20000)
+    alarms = np.zeros(fresh.size, bool)
+    for f in fitted.fits:
+        alarms |= fresh + rng.normal(0.0, 0.01, fresh.size) >= f.threshold
+    assert alarms.mean() < 0.1
 
 
 def test_a_heavy_tailed_judge_does_not_cost_the_others_their_share():

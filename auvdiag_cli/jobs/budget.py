@@ -6,7 +6,9 @@ peak g), each sensor whose start is judged (the start's deviation from the norma
 each actuator whose commands are judged against the motion (the log's peak extra effort),
 each judged signal's change test (the log's largest window |z| and largest sum) and the
 actuators of the effort groups (their own budget, `models.effort`). A normal log
-alarms when any judge does: with k judges each gets 1 - (1 - R)^(1/k). A start judge's law
+alarms when any judge does: with k independent judges each gets 1 - (1 - R)^(1/k), k
+counted from how the judges' statistics move together over the normal logs
+(`models.false_alarms.effective_judges`). A start judge's law
 is fitted to the training logs' starts as well as the calibration logs': the start is not
 fitted by the model, so those are fair normal data, and more of them steady the law."""
 
@@ -23,7 +25,13 @@ from auvdiag_cli.numeric import peak
 from auvdiag_errors import UsageError
 from models.card import StartReference
 from models.command_relations import CommandRelations
-from models.false_alarms import LawFit, checked_share, fit_law, judge_share
+from models.false_alarms import (
+    LawFit,
+    checked_share,
+    effective_judges,
+    fit_law,
+    judge_share,
+)
 
 RATE_PATTERN = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(/\s*h)?\s*$")
 
@@ -115,6 +123,7 @@ class BudgetThresholds:
     fits: tuple[JudgeFit, ...]
     effort_rate: float | None                # the effort groups' budget (None: no groups)
     logs: int
+    independent: float = 0.0                 # how many independent judges they amount to
 
     @property
     def lowered(self) -> tuple[JudgeFit, ...]:
@@ -147,7 +156,8 @@ class BudgetThresholds:
     def to_json(self) -> dict[str, Any]:
         return {"rate": self.budget.rate, "per": "hour" if self.budget.per_hour else "log",
                 "per_log_rate": round(self.per_log_rate, 5), "share_per_judge":
-                round(self.share, 5), "effort_rate": self.effort_rate,
+                round(self.share, 5), "independent_judges": round(self.independent, 2),
+                "effort_rate": self.effort_rate,
                 "leave_one_log_out": {"logs": self.logs, "alarmed": self.loo_logs_alarmed},
                 "calibration_logs_over_thresholds": self.in_sample_alarmed,
                 "judges": [{"judge": f.judge.label, "threshold": f.threshold,
@@ -210,10 +220,13 @@ def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
     in the sharing all the same: they may alarm too). Each judge's share is checked on its
     own left-out logs: a heavy-tailed judge is held back without costing the others."""
     per_log = budget.per_log(log_hours)
-    share = judge_share(per_log, len(judges) + effort_actuators)
     fits = [(judge, fit_law([*judge.values, *judge.more], judge.law)) for judge in judges]
+    statistics = np.array([judge.statistic for judge in judges]).reshape(len(judges), -1)
+    independent = effective_judges(statistics)
+    share = judge_share(per_log, independent + effort_actuators)
     kept = tuple(JudgeFit(judge, fit, checked_share(fit, share)) for judge, fit in fits
                  if fit is not None)
     effort_rate = (round(1.0 - (1.0 - share) ** effort_actuators, 6)
                    if effort_actuators else None)
-    return BudgetThresholds(budget, per_log, share, kept, effort_rate, len(log_hours))
+    return BudgetThresholds(budget, per_log, share, kept, effort_rate, len(log_hours),
+                            independent)

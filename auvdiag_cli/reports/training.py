@@ -169,7 +169,8 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
                f", lowered for {', '.join(f.judge.label for f in budget.lowered)} because "
                "its logs left out alarmed more often than its fitted law promises")
     lines = [f"calibrated on {hours:.2f} h of normal data ({budget.logs} logs) for a "
-             f"false-alarm rate of {budget.budget.describe()}{per_log}: each judge gets "
+             f"false-alarm rate of {budget.budget.describe()}{per_log}: its judges move "
+             f"as {budget.independent:.1f} independent ones would, and each gets "
              f"{budget.share:.2%} of logs{lowered}",
              f"  leave one log out: {budget.loo_logs_alarmed} of {budget.logs} logs alarm "
              f"with the thresholds fitted on the others (the budget expects "
