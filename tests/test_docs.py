@@ -26,7 +26,8 @@ def test_the_site_builds_strictly_and_renders_the_library_reference(tmp_path):
 def test_a_broken_link_fails_the_build(tmp_path):
     copy = tmp_path / "project"
     shutil.copytree(ROOT / "docs", copy / "docs")
-    for name in ("mkdocs.yml", "auvdiag_cli", "auvdiag_errors", "adapters", "models"):
+    for name in ("mkdocs.yml", "auvdiag_cli", "auvdiag_errors", "adapters", "models",
+                 "scripts", "sample_logs"):
         source = ROOT / name
         (shutil.copytree if source.is_dir() else shutil.copy)(source, copy / name)
     page = copy / "docs" / "limits.md"

@@ -1,4 +1,4 @@
-"""The tutorial (docs/tutorial.md) run as written: each `$ ` line of its console blocks in
+"""The tutorial (docs/tutorial.md) and the home page's example run as written: each `$ ` line of its console blocks in
 one shell, in order, on the real logs; each output line it shows must be in what that
 command printed, and its exit status must be the one the line's `# exit N` says (0 if none).
 Two changes only: the install line is skipped (this environment is the install) and the
@@ -58,12 +58,9 @@ def _script(steps: list[Step], out: Path) -> str:
     return "\n".join(lines) + "\n"
 
 
-@pytest.mark.slow
-@pytest.mark.shared_data("crazypad/E8")
-@pytest.mark.shared_data("ardusub/small.BIN")
-def test_the_tutorial_runs_command_by_command(tmp_path):
-    steps = tutorial_steps(TUTORIAL.read_text())
-    assert len(steps) >= 12 and any("auvdiag train" in s.command for s in steps)
+def _run_as_written(steps: list[Step], tmp_path: Path) -> Path:
+    """Run the steps in one shell in a fresh folder (with the sample logs and this
+    environment as its .venv); each must exit and print as the page says. The folder."""
     work, out = tmp_path / "work", tmp_path / "out"
     work.mkdir(), out.mkdir()
     (work / "sample_logs").symlink_to(ROOT / "sample_logs")
@@ -78,5 +75,22 @@ def test_the_tutorial_runs_command_by_command(tmp_path):
         assert status == step.exit_status, f"{step.command}: exit {status}\n{printed}"
         for line in step.shown:
             assert line in printed, f"{step.command}: {line!r} not in\n{printed}"
+    return work
+
+
+def test_the_home_page_runs_as_shown(tmp_path):
+    steps = tutorial_steps((ROOT / "docs" / "index.md").read_text())
+    assert any(s.command.startswith(".venv/bin/auvdiag diagnose") for s in steps)
+    work = _run_as_written(steps, tmp_path)
+    assert (work / "paper-report.pdf").read_bytes().startswith(b"%PDF")
+
+
+@pytest.mark.slow
+@pytest.mark.shared_data("crazypad/E8")
+@pytest.mark.shared_data("ardusub/small.BIN")
+def test_the_tutorial_runs_command_by_command(tmp_path):
+    steps = tutorial_steps(TUTORIAL.read_text())
+    assert len(steps) >= 12 and any("auvdiag train" in s.command for s in steps)
+    work = _run_as_written(steps, tmp_path)
     assert (work / "paper.pdf").read_bytes().startswith(b"%PDF")
     assert (work / "cf_model" / "model.json").is_file() and not (work / "my_model").exists()
