@@ -1,6 +1,7 @@
 """The tutorial (docs/tutorial.md) and the home page's example run as written: each `$ `
 line of their console blocks in one shell, in order, on the real logs; each output line
-shown must be in what that command printed, and its exit status must be the one the line's `# exit N` says (0 if none).
+shown must be in what that command printed, and its exit status must be the one the
+line's `# exit N` says (0 if none).
 Two changes only: the install line is skipped (this environment is the install) and the
 training is shortened (`--iterations-scale 0.05`: the tutorial's checks do not depend on it).
 """
