@@ -9,13 +9,27 @@ from typer.testing import CliRunner
 from auvdiag_cli.cli import app
 
 
-def diagnose_json(log: Path, *options: str) -> tuple[int, dict[str, Any]]:
+def diagnose_outcome(log: Path, *options: str) -> tuple[int, dict[str, Any] | str]:
     """`auvdiag diagnose LOG --json - --quiet OPTIONS`, as a user runs it: the exit status
-    and the JSON report. A verdict must come out (exit status 0 or 1)."""
+    and the JSON report, or for a log it cannot analyse (exit status 2) the one line that
+    names the log and the problem. Never a traceback or an unexpected error."""
     result = CliRunner().invoke(app, ["diagnose", str(log), "--json", "-", "--quiet",
                                       *options])
+    assert "Traceback" not in result.output and "unexpected" not in result.output, (
+        result.output)
+    if result.exit_code == 2:
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and str(log) in lines[0], result.stderr
+        return 2, lines[0]
     assert result.exit_code in (0, 1), result.output
     return result.exit_code, json.loads(result.stdout)
+
+
+def diagnose_json(log: Path, *options: str) -> tuple[int, dict[str, Any]]:
+    """`diagnose_outcome` where a verdict must come out (exit status 0 or 1)."""
+    code, report = diagnose_outcome(log, *options)
+    assert isinstance(report, dict), report
+    return code, report
 
 
 def assert_same_signals(read: Any, reference: Any) -> None:

@@ -2,13 +2,13 @@
 every time unit; bad rows counted, never fatal; recognised by content; the real Haizhe runs
 read as they are."""
 
-import json
 import re
 from importlib import resources
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import diagnose_outcome
 from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
@@ -19,16 +19,9 @@ PROFILE = (resources.files("auvdiag_cli.vehicle") / "profiles/twin_burger.toml")
 HAIZHE = SHARED_DATA / "haizhe" / "train"
 
 
-def diagnose(log, *options):
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet", *options])
-    assert "unexpected" not in result.output and "Traceback" not in result.output
-    return result.exit_code, (json.loads(result.stdout) if result.exit_code < 2 else
-                              result.output.strip())
-
-
 @pytest.fixture(scope="module")
 def reference(make_log):
-    return diagnose(make_log("paper-flow-sensor-covered", 31, "mcap"))[1]
+    return diagnose_outcome(make_log("paper-flow-sensor-covered", 31, "mcap"))[1]
 
 
 @pytest.mark.parametrize("unit", ["s", "ms", "us", "ns", "iso", "hhmmss"])
@@ -41,7 +34,7 @@ def test_csv_round_trip_in_every_time_unit(tmp_path, dive_cache, reference, unit
     profile = load_profile(profile_path)
     log = tmp_path / "dive.csv"
     write_log(dive_cache("paper-flow-sensor-covered", 31), profile, log, "csv")
-    code, report = diagnose(log, "--profile", str(profile_path))
+    code, report = diagnose_outcome(log, "--profile", str(profile_path))
     assert code == 1 and report["format"] == "csv"
     assert report["component"] == reference["component"] == "flow_sensor"
     if unit == "hhmmss":   # rows spread over each second: times are right to a fraction of it
@@ -65,7 +58,7 @@ def test_bad_rows_are_counted_not_fatal(make_log, tmp_path):
         + [lines[-1][:7]]                                          # a row cut short
     log = tmp_path / "damaged.csv"
     log.write_text("\n".join(damaged) + "\n")
-    code, report = diagnose(log)
+    code, report = diagnose_outcome(log)
     assert code == 0
     note = next(n for n in report["notes"] if n.startswith("left out:"))
     assert "2 row(s) with the wrong number of cells" in note
@@ -77,7 +70,7 @@ def test_a_csv_with_no_usable_row_is_one_line(tmp_path):
     log = tmp_path / "empty.csv"
     log.write_text("time_s,thruster_0,thruster_1,flow_mps,yaw_rate_rps,sequence\n"
                    "x,1,2,3,4,\n")
-    code, line = diagnose(log)
+    code, line = diagnose_outcome(log)
     assert code == 2 and str(log) in line and "\n" not in line
 
 
@@ -85,7 +78,7 @@ def test_a_missing_column_names_it_and_the_closest(make_log, tmp_path):
     text = make_log("paper-normal", 11, "csv").read_text()
     log = tmp_path / "renamed.csv"
     log.write_text(text.replace("flow_mps", "flow_m_s", 1))
-    code, line = diagnose(log)
+    code, line = diagnose_outcome(log)
     assert code == 2 and "no column(s) flow_mps in the header" in line
     assert "closest first: flow_m_s" in line
 

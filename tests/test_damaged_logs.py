@@ -1,10 +1,10 @@
 """Damaged, partial and odd logs: either the readable part is analysed and the report says
 what was lost, or one line names the file and the problem (exit 2). Never a traceback."""
 
-import json
 import shutil
 
 import pytest
+from helpers import diagnose_outcome
 from typer.testing import CliRunner
 
 from adapters.ulog import walk_framing
@@ -31,14 +31,9 @@ def copy_log(log, fmt, target):
 
 
 def outcome(log):
-    result = runner.invoke(app, ["diagnose", str(log), "--json", "-", "--quiet"])
-    assert "Traceback" not in result.output
-    if result.exit_code == 2:
-        lines = result.stderr.strip().splitlines()
-        assert len(lines) == 1 and str(log) in lines[0], result.stderr
-        return 2, None
-    assert result.exit_code in (0, 1), result.output
-    return result.exit_code, json.loads(result.stdout)
+    """The exit status and the report (None for a log refused in one line)."""
+    code, report = diagnose_outcome(log)
+    return code, report if isinstance(report, dict) else None
 
 
 @pytest.mark.parametrize("fraction", [0.05, 0.5, 0.97])

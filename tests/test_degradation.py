@@ -1,12 +1,8 @@
 """Beyond assumption 3: a thruster at half power is named, not mistaken for a sensor."""
 
-import json
 
 import pytest
 from helpers import diagnose_json
-from typer.testing import CliRunner
-
-from auvdiag_cli.cli import app
 
 
 @pytest.mark.parametrize("thruster", ["thruster_0", "thruster_1"])
@@ -26,8 +22,7 @@ def test_half_power_thruster_is_named_with_its_fraction(make_log, thruster):
     ("paper-flow-sensor-covered", "flow_sensor"),
     ("mission-yaw-rate-sensor-dead", "yaw_rate_sensor")])
 def test_dead_sensors_are_not_explained_away(make_log, scenario, component):
-    report = json.loads(CliRunner().invoke(
-        app, ["diagnose", str(make_log(scenario, 81, "bag")), "--json", "-", "-q"]).stdout)
+    _, report = diagnose_json(make_log(scenario, 81, "bag"))
     assert report["component"] == component and report["degradation"] is None
 
 
@@ -62,11 +57,9 @@ def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     assert row in text
     partial = tmp_path / "partial.toml"
     partial.write_text(text.replace(row, ""))
-    result = CliRunner().invoke(app, ["diagnose", str(make_log("mission-yaw-rate-sensor-dead",
-                                                                81, "bag")),
-                                      "--profile", str(partial), "--json", "-", "-q"])
-    report = json.loads(result.stdout)
-    assert result.exit_code == 1 and report["verdict"] == "fault"
+    code, report = diagnose_json(make_log("mission-yaw-rate-sensor-dead", 81, "bag"),
+                                 "--profile", str(partial))
+    assert code == 1 and report["verdict"] == "fault"
     assert report["case"] is None and report["component"] is None
     assert report["b"] == {"flow": 0, "yaw_rate": 1}
     assert any("fits no row of the pattern table" in note for note in report["notes"])

@@ -1,9 +1,9 @@
 """The hypothesis test: every single-component fault replayed from the onset, the one that
 explains the log named, with its runner-up and the margin between them."""
 
-import json
 
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -22,8 +22,7 @@ runner = CliRunner()
 def test_the_best_hypothesis_names_the_failed_part(make_log, scenario, component, kind):
     """On a mission the pattern table cannot tell the thrusters apart (case 1 names both);
     the replays under each thruster's failure can."""
-    result = runner.invoke(app, ["diagnose", str(make_log(scenario, 17)), "--json", "-", "-q"])
-    report = json.loads(result.stdout)
+    _, report = diagnose_json(make_log(scenario, 17))
     hypotheses = report["hypotheses"]
     assert hypotheses["best"]["component"] == component
     assert hypotheses["best"]["kind"] == kind and hypotheses["best"]["explains"]

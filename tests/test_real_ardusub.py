@@ -2,10 +2,10 @@
 (clydemcqueen/ardusub_log_tools, MIT): every signal resolves, the operating time found is the
 armed time pymavlink reads from the same logs, and train and diagnose accept them."""
 
-import json
 from pathlib import Path
 
 import pytest
+from helpers import diagnose_json
 from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
@@ -63,10 +63,8 @@ def real_model(tmp_path_factory):
 
 @pytest.mark.parametrize("name", ["small.tlog", "small.BIN"])
 def test_operating_time_is_the_armed_time(real_model, name):
-    result = runner.invoke(app, ["diagnose", str(DATA / name), "--profile", "bluerov2_standard",
-                                 "--model", str(real_model), "--json", "-", "--quiet"])
-    assert result.exit_code in (0, 1), result.output
-    report = json.loads(result.stdout)
+    _, report = diagnose_json(DATA / name, "--profile", "bluerov2_standard", "--model",
+                              str(real_model))
     operating = report["duration_s"] - report["not_operating_s"]
     assert operating == pytest.approx(_armed_seconds(DATA / name), abs=1.2)
 
@@ -97,10 +95,8 @@ def _without_records(log: Path, name: str, target: Path) -> Path:
 
 def test_arming_is_read_from_ev_events_where_a_log_has_no_arm_records(real_model, tmp_path):
     older = _without_records(DATA / "small.BIN", "ARM", tmp_path / "no_arm.BIN")
-    result = runner.invoke(app, ["diagnose", str(older), "--profile", "bluerov2_standard",
-                                 "--model", str(real_model), "--json", "-", "--quiet"])
-    assert result.exit_code in (0, 1), result.output
-    report = json.loads(result.stdout)
+    _, report = diagnose_json(older, "--profile", "bluerov2_standard", "--model",
+                              str(real_model))
     assert report["duration_s"] - report["not_operating_s"] == pytest.approx(
         _armed_seconds(DATA / "small.BIN"), abs=1.2)
     assert any("operating from EV.Id (no ARM message" in note for note in report["notes"])

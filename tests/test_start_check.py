@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from helpers import diagnose_json
 from typer.testing import CliRunner
 
-from auvdiag_cli.cli import app
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.start_check import (
     FLOOR,
@@ -81,10 +81,7 @@ def test_a_flow_sensor_reading_high_from_the_first_sample_is_named(tmp_path, pro
     table.to_csv(biased, index=False)
     report = {}
     for name, log in (("clean", clean), ("biased", biased)):
-        result = runner.invoke(app, ["diagnose", str(log), "--model", str(model), "--json", "-",
-                                     "--quiet"])
-        assert result.exit_code in (0, 1), result.output
-        report[name] = json.loads(result.stdout)
+        report[name] = diagnose_json(log, "--model", str(model))[1]
     assert report["clean"]["verdict"] == "normal" and report["clean"]["start_check"]["judged"]
     biased_report = report["biased"]
     assert biased_report["verdict"] == "fault" and biased_report["component"] == "flow_sensor"
@@ -95,9 +92,7 @@ def test_a_flow_sensor_reading_high_from_the_first_sample_is_named(tmp_path, pro
 
     late = table[table["time_s"] >= table["time_s"].min() + 40.0]    # begins mid-dive
     late.to_csv(tmp_path / "late.csv", index=False)
-    result = runner.invoke(app, ["diagnose", str(tmp_path / "late.csv"), "--model", str(model),
-                                 "--json", "-", "--quiet"])
-    late_report = json.loads(result.stdout)
+    _, late_report = diagnose_json(tmp_path / "late.csv", "--model", str(model))
     assert not late_report["start_check"]["judged"]
     assert "not recorded from rest" in late_report["start_check"]["summary"]
 
