@@ -67,8 +67,8 @@ def effective_judges(values: np.ndarray) -> float:
     correlation is of ranks, so that one log far out (a disturbance) does not make judges
     look alike; logs missing a judge's value are left out. At least one, at most the
     number of judges; all of them where fewer than MIN_LOGS logs have every value."""
-    statistics = np.asarray(values, float)
-    judges = statistics.shape[0]
+    statistics = np.atleast_2d(np.asarray(values, float))
+    judges = len(values)
     complete = statistics[:, np.isfinite(statistics).all(axis=0)]
     if judges < 2 or complete.shape[1] < MIN_LOGS:
         return float(judges)

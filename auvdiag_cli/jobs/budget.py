@@ -221,8 +221,8 @@ def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
     own left-out logs: a heavy-tailed judge is held back without costing the others."""
     per_log = budget.per_log(log_hours)
     fits = [(judge, fit_law([*judge.values, *judge.more], judge.law)) for judge in judges]
-    statistics = np.array([judge.statistic for judge in judges]).reshape(len(judges), -1)
-    independent = effective_judges(statistics)
+    independent = effective_judges(np.array([judge.statistic for judge in judges])
+                                   if judges else np.empty((0, 0)))
     share = judge_share(per_log, independent + effort_actuators)
     kept = tuple(JudgeFit(judge, fit, checked_share(fit, share)) for judge, fit in fits
                  if fit is not None)

@@ -222,8 +222,6 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     except ValueError as problem:   # the logs hold too little complete, operating data
         raise UsageError(f"cannot train on {', '.join(p.name for p in training_paths)}: "
                          f"{problem}") from None
-    scores = fitted.scores
-    chosen = choose_horizon(scores)
     hours = sum(_complete_steps(t) for t in training) * profile.dt_s / 3600
     progress("learning the command relations, the start state and the effort shares")
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
@@ -231,8 +229,9 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                                               profile)
     result = TrainingResult(
         output=output, written=False, training_logs=len(training), heldout_logs=len(heldout),
-        heldout_split=split, scores=scores, chosen=chosen, operating_hours=hours,
-        logged_rates_hz=rates, command_relations=relations, start_state=start_state,
+        heldout_split=split, scores=fitted.scores, chosen=choose_horizon(fitted.scores),
+        operating_hours=hours, logged_rates_hz=rates, command_relations=relations,
+        start_state=start_state,
         effort=effort, effort_notes=tuple(effort_notes), by_predictor=fitted.by_kind,
         predictor_notes=fitted.notes, input_names=profile.input_names)
     result = replace(result, written=result.judges_anything or options.keep_unskilled)
