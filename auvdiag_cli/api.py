@@ -47,6 +47,7 @@ if TYPE_CHECKING:
     from auvdiag_cli.jobs.healthy import HealthyParts, read_healthy_parts
     from auvdiag_cli.jobs.inspect import Inspection
     from auvdiag_cli.jobs.train import TrainingResult, TrainOptions
+    from auvdiag_cli.reports.report import Report
     from auvdiag_cli.reports.saved import redraw_report
     from auvdiag_cli.simulator.run import SimulatedDive
     from auvdiag_cli.simulator.scenarios import Scenario
@@ -59,17 +60,16 @@ if TYPE_CHECKING:
 
     AuditProgress = Reporter
 
+
 __all__ = [
     "AuditProgress", "AuditRecord", "AuditResult", "CalibrateOptions", "CalibrationResult",
     "CommandRelations", "DerivedTable", "Diagnosis", "EffortModel", "FalseAlarmBudget",
     "FleetTrend", "HealthyParts", "HorizonScore", "Inspection", "LoadedModel", "ModelCard",
-    "Profile",
-    "Refused", "Scenario", "Signals", "SimulatedDive", "StartReference", "TrainOptions",
-    "TrainingResult", "Verdict", "audit", "calibrate", "derive_table",
-    "diagnose", "draft_profile", "inspect", "load_model", "load_profile", "log_format",
-    "read_healthy_parts", "read_log", "redraw_report", "relate", "save_model", "scenarios",
-    "score", "simulate", "summary_text",
-    "to_json", "train", "trend", "write_reports",
+    "Profile", "Refused", "Report", "Scenario", "Signals", "SimulatedDive", "StartReference",
+    "TrainOptions", "TrainingResult", "Verdict", "audit", "build_report", "calibrate",
+    "derive_table", "diagnose", "draft_profile", "inspect", "load_model", "load_profile",
+    "log_format", "read_healthy_parts", "read_log", "redraw_report", "relate", "save_model",
+    "scenarios", "score", "simulate", "summary_text", "to_json", "train", "trend", "write_reports",
 ]
 
 
@@ -87,6 +87,7 @@ _EXPORTED = {name: f"{module}.{name}" for module, names in {
     "auvdiag_cli.jobs.healthy": ["HealthyParts", "read_healthy_parts"],
     "auvdiag_cli.jobs.inspect": ["Inspection"],
     "auvdiag_cli.jobs.train": ["TrainOptions", "TrainingResult"],
+    "auvdiag_cli.reports.report": ["Report"],
     "auvdiag_cli.reports.saved": ["redraw_report"],
     "auvdiag_cli.simulator.run": ["SimulatedDive"],
     "auvdiag_cli.simulator.scenarios": ["Scenario"],
@@ -254,12 +255,21 @@ def to_json(diagnosis: Diagnosis) -> dict[str, Any]:
     return diagnosis_to_dict(diagnosis)
 
 
+def build_report(diagnosis: Diagnosis) -> Report:
+    """The typed report of a diagnosis: what the JSON report holds (``to_json`` of it is
+    `to_json`), and what the summary, the PDF and the MCAP are drawn from."""
+    from auvdiag_cli.reports.report_build import build_report as build
+
+    return build(diagnosis)
+
+
 def summary_text(diagnosis: Diagnosis) -> str:
     """The terminal summary `auvdiag diagnose` prints: verdict, onset and detection, each
     check's finding, notes (lines joined by newlines)."""
+    from auvdiag_cli.reports.report_build import build_report as build
     from auvdiag_cli.reports.text import summary_lines
 
-    return "\n".join(summary_lines(diagnosis))
+    return "\n".join(summary_lines(build(diagnosis)))
 
 
 def write_reports(diagnosis: Diagnosis, *, json: Path | None = None, pdf: Path | None = None,

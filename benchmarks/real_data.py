@@ -351,7 +351,7 @@ def _defect_verdicts(defects: list[Path], heldout: list[Path], profile: "Profile
     model = api.load_model(model_dir, profile)
 
     def verdicts(paths: list[Path]) -> Counter[str]:
-        return Counter(verdict_title(api.to_json(api.diagnose(path, profile, model)))
+        return Counter(verdict_title(api.build_report(api.diagnose(path, profile, model)))
                        for path in paths)
 
     defect, normal = verdicts(defects), verdicts(heldout)

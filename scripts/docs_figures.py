@@ -27,10 +27,10 @@ def on_files(files: Files, config: MkDocsConfig) -> Files:
     profile = api.load_profile()
     diagnosis = api.diagnose(log, profile, api.load_model(profile=profile),
                              truth=log.with_name(f"{log.name}.truth.csv"))
-    document, series = api.to_json(diagnosis), series_from_diagnosis(diagnosis)
+    report, series = api.build_report(diagnosis), series_from_diagnosis(diagnosis)
     for name, draw in (("img/sample-sensors.png", sensors_page),
                        ("img/sample-residual.png", residual_page)):
         buffer = BytesIO()
-        draw(document, series).savefig(buffer, format="png", dpi=DPI)
+        draw(report, series).savefig(buffer, format="png", dpi=DPI)
         files.append(File.generated(config, name, content=buffer.getvalue()))
     return files

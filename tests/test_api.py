@@ -110,7 +110,8 @@ def test_a_program_trains_calibrates_saves_diagnoses_reports_and_audits(make_log
 def test_everything_public_is_named_in_one_place():
     defined = {name for name, value in vars(api).items() if not name.startswith("_")
                and getattr(value, "__module__", None) == api.__name__}
-    assert defined == {"audit", "calibrate", "derive_table", "diagnose", "draft_profile",
+    assert defined == {"audit", "build_report", "calibrate", "derive_table", "diagnose",
+                       "draft_profile",
                        "inspect", "load_model", "load_profile", "log_format", "read_log",
                        "relate", "save_model", "scenarios", "score", "simulate", "summary_text",
                        "to_json",

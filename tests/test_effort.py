@@ -166,10 +166,12 @@ def test_the_audit_table_and_the_trend_carry_the_shares():
     from auvdiag_cli.audit.table import table_row
 
     record = AuditRecord.from_report({
-        "log": "fleet/cf/a.csv", "verdict": "fault", "actuators": {"shares": {
-            "motor_1": {"over_threshold": -0.2, "driven_harder": False},
-            "motor_3": {"over_threshold": 1.4, "driven_harder": True},
-            "motor_4": {"over_threshold": None, "driven_harder": False}}}})
+        "log": "fleet/cf/a.csv", "verdict": "fault", "actuators": {
+            "summary": "motor_3 is driven harder", "shares": {
+                name: {"group": "rotors", "component": name, "over_threshold": ratio,
+                       "driven_harder": harder}
+                for name, ratio, harder in (("motor_1", -0.2, False), ("motor_3", 1.4, True),
+                                            ("motor_4", None, False))}}})
     row = table_row(record)
     assert (row["driven_harder"], row["worst_effort_actuator"], row["worst_effort_ratio"]) == \
         ("motor_3", "motor_3", 1.4)

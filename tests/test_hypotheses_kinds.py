@@ -2,6 +2,8 @@
 a control surface stuck at its trim, where it was, or hard over; each said in its own words
 in every report."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from auvdiag_cli import api
@@ -13,8 +15,7 @@ from auvdiag_cli.engine.hypotheses import (
     Hypothesis,
     _stuck_surfaces,
 )
-from auvdiag_cli.reports.json_report import diagnosis_to_dict
-from auvdiag_cli.reports.pdf.facts import _hypothesis
+from auvdiag_cli.reports.sentences import hypotheses_sentence
 from auvdiag_cli.vehicle.profile import profile_text
 
 
@@ -58,7 +59,9 @@ def test_a_profile_whose_part_is_a_surface_is_tried_stuck_not_weakened(make_log,
     tried = {(h.component, h.kind) for h in diagnosis.hypotheses.ranked}
     assert ("thruster_0", "stuck") in tried and ("thruster_0", "weakened") not in tried
     assert {("thruster_1", "dead"), ("thruster_1", "weakened")} <= tried
-    ranked = diagnosis_to_dict(diagnosis)["hypotheses"]["ranked"]
-    stuck = [h for h in ranked if h["component"] == "thruster_0" and h["kind"] == "stuck"]
-    assert {h["stuck_at"] for h in stuck} == {TRIM, WHERE_IT_WAS, LOW_LIMIT, HIGH_LIMIT}
-    assert _hypothesis(stuck[0]).startswith(f"thruster 0 stuck {stuck[0]['stuck_at']} (")
+    hypotheses = api.build_report(diagnosis).hypotheses
+    assert hypotheses is not None
+    stuck = [h for h in hypotheses.ranked if h.component == "thruster_0" and h.kind == "stuck"]
+    assert {h.stuck_at for h in stuck} == {TRIM, WHERE_IT_WAS, LOW_LIMIT, HIGH_LIMIT}
+    said = hypotheses_sentence(replace(hypotheses, best=stuck[0], runner_up=None))
+    assert f"thruster 0 stuck {stuck[0].stuck_at} (" in said

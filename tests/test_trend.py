@@ -34,7 +34,8 @@ def test_mann_kendall_and_sen_slope_on_known_series():
 def _record(log, date, flow, verdict="normal"):
     return AuditRecord.from_report({
         "log": log, "start_time_utc": date, "verdict": verdict, "not_judged": {},
-        "segments": [{"max_g": {"flow": flow, "yaw_rate": 2.0},
+        "segments": [{"name": "MISSION", "start_s": 0.0, "end_s": 60.0, "mode": "mission",
+                      "max_g": {"flow": flow, "yaw_rate": 2.0},
                       "thresholds": {"flow": 10.0, "yaw_rate": 10.0}}]})
 
 

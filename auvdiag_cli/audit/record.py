@@ -2,12 +2,13 @@
 its error) into typed values: what the table, the trend and the fleet PDF read."""
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from auvdiag_cli.engine.coverage import Coverage
+from auvdiag_cli.reports.report import Report, SegmentPart, SharePart
 
 Document = Mapping[str, Any]     # a stored report as JSON gives it back
 
@@ -72,84 +73,112 @@ class AuditRecord:
         return (self.verdict or "?") + (f" ({what})" if what else "")
 
     @classmethod
-    def from_report(cls, report: Document) -> "AuditRecord":
+    def from_report(cls, document: Document) -> "AuditRecord":
         """Parse a stored per-log record (a JSON report with the audit's stamp, or an
         error); a key a report from an older release lacks takes its empty value."""
-        segments = report.get("segments") or []
-        not_judged = tuple(report.get("not_judged") or {})
-        worst, signal = _worst_g(segments, not_judged)
-        shares = (report.get("actuators") or {}).get("shares") or {}
+        stamp = AuditStamp.from_json(document.get("audit"))
+        log = str(document["log"])
+        fleet_vehicle = stamp.vehicle or Path(log).parent.name or "."
+        error = document.get("error")
+        if error or "verdict" not in document:
+            return cls(log=log, error=str(error or "no verdict in the stored report"),
+                       fleet_vehicle=fleet_vehicle, log_sha256=stamp.log_sha256,
+                       result_file=stamp.result_file, seconds=stamp.seconds)
+        report = Report.from_json(document)
+        not_judged = tuple(report.not_judged)
+        worst, signal = _worst_g(report.segments, not_judged)
+        shares = {} if report.actuators is None else dict(report.actuators.shares)
         effort_ratio, effort_actuator = _worst_effort(shares)
-        audit = report.get("audit") or {}
-        model = report.get("model") or {}
+        coverage = report.coverage
         return cls(
-            log=str(report["log"]), error=report.get("error"), verdict=report.get("verdict"),
-            format=report.get("format"), vehicle=report.get("vehicle"),
-            fleet_vehicle=str((audit.get("vehicle") or {}).get("id")
-                              or Path(report["log"]).parent.name or "."),
-            start_time_utc=report.get("start_time_utc"), duration_s=report.get("duration_s"),
-            not_operating_s=report.get("not_operating_s"),
-            completeness=(report.get("completeness") or {}).get("status"),
-            not_judged=not_judged, coverage=Coverage.from_dict(report["coverage"])
-            if report.get("coverage") else None,
-            component=report.get("component"),
-            candidates=tuple(report.get("candidates") or ()), case=report.get("case"),
-            onset_s=report.get("onset_s"), detected_at_s=report.get("detected_at_s"),
-            worst_g_ratio=worst, worst_g_signal=signal, segments=len(segments),
-            routine_segments=sum(1 for s in segments if s.get("mode") == "routine"),
-            substituted_signal=(report.get("substitution") or {}).get("signal"),
-            weakened_thrust_fraction=(report.get("degradation") or {}).get("thrust_fraction"),
-            driven_harder=tuple(n for n, e in shares.items() if e.get("driven_harder")),
+            log=log, verdict=report.verdict, format=report.format, vehicle=report.vehicle,
+            fleet_vehicle=fleet_vehicle, start_time_utc=report.start_time_utc,
+            duration_s=report.duration_s, not_operating_s=report.not_operating_s,
+            completeness=None if report.completeness is None else report.completeness.status,
+            not_judged=not_judged, coverage=None if coverage is None else coverage.engine(),
+            component=report.component, candidates=report.candidates, case=report.case,
+            onset_s=report.onset_s, detected_at_s=report.detected_at_s,
+            worst_g_ratio=worst, worst_g_signal=signal, segments=len(report.segments),
+            routine_segments=sum(1 for s in report.segments if s.mode == "routine"),
+            substituted_signal=None if report.substitution is None
+            else report.substitution.signal,
+            weakened_thrust_fraction=None if report.degradation is None
+            else report.degradation.thrust_fraction,
+            driven_harder=tuple(n for n, e in shares.items() if e.driven_harder),
             worst_effort_ratio=effort_ratio, worst_effort_actuator=effort_actuator,
-            recommended_dms=tuple((report.get("active_diagnosis") or {}).get(
-                "recommended_dms") or ()),
-            model=model.get("name"), model_path=model.get("path"),
-            log_sha256=audit.get("log_sha256"), result_file=audit.get("result_file"),
-            seconds=audit.get("seconds"),
-            bits={str(k): int(v) for k, v in (report.get("b") or {}).items()},
-            margins=_margins(report, segments, set(not_judged), shares))
+            recommended_dms=() if report.active_diagnosis is None
+            else report.active_diagnosis.recommended_dms,
+            model=report.model.name, model_path=report.model.path,
+            log_sha256=stamp.log_sha256, result_file=stamp.result_file, seconds=stamp.seconds,
+            bits={str(k): int(v) for k, v in report.b.items()},
+            margins=_margins(report, set(not_judged), shares))
 
 
-def _worst_g(segments: Sequence[Document], not_judged: Sequence[str]
+@dataclass(frozen=True)
+class AuditStamp:
+    """What the audit stored beside a report: which log (its digest), where, how long it
+    took, and which vehicle of the fleet."""
+
+    log_sha256: str | None = None
+    result_file: str | None = None
+    seconds: float | None = None
+    vehicle: str | None = None
+
+    @classmethod
+    def from_json(cls, stamp: object) -> "AuditStamp":
+        if not isinstance(stamp, Mapping):
+            return cls()
+        vehicle = stamp.get("vehicle")
+        identity = vehicle.get("id") if isinstance(vehicle, Mapping) else None
+        seconds = stamp.get("seconds")
+        return cls(_text(stamp.get("log_sha256")), _text(stamp.get("result_file")),
+                   float(seconds) if isinstance(seconds, int | float) else None,
+                   None if identity is None else str(identity))
+
+
+def _text(value: object) -> str | None:
+    return None if value is None else str(value)
+
+
+def _segment_ratios(segments: Sequence[SegmentPart], not_judged: Collection[str]
+                    ) -> Iterator[tuple[str, float]]:
+    """(signal, largest g / threshold) of each judged signal in each segment."""
+    for segment in segments:
+        for signal, g in segment.max_g.items():
+            threshold = segment.thresholds.get(signal)
+            if signal not in not_judged and g is not None and threshold:
+                yield signal, g / threshold
+
+
+def _worst_g(segments: Sequence[SegmentPart], not_judged: Collection[str]
              ) -> tuple[float | None, str | None]:
     """The largest g relative to its threshold over all segments and judged signals."""
-    worst: tuple[float | None, str | None] = (None, None)
-    for segment in segments:
-        for signal, g in (segment.get("max_g") or {}).items():
-            if signal in not_judged:
-                continue
-            threshold = (segment.get("thresholds") or {}).get(signal)
-            if g is not None and threshold and (worst[0] is None or g / threshold > worst[0]):
-                worst = (round(g / threshold, 4), signal)
-    return worst
+    ratio, signal = max(((r, s) for s, r in _segment_ratios(segments, not_judged)),
+                        default=(None, None))
+    return (None if ratio is None else round(ratio, 4)), signal
 
 
-def _worst_effort(shares: Document) -> tuple[float | None, str | None]:
+def _worst_effort(shares: Mapping[str, SharePart]) -> tuple[float | None, str | None]:
     """The judged actuator whose share of the effort came closest to its threshold."""
-    judged = [(entry["over_threshold"], name) for name, entry in shares.items()
-              if entry.get("over_threshold") is not None]
+    judged = [(entry.over_threshold, name) for name, entry in shares.items()
+              if entry.over_threshold is not None]
     return max(judged, default=(None, None))
 
 
-def _margins(report: Document, segments: Sequence[Document], not_judged: set[str],
-             shares: Document) -> dict[str, float]:
+def _margins(report: Report, not_judged: set[str], shares: Mapping[str, SharePart]
+             ) -> dict[str, float]:
     """The peak ratio to the threshold per judged sensor (g, the largest over the
     segments) and per judged actuator (its commands against the motion, "NAME"; its share
     of the effort, "NAME share")."""
     ratios: dict[str, float] = {}
-    for segment in segments:
-        for signal, g in (segment.get("max_g") or {}).items():
-            threshold = (segment.get("thresholds") or {}).get(signal)
-            if signal in not_judged or g is None or not threshold:
-                continue
-            ratios[signal] = max(ratios.get(signal, 0.0), g / threshold)
-    check = report.get("commands_check") or {}
-    for actuator, ratio in (check.get("peak_over_threshold") or {}).items():
-        if ratio is not None and math.isfinite(ratio) and actuator not in \
-                (check.get("not_judged") or {}):
-            ratios[actuator] = float(ratio)
+    for signal, ratio in _segment_ratios(report.segments, not_judged):
+        ratios[signal] = max(ratios.get(signal, 0.0), ratio)
+    check = report.commands_check
+    for actuator, peak in ({} if check is None else check.peak_over_threshold).items():
+        if peak is not None and math.isfinite(peak) and check is not None and \
+                actuator not in check.not_judged:
+            ratios[actuator] = float(peak)
     for actuator, entry in shares.items():
-        ratio = entry.get("over_threshold")
-        if ratio is not None and math.isfinite(ratio):
-            ratios[f"{actuator} share"] = float(ratio)
+        if entry.over_threshold is not None and math.isfinite(entry.over_threshold):
+            ratios[f"{actuator} share"] = float(entry.over_threshold)
     return ratios

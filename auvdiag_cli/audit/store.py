@@ -14,6 +14,7 @@ from auvdiag_cli.audit.worker import AuditOutcome
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.files import write_json
 from auvdiag_cli.reports.mcap_export import write_diagnosis_mcap
+from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import save_series, series_path
 
 RESULTS_FOLDER = "logs"
@@ -88,7 +89,7 @@ class ResultStore:
             save_series(outcome.series, sidecar)
             record["series_file"] = sidecar.name
             if self.mcap and outcome.document is not None and outcome.final:
-                write_diagnosis_mcap(outcome.document, outcome.series,
+                write_diagnosis_mcap(Report.from_json(outcome.document), outcome.series,
                                      path.with_suffix(".mcap"))
         record["audit"] = {**self.inputs.stamp(log_sha256), "seconds": outcome.seconds,
                            "peak_rss_mb": outcome.peak_rss_mb, "result_file": path.name,

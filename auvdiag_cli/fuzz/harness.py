@@ -69,7 +69,7 @@ def exercise(path: Path, profile: Profile, model: LoadedModel) -> tuple[str, str
     terminal: (outcome, detail). Raises nothing the CLI would not turn into one line."""
     from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.jobs.inspect import inspect_log
-    from auvdiag_cli.reports.json_report import diagnosis_to_dict
+    from auvdiag_cli.reports.report_build import build_report
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import inspection_lines, summary_lines
     from auvdiag_errors import AuvdiagError
@@ -81,9 +81,10 @@ def exercise(path: Path, profile: Profile, model: LoadedModel) -> tuple[str, str
                 inspection_lines(inspect_log(path, profile))
             else:
                 result = diagnose(path, profile, model)
-                json.dumps(diagnosis_to_dict(result))
+                report = build_report(result)
+                json.dumps(report.to_json())
                 series_from_diagnosis(result)
-                summary_lines(result)
+                summary_lines(report)
             outcomes.append("read")
         except AuvdiagError as error:
             message = str(error)

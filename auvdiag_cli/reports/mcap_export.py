@@ -1,8 +1,9 @@
 """The diagnosis as an MCAP file, to open beside the original log in Foxglove or PlotJuggler.
 
-Drawn, like the PDF, from the JSON report and its time histories only, on the log's own
-clock (every time is the log's first message plus the report's seconds). Messages are JSON
-with a JSON schema, which both viewers plot without plugins. Topics (see docs/reports.md):
+Drawn, like the PDF, from the report (`reports.report.Report`) and its time histories only,
+on the log's own clock (every time is the log's first message plus the report's seconds).
+Messages are JSON with a JSON schema, which both viewers plot without plugins. Topics (see
+docs/reports.md):
 
 - ``/auvdiag/signals/NAME``: per judged quantity, each model step: ``sensor`` (SS),
   ``model`` (SM), ``g_percent``, ``threshold_percent``, ``b`` (0/1), and ``substituted``
@@ -25,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from auvdiag_cli import __version__
-from auvdiag_cli.reports.json_report import named_components, verdict_title
+from auvdiag_cli.reports.json_report import verdict_title
+from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
 from auvdiag_errors import UsageError
 
@@ -93,20 +95,19 @@ def _stamp(time_ns: int) -> dict[str, int]:
     return {"sec": time_ns // 1_000_000_000, "nsec": time_ns % 1_000_000_000}
 
 
-def _events(document: dict[str, Any]) -> Iterator[tuple[float, int, str]]:
+def _events(report: Report) -> Iterator[tuple[float, int, str]]:
     """(seconds, level, text) of what happened when, in time order."""
     found: list[tuple[float, int, str]] = []
-    if document.get("onset_s") is not None:
-        found.append((document["onset_s"], LOG_LEVEL_WARNING,
+    if report.onset_s is not None:
+        found.append((report.onset_s, LOG_LEVEL_WARNING,
                       "fault onset (estimated): the residual starts to grow"))
-    if document.get("detected_at_s") is not None:
-        named = named_components(document)
-        found.append((document["detected_at_s"], LOG_LEVEL_WARNING,
-                      f"fault detected: {named or 'component not identified'}"))
+    if report.detected_at_s is not None:
+        found.append((report.detected_at_s, LOG_LEVEL_WARNING,
+                      f"fault detected: {report.named or 'component not identified'}"))
     yield from sorted(found)
 
 
-def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path) -> None:
+def write_diagnosis_mcap(report: Report, series: Series, target: Path) -> None:
     """Write the diagnosis at ``target`` (atomically: a viewer never opens half a file)."""
     from mcap.writer import Writer
 
@@ -118,17 +119,16 @@ def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path)
             writer = Writer(stream)
             writer.start(profile="", library=f"auvdiag {__version__}")
             channels = _Channels(writer)
-            _write_time_histories(channels, document, series, times_ns)
-            _write_segments(channels, document, start_ns)
+            _write_time_histories(channels, report, series, times_ns)
+            _write_segments(channels, report, start_ns)
             _write_effort(channels, series, start_ns)
-            _write_events(channels, document, start_ns, int(times_ns[-1]) if times_ns.size
+            _write_events(channels, report, start_ns, int(times_ns[-1]) if times_ns.size
                           else start_ns)
+            coverage = None if report.coverage is None else report.coverage.summary
             writer.add_metadata("auvdiag", {
-                "log": str(document["log"]), "format": str(document.get("format")),
-                "vehicle": str(document.get("vehicle")), "verdict": verdict_title(document),
-                "coverage": str((document.get("coverage") or {}).get("summary")),
-                "model": str((document.get("model") or {}).get("name")),
-                "log_start_ns": str(start_ns)})
+                "log": report.log, "format": report.format, "vehicle": report.vehicle,
+                "verdict": verdict_title(report), "coverage": str(coverage),
+                "model": str(report.model.name), "log_start_ns": str(start_ns)})
             writer.finish()
         temporary.replace(target)
     except OSError as error:
@@ -137,14 +137,14 @@ def write_diagnosis_mcap(document: dict[str, Any], series: Series, target: Path)
                          ) from None
 
 
-def _write_time_histories(channels: _Channels, document: dict[str, Any], series: Series,
+def _write_time_histories(channels: _Channels, report: Report, series: Series,
                           times_ns: np.ndarray) -> None:
     """The model-step messages, interleaved in time order as MCAP readers prefer."""
     names = [str(n) for n in series["sensor_names"]]
     commands = [str(n) for n in series["command_names"]]
-    substitution = document.get("substitution") or {}
     substituted = series.get("substituted")
-    replaced = substitution.get("signal") if substituted is not None else None
+    replaced = (report.substitution.signal
+                if substituted is not None and report.substitution is not None else None)
     columns = {"sensor": series.get("measured"), "model": series.get("modelled"),
                "g_percent": series.get("g_percent"), "threshold_percent": series["thresholds"],
                "b": series["b"]}
@@ -180,30 +180,30 @@ def _write_effort(channels: _Channels, series: Series, start_ns: int) -> None:
                            start_ns + round(seconds * 1e9), schema)
 
 
-def _write_segments(channels: _Channels, document: dict[str, Any], start_ns: int) -> None:
-    for segment in document.get("segments") or []:
-        body = {key: segment.get(key) for key in ("name", "mode", "start_s", "end_s",
-                                                  "thresholds", "max_g", "case")}
+def _write_segments(channels: _Channels, report: Report, start_ns: int) -> None:
+    for segment in report.segments:
+        body = {"name": segment.name, "mode": segment.mode, "start_s": segment.start_s,
+                "end_s": segment.end_s, "thresholds": dict(segment.thresholds),
+                "max_g": dict(segment.max_g), "case": segment.case}
         channels.write(f"{TOPIC_PREFIX}/segments", "auvdiag.Segment", body,
-                       start_ns + round(float(segment["start_s"]) * 1e9))
+                       start_ns + round(float(segment.start_s) * 1e9))
 
 
-def _write_events(channels: _Channels, document: dict[str, Any], start_ns: int,
-                  end_ns: int) -> None:
-    for seconds, level, text in _events(document):
+def _write_events(channels: _Channels, report: Report, start_ns: int, end_ns: int) -> None:
+    for seconds, level, text in _events(report):
         time_ns = start_ns + round(float(seconds) * 1e9)
         channels.write(f"{TOPIC_PREFIX}/events", "foxglove.Log",
                        {"timestamp": _stamp(time_ns), "level": level, "message": text,
                         "name": "auvdiag", "file": "", "line": 0}, time_ns)
-    detected = document.get("detected_at_s")
+    detected = report.detected_at_s
     verdict_ns = end_ns if detected is None else start_ns + round(float(detected) * 1e9)
-    summary = verdict_title(document)
+    summary = verdict_title(report)
     channels.write(f"{TOPIC_PREFIX}/events", "foxglove.Log",
                    {"timestamp": _stamp(verdict_ns), "level": LOG_LEVEL_INFO,
                     "message": f"verdict: {summary}", "name": "auvdiag", "file": "",
                     "line": 0}, verdict_ns)
     channels.write(f"{TOPIC_PREFIX}/verdict", "auvdiag.Verdict", {
-        "verdict": document["verdict"], "component": document.get("component"),
-        "candidates": list(document.get("candidates") or []), "case": document.get("case"),
-        "onset_s": document.get("onset_s"), "detected_at_s": detected,
+        "verdict": report.verdict, "component": report.component,
+        "candidates": list(report.candidates), "case": report.case,
+        "onset_s": report.onset_s, "detected_at_s": detected,
         "summary": summary}, verdict_ns)

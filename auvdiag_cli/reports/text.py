@@ -1,98 +1,103 @@
 """The short human summary printed on the terminal."""
 
-import math
 import textwrap
-from collections.abc import Sequence
 
 from adapters import TopicInfo
-from auvdiag_cli.engine.active import ActiveDiagnosis
-from auvdiag_cli.engine.coverage import normal_verdict_text
-from auvdiag_cli.engine.effort_check import EffortCheck
-from auvdiag_cli.engine.hypotheses import HypothesisTest
-from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, Diagnosis, Verdict
-from auvdiag_cli.engine.substitution import Substitution
+from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
 from auvdiag_cli.jobs.inspect import Inspection
-from auvdiag_cli.reports.json_report import utc_text
+from auvdiag_cli.reports.json_report import utc_text, verdict_title
+from auvdiag_cli.reports.report import ActivePart, ActuatorsPart, Report
+from auvdiag_cli.reports.sentences import (
+    hypotheses_sentence,
+    names,
+    substitution_facts,
+    thrust_kept,
+)
 
 DETAIL_WIDTH = 100
 
 
-def _components(names: Sequence[str]) -> str:
-    return " or ".join(name.replace("_", " ") for name in names)
-
-
-def summary_lines(diagnosis: Diagnosis) -> list[str]:
-    d = diagnosis
-    duration = d.histories.duration_s or 0.0
-    lines = [f"{d.log}  ({d.format}, {duration:.1f} s, vehicle {d.vehicle})"]
-    if d.completeness is not None and not d.completeness.complete:
-        lines.append(f"PARTIAL LOG: analysed only what was readable: {d.completeness.reason}")
-    coverage = d.coverage
-    if d.verdict == Verdict.NORMAL:
-        lines.append("verdict: " + normal_verdict_text(coverage.counts(), coverage.complete))
-    elif d.verdict == Verdict.UNDETERMINED:
+def summary_lines(report: Report) -> list[str]:
+    """The terminal summary of a diagnosis."""
+    r, coverage = report, report.coverage
+    lines = [f"{r.log}  ({r.format}, {r.duration_s or 0.0:.1f} s, vehicle {r.vehicle})"]
+    if r.partial and r.completeness is not None:
+        lines.append(f"PARTIAL LOG: analysed only what was readable: {r.completeness.reason}")
+    if r.verdict == "fault":
+        lines += _fault_lines(r)
+    elif r.verdict == "undetermined":
         lines.append("verdict: UNDETERMINED: no signal could be judged")
     else:
-        what = (d.component.replace("_", " ") if d.component
-                else _components(d.candidates) if d.candidates else "unidentified component")
-        if d.degradation is not None:
-            what += f" weakened to about {d.degradation.thrust_fraction:.0%} thrust"
-        lines.append(f"verdict: FAULT: {what}"
-                     + (f" (pattern case {d.case})" if d.case is not None else ""))
-        lines.append(f"  onset    ~{d.onset_s:.1f} s   detected {d.detected_at_s:.1f} s   "
-                     f"(delay {d.detected_at_s - d.onset_s:.1f} s)"
-                     if d.onset_s is not None and d.detected_at_s is not None else "")
-        lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in d.b.items()))
-        if d.hypotheses is not None:
-            lines.append("  " + _hypotheses_line(d.hypotheses))
-        lines += _active_lines(d.active)
-        lines += _substitution_lines(d.substitution)
-    lines.append(f"  coverage: {coverage.describe()}")
-    lines += [f"  {name}: {why}" for name, why in d.not_judged.items()]
-    check = d.command_check
-    if check is not None:
-        lines.append("  commands vs motion: " + (check.describe() if check.judged
-                                                 else "no actuator could be judged"))
-        lines += [f"    {name}: {why}" for name, why in check.not_judged.items()]
-    if d.start_check is not None:
-        lines.append("  start: " + d.start_check.describe(d.sensor_units))
-    if d.change_check is not None:
-        lines.append("  change test: " + d.change_check.describe())
-    lines += effort_lines(d.effort_check)
-    for result in d.segments:
-        seg = result.segment
-        peaks = ", ".join(f"{name} {result.max_g[name]:.1f}/{seg.thresholds[name]:g} %"
-                          + (" (not judged)" if name in d.not_judged else "")
-                          for name in result.max_g)
-        case = f"  case {result.case}" if result.case else ""
-        lines.append(f"  segment {seg.name:<8} {seg.start_s:7.1f}-{seg.end_s:7.1f} s  "
-                     f"max g / threshold: {peaks}{case}")
-    lines += [f"  note: {note}" for note in d.notes]
-    inputs = d.model.inputs
-    lines.append(f"  model: {d.model.name} ({d.model.path})"
+        lines.append("verdict: " + verdict_title(r))
+    if coverage is not None:
+        lines.append(f"  coverage: {coverage.engine().describe()}")
+    lines += [f"  {name}: {why}" for name, why in r.not_judged.items()]
+    if r.commands_check is not None:
+        lines.append("  commands vs motion: " + r.commands_check.summary)
+        lines += [f"    {name}: {why}" for name, why in r.commands_check.not_judged.items()]
+    if r.start_check is not None:
+        lines.append("  start: " + r.start_check.summary)
+    if r.change_check is not None:
+        lines.append("  change test: " + r.change_check.summary)
+    lines += effort_lines(r.actuators)
+    for segment in r.segments:
+        peaks = ", ".join(f"{name} {_percent(g)}/{segment.thresholds.get(name, 0):g} %"
+                          + (" (not judged)" if name in r.not_judged else "")
+                          for name, g in segment.max_g.items())
+        case = f"  case {segment.case}" if segment.case else ""
+        lines.append(f"  segment {segment.name:<8} {segment.start_s:7.1f}-"
+                     f"{segment.end_s:7.1f} s  max g / threshold: {peaks}{case}")
+    lines += [f"  note: {note}" for note in r.notes]
+    inputs = r.model.inputs
+    lines.append(f"  model: {r.model.name} ({r.model.path})"
                  + (f", driven also by the measured {', '.join(inputs)}" if inputs else ""))
     return [line for line in lines if line]
 
 
-def effort_lines(check: EffortCheck | None) -> list[str]:
+def _percent(g: float | None) -> str:
+    return "-" if g is None else f"{g:.1f}"
+
+
+def _fault_lines(r: Report) -> list[str]:
+    what = r.component.replace("_", " ") if r.component else (
+        names(r.candidates) or "unidentified component")
+    if r.degradation is not None:
+        what += f" weakened to {thrust_kept(r.degradation)} thrust"
+    lines = [f"verdict: FAULT: {what}" + (f" (pattern case {r.case})" if r.case is not None
+                                         else "")]
+    if r.onset_s is not None and r.detected_at_s is not None:
+        lines.append(f"  onset    ~{r.onset_s:.1f} s   detected {r.detected_at_s:.1f} s   "
+                     f"(delay {r.detected_at_s - r.onset_s:.1f} s)")
+    lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in r.b.items()))
+    if r.hypotheses is not None:
+        lines.append("  hypotheses: " + hypotheses_sentence(r.hypotheses))
+    lines += _active_lines(r.active_diagnosis)
+    if r.substitution is not None:
+        (_, first), *rest = substitution_facts(r.substitution)
+        lines.append(f"  substituting control: {first}")
+        lines += [f"    {label.lower()}: {text}" for label, text in rest]
+    return lines
+
+
+def effort_lines(check: ActuatorsPart | None) -> list[str]:
     """The effort line and each actuator's share against its normal band (or why not)."""
     if check is None:
         return []
-    lines = ["  effort: " + check.describe()]
-    shares = [f"{a.name} {a.share:.3f} ({a.normal_share:.3f} ± {a.spread:.3f}, "
-              f"{a.departure:+.0%})" for a in check.actuators
+    lines = ["  effort: " + check.summary]
+    shares = [f"{name} {a.share:.3f} ({a.normal_share:.3f} ± {a.spread:.3f}, "
+              f"{a.departure:+.0%})" for name, a in check.shares.items()
               if a.share is not None and a.normal_share is not None
               and a.spread is not None and a.departure is not None]
     if shares:
         lines += textwrap.wrap("shares (normal ± spread): " + ", ".join(shares),
                                width=DETAIL_WIDTH, initial_indent="    ",
                                subsequent_indent="      ")
-    reasons = dict.fromkeys(f"{a.group}: {a.not_judged}" for a in check.actuators
+    reasons = dict.fromkeys(f"{a.group}: {a.not_judged}" for a in check.shares.values()
                             if a.not_judged is not None)
     return lines + [f"    {reason}" for reason in reasons]
 
 
-def _active_lines(active: ActiveDiagnosis | None) -> list[str]:
+def _active_lines(active: ActivePart | None) -> list[str]:
     if active is None:
         return []
     lines: list[str] = []
@@ -107,44 +112,6 @@ def _active_lines(active: ActiveDiagnosis | None) -> list[str]:
                      + " or ".join(active.recommended_dms)
                      + " on the next dive (or give such a log with --with) to decide")
     return lines
-
-
-def _substitution_lines(s: Substitution | None) -> list[str]:
-    if s is None:
-        return []
-    lines = []
-    error = (f", expected error {s.expected_error_rms:.4f} {s.unit} rms"
-             if s.expected_error_rms is not None else "")
-    lines.append(f"  substituting control: model {s.signal} replaces the sensor from "
-                 f"{s.from_s:.1f} s{error}")
-    if s.truth_error_rms is not None and s.failed_error_rms is not None:
-        lines.append(f"    against the truth: substituted {s.truth_error_rms:.4f} "
-                     f"{s.unit} rms, failed sensor {s.failed_error_rms:.4f} {s.unit}")
-    if "truth" in s.tracks:
-        lines.append("    dead-reckoned track ends "
-                     f"{s.tracks['substituted'].distance_to(s.tracks['truth']):.2f} m "
-                     "from the true end with the substitute, "
-                     f"{s.tracks['failed'].distance_to(s.tracks['truth']):.2f} m with "
-                     "the failed sensor")
-    loop = s.closed_loop
-    if loop is not None:
-        outcome = (f"reaches its last waypoint at {loop.finished_s:.1f} s"
-                   if loop.reached else "does not reach its last waypoint")
-        lines.append(f"    closed-loop replay (controller fed the model from "
-                     f"{loop.start_s:.1f} s): the vehicle {outcome}, ending "
-                     f"{loop.miss_m:.2f} m from it")
-    return lines
-
-
-def _hypotheses_line(test: HypothesisTest) -> str:
-    best, other, margin = test.best, test.runner_up, test.margin
-    text = (f"best explained by {best.describe()} (g at most {best.peak_g_ratio:.0%} of its "
-            "threshold)" if best.explains else
-            f"no single-component fault explains it (closest: {best.describe()}, "
-            f"{best.peak_g_ratio:.0%})")
-    if other is not None and margin is not None and math.isfinite(margin):
-        text += f"; runner-up {other.describe()} ({margin:.1f}x)"
-    return "hypotheses: " + text
 
 
 def _utc(time_ns: int | None) -> str:

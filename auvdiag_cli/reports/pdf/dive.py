@@ -1,8 +1,8 @@
-"""The PDF report of one dive, drawn from the JSON report and its time histories only (so a
+"""The PDF report of one dive, drawn from the report and its time histories only (so a
 saved report can be drawn again without the log or the model)."""
 
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 from auvdiag_cli.reports.json_report import verdict_title
 from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
@@ -15,51 +15,52 @@ from auvdiag_cli.reports.pdf.plots import (
 )
 from auvdiag_cli.reports.pdf.style import COLOURS, pdf_document
 from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
+from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
 
 
-def _banner(document: dict[str, Any]) -> Line:
-    verdict = document["verdict"]
-    partial = verdict == "normal" and not (document.get("coverage") or {}).get("complete", True)
+def _banner(report: Report) -> Line:
+    verdict = report.verdict
+    partial = verdict == "normal" and report.coverage is not None and \
+        not report.coverage.complete
     colour = COLOURS["partial"] if partial else COLOURS.get(verdict, COLOURS["error"])
-    return Line(verdict_title(document), size=20, bold=True, banner=colour)
+    return Line(verdict_title(report), size=20, bold=True, banner=colour)
 
 
-def partial_log_text(document: dict[str, Any]) -> str | None:
+def partial_log_text(report: Report) -> str | None:
     """"PARTIAL LOG: ..." when the report covers only the readable part of a damaged log."""
-    completeness = document.get("completeness") or {}
-    if completeness.get("status") != "partial":
+    completeness = report.completeness
+    if completeness is None or completeness.status != "partial":
         return None
-    read = completeness.get("seconds_read")
-    at = completeness.get("damage_at_byte")
-    where = f" (damage at byte {at} of {completeness.get('bytes_total')})" if at else ""
-    span = f" the first {read:.1f} s" if isinstance(read, int | float) else " part"
+    read, at = completeness.seconds_read, completeness.damage_at_byte
+    where = f" (damage at byte {at} of {completeness.bytes_total})" if at else ""
+    span = f" the first {read:.1f} s" if read is not None else " part"
     return f"PARTIAL LOG: only{span} could be read{where}"
 
 
-def first_page_lines(document: dict[str, Any], series: Series | None) -> list[Line]:
-    lines = [_banner(document)]
-    partial = partial_log_text(document)
+def first_page_lines(report: Report, series: Series | None) -> list[Line]:
+    lines = [_banner(report)]
+    partial = partial_log_text(report)
     if partial is not None:
         lines.append(Line(partial, size=13, bold=True, banner=COLOURS["error"]))
     lines.append(Line(""))
-    for label, value in summary_facts(document):
+    for label, value in summary_facts(report):
         lines += paragraph(f"{label}:  {value}", size=10)
     lines += heading("The paper's assumptions, and what they mean for this log")
-    for number, (assumption, remark) in enumerate(assumption_remarks(document, series), 1):
+    for number, (assumption, remark) in enumerate(assumption_remarks(report, series), 1):
         lines += paragraph(f"{number}. {assumption}", size=9.5, bold=True)
         lines += paragraph(f"here: {remark}", size=9.5, indent=0.02, colour=COLOURS["muted"])
     return lines
 
 
-def _cell(values: dict[str, Any], digits: int = 1) -> str:
+def _cell(values: Mapping[str, float | int | None], digits: int = 1) -> str:
     return " ".join("-" if v is None else f"{v:.{digits}f}" if isinstance(v, float) else str(v)
                     for v in values.values())
 
 
-def detail_lines(document: dict[str, Any]) -> list[Line]:
-    signals = list(document.get("b", {}))
-    unjudged = [name for name in signals if name in (document.get("not_judged") or {})]
+def detail_lines(report: Report) -> list[Line]:
+    signals = list(report.b)
+    unjudged = [name for name in signals if name in report.not_judged]
     lines = paragraph(f"Columns per signal, in the order {', '.join(signals)}. Thresholds and "
                       "g in percent of each signal's full scale."
                       + (f" Not judged (their g raises no alarm): {', '.join(unjudged)}."
@@ -67,44 +68,44 @@ def detail_lines(document: dict[str, Any]) -> list[Line]:
     header = f"{'segment':<10}{'mode':<9}{'start-end [s]':<17}{'thresholds':<22}" \
              f"{'max g':<24}{'b':<10}case"
     lines.append(Line(header, family="monospace", bold=True, size=8.5))
-    for s in document.get("segments", []):
-        span = f"{s['start_s']:.1f}-{s['end_s']:.1f}"
-        case = "-" if s.get("case") is None else str(s["case"])
-        row = (f"{s['name'][:9]:<10}{s['mode']:<9}{span:<17}{_cell(s['thresholds'], 0):<22}"
-               f"{_cell(s['max_g']):<24}{_cell(s['b']):<10}{case}")
+    for s in report.segments:
+        span = f"{s.start_s:.1f}-{s.end_s:.1f}"
+        case = "-" if s.case is None else str(s.case)
+        row = (f"{s.name[:9]:<10}{s.mode:<9}{span:<17}{_cell(s.thresholds, 0):<22}"
+               f"{_cell(s.max_g):<24}{_cell(s.b):<10}{case}")
         lines.append(Line(row, family="monospace", size=8.5))
-    active = document.get("active_diagnosis")
+    active = report.active_diagnosis
     if active:
         lines += heading("Active diagnosis")
-        for e in active["evidence"]:
-            outcome = "a fault among" if e["faulty"] else "clears"
-            lines += paragraph(f"{e['segment']} at {e['start_s']:.1f} s in {e['log']}: b = "
-                               f"{''.join(str(v) for v in e['b'].values())} -> {outcome} "
-                               f"{', '.join(e['tested'])}")
-        if active.get("recommended_dms"):
-            lines += paragraph("To decide, run " + " or ".join(active["recommended_dms"])
+        for e in active.evidence:
+            outcome = "a fault among" if e.faulty else "clears"
+            lines += paragraph(f"{e.segment} at {e.start_s:.1f} s in {e.log}: b = "
+                               f"{''.join(str(v) for v in e.b.values())} -> {outcome} "
+                               f"{', '.join(e.tested)}")
+        if active.recommended_dms:
+            lines += paragraph("To decide, run " + " or ".join(active.recommended_dms)
                                + " on the next dive.")
-    if document.get("notes"):
+    if report.notes:
         lines += heading("Notes")
-        for note in document["notes"]:
+        for note in report.notes:
             lines += paragraph(f"- {note}")
     return lines
 
 
-def render_dive_report(document: dict[str, Any], series: Series | None, target: Path) -> int:
+def render_dive_report(report: Report, series: Series | None, target: Path) -> int:
     """Write the PDF; returns its page count."""
-    name = Path(document["log"]).name
+    name = Path(report.log).name
     title = f"auvdiag report: {name}"
-    with pdf_document(target, title, f"Fault diagnosis of {document['log']}") as pdf:
+    with pdf_document(target, title, f"Fault diagnosis of {report.log}") as pdf:
         # One flow of text: the segments follow the summary on its page where they fit,
         # rather than a page of their own that is mostly empty.
-        text = [*first_page_lines(document, series), *heading("Segments and evidence"),
-                *detail_lines(document)]
+        text = [*first_page_lines(report, series), *heading("Segments and evidence"),
+                *detail_lines(report)]
         pages = write_text_pages(pdf, text, title, f"Diagnosis of {name}")
         if series is None or "measured" not in series:
             return pages
         for draw in (sensors_page, residual_page, commands_page, effort_page, substitution_page):
-            figure = draw(document, series)
+            figure = draw(report, series)
             if figure is not None:
                 figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])
                 pdf.savefig(figure)

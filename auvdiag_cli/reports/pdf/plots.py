@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from auvdiag_cli.reports.pdf.style import COLOURS, COMMAND_CYCLE, new_page, seconds_label
+from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
 
 if TYPE_CHECKING:
@@ -17,17 +18,15 @@ def _names(series: Series, key: str) -> list[str]:
     return [str(name) for name in series[key]]
 
 
-def _mark_events(ax: "Axes", document: dict[str, Any], label: bool) -> None:
-    for segment in document.get("segments", []):
-        if segment["mode"] == "routine":
-            ax.axvspan(segment["start_s"], segment["end_s"], color=COLOURS["dms"], alpha=0.18,
-                       lw=0)
-            ax.axvline(segment["start_s"], color=COLOURS["dms"], lw=0.6)
-    for key, colour, text in (("onset_s", COLOURS["onset"], "onset"),
-                              ("detected_at_s", COLOURS["alarm"], "detected")):
-        if document.get(key) is not None:
-            ax.axvline(document[key], color=colour, ls="--", lw=1.0,
-                       label=text if label else None)
+def _mark_events(ax: "Axes", report: Report, label: bool) -> None:
+    for segment in report.segments:
+        if segment.mode == "routine":
+            ax.axvspan(segment.start_s, segment.end_s, color=COLOURS["dms"], alpha=0.18, lw=0)
+            ax.axvline(segment.start_s, color=COLOURS["dms"], lw=0.6)
+    for at, colour, text in ((report.onset_s, COLOURS["onset"], "onset"),
+                             (report.detected_at_s, COLOURS["alarm"], "detected")):
+        if at is not None:
+            ax.axvline(at, color=colour, ls="--", lw=1.0, label=text if label else None)
 
 
 def _figure_legend(figure: "Figure", axes: list["Axes"]) -> None:
@@ -40,19 +39,19 @@ def _figure_legend(figure: "Figure", axes: list["Axes"]) -> None:
                   ncols=min(len(entries), 7))
 
 
-def _stacked(document: dict[str, Any], rows: int, title: str) -> tuple["Figure", list["Axes"]]:
+def _stacked(report: Report, rows: int, title: str) -> tuple["Figure", list["Axes"]]:
     figure = new_page()
     axes = list(np.atleast_1d(figure.subplots(rows, 1, sharex=True)))
     axes[0].set_title(title, loc="left", fontweight="bold")
     axes[-1].set_xlabel(seconds_label())
     for ax in axes:
-        _mark_events(ax, document, label=ax is axes[0])
+        _mark_events(ax, report, label=ax is axes[0])
     return figure, axes
 
 
-def sensors_page(document: dict[str, Any], series: Series) -> "Figure":
-    names, units = _names(series, "sensor_names"), document.get("units", {})
-    figure, axes = _stacked(document, len(names),
+def sensors_page(report: Report, series: Series) -> "Figure":
+    names, units = _names(series, "sensor_names"), report.units
+    figure, axes = _stacked(report, len(names),
                             "Sensors (SS) and the model of the healthy vehicle (SM); "
                             "shaded: Diagnosis Motion Sequences")
     t = series["time_s"]
@@ -66,13 +65,13 @@ def sensors_page(document: dict[str, Any], series: Series) -> "Figure":
     return figure
 
 
-def residual_page(document: dict[str, Any], series: Series) -> "Figure":
+def residual_page(report: Report, series: Series) -> "Figure":
     names = _names(series, "sensor_names")
-    figure, axes = _stacked(document, len(names),
+    figure, axes = _stacked(report, len(names),
                             "Residual index g (percent of full scale) against its threshold; "
                             "red band: b = 1")
     t = series["time_s"]
-    not_judged = document.get("not_judged") or {}
+    not_judged = report.not_judged
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         if name in not_judged:      # drawn, greyed: it raises no alarm
             ax.plot(t, series["g_percent"][:, i], color=COLOURS["dms"], lw=0.8)
@@ -91,16 +90,16 @@ def residual_page(document: dict[str, Any], series: Series) -> "Figure":
     return figure
 
 
-def commands_page(document: dict[str, Any], series: Series) -> "Figure":
-    figure, axes = _stacked(document, 1, "Commands, with the Diagnosis Motion Sequences")
+def commands_page(report: Report, series: Series) -> "Figure":
+    figure, axes = _stacked(report, 1, "Commands, with the Diagnosis Motion Sequences")
     ax, t = axes[0], series["time_s"]
     for i, name in enumerate(_names(series, "command_names")):
         ax.plot(t, series["commands"][:, i], lw=0.9, label=name,
                 color=COMMAND_CYCLE[i % len(COMMAND_CYCLE)])
     ax.set_ylabel("command (normalised, full scale = 1)")
-    for segment in document.get("segments", []):
-        if segment["mode"] == "routine":
-            ax.annotate(segment["name"], ((segment["start_s"] + segment["end_s"]) / 2, 0.98),
+    for segment in report.segments:
+        if segment.mode == "routine":
+            ax.annotate(segment.name, ((segment.start_s + segment.end_s) / 2, 0.98),
                         xycoords=("data", "axes fraction"), ha="center", va="top",
                         fontsize=8, color=COLOURS["muted"], annotation_clip=True,
                         bbox={"facecolor": "white", "edgecolor": "none", "pad": 1.0})
@@ -108,21 +107,21 @@ def commands_page(document: dict[str, Any], series: Series) -> "Figure":
     return figure
 
 
-def effort_page(document: dict[str, Any], series: Series) -> "Figure | None":
+def effort_page(report: Report, series: Series) -> "Figure | None":
     """Each actuator's share of its group's effort, window by window, against the normal
     share for the same conditions (dashed) and its band of ± one window's spread."""
     groups = [str(g) for g in series.get("effort_groups", [])]
     if not groups:
         return None
-    shares = (document.get("actuators") or {}).get("shares", {})
-    figure, axes = _stacked(document, len(groups),
+    shares = {} if report.actuators is None else report.actuators.shares
+    figure, axes = _stacked(report, len(groups),
                             "Share of the group's effort per actuator (1 = the group's mean); "
                             "dashed: normal share, band: ± one window's normal spread")
     for k, (ax, group) in enumerate(zip(axes, groups, strict=True)):
         t = series[f"effort_{k}_time_s"]
         for i, name in enumerate(_names(series, f"effort_{k}_members")):
             colour = COMMAND_CYCLE[i % len(COMMAND_CYCLE)]
-            harder = shares.get(name, {}).get("driven_harder", False)
+            harder = name in shares and shares[name].driven_harder
             normal = series[f"effort_{k}_normal"][:, i]
             band = float(series[f"effort_{k}_band"][i])
             ax.fill_between(t, normal - band, normal + band, color=colour, alpha=0.12, lw=0)
@@ -135,18 +134,18 @@ def effort_page(document: dict[str, Any], series: Series) -> "Figure | None":
     return figure
 
 
-def substitution_page(document: dict[str, Any], series: Series) -> "Figure | None":
-    substitution = document.get("substitution")
+def substitution_page(report: Report, series: Series) -> "Figure | None":
+    substitution = report.substitution
     if substitution is None or "substituted" not in series:
         return None
     figure = new_page()
     signal_ax, map_ax = figure.subplots(1, 2, width_ratios=[1.4, 1.0])
-    signal = substitution["signal"]
+    signal = substitution.signal
     column = _names(series, "sensor_names").index(signal)
     t = series["time_s"]
     signal_ax.set_title(f"Substituting Control: the model's {signal} replaces the failed "
                         "sensor", loc="left", fontweight="bold")
-    _mark_events(signal_ax, document, label=True)
+    _mark_events(signal_ax, report, label=True)
     signal_ax.plot(t, series["measured"][:, column], color=COLOURS["measured"], lw=0.8,
                    label="failed sensor")
     signal_ax.plot(t, series["substituted"], color=COLOURS["modelled"], lw=0.9,
@@ -155,7 +154,7 @@ def substitution_page(document: dict[str, Any], series: Series) -> "Figure | Non
         signal_ax.plot(t, series["substituted_truth"], color=COLOURS["truth"], lw=0.8,
                        ls="--", label="truth")
     signal_ax.set_xlabel(seconds_label())
-    signal_ax.set_ylabel(f"{signal} [{substitution['unit']}]")
+    signal_ax.set_ylabel(f"{signal} [{substitution.unit}]")
     _draw_tracks(map_ax, series)
     _figure_legend(figure, [signal_ax, map_ax])
     return figure
