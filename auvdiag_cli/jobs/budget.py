@@ -97,6 +97,13 @@ class Judge:
     def law(self) -> str:
         return "student-t" if self.kind == "start" else "gumbel"
 
+    def over(self, threshold: float) -> np.ndarray:
+        """Which logs' statistics alarm at ``threshold``, as the diagnosis compares them: a
+        start beyond it, the others (g, as the paper's b) from it on."""
+        with np.errstate(invalid="ignore"):
+            return np.asarray(self.statistic > threshold if self.kind == "start"
+                              else self.statistic >= threshold)
+
 
 @dataclass(frozen=True)
 class JudgeFit:
@@ -138,9 +145,8 @@ class BudgetThresholds:
     def _flags(self, over: bool) -> np.ndarray:
         flags = np.zeros(self.logs, bool)
         for f in self.fits:
-            with np.errstate(invalid="ignore"):
-                flags |= (f.judge.statistic >= f.threshold if over
-                          else np.asarray(f.fit.loo_alarms(f.share))[:self.logs])
+            flags |= (f.judge.over(f.threshold) if over
+                      else np.asarray(f.fit.loo_alarms(f.share))[:self.logs])
         return flags
 
     @property
