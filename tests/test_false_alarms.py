@@ -3,6 +3,7 @@
 
 import json
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -178,3 +179,23 @@ def test_calibrate_refuses_a_budget_it_cannot_read_in_one_line(make_log, tmp_pat
                                  "--false-alarm-rate", "often"])
     assert result.exit_code == 2
     assert "--false-alarm-rate" in result.output and len(result.output.strip().splitlines()) == 1
+
+
+def test_normal_dives_that_start_alike_do_not_alarm_after_a_budgeted_calibration(tmp_path):
+    """Simulated dives all start at rest alike: the start's normal deviations barely
+    scatter, and a threshold rounded down below them flagged every normal dive at its
+    start. Thresholds round up; the calibration logs stay normal."""
+    from auvdiag_cli import api
+
+    samples = Path(__file__).resolve().parents[1] / "sample_logs"
+    normal = [samples / name for name in ("paper-normal", "mission-large-cw.mcap",
+                                          "mission-large-ccw.bin", "mission-fast-ccw.tlog",
+                                          "mission-ccw-db3", "routine-and-mission.bag")]
+    model_dir = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model_dir)
+    profile = api.load_profile()
+    model = api.load_model(model_dir, profile)
+    result = api.calibrate(normal, profile, model,
+                           options=api.CalibrateOptions(budget=FalseAlarmBudget(0.05)))
+    assert result.budget is not None and result.budget.in_sample_alarmed == 0
+    assert api.diagnose(normal[0], profile, model).verdict == api.Verdict.NORMAL

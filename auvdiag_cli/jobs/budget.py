@@ -12,6 +12,7 @@ counted from how the judges' statistics move together over the normal logs
 is fitted to the training logs' starts as well as the calibration logs': the start is not
 fitted by the model, so those are fair normal data, and more of them steady the law."""
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -115,7 +116,10 @@ class JudgeFit:
 
     @property
     def threshold(self) -> float:
-        return round(self.fit.threshold(self.share), 6)
+        """The law's threshold, rounded up to the sixth decimal: rounding it down could put
+        it below normal logs' values where they barely scatter (simulated dives that all
+        start at rest alike)."""
+        return math.ceil(self.fit.threshold(self.share) * 1e6) / 1e6
 
     @property
     def loo_alarms(self) -> int:
