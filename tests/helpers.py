@@ -25,11 +25,27 @@ def diagnose_outcome(log: Path, *options: str) -> tuple[int, dict[str, Any] | st
     return result.exit_code, json.loads(result.stdout)
 
 
+LIBRARY_OPTIONS = {"--model", "--profile", "--mission", "--truth", "--with"}
+
+
 def diagnose_json(log: Path, *options: str) -> tuple[int, dict[str, Any]]:
-    """`diagnose_outcome` where a verdict must come out (exit status 0 or 1)."""
-    code, report = diagnose_outcome(log, *options)
-    assert isinstance(report, dict), report
-    return code, report
+    """The diagnosis of ``log`` through the library, as `auvdiag diagnose LOG OPTIONS`
+    would give it: the exit status it would have (1 for a fault, else 0) and the JSON
+    report as written and read back. A verdict must come out; the command line's own
+    behaviour (exit status 2, one-line errors) is `diagnose_outcome`'s."""
+    from auvdiag_cli import api
+
+    pairs = list(zip(options[::2], options[1::2], strict=True))
+    assert {o for o, _ in pairs} <= LIBRARY_OPTIONS, f"not a library option: {pairs}"
+    given = dict(pairs)
+    profile = api.load_profile(given.get("--profile"))
+    model = api.load_model(Path(given["--model"]) if "--model" in given else None, profile)
+    diagnosis = api.diagnose(Path(log), profile, model,
+                             companions=[Path(v) for o, v in pairs if o == "--with"],
+                             mission=Path(given["--mission"]) if "--mission" in given else None,
+                             truth=Path(given["--truth"]) if "--truth" in given else None)
+    code = 1 if diagnosis.verdict == api.Verdict.FAULT else 0
+    return code, json.loads(json.dumps(api.to_json(diagnosis)))
 
 
 def assert_same_signals(read: Any, reference: Any) -> None:
