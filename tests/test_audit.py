@@ -269,3 +269,21 @@ def test_a_short_fleet_summary_shares_its_page_with_the_charts(tmp_path):
     pixels = np.asarray(page)
     lower = pixels[pixels.shape[0] // 2:]
     assert (lower < 128).mean() > 0.01, "the first page's lower half is empty"
+
+
+def test_a_stored_result_this_release_cannot_read_is_done_again(tmp_path):
+    """A stored report whose shape does not read (damaged, or from another release) with
+    the right digests is diagnosed again, never a crash of the audit."""
+    from auvdiag_cli import api
+
+    fleet = tmp_path / "fleet"
+    fleet.mkdir()
+    samples = Path(__file__).resolve().parents[1] / "sample_logs"
+    shutil.copy(samples / "mission-fast-ccw.tlog", fleet)
+    first = api.audit([fleet], None, None, tmp_path / "out")
+    assert first.computed == 1
+    stored = next((tmp_path / "out" / "logs").glob("*.json"))
+    document = json.loads(stored.read_text())
+    stored.write_text(json.dumps({**document, "segments": {"not": "a list"}}))
+    again = api.audit([fleet], None, None, tmp_path / "out")
+    assert again.reused == 0 and again.computed == 1 and again.records[0].verdict == "normal"

@@ -111,10 +111,13 @@ def run_audit(options: AuditOptions, reporter: Reporter) -> AuditResult:
                                          fleet_vehicle=vehicles[str(log)].vehicle)
             continue
         reused = store.reusable(log, digests[str(log)])
-        if reused is not None:
-            done[str(log)] = AuditRecord.from_report(
-                store.with_vehicle(log, reused, vehicles[str(log)]))
-        else:
+        try:
+            if reused is not None:
+                done[str(log)] = AuditRecord.from_report(
+                    store.with_vehicle(log, reused, vehicles[str(log)]))
+        except ValueError:         # a stored result this release cannot read: done again
+            reused = None
+        if reused is None:
             profile = None if options.profile is None else str(options.profile)
             tasks.append(AuditTask(str(log), profile, model_dir))
     result.reused = len(done)
