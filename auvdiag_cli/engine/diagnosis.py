@@ -179,41 +179,39 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
     return Diagnosis.of(seen, _conclude(seen, normal, detection, judging, log, matching,
-                                        thresholds, dms_starts, companion_runs, profile,
-                                        model))
+                                        thresholds, dms_starts, companion_runs))
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
               judging: Judging, log: IngestedLog, matching: Matching, thresholds: np.ndarray,
-              dms_starts: list[int], companion_runs: Sequence[tuple[DmsRun, int]],
-              profile: Profile, model: LoadedModel) -> Finding:
+              dms_starts: list[int], companion_runs: Sequence[tuple[DmsRun, int]]
+              ) -> Finding:
     """The finding: from the replay's alarm where it raised one, else from the checks."""
     others = (seen.command_check, seen.start_check, seen.effort_check)
     if len(judging.not_judged) == len(seen.histories.sensor_names):
         normal = normal.noted("no signal is judged: the model cannot predict any of them")
         if any(other is not None and other.judged for other in others):
-            return apply_other_evidence(seen, normal, profile, model)
+            return apply_other_evidence(seen, normal, judging)
         return replace(normal, verdict=Verdict.UNDETERMINED, case=None)
     frame = log.frame
     change = seen.change_check
     if change is not None and change.alarm_s is not None and change.onset_s is not None and (
             detection is None or change.alarm_s < frame.time_s[detection.alarm_index]):
-        if names_a_mover(change, profile):
-            return apply_change_alarm(seen, normal, change, profile, model)
+        if names_a_mover(change, judging.profile):
+            return apply_change_alarm(seen, normal, change, judging)
         # The change came first: its b and times, named as the replay's alarm would be.
         b = {name: int(name in change.flagged) for name in frame.sensor_names}
         onset = int(np.searchsorted(frame.time_s, change.onset_s))
-        test = weigh_hypotheses(model, judging, frame, matching, thresholds, onset,
+        test = weigh_hypotheses(judging.model, judging, frame, matching, thresholds, onset,
                                 dms_starts)
         return isolate(seen, normal.noted(f"found by the change test: {change.describe()}"),
-                       b, change.alarm_s, change.onset_s, test, companion_runs, profile,
-                       model)
+                       b, change.alarm_s, change.onset_s, test, companion_runs, judging)
     if detection is None:
-        return apply_other_evidence(seen, normal, profile, model)
-    test = weigh_hypotheses(model, judging, frame, matching, thresholds,
+        return apply_other_evidence(seen, normal, judging)
+    test = weigh_hypotheses(judging.model, judging, frame, matching, thresholds,
                             detection.onset_index, dms_starts)
     return isolate(seen, normal, detection.b, frame.time_s[detection.alarm_index],
-                   frame.time_s[detection.onset_index], test, companion_runs, profile, model)
+                   frame.time_s[detection.onset_index], test, companion_runs, judging)
 
 
 def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray,

@@ -13,13 +13,13 @@ from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
+from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import rms, substitute
 from auvdiag_cli.vehicle.profile import Profile
-from models.store import LoadedModel
 
 # The candidate the hypotheses name must leave this many times less of its threshold than
 # any other candidate.
@@ -28,12 +28,11 @@ DECISIVE_MARGIN = 2.0
 
 def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s: float,
             onset_s: float, test: HypothesisTest,
-            companion_runs: Sequence[tuple[DmsRun, int]], profile: Profile,
-            model: LoadedModel) -> Finding:
+            companion_runs: Sequence[tuple[DmsRun, int]], judging: Judging) -> Finding:
     """The replay alarmed: read b in the pattern table, then let the DMS runs (this log's
     and its companions'), a weakened thruster's replay or the hypothesis test name the
     component where the table leaves it open or misreads it."""
-    finding = replace(apply_detection(seen, finding, b, alarm_s, onset_s, profile, model),
+    finding = replace(apply_detection(seen, finding, b, alarm_s, onset_s, judging),
                       hypotheses=test)
     effort = seen.effort_check
     if effort is not None and effort.suspects:
@@ -41,33 +40,32 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
     weak = next((h for h in test.ranked if h.is_actuator), None)
     if len(finding.candidates) > 1:
         own = [(run, seen.start_ns) for run in dms_runs(seen)]
-        return apply_active_diagnosis(seen, finding, [*own, *companion_runs], profile, model)
+        return apply_active_diagnosis(seen, finding, [*own, *companion_runs], judging)
     if finding.substitution is not None:
         if weak is not None and weak.explains:
-            return apply_weakened_thruster(finding, weak, profile)
+            return apply_weakened_thruster(finding, weak, judging.profile)
         return finding
     if not finding.candidates:
-        return name_by_hypotheses(seen, finding, test, profile, model)
+        return name_by_hypotheses(seen, finding, test, judging)
     return finding
 
 
-def apply_other_evidence(seen: Observations, finding: Finding, profile: Profile,
-                         model: LoadedModel) -> Finding:
+def apply_other_evidence(seen: Observations, finding: Finding, judging: Judging) -> Finding:
     """The replay raised no alarm: a sensor that read wrong from the start, an actuator
     carrying more of its group's effort than on normal logs, or one driven harder than the
     motion needs, still makes the verdict."""
     check, start, effort = seen.command_check, seen.start_check, seen.effort_check
     if start is not None and start.off:
-        return _apply_start_alarm(seen, finding, start, profile, model)
+        return _apply_start_alarm(seen, finding, start, judging)
     if effort is not None and effort.suspects:
-        return _apply_effort_alarm(seen, finding, effort, check, profile, model)
+        return _apply_effort_alarm(seen, finding, effort, check, judging)
     if check is not None and check.alarm_s is not None:
-        return _apply_command_alarm(seen, finding, check, profile, model)
+        return _apply_command_alarm(seen, finding, check, judging)
     return finding
 
 
 def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck,
-                       profile: Profile, model: LoadedModel) -> Finding:
+                       judging: Judging) -> Finding:
     """The log changed against its own beginning before the replay's thresholds were
     crossed, in signals the profile says which parts move: the signals that changed make
     b; a row of the pattern table names the part, else the part that moves most of what
@@ -76,18 +74,18 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
                       onset_s=change.onset_s)
     note = f"found by the change test: {change.describe()}"
-    row = look_up(profile.pattern, b)
+    row = look_up(judging.profile.pattern, b)
     if row is not None and row.components:
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
-                      profile, model)
-    ranked = change_suspects(change.flagged, profile)
+                      judging)
+    ranked = change_suspects(change.flagged, judging.profile)
     if len(ranked) > 1:
         note += "; the part that moves most of what changed is named, before " + ", ".join(
             ranked[1:])
     effect = failure_effect(seen, change)
     if effect:
         note += "; " + effect
-    return _found(seen, replace(finding, case=None), ranked[:1], note, profile, model)
+    return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
 
 
 def failure_effect(seen: Observations, change: ChangeCheck) -> str:
@@ -144,28 +142,28 @@ def change_suspects(flagged: Mapping[str, float], profile: Profile) -> list[str]
 
 
 def _found(seen: Observations, finding: Finding, candidates: Sequence[str], note: str,
-           profile: Profile, model: LoadedModel) -> Finding:
+           judging: Judging) -> Finding:
     """A fault with these candidates: one of them is named."""
     finding = replace(finding.noted(note), candidates=tuple(candidates))
     if len(candidates) == 1:
-        return _name_component(seen, finding, candidates[0], profile, model)
+        return _name_component(seen, finding, candidates[0], judging)
     return finding
 
 
 def _apply_start_alarm(seen: Observations, finding: Finding, start: StartCheck,
-                       profile: Profile, model: LoadedModel) -> Finding:
+                       judging: Judging) -> Finding:
     """The replay starts from the measured state and takes a wrong start reading as the
     truth; the sensors that started away from where normal logs start are the candidates."""
     finding = replace(finding, verdict=Verdict.FAULT, case=None, onset_s=0.0,
                       detected_at_s=start.at_s)
-    candidates = list(dict.fromkeys(s.component for s in profile.sensors if s.name in start.off))
+    candidates = list(dict.fromkeys(s.component for s in judging.profile.sensors
+                                    if s.name in start.off))
     return _found(seen, finding, candidates, "found at the start of the log: "
-                  + start.describe(seen.sensor_units), profile, model)
+                  + start.describe(seen.sensor_units), judging)
 
 
 def _apply_effort_alarm(seen: Observations, finding: Finding, effort: EffortCheck,
-                        check: CommandCheck | None, profile: Profile,
-                        model: LoadedModel) -> Finding:
+                        check: CommandCheck | None, judging: Judging) -> Finding:
     """An actuator carries more of its group's effort than on normal logs: the controller
     drives it harder to make up for a weakness near it. Shares that fell are the others
     taking less of the total, not faults of their own."""
@@ -176,18 +174,18 @@ def _apply_effort_alarm(seen: Observations, finding: Finding, effort: EffortChec
         note += "; more than one actuator is driven harder (a fault near several of them?)"
     if check is not None and check.alarm_s is not None:
         note += f"; the commands against the motion: {check.describe()}"
-    return _found(seen, finding, list(effort.named), note, profile, model)
+    return _found(seen, finding, list(effort.named), note, judging)
 
 
 def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandCheck,
-                         profile: Profile, model: LoadedModel) -> Finding:
+                         judging: Judging) -> Finding:
     """The motion looks normal (or cannot be judged) but an actuator works harder than the
     motion needs: a weakened actuator whose loss the controller makes up for."""
     finding = replace(finding, verdict=Verdict.FAULT, case=None,
                       detected_at_s=check.alarm_s, onset_s=check.onset_s)
     # A sensor reading the motion wrongly also makes the controller push harder; the motion
     # model rules that out only for the sensors it judges.
-    unjudged = [s.component for s in profile.sensors if s.name in seen.not_judged]
+    unjudged = [s.component for s in judging.profile.sensors if s.name in seen.not_judged]
     candidates = list(dict.fromkeys([*check.named, *unjudged])) if check.named else []
     note = f"found in the commands, not the motion: {check.describe()}"
     if len(check.named) > 1:
@@ -195,11 +193,11 @@ def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandChe
     if check.named and unjudged:
         note += ("; a misreading " + " or ".join(dict.fromkeys(unjudged)) + " (not judged by "
                  "the motion model) would look the same")
-    return _found(seen, finding, candidates, note, profile, model)
+    return _found(seen, finding, candidates, note, judging)
 
 
 def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTest,
-                       profile: Profile, model: LoadedModel) -> Finding:
+                       judging: Judging) -> Finding:
     """No row of the pattern table names the component (or there is no table): the
     hypothesis that explains the log does, when one does."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
@@ -216,7 +214,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     return _found(seen, finding, [best.component],
                   f"named by the hypothesis test: {best.describe()} explains the log (g then "
                   f"stays at {best.peak_g_ratio:.0%} of its threshold at most){beside}",
-                  profile, model)
+                  judging)
 
 
 def apply_weakened_thruster(finding: Finding, weak: Hypothesis, profile: Profile) -> Finding:
@@ -242,22 +240,21 @@ def apply_weakened_thruster(finding: Finding, weak: Hypothesis, profile: Profile
 
 
 def apply_active_diagnosis(seen: Observations, finding: Finding,
-                           runs: Sequence[tuple[DmsRun, int]], profile: Profile,
-                           model: LoadedModel) -> Finding:
+                           runs: Sequence[tuple[DmsRun, int]], judging: Judging) -> Finding:
     assert finding.onset_s is not None
     onset_ns = seen.start_ns + round(finding.onset_s * 1e9)
-    active = decide(finding.candidates, onset_ns, runs, profile)
+    active = decide(finding.candidates, onset_ns, runs, judging.profile)
     if active.conflict:
         finding = finding.noted("the DMS runs contradict each other (more than one fault?); "
                                 "all candidates kept")
     if len(active.candidates) > 1:
         active, finding = _narrow_by_predicted_signatures(finding, active, onset_ns, runs,
-                                                          profile, model)
+                                                          judging)
     if len(active.candidates) > 1 and finding.hypotheses is not None:
         active, finding = _narrow_by_hypotheses(finding, active, finding.hypotheses)
     finding = replace(finding, active=active, candidates=active.candidates)
     if len(active.candidates) == 1:
-        return _name_component(seen, finding, active.candidates[0], profile, model)
+        return _name_component(seen, finding, active.candidates[0], judging)
     return finding
 
 
@@ -286,7 +283,7 @@ def _narrow_by_hypotheses(finding: Finding, active: ActiveDiagnosis, test: Hypot
 
 def _narrow_by_predicted_signatures(finding: Finding, active: ActiveDiagnosis,
                                     onset_ns: int, runs: Sequence[tuple[DmsRun, int]],
-                                    profile: Profile, model: LoadedModel
+                                    judging: Judging
                                     ) -> tuple[ActiveDiagnosis, Finding]:
     """Where moving or not moving a component cannot separate the candidates (a thruster
     and the sensor of the motion it drives), the model can: it predicts each candidate's b
@@ -296,10 +293,11 @@ def _narrow_by_predicted_signatures(finding: Finding, active: ActiveDiagnosis,
     a threshold the model cannot call single bits reliably. Never all are cleared."""
     kept = list(active.candidates)
     for run, _ in runs:
-        if run.start_ns < onset_ns or run.name not in profile.dms:
+        if run.start_ns < onset_ns or run.name not in judging.profile.dms:
             continue
         alarm = any(run.b.values())
-        predicted = {c: any(dms_signature(model, profile, run.name, c).values()) for c in kept}
+        predicted = {c: any(dms_signature(judging.model, judging.profile, run.name,
+                                          c).values()) for c in kept}
         agreeing = [c for c in kept if predicted[c] == alarm]
         if agreeing and len(agreeing) < len(kept):
             seen = "".join(str(v) for v in run.b.values())
@@ -310,50 +308,50 @@ def _narrow_by_predicted_signatures(finding: Finding, active: ActiveDiagnosis,
             kept = agreeing
     # The DMSs on which the remaining candidates' failures look different decide next time.
     recommended = () if len(kept) == 1 else tuple(
-        name for name in profile.dms
-        if len({tuple(dms_signature(model, profile, name, c).values()) for c in kept}) > 1)
+        name for name in judging.profile.dms
+        if len({tuple(dms_signature(judging.model, judging.profile, name, c).values())
+                for c in kept}) > 1)
     return replace(active, candidates=tuple(kept), recommended_dms=recommended), finding
 
 
 def apply_detection(seen: Observations, finding: Finding, b: Mapping[str, int],
-                    alarm_s: float, onset_s: float, profile: Profile,
-                    model: LoadedModel) -> Finding:
-    row = look_up(profile.pattern, dict(b))
+                    alarm_s: float, onset_s: float, judging: Judging) -> Finding:
+    row = look_up(judging.profile.pattern, dict(b))
     finding = replace(finding, verdict=Verdict.FAULT, b=dict(b),
                       detected_at_s=round(float(alarm_s), 3), onset_s=round(float(onset_s), 3),
                       case=None if row is None else row.case)
     if row is not None:
         candidates = list(row.components)
     else:
-        candidates, finding = _predicted_on_dms(seen, finding, b, alarm_s, profile, model)
+        candidates, finding = _predicted_on_dms(seen, finding, b, alarm_s, judging)
     # A profile without a table naming parts (none, or only its "nothing" row) is not
     # reminded of it on every log: the other evidence names the part there.
-    if not candidates and any(r.components for r in profile.pattern):
+    if not candidates and any(r.components for r in judging.profile.pattern):
         finding = finding.noted(f"b = {dict(b)} fits no row of the pattern table: more than "
                                 "one fault, or one the table does not describe")
     finding = replace(finding, candidates=tuple(candidates))
     if len(candidates) == 1:
-        return _name_component(seen, finding, candidates[0], profile, model)
+        return _name_component(seen, finding, candidates[0], judging)
     return finding
 
 
 def _predicted_on_dms(seen: Observations, finding: Finding, b: Mapping[str, int],
-                      alarm_s: float, profile: Profile, model: LoadedModel
+                      alarm_s: float, judging: Judging
                       ) -> tuple[list[str], Finding]:
     """The table describes the mission; a DMS moves the vehicle otherwise, so a failure can
     show there with a b of its own. When the alarm came on a DMS, the candidates are the
     components whose failure, the model predicts, raises one of the same bits on it (the
     DMS runs that follow narrow them down)."""
     segment = next((r.segment for r in seen.segments
-                    if r.segment.mode == ROUTINE_MODE and r.segment.name in profile.dms
+                    if r.segment.mode == ROUTINE_MODE and r.segment.name in judging.profile.dms
                     and r.segment.start_s <= alarm_s <= r.segment.end_s), None)
     if segment is None:
         return [], finding
-    components = [c.component for c in profile.commands] + [s.component
-                                                            for s in profile.sensors]
+    components = [c.component for c in judging.profile.commands] + [s.component
+                                                            for s in judging.profile.sensors]
     matching = [c for c in components
                 if any(b[k] and v for k, v in
-                       dms_signature(model, profile, segment.name, c).items())]
+                       dms_signature(judging.model, judging.profile, segment.name, c).items())]
     if matching:
         bits = "".join(str(v) for v in b.values())
         finding = finding.noted(f"b = {bits} on {segment.name} fits no row of the pattern "
@@ -363,20 +361,21 @@ def _predicted_on_dms(seen: Observations, finding: Finding, b: Mapping[str, int]
     return matching, finding
 
 
-def _name_component(seen: Observations, finding: Finding, component: str, profile: Profile,
-                    model: LoadedModel) -> Finding:
+def _name_component(seen: Observations, finding: Finding, component: str, judging: Judging
+                    ) -> Finding:
     """The verdict names one component; a failed sensor gets Substituting Control."""
     finding = replace(finding, component=component)
-    sensor = next((s for s in profile.sensors if s.component == component), None)
+    sensor = next((s for s in judging.profile.sensors if s.component == component), None)
     histories = seen.histories
     matching = histories.matching
     if sensor is None or finding.onset_s is None or matching is None:
         return finding
     substitution = substitute(
         sensor, histories.sensor_names, histories.time_s, matching.measured, matching.modelled,
-        finding.onset_s, profile.navigation, model.card.heldout_error_rms.get(sensor.name))
-    if profile.controller is not None and seen.mission_legs:
+        finding.onset_s, judging.profile.navigation,
+        judging.model.card.heldout_error_rms.get(sensor.name))
+    if judging.profile.controller is not None and seen.mission_legs:
         substitution = replace(substitution, closed_loop=replay_closed_loop(
-            model, profile.controller, histories, finding.onset_s, seen.mission_legs,
-            profile.dt_s))
+            judging.model, judging.profile.controller, histories, finding.onset_s,
+            seen.mission_legs, judging.profile.dt_s))
     return replace(finding, substitution=substitution)

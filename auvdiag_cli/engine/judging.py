@@ -1,5 +1,6 @@
 """How the signals are judged, worked out once per model and profile and shared by the
-diagnosis, the hypothesis test and the fault signatures: each signal's full scale R_i, g's
+diagnosis, the hypothesis test, the isolation and the fault signatures (one context: the
+profile as calibrated and the model travel in it together): each signal's full scale R_i, g's
 window K, the decision window, the thresholds per mode (calibrated into the model over
 the profile's defaults), and which signals the model has the skill to judge."""
 
@@ -23,6 +24,7 @@ class Judging:
     decision_steps: int                  # b is collected this long after the first alarm
     profile: Profile                     # with the thresholds calibrated into the model
     not_judged: dict[str, str]           # signal -> why the model cannot judge it
+    model: LoadedModel                   # the model it judges with
 
     @classmethod
     def of(cls, model: LoadedModel, profile: Profile) -> "Judging":
@@ -34,7 +36,7 @@ class Judging:
                    profile.window_samples if card.window_samples is None
                    else card.window_samples,
                    round(profile.decision_window_s / profile.dt_s), judged,
-                   not_judged_signals(model))
+                   not_judged_signals(model), model)
 
     @property
     def scales(self) -> np.ndarray:
