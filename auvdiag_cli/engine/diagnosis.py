@@ -170,11 +170,11 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
         not_judged=not_judged,
-        command_check=_check_commands(log, segments, profile, model, notes),
+        command_check=_check_commands(log, segments, judging, notes),
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s),
-        effort_check=_check_effort(log, segments, profile, model, notes),
-        change_check=_check_change(change_errors, judging, frame.time_s, profile, model),
+        effort_check=_check_effort(log, segments, judging, notes),
+        change_check=_check_change(change_errors, judging, frame.time_s),
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
@@ -214,10 +214,11 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
                    frame.time_s[detection.onset_index], test, companion_runs, judging)
 
 
-def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray,
-                  profile: Profile, model: LoadedModel) -> ChangeCheck | None:
+def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
+                  ) -> ChangeCheck | None:
     """The log against its own beginning, for the signals the test judges
     (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
+    profile, model = judging.profile, judging.model
     names = profile.sensor_names
     judged = change_judged(model, [n for n, j in zip(names, judging.judged_mask, strict=True)
                                    if j])
@@ -229,10 +230,11 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray,
                         judging.window, profile.dt_s)
 
 
-def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
-                    model: LoadedModel, notes: list[str]) -> CommandCheck | None:
+def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,
+                    notes: list[str]) -> CommandCheck | None:
     """The commands against the motion, over the steps driven in closed loop or by a pilot
     (not the DMS runs, whose commands are fixed)."""
+    profile, model = judging.profile, judging.model
     relations = model.relations
     if relations is None:
         why = model.card.relations_refused
@@ -244,10 +246,11 @@ def _check_commands(log: IngestedLog, segments: list[Segment], profile: Profile,
                           mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
 
 
-def _check_effort(log: IngestedLog, segments: list[Segment], profile: Profile,
-                  model: LoadedModel, notes: list[str]) -> EffortCheck | None:
+def _check_effort(log: IngestedLog, segments: list[Segment], judging: Judging,
+                  notes: list[str]) -> EffortCheck | None:
     """Each actuator's share of its group's effort over the steps a controller or a pilot
     drove (not the DMS runs)."""
+    profile, model = judging.profile, judging.model
     effort = model.effort
     if effort is None:
         if profile.effort_groups:
