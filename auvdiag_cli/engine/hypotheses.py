@@ -118,11 +118,12 @@ class _Judge:
         return self.ratio(self.judging.g(self.measured[after], predicted[after]))
 
 
-def weigh_hypotheses(model: LoadedModel, judging: Judging, frame: AlignedFrame,
-                    matching: Matching, thresholds: np.ndarray, onset: int,
-                    restarts: Sequence[int]) -> HypothesisTest:
+def weigh_hypotheses(judging: Judging, frame: AlignedFrame, matching: Matching,
+                     thresholds: np.ndarray, onset: int, restarts: Sequence[int]
+                     ) -> HypothesisTest:
     judge = _Judge(matching.measured, thresholds, judging, onset)
-    hypotheses = [*_actuator_hypotheses(model, judging.profile, frame, judge, restarts),
+    hypotheses = [*_actuator_hypotheses(judging.model, judging.profile, frame, judge,
+                                        restarts),
                   *_sensor_hypotheses(judging.profile, frame, matching, judge)]
     return HypothesisTest(tuple(sorted(hypotheses, key=lambda h: h.peak_g_ratio)))
 
