@@ -30,7 +30,8 @@ class Step:
 def tutorial_steps(text: str) -> list[Step]:
     steps: list[Step] = []
     for block in re.findall(r"```console\n(.*?)```", text, re.DOTALL):
-        for line in block.splitlines():
+        # a command continued with a trailing backslash is one line, as the shell reads it
+        for line in re.sub(r" \\\n\s*", " ", block).splitlines():
             if line.startswith("$ "):
                 status = re.search(r"#\s*exit (\d+)\s*$", line)
                 steps.append(Step(line[2:], int(status.group(1)) if status else 0))
@@ -40,9 +41,9 @@ def tutorial_steps(text: str) -> list[Step]:
 
 
 def test_the_tutorial_is_read_as_steps():
-    steps = tutorial_steps("```console\n$ a --x   # exit 1\nshown line\n$ b\n```\n")
+    steps = tutorial_steps("```console\n$ a --x   # exit 1\nshown line\n$ b \\\n  --y\n```\n")
     assert [(s.command, s.exit_status, s.shown) for s in steps] == [
-        ("a --x   # exit 1", 1, ["shown line"]), ("b", 0, [])]
+        ("a --x   # exit 1", 1, ["shown line"]), ("b --y", 0, [])]
 
 
 def _script(steps: list[Step], out: Path) -> str:
@@ -81,7 +82,7 @@ def _run_as_written(steps: list[Step], tmp_path: Path) -> Path:
 
 def test_the_home_page_runs_as_shown(tmp_path):
     steps = tutorial_steps((ROOT / "docs" / "index.md").read_text())
-    assert any(s.command.startswith(".venv/bin/auvdiag diagnose") for s in steps)
+    assert any(s.command.startswith("auvdiag diagnose") for s in steps)
     work = _run_as_written(steps, tmp_path)
     assert (work / "paper-report.pdf").read_bytes().startswith(b"%PDF")
 

@@ -114,12 +114,15 @@ def _active_lines(active: ActivePart | None) -> list[str]:
     return lines
 
 
-def _utc(time_ns: int | None) -> str:
-    if time_ns is None:
-        return "?"
-    if time_ns <= EPOCH_CLOCK_NS:  # since boot, or since whatever the log counts from
-        return f"{time_ns / 1e9:.3f} s (the log's clock, not a date)"
-    return utc_text(time_ns, "milliseconds") or f"{time_ns} ns (not a date)"
+def _span(start_ns: int | None, end_ns: int | None) -> str:
+    """A log's first and last time: dates where its clock is UTC, else seconds on its own
+    clock (since boot, or since whatever the log counts from), said once."""
+    if start_ns is None or end_ns is None:
+        return "? … ?"
+    if end_ns <= EPOCH_CLOCK_NS:
+        return f"{start_ns / 1e9:.3f} … {end_ns / 1e9:.3f} s on the log's clock (not a date)"
+    return " … ".join(utc_text(t, "milliseconds") or f"{t} ns (not a date)"
+                      for t in (start_ns, end_ns))
 
 
 def _wrapped(label: str, items: list[str]) -> list[str]:
@@ -156,7 +159,7 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     duration = inv.duration_s
     lines = [f"{inspection.path}", f"  format    {inv.format} (profile mapping: "
              f"[sources.{inspection.family}])",
-             f"  span      {_utc(inv.start_ns)} … {_utc(inv.end_ns)}"
+             f"  span      {_span(inv.start_ns, inv.end_ns)}"
              + (f"  ({duration:.1f} s)" if duration is not None else "")]
     lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'mean rate':>9}")
     for topic in inv.topics:
