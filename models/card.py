@@ -1,15 +1,25 @@
 """The model card: what ``model.json`` says about a model, parsed once when it loads into
-typed, read-only values. Everything outside ``models`` reads a model through its card (and
-the parsed relations and effort beside it), never through the JSON document; a missing key
-takes the value a model from before that key existed means."""
+typed, read-only values, and the one writer of that document (``to_document``). Everything
+outside ``models`` reads a model through its card (and the parsed relations and effort
+beside it), never through the JSON document; a missing key takes the value a model from
+before that key existed means. A writer (train, calibrate, relate, score) gives the card new
+entries as typed values that say their own JSON (``ModelEntry``) and gets a new card."""
 
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from models.ahead import AheadPredictor
 from models.fast import NETWORK
+
+
+@runtime_checkable
+class ModelEntry(Protocol):
+    """A typed value that is one entry of model.json."""
+
+    def to_json(self) -> Mapping[str, object]: ...
 
 
 @dataclass(frozen=True)
@@ -169,6 +179,30 @@ class ModelCard:
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
+    # model.json as the card writes it back: every entry, the records kept for people
+    # (how it was trained and calibrated) among them, as JSON text so that it stays frozen.
+    document_text: str = field(default="{}", repr=False, compare=False)
+
+    def to_document(self) -> dict[str, Any]:
+        """model.json: what the card was read from, with every entry given since."""
+        document: dict[str, Any] = json.loads(self.document_text)
+        return document
+
+    def entry(self, key: str) -> dict[str, Any]:
+        """One entry of the document (a copy; empty where the model has none), for the
+        parsers in ``models`` of what the card does not type itself."""
+        value = self.to_document().get(key)
+        return value if isinstance(value, dict) else {}
+
+    def with_entries(self, **entries: "ModelEntry | Mapping[str, object] | object"
+                     ) -> "ModelCard":
+        """The card with these entries replaced, each a typed value (written with its
+        ``to_json``) or plain JSON; this card is unchanged."""
+        document = self.to_document()
+        for key, value in entries.items():
+            plain = value.to_json() if isinstance(value, ModelEntry) else value
+            document[key] = json.loads(json.dumps(plain))
+        return ModelCard.from_document(document)
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -237,4 +271,5 @@ class ModelCard:
                 str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
                 for statistic, values in (meta.get("change_test") or {}).get(
                     "thresholds", {}).items()}),
-            ahead=_ahead(meta, len(signals["commands"]), len(sensors)))
+            ahead=_ahead(meta, len(signals["commands"]), len(sensors)),
+            document_text=json.dumps(meta))

@@ -8,7 +8,6 @@ Diagnosis runs on the NumPy path and never imports torch; the torch module is bu
 when asked for (training, comparisons). Version 1 directories (``weights.pt``, a torch state
 dict read with ``weights_only=True``) still load."""
 
-import copy
 import hashlib
 import json
 import os
@@ -51,17 +50,12 @@ class ModelFileError(ModelError):
 class LoadedModel:
     state: dict[str, np.ndarray]     # the network's state dict, as arrays
     normaliser: Normaliser
-    # model.json as read; only the writers (train, calibrate, relate, score) go through it,
-    # with `entry` and `update_entries`: everything else reads `card`.
-    model_json: dict[str, Any]
+    # model.json, typed; only the writers (train, calibrate, relate, score) change it, with
+    # `update_entries`.
+    card: ModelCard
     path: str
     extra: dict[str, np.ndarray] = field(default_factory=dict)   # linear, on_linear/…
     directory: Path | None = None    # where it was read from
-
-    @cached_property
-    def card(self) -> ModelCard:
-        """model.json, parsed into typed values."""
-        return ModelCard.from_document(self.model_json)
 
     @property
     def shipped(self) -> bool:
@@ -75,24 +69,20 @@ class LoadedModel:
         memory by calibrate, relate or score, and not saved); False without a directory."""
         if self.directory is None:
             return False
-        saved = json.loads((self.directory / "model.json").read_text("utf-8"))
-        return bool(saved != self.model_json)
-
-    def entry(self, key: str) -> dict[str, Any]:
-        """A copy of one model.json entry, for a writer to edit and put back."""
-        return copy.deepcopy(self.model_json.get(key) or {})
+        saved = json.loads((self.directory / METADATA_FILE).read_text("utf-8"))
+        return bool(saved != self.card.to_document())
 
     def update_entries(self, **entries: object) -> None:
-        """Replace model.json entries (not yet written): the parsed card, the replay (which
-        predictor each signal is read from), relations and effort are read afresh."""
-        self.model_json.update(copy.deepcopy(entries))
-        for parsed in ("card", "dynamics", "relations", "effort"):
+        """Replace model.json entries (not yet written), each a typed value or plain JSON:
+        the replay (which predictor each signal is read from), relations and effort are
+        read afresh from the new card."""
+        self.card = self.card.with_entries(**entries)
+        for parsed in ("dynamics", "relations", "effort"):
             self.__dict__.pop(parsed, None)
 
     def with_entries(self, **entries: object) -> "LoadedModel":
         """The same model with these model.json entries replaced; this one is unchanged."""
-        return replace(self, model_json={**copy.deepcopy(self.model_json),
-                                       **copy.deepcopy(entries)})
+        return replace(self, card=self.card.with_entries(**entries))
 
     @cached_property
     def network(self) -> "RecurrentDynamics":
@@ -101,8 +91,8 @@ class LoadedModel:
 
         from models.dynamics import RecurrentDynamics
 
-        arch = self.model_json["architecture"]
-        network = RecurrentDynamics(arch["n_commands"], arch["n_states"], arch["hidden"],
+        card = self.card
+        network = RecurrentDynamics(card.drive_width, len(card.sensor_names), card.hidden,
                                     self.normaliser.delta_ratio)
         network.load_state_dict({k: torch.from_numpy(v) for k, v in self.state.items()})
         network.eval()
@@ -173,14 +163,14 @@ class LoadedModel:
     def relations(self) -> CommandRelations | None:
         """How the commands follow the motion on normal logs; None where the model has none
         (trained before they were learned, or the logs could not teach them)."""
-        entry = self.model_json.get("command_relations")
+        entry = self.card.entry("command_relations")
         return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
 
     @cached_property
     def effort(self) -> EffortModel | None:
         """Each actuator's normal share of its group's effort; None where the model has none
         (trained before effort was learnt, or the logs could not teach it)."""
-        entry = self.model_json.get("effort")
+        entry = self.card.entry("effort")
         return None if not entry or "groups" not in entry else EffortModel.from_json(entry)
 
     @property
@@ -234,14 +224,15 @@ def save_model(directory: Path, network: "RecurrentDynamics", normaliser: Normal
                           "delta_ratio": normaliser.delta_ratio},
         "weights_sha256": hashlib.sha256(weights.read_bytes()).hexdigest(),
     }
-    _write_document(full, directory)
+    _write_card(ModelCard.from_document(full), directory)
 
 
-def _write_document(document: dict[str, Any], directory: Path) -> None:
-    """The one writer of model.json, atomic: a reader never sees half of it."""
+def _write_card(card: ModelCard, directory: Path) -> None:
+    """Write model.json as the card says it (``ModelCard.to_document``), atomic: a reader
+    never sees half of it."""
     target = directory / METADATA_FILE
     temporary = target.with_name(f".{target.name}.tmp")
-    temporary.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    temporary.write_text(json.dumps(card.to_document(), indent=2) + "\n", encoding="utf-8")
     os.replace(temporary, target)
 
 
@@ -257,7 +248,7 @@ def write_model(model: LoadedModel, directory: Path) -> None:
         for file in source.iterdir():
             if file.is_file() and file.name != METADATA_FILE and not file.name.startswith("."):
                 (directory / file.name).write_bytes(file.read_bytes())
-    _write_document(model.model_json, directory)
+    _write_card(model.card, directory)
 
 
 def _read_weights(directory: Path, version: int) -> dict[str, np.ndarray]:
@@ -303,8 +294,8 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         extra = {k: arrays.pop(k) for k in list(arrays)
                  if k in (LINEAR_KEY, LINEAR_REPLAY_KEY)
                  or k.startswith(ON_LINEAR_PREFIX)}
-        model = LoadedModel(arrays, normaliser, metadata, label, extra, directory)
-        _ = model.card           # model.json holds what the card needs
+        model = LoadedModel(arrays, normaliser, ModelCard.from_document(metadata), label,
+                            extra, directory)
         fast = model.fast        # checks every weight is there with the architecture's shape
         _ = model.dynamics       # and every predictor a signal is read from
         _ = model.effort         # and that an effort entry refits

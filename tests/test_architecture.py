@@ -263,7 +263,7 @@ def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
             continue
         tree = ast.parse(path.read_text(encoding="utf-8"))
         touched = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
-        assert not touched & {"model_json", "entry", "update_entries"}, name
+        assert not touched & {"to_document", "entry", "update_entries", "with_entries"}, name
 
 
 def test_a_diagnosis_loads_no_data_frame_library_and_no_compiler_for_a_short_log(tmp_path):

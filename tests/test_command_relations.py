@@ -127,7 +127,7 @@ def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(
     from auvdiag_cli.jobs.relate import widen_thresholds
 
     model = load_model()
-    before = list(model.model_json["command_relations"]["thresholds"])
+    before = list(model.card.entry("command_relations")["thresholds"])
 
     def check(peaks: dict[str, float | None]) -> CommandCheck:
         return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), peaks, None, None,
@@ -135,7 +135,7 @@ def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(
 
     raised = widen_thresholds(model, [check({"thruster_0": 0.9, "thruster_1": 0.5}), None,
                                       check({"thruster_0": 0.2, "thruster_1": None})], 1.5)
-    after = model.model_json["command_relations"]["thresholds"]
+    after = model.card.entry("command_relations")["thresholds"]
     assert raised == {"thruster_0": after[0]} and after[1] == before[1]
     assert after[0] == pytest.approx(1.35 * before[0], rel=1e-4)
     assert model.relations is not None and model.relations.thresholds[0] == after[0]

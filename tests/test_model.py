@@ -114,7 +114,7 @@ def test_version_1_models_still_load(quick_model, tmp_path):
     target.mkdir()
     torch.save({k: torch.from_numpy(v) for k, v in model.state.items()}, target / "weights.pt")
     # Version 1 had the network alone: no other predictor to read a signal from.
-    metadata = {k: v for k, v in model.model_json.items() if k != "predictors"}
+    metadata = {k: v for k, v in model.card.to_document().items() if k != "predictors"}
     (target / "model.json").write_text(json.dumps({**metadata, "format_version": 1}))
     old = load_model(target)
     commands = np.full((50, 2), 0.4)
@@ -135,7 +135,7 @@ def test_unknown_model_version_is_refused(quick_model, tmp_path):
 
 
 def test_shipped_model_matches_the_papers_model_error():
-    meta = load_model().model_json
+    meta = load_model().card.to_document()
     for name, paper in PAPER_ERROR.items():
         assert meta["heldout_error"]["rms"][name] <= paper
     assert meta["heldout_error"]["paper_rms"] == PAPER_ERROR

@@ -227,7 +227,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     raised = widen_thresholds(model, checks, margin)
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
-        model.update_entries(start_state=start.to_json())
+        model.update_entries(start_state=start)
     evidence = change_evidence(diagnoses, judged, model, profile)
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
@@ -297,12 +297,12 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
         allowed = list(start.thresholds)
         for (_, name), value in fitted.thresholds("start").items():
             allowed[profile.sensor_names.index(name)] = value
-        model.update_entries(start_state=replace(start, thresholds=tuple(allowed)).to_json())
+        model.update_entries(start_state=replace(start, thresholds=tuple(allowed)))
     if relations is not None:
         extra = relations.thresholds.copy()
         for (_, name), value in fitted.thresholds("command").items():
             extra[profile.command_names.index(name)] = value
-        model.update_entries(command_relations=replace(relations, thresholds=extra).to_json())
+        model.update_entries(command_relations=replace(relations, thresholds=extra))
     return fitted
 
 
@@ -334,7 +334,7 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
     else:
         effort, notes = refit_effort(model.effort, relations, profile, false_alarm_rate)
     if isinstance(effort, EffortModel):
-        model.update_entries(effort=effort.to_json())
+        model.update_entries(effort=effort)
     return effort, notes
 
 

@@ -92,7 +92,7 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
         {} if isinstance(relations, Refused) else {"command_relations": relations})
     if start.refused is None:
         learned["start_state"] = start
-    model.update_entries(**{key: value.to_json() for key, value in learned.items()})
+    model.update_entries(**learned)
     return relations, start
 
 
@@ -114,5 +114,5 @@ def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None
             if not np.isnan(thresholds[k]) and ratio is not None and margin * ratio > 1.0:
                 thresholds[k] = round(margin * ratio * thresholds[k], 6)
                 raised[name] = float(thresholds[k])
-    model.update_entries(command_relations=replace(relations, thresholds=thresholds).to_json())
+    model.update_entries(command_relations=replace(relations, thresholds=thresholds))
     return raised
