@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import diagnose_json
 from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
@@ -117,10 +118,10 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
 
 
 def test_a_normal_flight_is_normal(flights: Path, model: Path):
-    code, output = invoke("diagnose", str(flights / "later_normal.csv"), "--profile",
-                          "crazyflie", "--model", str(model), "--json", "-", "--quiet")
-    assert code == 0, output
-    actuators = json.loads(output)["actuators"]
+    code, report = diagnose_json(flights / "later_normal.csv", "--profile", "crazyflie",
+                                 "--model", str(model))
+    assert code == 0, report
+    actuators = report["actuators"]
     assert actuators["judged"] and not actuators["named"]
     assert all(a["over_threshold"] < 1 for a in actuators["shares"].values())
 
@@ -134,11 +135,10 @@ def test_too_few_normal_logs_or_too_little_steady_time_are_not_judged(flights: P
     assert code == 1
     assert "needs 3 normal logs" in output and not (tmp_path / "m").exists()
     short = write_flight(tmp_path / "short.csv", 7, seconds=4.0)
-    code, output = invoke("diagnose", str(short), "--profile", "crazyflie", "--model",
-                          str(model), "--json", "-", "--quiet")
-    shares = json.loads(output)["actuators"]["shares"]
+    _, report = diagnose_json(short, "--profile", "crazyflie", "--model", str(model))
+    shares = report["actuators"]["shares"]
     assert "too little steady effort in this log" in shares["motor_1"]["not_judged"]
-    assert json.loads(output)["verdict"] == "undetermined"
+    assert report["verdict"] == "undetermined"
 
 
 def test_calibrate_sets_the_threshold_for_a_false_alarm_budget(flights: Path, model: Path,
