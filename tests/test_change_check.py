@@ -146,20 +146,29 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     measured = np.zeros((1000, 2))
     measured[600:, 1] = 0.2                               # yaw rate off from 60 s
     modelled = np.zeros((1000, 2))
+    # the replay that re-starts from the measured state every horizon catches up; the
+    # healthy vehicle started at the onset does not
+    modelled[600:, 1] = 0.1
+    healthy = np.zeros((1000, 2))
     seen = SimpleNamespace(
         histories=SimpleNamespace(time_s=time_s, sensor_names=("roll", "yaw_rate"),
                                   matching=SimpleNamespace(measured=measured,
                                                            modelled=modelled)),
         sensor_units={"yaw_rate": "rad/s"})
-    check = check_change(measured - modelled + _noise(100.0, seed=2) * 0.01,
+    check = check_change(measured - healthy + _noise(100.0, seed=2) * 0.01,
                          ["roll", "yaw_rate"], {WINDOW_Z: {"roll": 8.0, "yaw_rate": 8.0}},
                          time_s, WINDOW, DT_S)
     assert list(check.flagged) == ["yaw_rate"]
-    effect = failure_effect(seen, check)
+    effect = failure_effect(seen, check, healthy, horizon_steps=20)
     assert effect.startswith("from the onset, the vehicle departs from what the model of "
                              "the healthy vehicle says it would have done by yaw_rate ")
     gap = float(effect.split("yaw_rate ")[1].split()[0])
-    assert 0.18 <= gap <= 0.2 and effect.endswith("rad/s rms (before: 0)")
+    assert 0.18 <= gap <= 0.2 and "rad/s rms (before: 0)" in effect
+    assert effect.endswith("1.9 s after the onset the healthy vehicle would have read "
+                           "yaw_rate 0 where it read 0.2 rad/s")
+    assert failure_effect(seen, check, healthy, horizon_steps=None).endswith(
+        f"{time_s[-1] - check.onset_s:.1f} s after the onset the healthy vehicle would have "
+        "read yaw_rate 0 where it read 0.2 rad/s")
 
 
 def test_change_judges_no_log_is_long_enough_for_take_no_share_of_the_budget():

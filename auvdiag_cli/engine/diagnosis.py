@@ -36,6 +36,7 @@ from auvdiag_cli.engine.isolation import (
 )
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
+from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
     EPOCH_CLOCK_NS,
@@ -198,7 +199,8 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
     if change is not None and change.alarm_s is not None and change.onset_s is not None and (
             detection is None or change.alarm_s < frame.time_s[detection.alarm_index]):
         if names_a_mover(change, judging.profile):
-            return apply_change_alarm(seen, normal, change, judging)
+            return apply_change_alarm(seen, normal, change, judging, _healthy_replay(
+                judging, frame, change.onset_s, dms_starts))
         # The change came first: its b and times, named as the replay's alarm would be.
         b = {name: int(name in change.flagged) for name in frame.sensor_names}
         onset = int(np.searchsorted(frame.time_s, change.onset_s))
@@ -211,6 +213,16 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
                             dms_starts)
     return isolate(seen, normal, detection.b, frame.time_s[detection.alarm_index],
                    frame.time_s[detection.onset_index], test, companion_runs, judging)
+
+
+def _healthy_replay(judging: Judging, frame: AlignedFrame, onset_s: float,
+                    dms_starts: list[int]) -> np.ndarray:
+    """The model of the healthy vehicle replayed from the measured state at the onset (and
+    after it, every horizon of the model): what the vehicle would have done had nothing
+    failed, which the failure's effect is measured against."""
+    onset = int(np.searchsorted(frame.time_s, onset_s))
+    return match(judging.model, frame, judging.full_scale, judging.window,
+                 [*dms_starts, onset], since=onset).modelled
 
 
 def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray

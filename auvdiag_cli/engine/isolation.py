@@ -6,6 +6,8 @@ returns the next; the observations are read, never changed."""
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
@@ -65,11 +67,13 @@ def apply_other_evidence(seen: Observations, finding: Finding, judging: Judging)
 
 
 def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck,
-                       judging: Judging) -> Finding:
+                       judging: Judging, healthy: np.ndarray | None = None) -> Finding:
     """The log changed against its own beginning before the replay's thresholds were
     crossed, in signals the profile says which parts move: the signals that changed make
     b; a row of the pattern table names the part, else the part that moves most of what
-    changed (`change_suspects`)."""
+    changed (`change_suspects`). ``healthy``: the model of the healthy vehicle replayed
+    from the measured state at the onset (`healthy_replay`), which gives the failure's
+    effect."""
     b = {name: int(name in change.flagged) for name in finding.b}
     finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
                       onset_s=change.onset_s)
@@ -82,30 +86,43 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if len(ranked) > 1:
         note += "; the part that moves most of what changed is named, before " + ", ".join(
             ranked[1:])
-    effect = failure_effect(seen, change)
+    effect = "" if healthy is None else failure_effect(seen, change, healthy,
+                                                          judging.model.horizon_steps)
     if effect:
         note += "; " + effect
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
 
 
-def failure_effect(seen: Observations, change: ChangeCheck) -> str:
-    """What the vehicle did against what the model of the healthy vehicle says it would
-    have done, from the onset on, in each signal that changed: the failure's effect."""
+def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
+                   horizon_steps: int | None) -> str:
+    """What the vehicle did against what the model of the healthy vehicle, started from
+    the measured state at the onset, says it would have done, in each signal that changed:
+    the failure's effect. The gap is the rms from the onset on (against the model's own
+    error before it), and the two values where the first replay from the onset ends (its
+    horizon, or the log's end): the furthest the model predicts with the skill it has."""
     histories, onset = seen.histories, change.onset_s
     matching = histories.matching
     if matching is None or onset is None:
         return ""
-    after = histories.time_s >= onset
-    before = ~after
-    gaps = []
+    start = int(np.searchsorted(histories.time_s, onset))
+    stop = len(histories.time_s) if horizon_steps is None else min(
+        start + horizon_steps, len(histories.time_s))
+    if stop - start < 2:
+        return ""
+    last = stop - 1
+    span_s = histories.time_s[last] - histories.time_s[start]
+    gaps, ends = [], []
     for name in change.flagged:
         column = histories.sensor_names.index(name)
-        gap = matching.measured[:, column] - matching.modelled[:, column]
         unit = seen.sensor_units.get(name, "")
-        gaps.append(f"{name} {_number(rms(gap[after]))} {unit} rms (before: "
-                    f"{_number(rms(gap[before]))})")
+        before = matching.measured[:start, column] - matching.modelled[:start, column]
+        gap = matching.measured[start:, column] - healthy[start:, column]
+        gaps.append(f"{name} {_number(rms(gap))} {unit} rms (before: {_number(rms(before))})")
+        ends.append(f"{name} {_number(healthy[last, column])} where it read "
+                    f"{_number(matching.measured[last, column])} {unit}")
     return ("from the onset, the vehicle departs from what the model of the healthy vehicle "
-            "says it would have done by " + ", ".join(gaps))
+            "says it would have done by " + ", ".join(gaps) + f"; {span_s:.1f} s after the "
+            "onset the healthy vehicle would have read " + ", ".join(ends))
 
 
 def _number(value: float | None) -> str:
