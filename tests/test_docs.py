@@ -1,6 +1,8 @@
 """The documentation: a README a newcomer reads to the end, and a site that builds with
 `mkdocs build --strict` (a broken link, a missing page or a stale API reference fails)."""
 
+import html
+import re
 import shutil
 import subprocess
 import sys
@@ -21,6 +23,22 @@ def test_the_site_builds_strictly_and_renders_the_library_reference(tmp_path):
     assert result.returncode == 0, result.stdout + result.stderr
     api = (tmp_path / "site" / "api" / "index.html").read_text()
     assert "load_model" in api and "diagnose" in api     # mkdocstrings read the docstrings
+    # a console block's copy button copies the commands, not the prompts or the output
+    home = (tmp_path / "site" / "index.html").read_text()
+    copied = html.unescape(re.findall(r'data-copy="([^"]*)"', home)[0])
+    assert copied.splitlines()[1].startswith("auvdiag diagnose sample_logs/paper-flow")
+    assert "$ " not in copied and "verdict" not in copied
+
+
+def test_a_console_block_copies_its_commands_whole():
+    from scripts.docs_console_copy import commands, with_copy_text
+
+    block = "$ auvdiag train a.csv \\\n    --output m   # exit 1\nmodel written\n$ ls\nm\n"
+    assert commands(block) == "auvdiag train a.csv \\\n    --output m   # exit 1\nls"
+    page = ('<pre><code><span class="gp">$ </span>echo<span class="w"> </span>&quot;a&quot;'
+            "\na\n</code></pre><pre><code>plain</code></pre>")
+    assert with_copy_text(page) == ('<pre><code data-copy="echo &quot;a&quot;">'
+                                    + page.removeprefix("<pre><code>"))
 
 
 def test_a_broken_link_fails_the_build(tmp_path):
