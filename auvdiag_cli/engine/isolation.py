@@ -72,8 +72,8 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     crossed, in signals the profile says which parts move: the signals that changed make
     b; a row of the pattern table names the part, else the part that moves most of what
     changed (`change_suspects`). ``healthy``: the model of the healthy vehicle replayed
-    from the measured state at the onset (`healthy_replay`), which gives the failure's
-    effect."""
+    from the measured state at the onset, which gives the failure's effect (none: the
+    effect is not said)."""
     b = {name: int(name in change.flagged) for name in finding.b}
     finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
                       onset_s=change.onset_s)
