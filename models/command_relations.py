@@ -29,6 +29,10 @@ from models.skill import MIN_SKILL
 
 WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
 MIN_WINDOW_S = 5.0        # logs too short for WINDOW_S: windows of half a log, this at least
+# A stretch shorter than the window (the minutes after a failure, a short run) is judged
+# over a shorter window too, this share of the main one (MIN_WINDOW_S at least), with its
+# own thresholds: its noise is larger, so it sees a large extra effort, not a small one.
+SHORTER_WINDOW = 1 / 3
 SMOOTHING_S = 1.0         # of the rates that stand for inertia
 MIN_DRIVE = 0.1           # an actuator must work at this rms command in a window to be judged
 MARGIN = 1.5              # thresholds: this many times the held-out normal peak of |α|
@@ -102,6 +106,29 @@ class FittedOn:
 
 
 @dataclass(frozen=True)
+class RelationWindow:
+    """A window of the extra effort and the extra effort allowed over it."""
+
+    steps: int
+    thresholds: np.ndarray           # (n_commands,) |α| allowed; NaN: not judged
+
+    def to_json(self) -> dict[str, Any]:
+        return {"window_steps": self.steps, "thresholds": _numbers_out(self.thresholds)}
+
+    @classmethod
+    def from_json(cls, data: dict[str, Any]) -> "RelationWindow":
+        return cls(int(data["window_steps"]), _numbers_in(data["thresholds"]))
+
+
+def _numbers_out(values: np.ndarray) -> list[float | None]:
+    return [None if math.isnan(v) else round(v, 6) for v in values.tolist()]
+
+
+def _numbers_in(values: list[float | None]) -> np.ndarray:
+    return np.asarray([math.nan if v is None else float(v) for v in values], float)
+
+
+@dataclass(frozen=True)
 class CommandRelations:
     sensor_scale: np.ndarray         # (n_sensors,)
     weights: np.ndarray              # (n_features, n_commands)
@@ -113,6 +140,19 @@ class CommandRelations:
     window_steps: int
     smoothing_steps: int
     fitted_on: FittedOn
+    # Shorter windows for stretches shorter than the main one (none in older models).
+    shorter: tuple[RelationWindow, ...] = ()
+
+    @property
+    def windows(self) -> tuple[RelationWindow, ...]:
+        """The main window first, then the shorter ones."""
+        return (RelationWindow(self.window_steps, self.thresholds), *self.shorter)
+
+    def with_window_thresholds(self, thresholds: Sequence[np.ndarray]) -> "CommandRelations":
+        """The same relations with new thresholds, one array per window of `windows`."""
+        main, *rest = thresholds
+        return replace(self, thresholds=main, shorter=tuple(
+            replace(w, thresholds=t) for w, t in zip(self.shorter, rest, strict=True)))
 
     def too_little_heldout(self, k: int) -> str:
         """Why actuator k has no threshold though its relation has skill: how long the
@@ -149,15 +189,17 @@ class CommandRelations:
         return drive * along, drive**2, (along * departure).sum(axis=1), ok
 
     def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
-                     usable: np.ndarray) -> np.ndarray:
-        """α per actuator over the window ending at each step, shape (steps, n_commands);
-        NaN where the window holds too few usable steps or the actuator barely worked."""
+                     usable: np.ndarray, window_steps: int | None = None) -> np.ndarray:
+        """α per actuator over the window (of ``window_steps``; None: the main one) ending
+        at each step, shape (steps, n_commands); NaN where the window holds too few usable
+        steps or the actuator barely worked."""
+        window = self.window_steps if window_steps is None else window_steps
         product, drive2, _, ok = self._terms(commands, sensors, usable)
-        numerator = _trailing_sum(product, self.window_steps)
-        weight = _trailing_sum(drive2, self.window_steps)
-        count = _trailing_sum(ok.astype(float), self.window_steps)
+        numerator = _trailing_sum(product, window)
+        weight = _trailing_sum(drive2, window)
+        count = _trailing_sum(ok.astype(float), window)
         norms = np.maximum(np.diag(self.projector), 1e-12)
-        enough = (count >= self.window_steps / 2)[:, None] & (
+        enough = (count >= window / 2)[:, None] & (
             weight >= MIN_DRIVE**2 * np.maximum(count, 1.0)[:, None])
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(enough, numerator / (weight * norms), np.nan)
@@ -175,29 +217,26 @@ class CommandRelations:
         return np.nan_to_num(share, nan=0.0)
 
     def to_json(self) -> dict[str, Any]:
-        def numbers(values: np.ndarray) -> list[float | None]:
-            return [None if math.isnan(v) else round(v, 6) for v in values.tolist()]
-
         return {
             "sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
-            "basis": self.basis.tolist(), "thresholds": numbers(self.thresholds),
-            "skill": numbers(self.skill), "groups": [list(g) for g in self.groups],
+            "basis": self.basis.tolist(), "thresholds": _numbers_out(self.thresholds),
+            "skill": _numbers_out(self.skill), "groups": [list(g) for g in self.groups],
             "dt_s": self.dt_s, "window_steps": self.window_steps,
             "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on.to_json(),
+            **({"shorter_windows": [w.to_json() for w in self.shorter]} if self.shorter
+               else {}),
         }
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
-        def numbers(values: list[float | None]) -> np.ndarray:
-            return np.asarray([math.nan if v is None else float(v) for v in values], float)
-
         return cls(np.asarray(data["sensor_scale"], float),
                    np.asarray(data["weights"], float), np.asarray(data["basis"], float),
-                   numbers(data["thresholds"]), numbers(data["skill"]),
+                   _numbers_in(data["thresholds"]), _numbers_in(data["skill"]),
                    tuple(tuple(int(i) for i in g) for g in data["groups"]),
                    float(data["dt_s"]), int(data["window_steps"]),
                    int(data["smoothing_steps"]),
-                   FittedOn.from_json(data.get("fitted_on", {})))
+                   FittedOn.from_json(data.get("fitted_on", {})),
+                   tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
 
 
 class RelationsRefused(ValueError):
@@ -293,21 +332,36 @@ def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog
     commands = np.vstack([c for _, c in rows])
     basis = _subspace(commands)
     m = commands.shape[1]
+    window = max(2, round(window_s / dt_s))
+    shorter = max(2, round(max(MIN_WINDOW_S, SHORTER_WINDOW * window_s) / dt_s))
     relations = CommandRelations(
         scale, _least_squares(rows), basis, np.full(m, np.nan), np.full(m, np.nan),
-        _groups(commands, basis), dt_s, max(2, round(window_s / dt_s)), smoothing,
+        _groups(commands, basis), dt_s, window, smoothing,
         FittedOn(tuple(training[i].name for i in kept), tuple(open_loop), len(features),
-                 tuple(h.name for h in heldout)))
+                 tuple(h.name for h in heldout)),
+        (RelationWindow(shorter, np.full(m, np.nan)),) if 2 * shorter <= window else ())
     skill = _skill(relations, heldout, commands.mean(axis=0))
-    efforts = [relations.extra_effort(h.commands, h.sensors, h.usable) for h in heldout]
+    judged_steps, thresholds = zip(*(_heldout_thresholds(relations, heldout, w.steps, skill)
+                                     for w in relations.windows), strict=True)
+    fitted_on = replace(relations.fitted_on, heldout_judged_steps=judged_steps[0])
+    return replace(relations.with_window_thresholds(thresholds), skill=skill,
+                   fitted_on=fitted_on)
+
+
+def _heldout_thresholds(relations: CommandRelations, heldout: Sequence[RelationLog],
+                        window_steps: int, skill: np.ndarray
+                        ) -> tuple[tuple[int, ...], np.ndarray]:
+    """Over windows of ``window_steps``: how many steps of the held-out logs judged each
+    actuator, and the extra effort it may show (MARGIN times the held-out peak; NaN where
+    less than one window judged it, or its relation has no skill)."""
+    m = len(skill)
+    efforts = [relations.extra_effort(h.commands, h.sensors, h.usable, window_steps)
+               for h in heldout]
     stacked = np.vstack(efforts) if efforts else np.full((0, m), np.nan)
     finite = np.isfinite(stacked)
     peak = np.where(finite, np.abs(stacked), 0.0).max(axis=0, initial=0.0)
-    judged = (finite.sum(axis=0) >= relations.window_steps) & (skill >= MIN_SKILL)
-    fitted_on = replace(relations.fitted_on,
-                        heldout_judged_steps=tuple(finite.sum(axis=0).tolist()))
-    return replace(relations, thresholds=np.where(judged, MARGIN * peak, np.nan), skill=skill,
-                   fitted_on=fitted_on)
+    judged = (finite.sum(axis=0) >= window_steps) & (skill >= MIN_SKILL)
+    return tuple(finite.sum(axis=0).tolist()), np.where(judged, MARGIN * peak, np.nan)
 
 
 def _skill(relations: CommandRelations, heldout: Sequence[RelationLog], mean: np.ndarray

@@ -130,7 +130,7 @@ def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(
     before = list(model.card.entry("command_relations")["thresholds"])
 
     def check(peaks: dict[str, float | None]) -> CommandCheck:
-        return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), peaks, None, None,
+        return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), (peaks,), None, None,
                             (), None, None, 30.0)
 
     raised = widen_thresholds(model, [check({"thruster_0": 0.9, "thruster_1": 0.5}), None,
@@ -179,3 +179,89 @@ def test_short_logs_get_windows_that_fit_them_and_say_what_data_is_missing():
     assert np.isnan(relations.thresholds).all()       # the held-out flight barely drove them
     assert relations.too_little_heldout(0) == (
         "too little held-out data drove it to set a threshold (0.0 s, needs 10 s: one window)")
+
+
+def _steered(seconds: float, seed: int) -> RelationLog:
+    """A log whose two commands a controller sets from its two-signal motion (a linear law,
+    which the relation can learn exactly), the motion a few slow random swings."""
+    rng = np.random.default_rng(seed)
+    time_s = np.arange(round(seconds / 0.1))[:, None] * 0.1
+    motion = np.column_stack([
+        0.5 * np.sin(2 * np.pi * time_s / period + rng.uniform(0, 2 * np.pi, 3)).sum(axis=1)
+        for period in rng.uniform(8.0, 40.0, (2, 3))])
+    commands = 0.3 * motion @ np.array([[1.0, 0.3], [-0.4, 1.0]]) + rng.normal(0, 0.01, (
+        len(motion), 2))
+    return RelationLog(f"log{seed}", commands, motion, np.ones(len(motion), bool))
+
+
+def _weakened(log: RelationLog, from_step: int, extra: float) -> RelationLog:
+    """``log`` with its first actuator driven ``extra`` harder from ``from_step`` on, as a
+    controller drives a thruster that lost thrust."""
+    commands = log.commands.copy()
+    commands[from_step:, 0] *= 1.0 + extra
+    return dataclasses.replace(log, commands=commands)
+
+
+def test_a_stretch_shorter_than_the_window_is_judged_over_a_shorter_one():
+    """A 14 s log is too short for a 30 s window (it must hold half of one); the relations
+    also keep a 10 s window, its thresholds set on the held-out logs like the main one's,
+    which judges it: a normal one stays within them, a thruster driven twice as hard for
+    its last 8 s is found and named, from the shorter window."""
+    from auvdiag_cli.engine.command_check import check_commands
+
+    relations = fit_relations([_steered(300.0, seed) for seed in range(4)],
+                              [_steered(300.0, seed) for seed in (7, 8)], [1.0, 1.0], 0.1)
+    assert [w.steps for w in relations.windows] == [300, 100]
+    main, shorter = (w.thresholds for w in relations.windows)
+    assert np.isfinite(shorter).all() and (shorter >= main).all()
+    again = CommandRelations.from_json(json.loads(json.dumps(relations.to_json())))
+    assert [w.steps for w in again.windows] == [300, 100]
+    assert np.allclose(again.windows[1].thresholds, shorter)
+    older = relations.to_json()
+    del older["shorter_windows"]
+    assert CommandRelations.from_json(older).windows[1:] == ()   # a model from before
+
+    profile = load_profile(Path("twin_burger"))
+    normal = _steered(14.0, 11)
+    time_s = np.arange(140) * 0.1
+    calm = check_commands(relations, profile, normal.commands, normal.sensors, normal.usable,
+                          time_s)
+    assert calm.judged and calm.alarm_s is None and not calm.not_judged
+    assert [p["thruster_0"] is None for p in calm.peak_by_window] == [True, False]
+    weak = _weakened(normal, 60, 1.0)
+    found = check_commands(relations, profile, weak.commands, weak.sensors, weak.usable,
+                           time_s)
+    assert found.named == ("thruster_0",) and found.window_s == 10.0
+    assert found.alarm_s is not None and 6.0 <= found.alarm_s < 14.0
+    assert "(10 s windows)" in found.describe()
+    old_model = dataclasses.replace(relations, shorter=())
+    unjudged = check_commands(old_model, profile, weak.commands, weak.sensors, weak.usable,
+                              time_s)
+    assert unjudged.alarm_s is None and "through one 30 s window" in unjudged.not_judged[
+        "thruster_0"]
+
+
+def test_the_budget_judges_and_sets_each_window_of_the_relations():
+    """`calibrate --false-alarm-rate` fits a judge per actuator and window (the shorter
+    window's named by its length) and writes each threshold back to its own window."""
+    from auvdiag_cli.engine.command_check import CommandCheck
+    from auvdiag_cli.jobs.budget import command_judges, with_command_thresholds
+
+    relations = fit_relations([_steered(300.0, seed) for seed in range(4)],
+                              [_steered(300.0, seed) for seed in (7, 8)], [1.0, 1.0], 0.1)
+    names = ("thruster_0", "thruster_1")
+    peaks = ({"thruster_0": 0.5, "thruster_1": None}, {"thruster_0": 0.8, "thruster_1": 0.2})
+    check = CommandCheck(names, {}, {}, np.empty((0, 2)), peaks, None, None, (), None, None,
+                         30.0)
+    assert check.peak_ratio == {"thruster_0": 0.8, "thruster_1": 0.2}
+    judges = command_judges(relations, [check, None], names)
+    assert [(j.name, j.mode) for j in judges] == [
+        ("thruster_0", None), ("thruster_1", None), ("thruster_0", "10 s window"),
+        ("thruster_1", "10 s window")]
+    shorter = relations.windows[1].thresholds
+    assert judges[2].values[0] == pytest.approx(0.8 * shorter[0])
+    assert np.isnan(judges[1].values[0]) and np.isnan(judges[0].values[1])
+    updated = with_command_thresholds(
+        relations, {(None, "thruster_1"): 0.3, ("10 s window", "thruster_0"): 0.9}, names)
+    assert updated.thresholds.tolist() == [relations.thresholds[0], 0.3]
+    assert updated.windows[1].thresholds.tolist() == [0.9, shorter[1]]

@@ -27,13 +27,24 @@ class CommandCheck:
     thresholds: dict[str, float | None]     # extra effort allowed (fraction); None: not judged
     not_judged: dict[str, str]              # command -> why
     ratio: np.ndarray                       # (steps, commands): extra effort / threshold
-    peak_ratio: dict[str, float | None]
+    # Per window of the relations (the main one first), each command's peak extra effort
+    # over its threshold there (None: not judged in this log).
+    peak_by_window: tuple[dict[str, float | None], ...]
     alarm_s: float | None                   # when the windows over a threshold confirm it
     crossed_s: float | None                 # end of the first of those windows
     named: tuple[str, ...]                  # components; several when they look the same
     explained: dict[str, float] | None      # share of the departure each actuator explains
     extra_effort: float | None              # the named actuator's mean extra effort after it
-    window_s: float
+    window_s: float                         # the window that alarmed (else the main one)
+
+    @property
+    def peak_ratio(self) -> dict[str, float | None]:
+        """Each command's peak over its threshold in any window (None: never judged)."""
+        peaks: dict[str, float | None] = {}
+        for name in self.command_names:
+            seen = [peak for p in self.peak_by_window if (peak := p.get(name)) is not None]
+            peaks[name] = max(seen) if seen else None
+        return peaks
 
     @property
     def judged(self) -> bool:
@@ -72,37 +83,53 @@ def _confirmed_alarm(ratio: np.ndarray, window_steps: int) -> tuple[int, int] | 
     return since + int(np.argmax(over[since:at + 1])), at
 
 
-def check_commands(relations: CommandRelations, profile: Profile, commands: np.ndarray,
-                   sensors: np.ndarray, usable: np.ndarray, time_s: np.ndarray
-                   ) -> CommandCheck:
-    effort = relations.extra_effort(commands, sensors, usable)
-    thresholds = relations.thresholds
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = effort / thresholds
-    names = profile.command_names
-    not_judged: dict[str, str] = {}
+def _peaks(ratio: np.ndarray, names: tuple[str, ...]) -> dict[str, float | None]:
     peaks: dict[str, float | None] = {}
     for k, name in enumerate(names):
         finite = ratio[:, k][np.isfinite(ratio[:, k])]
         peaks[name] = round(float(finite.max()), 3) if finite.size else None
+    return peaks
+
+
+def check_commands(relations: CommandRelations, profile: Profile, commands: np.ndarray,
+                   sensors: np.ndarray, usable: np.ndarray, time_s: np.ndarray
+                   ) -> CommandCheck:
+    """Each window of the relations judges the extra effort against its own thresholds;
+    the first window to confirm an alarm gives it (a short stretch after a failure is seen
+    by the shorter window, a small lasting weakness by the main one)."""
+    names = profile.command_names
+    windows = relations.windows
+    efforts, ratios = [], []
+    for window in windows:
+        effort = relations.extra_effort(commands, sensors, usable, window.steps)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratios.append(effort / window.thresholds)
+        efforts.append(effort)
+    by_window = tuple(_peaks(r, names) for r in ratios)
+    ratio = np.fmax.reduce(ratios) if len(ratios) > 1 else ratios[0]
+    shortest_s = min(w.steps for w in windows) * relations.dt_s
+    not_judged: dict[str, str] = {}
+    for k, name in enumerate(names):
         skill = relations.skill[k]
         if not skill >= MIN_SKILL:
             not_judged[name] = ("not judged (the relation does not predict its commands better "
                                 "than their mean" + ("" if np.isnan(skill) else
                                                      f": skill {skill:.2f}") + ")")
-        elif np.isnan(thresholds[k]):
+        elif np.isnan(relations.thresholds[k]):
             not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
-        elif not finite.size:
-            window_s = relations.window_steps * relations.dt_s
+        elif all(p[name] is None for p in by_window):
             not_judged[name] = (f"not judged (never driven at {MIN_DRIVE:g} of full scale "
-                                f"rms or more through one {window_s:g} s window of this log)")
-    alarm = _confirmed_alarm(ratio, relations.window_steps)
+                                f"rms or more through one {shortest_s:g} s window of this log)")
+    alarms = [(alarm, w) for w, r in enumerate(ratios)
+              if (alarm := _confirmed_alarm(r, windows[w].steps)) is not None]
+    alarm, which = min(alarms, key=lambda item: item[0][1]) if alarms else (None, 0)
+    window_steps = windows[which].steps
     named: tuple[str, ...] = ()
     extra = shares = None
     if alarm is not None:
         first = alarm[0]
         since = usable.copy()
-        since[:max(0, first - relations.window_steps)] = False
+        since[:max(0, first - window_steps)] = False
         shares = relations.explained(commands, sensors, since)
         best = int(np.argmax(shares))
         group = relations.group_of(best)
@@ -110,13 +137,14 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
         if shares[best] >= max(MIN_EXPLAINED, DOMINANCE * others):
             components = [profile.commands[k].component for k in group]
             named = tuple(dict.fromkeys(components))
+            effort = efforts[which]
             over = effort[first:, best][np.isfinite(effort[first:, best])]
             extra = round(float(over.mean()), 3) if over.size else None
     return CommandCheck(
         names, {n: None if np.isnan(t) else round(float(t), 4) for n, t in zip(
-            names, thresholds, strict=True)}, not_judged, ratio, peaks,
+            names, relations.thresholds, strict=True)}, not_judged, ratio, by_window,
         None if alarm is None else round(float(time_s[alarm[1]]), 3),
         None if alarm is None else round(float(time_s[alarm[0]]), 3), named,
         None if shares is None else {n: round(float(v), 3) for n, v in zip(
             names, shares, strict=True)}, extra,
-        relations.window_steps * relations.dt_s)
+        window_steps * relations.dt_s)

@@ -14,7 +14,7 @@ fitted by the model, so those are fair normal data, and more of them steady the 
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -199,16 +199,41 @@ def start_judges(start: StartReference, readings: Sequence[StartReading | None],
 
 def command_judges(relations: CommandRelations | None, checks: Sequence[CommandCheck | None],
                    command_names: Sequence[str]) -> list[Judge]:
-    """Each judged actuator's peak extra effort per log (NaN: not judged in that log)."""
-    judges = []
-    thresholds = () if relations is None else relations.thresholds.tolist()
-    for k, allowed in enumerate(thresholds):
-        if np.isnan(allowed):
-            continue
-        ratios = [None if c is None else c.peak_ratio.get(command_names[k]) for c in checks]
-        judges.append(Judge("command", command_names[k], None, tuple(
-            float("nan") if r is None else r * allowed for r in ratios)))
+    """Each judged actuator's peak extra effort per log and window (NaN: not judged in
+    that log); a judge's mode is its window (None: the main one)."""
+    judges: list[Judge] = []
+    if relations is None:
+        return judges
+    for w, window in enumerate(relations.windows):
+        mode = None if w == 0 else window_mode(window.steps, relations.dt_s)
+        for k, allowed in enumerate(window.thresholds.tolist()):
+            if np.isnan(allowed):
+                continue
+            ratios = [None if c is None or len(c.peak_by_window) <= w
+                      else c.peak_by_window[w].get(command_names[k]) for c in checks]
+            judges.append(Judge("command", command_names[k], mode, tuple(
+                float("nan") if r is None else r * allowed for r in ratios)))
     return judges
+
+
+def window_mode(steps: int, dt_s: float) -> str:
+    """How a shorter window of the command relations is named among the judges."""
+    return f"{steps * dt_s:g} s window"
+
+
+def with_command_thresholds(relations: CommandRelations,
+                            allowed: Mapping[tuple[str | None, str], float],
+                            command_names: Sequence[str]) -> CommandRelations:
+    """The relations with the thresholds fitted to the budget (``allowed``: (mode, command)
+    -> threshold, as `command_judges` names them); the others kept."""
+    windows = []
+    for w, window in enumerate(relations.windows):
+        mode = None if w == 0 else window_mode(window.steps, relations.dt_s)
+        extra = window.thresholds.copy()
+        for k, name in enumerate(command_names):
+            extra[k] = allowed.get((mode, name), extra[k])
+        windows.append(extra)
+    return relations.with_window_thresholds(windows)
 
 
 def change_judges(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence[str]

@@ -32,6 +32,7 @@ from auvdiag_cli.jobs.budget import (
     command_judges,
     g_judges,
     start_judges,
+    with_command_thresholds,
 )
 from auvdiag_cli.jobs.change_calibration import (
     DOMINANCE_WARNING,
@@ -299,10 +300,8 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
             allowed[profile.sensor_names.index(name)] = value
         model.update_entries(start_state=replace(start, thresholds=tuple(allowed)))
     if relations is not None:
-        extra = relations.thresholds.copy()
-        for (_, name), value in fitted.thresholds("command").items():
-            extra[profile.command_names.index(name)] = value
-        model.update_entries(command_relations=replace(relations, thresholds=extra))
+        model.update_entries(command_relations=with_command_thresholds(
+            relations, fitted.thresholds("command"), profile.command_names))
     return fitted
 
 

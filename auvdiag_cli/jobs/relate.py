@@ -2,7 +2,6 @@
 normal logs: part of `auvdiag train`, and `auvdiag relate` for an existing model."""
 
 from collections.abc import Callable, Sequence
-from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -98,21 +97,23 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
 
 def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None"],
                      margin: float) -> dict[str, float]:
-    """Raise, in the model's command relations, each actuator's allowed extra effort to ``margin``
-    times the most these normal logs reached where that is more (never lower: the held-out
-    logs set it): no calibration log may alarm. Returns the raised thresholds by command."""
+    """Raise, in the model's command relations, each actuator's allowed extra effort (in
+    every window) to ``margin`` times the most these normal logs reached where that is more
+    (never lower: the held-out logs set it): no calibration log may alarm. Returns the
+    raised thresholds of the main window by command."""
     relations = model.relations
     if relations is None:
         return {}
-    thresholds = relations.thresholds.copy()
+    windows = [w.thresholds.copy() for w in relations.windows]
     raised = {}
     for check in checks:
-        if check is None:
-            continue
-        for k, name in enumerate(model.command_names):
-            ratio = check.peak_ratio.get(name)
-            if not np.isnan(thresholds[k]) and ratio is not None and margin * ratio > 1.0:
-                thresholds[k] = round(margin * ratio * thresholds[k], 6)
-                raised[name] = float(thresholds[k])
-    model.update_entries(command_relations=replace(relations, thresholds=thresholds))
+        for w, peaks in enumerate(() if check is None else check.peak_by_window):
+            thresholds = windows[w]
+            for k, name in enumerate(model.command_names):
+                ratio = peaks.get(name)
+                if not np.isnan(thresholds[k]) and ratio is not None and margin * ratio > 1.0:
+                    thresholds[k] = round(margin * ratio * thresholds[k], 6)
+                    if w == 0:
+                        raised[name] = float(thresholds[k])
+    model.update_entries(command_relations=relations.with_window_thresholds(windows))
     return raised
