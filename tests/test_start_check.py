@@ -56,6 +56,28 @@ def test_allowances_come_from_held_out_starts_with_a_floor():
     assert start.thresholds[0] is not None and start.thresholds[1] is None
 
 
+def test_a_log_already_under_way_is_not_judged_and_said_so_in_the_vehicles_words():
+    """A log whose commands already work on its first step (a flight cut from the air, a
+    dive recorded from mid-water) says nothing at its start; the message calls the log
+    what the vehicle's parts make it."""
+    from auvdiag_cli.vehicle.actuators import outing
+
+    assert outing(["set_point", "control_surface", "engine"]) == "flight"
+    assert outing(["rotor"] * 4) == "flight"
+    assert outing(["thruster", "thruster"]) == outing(["set_point"]) == "dive"
+    assert outing(["rotor", "thruster"]) == "dive"
+
+    def at(*values: float):
+        return start_reading(np.zeros((10, 2)), np.tile(values, (10, 1)), 0.1)
+
+    start = learn_start_state([at(0.0, 0.0)] * 3, [at(0.0, 0.0)] * 3, [1.0, 1.0])
+    under_way = np.full((30, 2), 0.3)
+    check = check_start(start, under_way, np.zeros((30, 2)), np.arange(30) * 0.1,
+                        ["a", "b"], 0.1, "flight")
+    assert not check.judged and check.why_not is not None
+    assert check.why_not.endswith("it may begin mid-flight)")
+
+
 def _dive(profile, scenario: str, seed: int, target: Path) -> Path:
     write_log(simulate(get_scenario(scenario, profile), profile, seed), profile, target, "csv")
     return target

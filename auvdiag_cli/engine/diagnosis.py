@@ -56,7 +56,7 @@ from auvdiag_cli.engine.segments import (
 )
 from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.numeric import peak
-from auvdiag_cli.vehicle.actuators import SET_POINT
+from auvdiag_cli.vehicle.actuators import SET_POINT, outing
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import CompanionError, ModelError
 from models.fast import new_replay_budget
@@ -173,7 +173,9 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         not_judged=not_judged,
         command_check=_check_commands(log, segments, judging, notes),
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
-                                frame.time_s, frame.sensor_names, frame.dt_s),
+                                frame.time_s, frame.sensor_names, frame.dt_s, outing(
+                                    [*(c.kind for c in profile.commands),
+                                     *(a.kind for a in profile.actuators)])),
         effort_check=_check_effort(log, segments, judging, notes),
         change_check=_check_change(change_errors, judging, frame.time_s),
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))

@@ -112,7 +112,9 @@ class StartCheck:
 
 
 def check_start(start: StartReference, commands: np.ndarray, sensors: np.ndarray,
-                time_s: np.ndarray, sensor_names: Sequence[str], dt_s: float) -> StartCheck:
+                time_s: np.ndarray, sensor_names: Sequence[str], dt_s: float,
+                outing: str = "dive") -> StartCheck:
+    """``outing``: what one log of the vehicle is called ("dive", "flight")."""
     def not_judged(why: str) -> StartCheck:
         return StartCheck(False, why, {}, {}, (), None)
 
@@ -121,7 +123,7 @@ def check_start(start: StartReference, commands: np.ndarray, sensors: np.ndarray
     reading = start_reading(commands, sensors, dt_s)
     if reading is None:
         return not_judged("the log is not recorded from rest (its commands already work on "
-                          "its first complete step: it may begin mid-dive)")
+                          f"its first complete step: it may begin mid-{outing})")
     deviation = reading.sensors - np.asarray(start.reference)
     thresholds = np.asarray([np.nan if t is None else t for t in start.thresholds], float)
     if np.isnan(thresholds).all():

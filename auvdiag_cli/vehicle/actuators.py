@@ -4,6 +4,7 @@ surfaces and engines are not commands, yet they are what fails. A profile lists 
 `[[actuators]]` (name, kind, description) and says, per sensor, which of them move the
 quantity it measures (`moved_by`): a relation that changes then names its part."""
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from auvdiag_cli.vehicle.toml_reader import TableReader
@@ -19,6 +20,17 @@ ACTUATOR_KINDS = {
     CONTROL_SURFACE: "a surface stuck, loose or damaged, or its servo failing",
     "engine": "lost or reduced thrust",
 }
+
+
+# What one log of the vehicle is called in messages: a vehicle moved by rotors, surfaces or
+# an engine flies; one moved by thrusters (or whose parts the profile does not say) dives.
+FLYING_KINDS = ("rotor", CONTROL_SURFACE, "engine")
+
+
+def outing(kinds: Iterable[str]) -> str:
+    """"flight" or "dive", from the kinds of the vehicle's commands and actuators."""
+    parts = {k for k in kinds if k != SET_POINT}
+    return "flight" if parts and parts <= set(FLYING_KINDS) else "dive"
 
 
 @dataclass(frozen=True)
