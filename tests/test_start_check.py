@@ -76,6 +76,13 @@ def test_a_log_already_under_way_is_not_judged_and_said_so_in_the_vehicles_words
                         ["a", "b"], 0.1, "flight")
     assert not check.judged and check.why_not is not None
     assert check.why_not.endswith("it may begin mid-flight)")
+    # A model whose normal logs all began under way has no start either; the log's own
+    # reason is the one given.
+    refused = learn_start_state([], [], [1.0, 1.0])
+    assert not refused.usable
+    again = check_start(refused, under_way, np.zeros((30, 2)), np.arange(30) * 0.1,
+                        ["a", "b"], 0.1, "flight")
+    assert again.why_not == check.why_not
 
 
 def _dive(profile, scenario: str, seed: int, target: Path) -> Path:
