@@ -127,8 +127,8 @@ def init_profile(
         if output.exists():
             raise UsageError(f"{output}: exists already, not overwriting")
         output.write_text(text, encoding="utf-8")
-    typer.echo(f"profile written to {output}; check the lines marked CHECK, then: auvdiag "
-               f"inspect {log} --profile {output}")
+    typer.echo(f"profile written to {output}; check the lines marked CHECK, then:\n"
+               f"  auvdiag inspect {log} --profile {output}")
 
 
 @app.command("derive-table")
