@@ -215,6 +215,7 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
         rows = []
         for fraction in FRACTIONS:
             cells = []
+            timed = len(times)
             for component in components:
                 check = _judge(model, profile, _simulated(
                     profile, f"mission-{component.replace('_', '-')}-weak", 201, work,
@@ -228,16 +229,26 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                         and check.alarm_s is not None):
                     times.append((check.onset_s - FAULT_FROM_S, check.alarm_s - FAULT_FROM_S))
                 cells.append(mark)
-            rows.append(f"| {fraction:.0%} | " + " | ".join(cells) + " |")
+            rows.append(f"| {fraction:.0%} | " + " | ".join(cells)
+                        + f" | {_row_timing(times[timed:])} |")
     alarms = sum(bool(c.suspects) for c in normal)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)})"
                        for setup, fit in zip(model.setups, model.fits, strict=True))
     return ["", f"**Simulated {title}** (`{profile_name}`, {len(training)} normal missions to "
             f"learn from; groups {groups}): false alarms on {len(normal)} normal missions of "
             f"other seeds: {alarms}. One actuator weakened from 60 s (- not found; named; in a "
-            "pair: named with the actuator whose command moves with it):", "",
-            "| thrust kept | " + " | ".join(components) + " |",
-            "|---" * (len(components) + 1) + "|", *rows, "", _timing(times)]
+            "pair: named with the actuator whose command moves with it; onset and detection "
+            "after 60 s, median over those named alone):", "",
+            "| thrust kept | " + " | ".join(components) + " | onset / detected (s) |",
+            "|---" * (len(components) + 2) + "|", *rows, "", _timing(times)]
+
+
+def _row_timing(times: list[tuple[float, float]]) -> str:
+    """One thrust's onset and detection, median over the actuators named alone."""
+    if not times:
+        return "–"
+    onset, detected = np.median(np.array(times), axis=0)
+    return f"{onset:+.1f} / {detected:.1f}"
 
 
 def _timing(times: list[tuple[float, float]]) -> str:
