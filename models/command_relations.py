@@ -229,6 +229,20 @@ class CommandRelations:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
+        """Raises ValueError where the entry is malformed (a window or an array that does
+        not fit the relation's commands)."""
+        relations = cls._parse(data)
+        m = relations.weights.shape[1]
+        for window in relations.windows:
+            if window.steps < 1 or window.thresholds.shape != (m,):
+                raise ValueError(f"command relations: a window of {window.steps} steps with "
+                                 f"{window.thresholds.size} thresholds for {m} commands")
+        if relations.skill.shape != (m,) or relations.basis.shape[0] != m:
+            raise ValueError(f"command relations: skill or mixer basis do not fit {m} commands")
+        return relations
+
+    @classmethod
+    def _parse(cls, data: dict[str, Any]) -> "CommandRelations":
         return cls(np.asarray(data["sensor_scale"], float),
                    np.asarray(data["weights"], float), np.asarray(data["basis"], float),
                    _numbers_in(data["thresholds"]), _numbers_in(data["skill"]),

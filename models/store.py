@@ -299,6 +299,7 @@ def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> L
         fast = model.fast        # checks every weight is there with the architecture's shape
         _ = model.dynamics       # and every predictor a signal is read from
         _ = model.effort         # and that an effort entry refits
+        _ = model.relations      # and that the command relations fit the commands
         if (fast.hidden, fast.input_states.shape[0]) != (arch["hidden"], arch["n_states"]):
             raise ValueError("weights do not match the architecture in the metadata")
     except Exception as error:  # bad archives, pickle refusals, missing or misshapen weights

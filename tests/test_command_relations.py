@@ -265,3 +265,18 @@ def test_the_budget_judges_and_sets_each_window_of_the_relations():
         relations, {(None, "thruster_1"): 0.3, ("10 s window", "thruster_0"): 0.9}, names)
     assert updated.thresholds.tolist() == [relations.thresholds[0], 0.3]
     assert updated.windows[1].thresholds.tolist() == [0.9, shorter[1]]
+
+
+def test_a_model_whose_relations_do_not_fit_its_commands_is_refused_in_one_line(tmp_path):
+    from models.store import ModelFileError
+
+    model = tmp_path / "model"
+    model.mkdir()
+    for file in default_model_dir().iterdir():
+        (model / file.name).write_bytes(file.read_bytes())
+    meta = json.loads((model / "model.json").read_text())
+    meta["command_relations"]["shorter_windows"][0]["thresholds"] = [0.5, 0.5, 0.5]
+    (model / "model.json").write_text(json.dumps(meta))
+    with pytest.raises(ModelFileError, match=r"model does not load: command relations: a "
+                       r"window of 100 steps with 3 thresholds for 2 commands"):
+        load_model(model)
