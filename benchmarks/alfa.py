@@ -73,6 +73,8 @@ class Outcome:
     peaks_after: dict[tuple[str, str], float] = field(default_factory=dict)
     # The same within each of GOAL_DELAYS_S of the onset.
     peaks_soon: dict[float, dict[tuple[str, str], float]] = field(default_factory=dict)
+    # Where the change test's alarm made the verdict: its onset and the error it stated.
+    stated_onset: tuple[float, float] | None = None
 
     @property
     def named_right(self) -> bool:
@@ -149,10 +151,16 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
             diagnosis = api.diagnose(flight.folder, profile, judged_by)
             onset_s = None if flight.onset_ns is None else (flight.onset_ns
                                                             - diagnosis.start_ns) / 1e9
+            judge = _judge(diagnosis)
+            change = diagnosis.change_check
+            stated = (change.onset_s, change.onset_error_s) if (
+                judge == "change test" and change is not None
+                and change.onset_s is not None) else None
             outcomes[variant].append(Outcome(
                 flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
-                diagnosis.component, time.perf_counter() - started, _judge(diagnosis),
-                *_change_peaks(diagnosis, onset_s, profile.window_samples, profile.dt_s)))
+                diagnosis.component, time.perf_counter() - started, judge,
+                *_change_peaks(diagnosis, onset_s, profile.window_samples, profile.dt_s),
+                stated))
     return outcomes, judged
 
 
@@ -204,6 +212,21 @@ def ceiling(outcomes: list[Outcome]) -> str:
             "stretch of every flight reached in some statistic of the change test: what any "
             f"thresholds could find without a false alarm; {soon} of the onset (the goal's "
             "median and worst delay).")
+
+
+def onset_honesty(outcomes: list[Outcome]) -> str:
+    """Whether the true onset lies within what the change test stated of it."""
+    stated = [(o.stated_onset, o.onset_s) for o in outcomes
+              if o.found and o.stated_onset is not None and o.onset_s is not None]
+    if not stated:
+        return "No failure found by the change test: no onset estimate to check."
+    inside = sum(abs(estimate - true) <= error for (estimate, error), true in stated)
+    offsets = [estimate - true for (estimate, _), true in stated]
+    errors = [error for (_, error), _ in stated]
+    return (f"Onset estimated by the change test: the true onset within the stated error in "
+            f"{inside} of {len(stated)} found; estimate - true onset median "
+            f"{statistics.median(offsets):+.1f} s ({min(offsets):+.1f} to {max(offsets):+.1f}); "
+            f"stated error median {statistics.median(errors):.1f} s.")
 
 
 def _judge(diagnosis: "Diagnosis") -> str | None:
@@ -296,6 +319,7 @@ def main() -> None:
         print(f"**{variant[0].upper()}{variant[1:]}**: " + summary(found)[0] + "\n")
         if variant == WITH:
             print(ceiling(found) + "\n")
+            print(onset_honesty(found) + "\n")
         print("\n".join(table(found)))
         print()
     print("\n".join(notes))

@@ -159,13 +159,15 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
                          ["roll", "yaw_rate"], {WINDOW_Z: {"roll": 8.0, "yaw_rate": 8.0}},
                          time_s, WINDOW, DT_S)
     assert list(check.flagged) == ["yaw_rate"]
-    effect = failure_effect(seen, check, healthy, horizon_steps=20)
+    assert check.onset_s is not None and abs(check.onset_s - 60.0) <= check.onset_error_s
+    effect = failure_effect(seen, check, healthy, horizon_steps=40)
     assert effect.startswith("from the onset, the vehicle departs from what the model of "
                              "the healthy vehicle says it would have done by yaw_rate ")
     gap = float(effect.split("yaw_rate ")[1].split()[0])
     assert 0.18 <= gap <= 0.2 and "rad/s rms (before: 0)" in effect
-    assert effect.endswith("1.9 s after the onset the healthy vehicle would have read "
-                           "yaw_rate 0 where it read 0.2 rad/s")
+    start = int(np.searchsorted(time_s, check.onset_s))
+    assert effect.endswith(f"{time_s[start + 39] - time_s[start]:.1f} s after the onset the "
+                           "healthy vehicle would have read yaw_rate 0 where it read 0.2 rad/s")
     assert failure_effect(seen, check, healthy, horizon_steps=None).endswith(
         f"{time_s[-1] - check.onset_s:.1f} s after the onset the healthy vehicle would have "
         "read yaw_rate 0 where it read 0.2 rad/s")

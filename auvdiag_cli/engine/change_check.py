@@ -206,14 +206,16 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     flagged = {n: round(float(combined[at, k]), 2) for k, n in enumerate(names_judged)
                if combined[at, k] > 1}
     strongest = names_judged.index(max(flagged, key=lambda n: flagged[n]))
-    start = at
-    if not ratios[WINDOW][at, strongest] > 1:     # the sum crossed: from where it rose
-        rest = np.flatnonzero(~(statistics[SUM][:at, strongest] > 0))
-        start = 0 if not rest.size else int(rest[-1]) + 1
+    # From where the strongest signal's sum last left zero: the first window of the run that
+    # went beyond the allowance, even where a later window alone crossed (a failure takes a
+    # second or two to stand out of the noise; the windows before carry part of it).
+    rest = np.flatnonzero(~(statistics[SUM][:at, strongest] > 0))
+    start = 0 if not rest.size else int(rest[-1]) + 1
     onset = float(time_s[max(start - window + 1, 0)])
-    # The change began after the window that crossed started, or after the sum last left
-    # zero: the later it crossed after that, the less sure the start.
-    error = max(window * dt_s, float(time_s[at]) - onset - window * dt_s)
+    # The change began before the alarm, and about when that run began: a noise window that
+    # happened to join the run puts it early, a change that grew slowly out of the noise
+    # late. The error spans the run up to the alarm, a window at least.
+    error = max(window * dt_s, float(time_s[at]) - onset)
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
                        round(onset, 3), round(error, 3),
                        dict(sorted(flagged.items(), key=lambda item: -item[1])))
