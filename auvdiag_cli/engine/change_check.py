@@ -22,8 +22,8 @@ up even when no single window stands out, while noise within the allowance does 
 signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
 are set by `auvdiag calibrate` from the largest of each statistic on normal logs, like the
 other judges; a model without them does not run the test. The onset is the start of the
-window that crossed, or, for the sum, of the window where it last left zero; give or take
-a window.
+window where the strongest signal's sum last left zero (whichever statistic crossed), give
+or take the run from there to the alarm.
 """
 
 from collections.abc import Mapping, Sequence
@@ -53,7 +53,7 @@ class ChangeCheck:
     peaks: Mapping[str, Mapping[str, float]]        # statistic -> judged signal -> largest
     judged_from_s: float | None        # when the reference was long enough; None: never
     alarm_s: float | None = None       # the first step over a threshold
-    onset_s: float | None = None       # the start of the window that crossed
+    onset_s: float | None = None       # where the run of windows that crossed began
     onset_error_s: float = 0.0         # give or take
     # Signal -> its statistic over its threshold at the alarm (the larger of the two).
     flagged: Mapping[str, float] = field(default_factory=dict)
