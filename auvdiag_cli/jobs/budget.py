@@ -205,7 +205,7 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
     if relations is None:
         return judges
     for w, window in enumerate(relations.windows):
-        mode = None if w == 0 else window_mode(window.steps, relations.dt_s)
+        mode = window_mode(relations, w)
         for k, allowed in enumerate(window.thresholds.tolist()):
             if np.isnan(allowed):
                 continue
@@ -216,9 +216,11 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
     return judges
 
 
-def window_mode(steps: int, dt_s: float) -> str:
-    """How a shorter window of the command relations is named among the judges."""
-    return f"{steps * dt_s:g} s window"
+def window_mode(relations: CommandRelations, index: int) -> str | None:
+    """How window ``index`` of the command relations is named among the judges (None: the
+    main one)."""
+    steps = relations.windows[index].steps
+    return None if index == 0 else f"{steps * relations.dt_s:g} s window"
 
 
 def with_command_thresholds(relations: CommandRelations,
@@ -228,10 +230,9 @@ def with_command_thresholds(relations: CommandRelations,
     -> threshold, as `command_judges` names them); the others kept."""
     windows = []
     for w, window in enumerate(relations.windows):
-        mode = None if w == 0 else window_mode(window.steps, relations.dt_s)
         extra = window.thresholds.copy()
         for k, name in enumerate(command_names):
-            extra[k] = allowed.get((mode, name), extra[k])
+            extra[k] = allowed.get((window_mode(relations, w), name), extra[k])
         windows.append(extra)
     return relations.with_window_thresholds(windows)
 
