@@ -107,6 +107,11 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
     # It began at 15 s: dated within 2 s, seen within 5 s (against the flight's own start).
     assert 13.0 <= report["onset_s"] <= 17.0
     assert max(15.0, report["onset_s"]) <= report["detected_at_s"] <= 20.0
+    # The error it states of the onset holds the true one, and is said.
+    error = actuators["onset_error_s"]
+    assert 0 < error < 5.0 and abs(actuators["onset_s"] - 15.0) <= error
+    assert f"it began at ~{actuators['onset_s']:.1f} s (give or take {error:.1f} s)" in (
+        actuators["summary"])
     assert "carries" in output and "more of the effort" in output
     # The profile's rotors are worded as rotors, not a marine vehicle's thrusters.
     assert "a damaged propeller or a weak motor" in actuators["summary"]

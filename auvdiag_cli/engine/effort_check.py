@@ -16,6 +16,7 @@ mid-log far sooner. The onset is the start that departs most (the change point's
 likeliest place); the detection, the first moment the span from it crosses its
 threshold."""
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -34,6 +35,9 @@ from models.effort_model import EffortLog, EffortModel, GroupSetup
 
 STARTS_PER_WINDOW = 8
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
+# The onset's error: the later starts whose statistic comes within this of the best one's
+# (in z²: the 95 % profile-likelihood interval of one change point).
+CHANGE_POINT_CHI2 = 3.84
 
 
 @dataclass(frozen=True)
@@ -81,6 +85,8 @@ class EffortCheck:
     # After an alarm, how well the departure of the suspect's group matches each member's
     # weakness (`signature_matches`), best first.
     matches: tuple[tuple[str, float], ...] = ()
+    # How far the onset may lie from onset_s (None: the whole log departs, from its start).
+    onset_error_s: float | None = None
 
     @property
     def judged(self) -> bool:
@@ -104,7 +110,15 @@ class EffortCheck:
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
-        return "; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
+        return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
+                + self._since())
+
+    def _since(self) -> str:
+        """When it began, where it began during the log."""
+        if self.onset_s is None or self.onset_error_s is None:
+            return ""
+        return (f"; it began at ~{self.onset_s:.1f} s (give or take {self.onset_error_s:.1f} s) "
+                f"and was seen at {self.alarm_s:.1f} s")
 
     def _pattern(self) -> str:
         if len(self.matches) < 2:
@@ -192,10 +206,21 @@ class _Spans:
                           / np.maximum(spread, SPREAD_FLOOR))
 
 
+def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float) -> float:
+    """How far the change point may lie from the best later start: the furthest start
+    whose statistic (``z``, one per start) comes within CHANGE_POINT_CHI2 of the best's,
+    a stride at least."""
+    floor = math.sqrt(max(float(z[best]) ** 2 - CHANGE_POINT_CHI2, 0.0))
+    likely = start_times[z >= floor]
+    return max(stride_s, float(np.abs(likely - start_times[best]).max(initial=0.0)))
+
+
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
                  time_s: np.ndarray, dt_s: float
-                 ) -> tuple[np.ndarray, float | None, float | None, EffortSeries, tuple]:
-    """(ratio per actuator, onset_s, alarm_s, series, whole-log figures)."""
+                 ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
+                            EffortSeries, tuple]:
+    """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
+    alarm_s, series, whole-log figures)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
@@ -222,14 +247,17 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
         return per_actuator, None, None, series, figures
-    start, threshold = candidates[int(np.argmax(ratios[:, top]))]
+    best = int(np.argmax(ratios[:, top]))
+    start, threshold = candidates[best]
+    error = None if best == 0 else _onset_error(z[1:, top], times[np.array(starts)], best - 1,
+                                                stride * dt_s)
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
-    return per_actuator, float(times[start]), float(times[alarm]), series, figures
+    return per_actuator, (float(times[start]), error), float(times[alarm]), series, figures
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
@@ -249,7 +277,8 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
     component = {c.name: c.component for c in profile.commands}
     actuators: list[ActuatorEffort] = []
     series: list[EffortSeries] = []
-    onsets: list[tuple[float, float, float, str]] = []   # (alarm, onset, ratio, group)
+    # (alarm, onset, its error, group) of each group that alarmed
+    onsets: list[tuple[float, float, float | None, str]] = []
     for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
         members = setup.group.members
         why = refused
@@ -273,12 +302,13 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
             round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None)
             for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
-            onsets.append((alarm, onset, float(ratio.max()), setup.group.name))
+            onsets.append((alarm, *onset, setup.group.name))
     named = tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder))
-    first = min(onsets, default=None)
+    first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.commands}
     failure = next((kinds[a.name] for a in actuators if a.driven_harder), "")
     return EffortCheck(tuple(actuators), model.false_alarm_rate,
                        None if first is None else round(first[0], 3),
                        None if first is None else round(first[1], 3), named, tuple(series),
-                       failure, signature_matches(actuators))
+                       failure, signature_matches(actuators),
+                       None if first is None or first[2] is None else round(first[2], 3))

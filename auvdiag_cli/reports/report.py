@@ -153,6 +153,7 @@ class ActuatorsPart:
     false_alarm_rate: float | None = None
     alarm_s: float | None = None
     onset_s: float | None = None
+    onset_error_s: float | None = None      # null: the whole log departs, from its start
     named: tuple[str, ...] = ()
     signatures: tuple[SignaturePart, ...] = ()
     shares: Mapping[str, SharePart] = field(default_factory=dict)
