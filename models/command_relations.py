@@ -148,6 +148,11 @@ class CommandRelations:
         """The main window first, then the shorter ones."""
         return (RelationWindow(self.window_steps, self.thresholds), *self.shorter)
 
+    @property
+    def judges_anything(self) -> bool:
+        """Some actuator has a threshold over some window."""
+        return any(bool(np.isfinite(w.thresholds).any()) for w in self.windows)
+
     def with_window_thresholds(self, thresholds: Sequence[np.ndarray]) -> "CommandRelations":
         """The same relations with new thresholds, one array per window of `windows`."""
         main, *rest = thresholds
@@ -229,8 +234,7 @@ class CommandRelations:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
-        """Raises ValueError where the entry is malformed (a window or an array that does
-        not fit the relation's commands)."""
+        """Raises ValueError where a window or an array does not fit the commands."""
         relations = cls._parse(data)
         m = relations.weights.shape[1]
         for window in relations.windows:

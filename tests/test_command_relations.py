@@ -280,3 +280,19 @@ def test_a_model_whose_relations_do_not_fit_its_commands_is_refused_in_one_line(
     with pytest.raises(ModelFileError, match=r"model does not load: command relations: a "
                        r"window of 100 steps with 3 thresholds for 2 commands"):
         load_model(model)
+
+
+def test_held_out_logs_too_short_for_the_main_window_leave_the_shorter_to_judge():
+    """A held-out log of 20 s sets no threshold for a 30 s window (it must drive the
+    actuator through one whole window) but does for the 10 s one: the actuators are judged
+    by that window alone, not called unjudged."""
+    from auvdiag_cli.engine.command_check import check_commands
+
+    relations = fit_relations([_steered(300.0, seed) for seed in range(4)],
+                              [_steered(20.0, 7)], [1.0, 1.0], 0.1)
+    main, shorter = (w.thresholds for w in relations.windows)
+    assert np.isnan(main).all() and np.isfinite(shorter).all()
+    weak = _weakened(_steered(14.0, 11), 60, 1.0)
+    check = check_commands(relations, load_profile(Path("twin_burger")), weak.commands,
+                           weak.sensors, weak.usable, np.arange(140) * 0.1)
+    assert not check.not_judged and check.named == ("thruster_0",)

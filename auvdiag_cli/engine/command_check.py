@@ -115,7 +115,7 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
             not_judged[name] = ("not judged (the relation does not predict its commands better "
                                 "than their mean" + ("" if np.isnan(skill) else
                                                      f": skill {skill:.2f}") + ")")
-        elif np.isnan(relations.thresholds[k]):
+        elif all(np.isnan(w.thresholds[k]) for w in windows):
             not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
         elif all(p[name] is None for p in by_window):
             not_judged[name] = (f"not judged (never driven at {MIN_DRIVE:g} of full scale "

@@ -105,8 +105,7 @@ class TrainingResult:
         some actuator's share of the effort can be judged."""
         relations, effort = self.command_relations, self.effort
         return bool(self.chosen.judged) or (
-            isinstance(relations, CommandRelations)
-            and bool(np.isfinite(relations.thresholds).any())) or (
+            isinstance(relations, CommandRelations) and relations.judges_anything) or (
             isinstance(effort, EffortModel) and effort.judges_anything)
 
 

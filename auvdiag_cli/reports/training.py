@@ -118,10 +118,11 @@ def relation_lines(relations: CommandRelations | Refused,
         if math.isnan(skill) or skill < MIN_SKILL:
             allowed = "not judged (the relation does not predict its commands)"
         else:
-            allowed = (f"not judged ({relations.too_little_heldout(k)})"
-                       if math.isnan(threshold) else f"{threshold:.0%}" + "".join(
-                           f", {w.thresholds[k]:.0%} per {w.steps * relations.dt_s:g} s"
-                           for w in relations.shorter if not math.isnan(w.thresholds[k])))
+            shorter = "".join(f", {w.thresholds[k]:.0%} per {w.steps * relations.dt_s:g} s"
+                              for w in relations.shorter if not math.isnan(w.thresholds[k]))
+            allowed = (f"{threshold:.0%}" if not math.isnan(threshold) else
+                       f"not judged ({relations.too_little_heldout(k)})" if not shorter else
+                       "none") + shorter
         lines.append(f"  {name:<14}{allowed}" + ("" if math.isnan(skill) else
                                                  f"   (skill {skill:.2f})"))
     lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
