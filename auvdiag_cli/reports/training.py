@@ -179,9 +179,10 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
              f"with the thresholds fitted on the others (the budget expects "
              f"{budget.per_log_rate * budget.logs:.1f}); {budget.in_sample_alarmed} reach the "
              "final thresholds"]
+    width = max((len(f.judge.label) for f in budget.fits), default=0)
     for f in budget.fits:
         share = "" if f.share >= budget.share else f", share lowered to {f.share:.2%}"
-        lines.append(f"    {f.judge.label:<24} threshold {f.threshold:.4g}  ({f.fit.law} "
+        lines.append(f"    {f.judge.label:<{width}} threshold {f.threshold:.4g}  ({f.fit.law} "
                      f"fit to {f.fit.logs} logs; left out, {f.loo_alarms} alarm{share})")
     if budget.effort_rate is not None:
         lines.append(f"    effort shares: a budget of {budget.effort_rate:.2%} of logs")
