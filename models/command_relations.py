@@ -29,9 +29,8 @@ from models.skill import MIN_SKILL
 
 WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
 MIN_WINDOW_S = 5.0        # logs too short for WINDOW_S: windows of half a log, this at least
-# A stretch shorter than the window (the minutes after a failure, a short run) is judged
-# over a shorter window too, this share of the main one (MIN_WINDOW_S at least), with its
-# own thresholds: its noise is larger, so it sees a large extra effort, not a small one.
+# A stretch too short for the window is judged over a shorter one too, this share of it (at
+# least MIN_WINDOW_S), with thresholds of its own: noisier, it sees a large extra effort only.
 SHORTER_WINDOW = 1 / 3
 SMOOTHING_S = 1.0         # of the rates that stand for inertia
 MIN_DRIVE = 0.1           # an actuator must work at this rms command in a window to be judged
@@ -148,6 +147,10 @@ class CommandRelations:
         """The main window first, then the shorter ones."""
         return (RelationWindow(self.window_steps, self.thresholds), *self.shorter)
 
+    def window_label(self, index: int) -> str | None:
+        """How window ``index`` of `windows` is named (None: the main one)."""
+        return None if index == 0 else f"{self.windows[index].steps * self.dt_s:g} s window"
+
     @property
     def judges_anything(self) -> bool:
         """Some actuator has a threshold over some window."""
@@ -235,7 +238,13 @@ class CommandRelations:
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
         """Raises ValueError where a window or an array does not fit the commands."""
-        relations = cls._parse(data)
+        relations = cls(
+            np.asarray(data["sensor_scale"], float), np.asarray(data["weights"], float),
+            np.asarray(data["basis"], float), _numbers_in(data["thresholds"]),
+            _numbers_in(data["skill"]), tuple(tuple(int(i) for i in g) for g in data["groups"]),
+            float(data["dt_s"]), int(data["window_steps"]), int(data["smoothing_steps"]),
+            FittedOn.from_json(data.get("fitted_on", {})),
+            tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
         m = relations.weights.shape[1]
         for window in relations.windows:
             if window.steps < 1 or window.thresholds.shape != (m,):
@@ -244,17 +253,6 @@ class CommandRelations:
         if relations.skill.shape != (m,) or relations.basis.shape[0] != m:
             raise ValueError(f"command relations: skill or mixer basis do not fit {m} commands")
         return relations
-
-    @classmethod
-    def _parse(cls, data: dict[str, Any]) -> "CommandRelations":
-        return cls(np.asarray(data["sensor_scale"], float),
-                   np.asarray(data["weights"], float), np.asarray(data["basis"], float),
-                   _numbers_in(data["thresholds"]), _numbers_in(data["skill"]),
-                   tuple(tuple(int(i) for i in g) for g in data["groups"]),
-                   float(data["dt_s"]), int(data["window_steps"]),
-                   int(data["smoothing_steps"]),
-                   FittedOn.from_json(data.get("fitted_on", {})),
-                   tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
 
 
 class RelationsRefused(ValueError):

@@ -127,17 +127,24 @@ def test_calibration_raises_the_effort_a_calibration_log_needs_and_never_lowers(
     from auvdiag_cli.jobs.relate import widen_thresholds
 
     model = load_model()
-    before = list(model.card.entry("command_relations")["thresholds"])
+    entry = model.card.entry("command_relations")
+    before, shorter = list(entry["thresholds"]), entry["shorter_windows"][0]["thresholds"]
 
-    def check(peaks: dict[str, float | None]) -> CommandCheck:
-        return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), (peaks,), None, None,
+    def check(*peaks: dict[str, float | None]) -> CommandCheck:
+        return CommandCheck(model.command_names, {}, {}, np.empty((0, 2)), peaks, None, None,
                             (), None, None, 30.0)
 
-    raised = widen_thresholds(model, [check({"thruster_0": 0.9, "thruster_1": 0.5}), None,
-                                      check({"thruster_0": 0.2, "thruster_1": None})], 1.5)
-    after = model.card.entry("command_relations")["thresholds"]
-    assert raised == {"thruster_0": after[0]} and after[1] == before[1]
+    quiet = {"thruster_0": 0.1, "thruster_1": None}
+    raised = widen_thresholds(model, [check({"thruster_0": 0.9, "thruster_1": 0.5}, quiet),
+                                      None, check({"thruster_0": 0.2, "thruster_1": None},
+                                                  {"thruster_0": 0.1, "thruster_1": 0.8})],
+                              1.5)
+    entry = model.card.entry("command_relations")
+    after = entry["thresholds"]
+    assert raised == {"thruster_0": after[0], "thruster_1 (10 s window)": pytest.approx(
+        1.2 * shorter[1], rel=1e-4)} and after[1] == before[1]
     assert after[0] == pytest.approx(1.35 * before[0], rel=1e-4)
+    assert entry["shorter_windows"][0]["thresholds"][0] == shorter[0]
     assert model.relations is not None and model.relations.thresholds[0] == after[0]
 
 

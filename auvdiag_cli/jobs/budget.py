@@ -205,7 +205,7 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
     if relations is None:
         return judges
     for w, window in enumerate(relations.windows):
-        mode = window_mode(relations, w)
+        mode = relations.window_label(w)
         for k, allowed in enumerate(window.thresholds.tolist()):
             if np.isnan(allowed):
                 continue
@@ -214,13 +214,6 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
             judges.append(Judge("command", command_names[k], mode, tuple(
                 float("nan") if r is None else r * allowed for r in ratios)))
     return judges
-
-
-def window_mode(relations: CommandRelations, index: int) -> str | None:
-    """How window ``index`` of the command relations is named among the judges (None: the
-    main one)."""
-    steps = relations.windows[index].steps
-    return None if index == 0 else f"{steps * relations.dt_s:g} s window"
 
 
 def with_command_thresholds(relations: CommandRelations,
@@ -232,7 +225,7 @@ def with_command_thresholds(relations: CommandRelations,
     for w, window in enumerate(relations.windows):
         extra = window.thresholds.copy()
         for k, name in enumerate(command_names):
-            extra[k] = allowed.get((window_mode(relations, w), name), extra[k])
+            extra[k] = allowed.get((relations.window_label(w), name), extra[k])
         windows.append(extra)
     return relations.with_window_thresholds(windows)
 

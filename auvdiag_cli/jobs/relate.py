@@ -100,7 +100,7 @@ def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None
     """Raise, in the model's command relations, each actuator's allowed extra effort (in
     every window) to ``margin`` times the most these normal logs reached where that is more
     (never lower: the held-out logs set it): no calibration log may alarm. Returns the
-    raised thresholds of the main window by command."""
+    raised thresholds by command ("NAME (10 s window)" for a shorter window's)."""
     relations = model.relations
     if relations is None:
         return {}
@@ -113,7 +113,8 @@ def widen_thresholds(model: "LoadedModel", checks: Sequence["CommandCheck | None
                 ratio = peaks.get(name)
                 if not np.isnan(thresholds[k]) and ratio is not None and margin * ratio > 1.0:
                     thresholds[k] = round(margin * ratio * thresholds[k], 6)
-                    if w == 0:
-                        raised[name] = float(thresholds[k])
+                    label = relations.window_label(w)
+                    raised[name if label is None else f"{name} ({label})"] = float(
+                        thresholds[k])
     model.update_entries(command_relations=relations.with_window_thresholds(windows))
     return raised
