@@ -178,7 +178,7 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
 
 
 def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
-               fraction: float | None = None) -> RelationLog:
+               fraction: float | None = None, onset_s: float | None = None) -> RelationLog:
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
@@ -186,9 +186,11 @@ def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
     scenario = get_scenario(scenario_name, profile)
     if fraction is not None and scenario.fault is not None:
         scenario = dataclasses.replace(scenario, fault=dataclasses.replace(
-            scenario.fault, severity=fraction))
-    path = work / f"{scenario_name}-{seed}-{fraction}.tlog"
-    write_log(simulate(scenario, profile, seed), profile, path, "tlog")
+            scenario.fault, severity=fraction,
+            onset_s=scenario.fault.onset_s if onset_s is None else onset_s))
+    path = work / f"{scenario_name}-{seed}-{fraction}-{onset_s}.tlog"
+    if not path.exists():       # the same mission asked for again: simulated once
+        write_log(simulate(scenario, profile, seed), profile, path, "tlog")
     return relation_log(ingest(path, profile), profile)
 
 
@@ -199,6 +201,8 @@ def _conditions(two_way: bool, fit: GroupFit | None) -> str:
 
 
 FAULT_FROM_S = 60.0     # the weak scenarios' fault begins here
+# A weakness that begins late: this much thrust kept from this long before the mission's end.
+LATE_FRACTION, LATE_BEFORE_END_S = 0.7, (10.0, 20.0)
 # Per actuator named alone: its onset and detection after the fault began, and the error
 # it stated of the onset (None: it found the whole log departing).
 Timing = tuple[float, float, float | None]
@@ -235,6 +239,7 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                 cells.append(mark)
             rows.append(f"| {fraction:.0%} | " + " | ".join(cells)
                         + f" | {_row_timing(times[timed:])} |")
+        late = _late(profile, model, components, work)
     alarms = sum(bool(c.suspects) for c in normal)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)})"
                        for setup, fit in zip(model.setups, model.fits, strict=True))
@@ -244,7 +249,38 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
             "pair: named with the actuator whose command moves with it; onset and detection "
             "after 60 s, median over those named alone):", "",
             "| thrust kept | " + " | ".join(components) + " | onset / detected (s) |",
-            "|---" * (len(components) + 2) + "|", *rows, "", _timing(times)]
+            "|---" * (len(components) + 2) + "|", *rows, "", _timing(times), "", *late]
+
+
+def _late(profile: Profile, model: EffortModel, components: list[str], work: Path
+          ) -> list[str]:
+    """Each actuator weakened LATE_BEFORE_END_S before the mission's end: named alone, the
+    true onset within the error stated, the detection after it."""
+    lines = []
+    for before_end in LATE_BEFORE_END_S:
+        named = held = 0
+        delays = []
+        end_s = 0.0
+        for component in components:
+            name = f"mission-{component.replace('_', '-')}-weak"
+            end_s = len(_simulated(profile, name, 201, work, LATE_FRACTION).commands) * (
+                profile.dt_s)
+            onset_s = end_s - before_end
+            check = _judge(model, profile, _simulated(profile, name, 201, work, LATE_FRACTION,
+                                                      onset_s))
+            if set(check.named) != {component} or check.alarm_s is None:
+                continue
+            named += 1
+            delays.append(check.alarm_s - onset_s)
+            held += (check.onset_s is not None and check.onset_error_s is not None
+                     and abs(check.onset_s - onset_s) <= check.onset_error_s)
+        timing = (f"; the true onset within the error stated in {held} of {named}, detected "
+                  f"{np.median(delays):.1f} s after it (median; worst {max(delays):.1f} s)"
+                  if delays else "")
+        lines.append(f"Weakened to {LATE_FRACTION:.0%} {before_end:.0f} s before the "
+                     f"mission's end ({end_s:.0f} s): named alone in {named} of "
+                     f"{len(components)}{timing}.")
+    return lines
 
 
 def _row_timing(times: list[Timing]) -> str:

@@ -60,6 +60,7 @@ def flights(tmp_path_factory: pytest.TempPathFactory) -> Path:
         write_flight(folder / f"normal_{seed}.csv", seed)
     write_flight(folder / "later_normal.csv", 50)
     write_flight(folder / "weak_motor_3.csv", 51, weak_from_s=15.0)
+    write_flight(folder / "weak_late.csv", 52, weak_from_s=24.0)
     return folder
 
 
@@ -120,6 +121,20 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
 
     text = "".join(page.extract_text() for page in PdfReader(tmp_path / "d.pdf").pages)
     assert "Share of the group's effort" in text and "motor_3 (driven harder)" in text
+
+
+def test_a_weakness_in_the_last_windows_is_dated_where_it_began(flights: Path, model: Path):
+    """Motor 3 driven harder from 24 s of a 30 s flight: less than two of its 4.7 s windows
+    before the end. Its onset is placed there, within the error stated, not at the last
+    start the test tried."""
+    code, report = diagnose_json(flights / "weak_late.csv", "--profile", "crazyflie",
+                                 "--model", str(model))
+    assert code == 1, report
+    actuators = report["actuators"]
+    assert actuators["named"] == ["motor_3"]
+    error = actuators["onset_error_s"]
+    assert abs(actuators["onset_s"] - 24.0) <= error < 5.0
+    assert 24.0 <= report["detected_at_s"] <= 29.0
 
 
 def test_a_normal_flight_is_normal(flights: Path, model: Path):

@@ -24,7 +24,6 @@ import numpy as np
 
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
-    MIN_WINDOWS,
     SPREAD_FLOOR,
     GroupFit,
     Thresholds,
@@ -34,6 +33,9 @@ from models.effort import (
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 
 STARTS_PER_WINDOW = 8
+# Windows a later start needs after it: the windows' noise is measured on whole windows, and a
+# shorter span would stretch that measure past what was measured.
+WINDOWS_AFTER_START = 1
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 # The onset's error: the later starts whose statistic comes within this of the best one's
 # (in z²: the 95 % profile-likelihood interval of one change point).
@@ -206,13 +208,17 @@ class _Spans:
                           / np.maximum(spread, SPREAD_FLOOR))
 
 
-def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float) -> float:
+def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
+                 end_s: float) -> float:
     """How far the change point may lie from the best later start: the furthest start
     whose statistic (``z``, one per start) comes within CHANGE_POINT_CHI2 of the best's,
-    a stride at least."""
+    a stride at least. Where the last start tried is among them, the change may have begun
+    anywhere up to ``end_s``, the last steady step: no later start was tried."""
     floor = math.sqrt(max(float(z[best]) ** 2 - CHANGE_POINT_CHI2, 0.0))
-    likely = start_times[z >= floor]
-    return max(stride_s, float(np.abs(likely - start_times[best]).max(initial=0.0)))
+    likely = z >= floor
+    error = max(stride_s, float(np.abs(start_times[likely] - start_times[best]).max(
+        initial=0.0)))
+    return max(error, end_s - float(start_times[best])) if likely[-1] else error
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
@@ -230,9 +236,9 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
-    # and MIN_WINDOWS after it, and the threshold allows for every start tried.
+    # and WINDOWS_AFTER_START after it, and the threshold allows for every start tried.
     stride = max(1, window // STARTS_PER_WINDOW)
-    starts = list(range(window, n - MIN_WINDOWS * window + 1, stride))
+    starts = list(range(window, n - WINDOWS_AFTER_START * window + 1, stride))
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.
@@ -250,7 +256,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     best = int(np.argmax(ratios[:, top]))
     start, threshold = candidates[best]
     error = None if best == 0 else _onset_error(z[1:, top], times[np.array(starts)], best - 1,
-                                                stride * dt_s)
+                                                stride * dt_s, float(times[-1]))
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
