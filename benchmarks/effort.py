@@ -277,7 +277,7 @@ def _late(profile: Profile, model: EffortModel, components: list[str], work: Pat
         timing = (f"; the true onset within the error stated in {held} of {named}, detected "
                   f"{np.median(delays):.1f} s after it (median; worst {max(delays):.1f} s)"
                   if delays else "")
-        lines.append(f"Weakened to {LATE_FRACTION:.0%} {before_end:.0f} s before the "
+        lines.append(f"- Weakened to {LATE_FRACTION:.0%} {before_end:.0f} s before the "
                      f"mission's end ({end_s:.0f} s): named alone in {named} of "
                      f"{len(components)}{timing}.")
     return lines
