@@ -140,7 +140,7 @@ def test_a_thruster_weakening_mid_log_is_found_first_by_the_change_test(calibrat
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     from types import SimpleNamespace
 
-    from auvdiag_cli.engine.isolation import failure_effect
+    from auvdiag_cli.engine.failure_effect import failure_effect
 
     time_s = np.arange(1000) * DT_S
     measured = np.zeros((1000, 2))
@@ -170,6 +170,12 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
                            "healthy vehicle would have read yaw_rate 0 where it read 0.2 rad/s")
     assert failure_effect(seen, check, healthy, horizon_steps=None).endswith(
         f"{time_s[-1] - check.onset_s:.1f} s after the onset the healthy vehicle would have "
+        "read yaw_rate 0 where it read 0.2 rad/s")
+    # The log's last reading left out (a spike): the values are said where it has one.
+    measured[-1, 1] = np.nan
+    effect = failure_effect(seen, check, healthy, horizon_steps=None)
+    assert "nan" not in effect and effect.endswith(
+        f"{time_s[-2] - check.onset_s:.1f} s after the onset the healthy vehicle would have "
         "read yaw_rate 0 where it read 0.2 rad/s")
 
 

@@ -14,13 +14,14 @@ from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.failure_effect import failure_effect
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
-from auvdiag_cli.engine.substitution import rms, substitute
+from auvdiag_cli.engine.substitution import substitute
 from auvdiag_cli.vehicle.profile import Profile
 
 # The candidate the hypotheses name must leave this many times less of its threshold than
@@ -91,42 +92,6 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if effect:
         note += "; " + effect
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
-
-
-def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
-                   horizon_steps: int | None) -> str:
-    """What the vehicle did against what the model of the healthy vehicle, started from
-    the measured state at the onset, says it would have done, in each signal that changed:
-    the failure's effect. The gap is the rms from the onset on (against the model's own
-    error before it), and the two values where the first replay from the onset ends (its
-    horizon, or the log's end): the furthest the model predicts with the skill it has."""
-    histories, onset = seen.histories, change.onset_s
-    matching = histories.matching
-    if matching is None or onset is None:
-        return ""
-    start = int(np.searchsorted(histories.time_s, onset))
-    stop = len(histories.time_s) if horizon_steps is None else min(
-        start + horizon_steps, len(histories.time_s))
-    if stop - start < 2:
-        return ""
-    last = stop - 1
-    span_s = histories.time_s[last] - histories.time_s[start]
-    gaps, ends = [], []
-    for name in change.flagged:
-        column = histories.sensor_names.index(name)
-        unit = seen.sensor_units.get(name, "")
-        before = matching.measured[:start, column] - matching.modelled[:start, column]
-        gap = matching.measured[start:, column] - healthy[start:, column]
-        gaps.append(f"{name} {_number(rms(gap))} {unit} rms (before: {_number(rms(before))})")
-        ends.append(f"{name} {_number(healthy[last, column])} where it read "
-                    f"{_number(matching.measured[last, column])} {unit}")
-    return ("from the onset, the vehicle departs from what the model of the healthy vehicle "
-            "says it would have done by " + ", ".join(gaps) + f"; {span_s:.1f} s after the "
-            "onset the healthy vehicle would have read " + ", ".join(ends))
-
-
-def _number(value: float | None) -> str:
-    return "?" if value is None else f"{value:.3g}"
 
 
 def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:

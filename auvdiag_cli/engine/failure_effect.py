@@ -1,0 +1,50 @@
+"""What a failure did: the vehicle against the model of the healthy vehicle started from
+the measured state at the change test's onset."""
+
+import numpy as np
+
+from auvdiag_cli.engine.change_check import ChangeCheck
+from auvdiag_cli.engine.results import Observations
+from auvdiag_cli.engine.substitution import rms
+
+
+def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
+                   horizon_steps: int | None) -> str:
+    """What the vehicle did against what the model of the healthy vehicle, started from
+    the measured state at the onset, says it would have done, in each signal that changed:
+    the failure's effect. The gap is the rms from the onset on (against the model's own
+    error before it), and the two values where the first replay from the onset ends (its
+    horizon, or the log's end; the last step there where every changed signal has a
+    reading): the furthest the model predicts with the skill it has."""
+    histories, onset = seen.histories, change.onset_s
+    matching = histories.matching
+    if matching is None or onset is None:
+        return ""
+    start = int(np.searchsorted(histories.time_s, onset))
+    stop = len(histories.time_s) if horizon_steps is None else min(
+        start + horizon_steps, len(histories.time_s))
+    if stop - start < 2:
+        return ""
+    columns = [histories.sensor_names.index(name) for name in change.flagged]
+    read = np.flatnonzero(np.isfinite(matching.measured[start:stop, columns]).all(axis=1)
+                          & np.isfinite(healthy[start:stop, columns]).all(axis=1))
+    last = start + int(read[-1]) if read.size and read[-1] > 0 else None
+    gaps, ends = [], []
+    for name, column in zip(change.flagged, columns, strict=True):
+        unit = seen.sensor_units.get(name, "")
+        before = matching.measured[:start, column] - matching.modelled[:start, column]
+        gap = matching.measured[start:, column] - healthy[start:, column]
+        gaps.append(f"{name} {_number(rms(gap))} {unit} rms (before: {_number(rms(before))})")
+        if last is not None:
+            ends.append(f"{name} {_number(healthy[last, column])} where it read "
+                        f"{_number(matching.measured[last, column])} {unit}")
+    effect = ("from the onset, the vehicle departs from what the model of the healthy vehicle "
+              "says it would have done by " + ", ".join(gaps))
+    if last is None:
+        return effect
+    return (effect + f"; {histories.time_s[last] - histories.time_s[start]:.1f} s after the "
+            "onset the healthy vehicle would have read " + ", ".join(ends))
+
+
+def _number(value: float | None) -> str:
+    return "?" if value is None else f"{value:.3g}"
