@@ -75,7 +75,7 @@ def test_a_log_already_under_way_is_not_judged_and_said_so_in_the_vehicles_words
     check = check_start(start, under_way, np.zeros((30, 2)), np.arange(30) * 0.1,
                         ["a", "b"], 0.1, "flight")
     assert not check.judged and check.why_not is not None
-    assert check.why_not.endswith("it may begin mid-flight)")
+    assert check.why_not.endswith("it may begin mid-flight")
     # A model whose normal logs all began under way has no start either; the log's own
     # reason is the one given.
     refused = learn_start_state([], [], [1.0, 1.0])

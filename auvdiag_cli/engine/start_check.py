@@ -121,8 +121,8 @@ def check_start(start: StartReference, commands: np.ndarray, sensors: np.ndarray
     # The log's own reason first: a log under way is not judged whatever the model holds.
     reading = start_reading(commands, sensors, dt_s)
     if reading is None:
-        return not_judged("the log is not recorded from rest (its commands already work on "
-                          f"its first complete step: it may begin mid-{outing})")
+        return not_judged("the log is not recorded from rest: its commands already act on "
+                          f"its first complete step, so it may begin mid-{outing}")
     if not start.usable:
         return not_judged(start.refused or "the model has no start state: train learns it")
     deviation = reading.sensors - np.asarray(start.reference)
