@@ -209,16 +209,16 @@ class _Spans:
 
 
 def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
-                 end_s: float) -> float:
-    """How far the change point may lie from the best later start: the furthest start
-    whose statistic (``z``, one per start) comes within CHANGE_POINT_CHI2 of the best's,
-    a stride at least. Where the last start tried is among them, the change may have begun
-    anywhere up to ``end_s``, the last steady step: no later start was tried."""
+                 seen_s: float) -> float:
+    """How far the change point may lie from the best later start: to the earliest and the
+    latest start whose statistic (``z``, one per start) comes within CHANGE_POINT_CHI2 of
+    the best's, a stride at least. Where the last start tried is among them, the change may
+    lie after it, up to ``seen_s``, when it was seen: it began before that."""
     floor = math.sqrt(max(float(z[best]) ** 2 - CHANGE_POINT_CHI2, 0.0))
-    likely = z >= floor
-    error = max(stride_s, float(np.abs(start_times[likely] - start_times[best]).max(
-        initial=0.0)))
-    return max(error, end_s - float(start_times[best])) if likely[-1] else error
+    likely = start_times[z >= floor]
+    latest = seen_s if z[-1] >= floor else float(likely.max())
+    return max(stride_s, float(start_times[best] - likely.min()),
+               min(latest, seen_s) - float(start_times[best]))
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
@@ -255,14 +255,14 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         return per_actuator, None, None, series, figures
     best = int(np.argmax(ratios[:, top]))
     start, threshold = candidates[best]
-    error = None if best == 0 else _onset_error(z[1:, top], times[np.array(starts)], best - 1,
-                                                stride * dt_s, float(times[-1]))
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
+    error = None if best == 0 else _onset_error(z[1:, top], times[np.array(starts)], best - 1,
+                                                stride * dt_s, float(times[alarm]))
     return per_actuator, (float(times[start]), error), float(times[alarm]), series, figures
 
 
