@@ -17,6 +17,7 @@ real-time anomaly detection for autonomous aerial vehicles", ICRA 2019, on 22 of
 flights.
 
 Usage: python benchmarks/alfa.py [--data DIR] [--iterations-scale 1.0] [--guard 1.0]
+                                [--keep DIR]
 """
 
 import argparse
@@ -142,6 +143,7 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
     model = api.load_model(model_dir, profile)
     api.calibrate(logs, profile, model, options=api.CalibrateOptions(
         budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
+    api.save_model(model, model_dir)      # as calibrated, for --keep
     # The same model without the change test: the judges as they were before it.
     without = model.with_entries(change_test={})
     outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
@@ -295,6 +297,8 @@ def main() -> None:
     parser.add_argument("--iterations-scale", type=float, default=1.0)
     parser.add_argument("--guard", type=float, default=1.0,
                         help="seconds before the onset where the healthy part ends")
+    parser.add_argument("--keep", type=Path, default=None,
+                        help="keep each day's model and healthy parts in this folder")
     args = parser.parse_args()
     if not (args.data / "labels.csv").is_file():
         print(f"ALFA not found at {args.data}: skipped (docs/results.md names the data set).")
@@ -305,10 +309,12 @@ def main() -> None:
     every = flights(args.data)
     outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
     notes = []
-    with tempfile.TemporaryDirectory() as work:
+    with tempfile.TemporaryDirectory() as scratch:
+        work = args.keep or Path(scratch)
+        work.mkdir(parents=True, exist_ok=True)
         for day in sorted({f.day for f in every}):
             started = time.perf_counter()
-            day_outcomes, judged = judge_day(day, every, Path(work), args.iterations_scale,
+            day_outcomes, judged = judge_day(day, every, work, args.iterations_scale,
                                              args.guard)
             for variant, found in day_outcomes.items():
                 outcomes[variant] += found

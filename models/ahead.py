@@ -40,7 +40,8 @@ class AheadPredictor:
                  ) -> np.ndarray:
         """Measured less predicted, on the steps of ``sensors`` (NaN where the prediction
         lacks a sample or reaches across one of ``cuts``)."""
-        rows, features, change = _design(commands, sensors, self.steps, self.lag, cuts)
+        rows, features, change = _design(commands, sensors, self.steps, self.lag, cuts,
+                                         each_signal=True)
         out = np.full(sensors.shape, np.nan)
         out[rows + self.steps] = change - features @ self.weights
         return out
@@ -64,16 +65,21 @@ class AheadPredictor:
 
 
 def _design(commands: np.ndarray, sensors: np.ndarray, steps: int, lag: int,
-            cuts: Sequence[int]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            cuts: Sequence[int], each_signal: bool = False
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rows k that can be predicted (every sample known, no cut inside [k-lag, k+steps]),
-    their features and the change x(k+steps) - x(k)."""
+    their features and the change x(k+steps) - x(k). With ``each_signal``, a row needs its
+    features alone: a signal without a sample at k or k+steps leaves only its own change
+    unknown (NaN), not every other signal's."""
     length = len(sensors)
     k = np.arange(lag, max(lag, length - steps))
     features = np.hstack([sensors[k], sensors[k] - sensors[k - lag], commands[k],
                           commands[k + steps // 2], commands[k + steps],
                           np.ones((len(k), 1))])
     change = sensors[k + steps] - sensors[k]
-    known = np.isfinite(features).all(axis=1) & np.isfinite(change).all(axis=1)
+    known = np.isfinite(features).all(axis=1)
+    if not each_signal:
+        known &= np.isfinite(change).all(axis=1)
     for cut in cuts:
         known &= ~((k - lag < cut) & (cut <= k + steps))
     return k[known], features[known], change[known]

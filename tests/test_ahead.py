@@ -59,9 +59,11 @@ def test_no_prediction_reaches_across_a_cut_or_a_missing_sample():
     sensors[100, 1] = np.nan
     error = ahead.residual(commands, sensors, cuts=[200])
     # Predicted from k to k + 5 with the change over k - 2 .. k: the sample missing at 100
-    # leaves out the targets that use it (k = 100, 102 and 95); a cut at 200, every
-    # prediction whose span holds it (targets 200 .. 206).
-    assert np.isnan(error[[100, 105, 107]]).all()
+    # leaves out the predictions made from it (k = 100 and 102: targets 105 and 107) and
+    # its own signal's target at 100 (k = 95), but not the other signal's there; a cut at
+    # 200, every prediction whose span holds it (targets 200 .. 206).
+    assert np.isnan(error[[105, 107]]).all() and np.isnan(error[100, 1])
+    assert np.isfinite(error[100, 0])
     assert np.isfinite(error[[99, 101, 104, 106, 108]]).all()
     assert np.isnan(error[200:207, 0]).all() and np.isfinite(error[207, 0])
 

@@ -191,6 +191,16 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
+    effort = seen.effort_check
+    if (effort is not None and len(effort.named) == 1 and margin is not None
+            and margin < DECISIVE_MARGIN):
+        # The motion departed, but several single faults explain it about as well; the
+        # actuator its group's effort points at is the specific evidence.
+        return _found(seen, finding, list(effort.named),
+                      f"named by the effort its group carries ({effort.named[0]}, above): "
+                      f"the hypothesis test does not decide (best {best.describe()}"
+                      f"{beside})",
+                      judging)
     if best.kind == "weakened":
         finding = replace(finding, degradation=best)
     return _found(seen, finding, [best.component],

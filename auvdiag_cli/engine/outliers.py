@@ -5,6 +5,11 @@ A sample is a spike when it stands further from the median of its 7 neighbours t
 8 robust standard deviations of that signal's local scatter and a tenth of its full scale.
 The median window sees through up to three bad samples in a row, while a real step (a
 sensor that dies and stays dead, a commanded change) moves the median with it and is kept.
+A run of such samples is a spike only when it is isolated: entered and left by jumps
+larger than `ISOLATION` times the change of the samples just outside it. On a smooth signal
+the local scatter is near zero (on a monotone stretch every sample is its neighbours'
+median), so the top of a fast but smooth excursion (a yaw rate swinging as a rudder
+sticks) stands out of its median; it is reached by the signal's own motion and kept.
 """
 
 import numpy as np
@@ -15,6 +20,7 @@ SCALE_WINDOW = 31         # samples: the local scatter's neighbourhood
 SPIKE_SIGMAS = 8.0
 SPIKE_FLOOR = 0.1         # of the signal's full scale
 MAD_TO_SIGMA = 1.4826
+ISOLATION = 2.0
 
 
 def centred_median(values: np.ndarray, window: int, min_periods: int,
@@ -51,7 +57,31 @@ def spike_mask(values: np.ndarray, full_scale: float) -> np.ndarray:
     spikes = np.zeros(values.size, bool)
     with np.errstate(invalid="ignore"):
         spikes[candidates] = departure[candidates] > SPIKE_SIGMAS * scatter
-    return spikes
+    return _isolated(values, spikes)
+
+
+def _isolated(values: np.ndarray, outlying: np.ndarray) -> np.ndarray:
+    """``outlying`` less the runs that the signal reaches by its own motion: a run is kept
+    where the jump into it and the jump out of it both exceed `ISOLATION` times the change
+    between the two samples outside it on that side (a side without those samples holds)."""
+    padded = np.concatenate(([False], outlying, [False]))
+    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
+    firsts, lasts = edges[0::2], edges[1::2] - 1
+
+    def jump(i: np.ndarray, j: np.ndarray) -> np.ndarray:
+        inside = (i >= 0) & (j < values.size)
+        out = np.full(i.size, np.nan)
+        out[inside] = np.abs(values[j[inside]] - values[i[inside]])
+        return out
+
+    into, before = jump(firsts - 1, firsts), jump(firsts - 2, firsts - 1)
+    out_of, after = jump(lasts, lasts + 1), jump(lasts + 1, lasts + 2)
+    with np.errstate(invalid="ignore"):
+        reached = (into <= ISOLATION * before) | (out_of <= ISOLATION * after)
+    kept = outlying.copy()
+    for first, last in zip(firsts[reached], lasts[reached], strict=True):
+        kept[first:last + 1] = False
+    return kept
 
 
 def remove_spikes(sensors: np.ndarray, time_s: np.ndarray, names: tuple[str, ...],
