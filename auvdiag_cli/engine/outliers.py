@@ -20,7 +20,7 @@ SCALE_WINDOW = 31         # samples: the local scatter's neighbourhood
 SPIKE_SIGMAS = 8.0
 SPIKE_FLOOR = 0.1         # of the signal's full scale
 MAD_TO_SIGMA = 1.4826
-ISOLATION = 2.0
+ISOLATION = 2.0          # a spike's jumps against the change beside it (a swing's are alike)
 
 
 def centred_median(values: np.ndarray, window: int, min_periods: int,
