@@ -4,6 +4,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import Signals, read_log
+from auvdiag_cli.engine.flat_signals import flat_sensor_notes
 from auvdiag_cli.engine.outliers import remove_spikes
 from auvdiag_cli.engine.resample import AlignedFrame, NeverOperates, resample
 from auvdiag_cli.vehicle.profile import Profile
@@ -44,6 +45,7 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
         raise LogNotOperating(path, str(error)) from None
     except ValueError as error:
         raise LogError(path, str(error)) from None
+    frame.notes += flat_sensor_notes(frame.sensors, frame.sensor_names, profile.dt_s)
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
                                  profile.full_scales)
     return IngestedLog(signals, frame)
