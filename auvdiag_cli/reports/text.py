@@ -41,7 +41,7 @@ def summary_lines(report: Report) -> list[str]:
         lines.append("  change test: " + r.change_check.summary)
     lines += effort_lines(r.actuators)
     for segment in r.segments:
-        peaks = ", ".join(f"{name} {_percent(g)}/{segment.thresholds.get(name, 0):g} %"
+        peaks = ", ".join(f"{name} {_percent(g)}/{segment.thresholds.get(name, 0):.4g} %"
                           + (" (not judged)" if name in r.not_judged else "")
                           for name, g in segment.max_g.items())
         case = f"  case {segment.case}" if segment.case else ""
