@@ -146,14 +146,15 @@ def test_a_csv_log_of_another_vehicle_names_the_shipped_profile_that_reads_it(tm
     assert line.endswith("the shipped profiles that fit this log: haizhe (--profile NAME)")
 
 
-def test_a_sensor_that_reads_one_value_throughout_is_reported(make_log, tmp_path):
-    """A channel written but never fed (zeros from the first row to the last) is named in a
-    note; a sensor that moves is not, and a short stretch alike is no flat channel."""
-    from auvdiag_cli.engine.flat_signals import flat_sensor_notes
+def test_a_sensor_that_reads_one_value_throughout_is_named_and_not_judged(make_log, tmp_path):
+    """A channel written but never fed (zeros in every one of its cells) is named in a note
+    and left unjudged in that log; a sensor that moves is judged, and a short stretch alike
+    is no flat channel."""
+    from auvdiag_cli.engine.flat_signals import flat_sensors
 
     lines = _rows(make_log("paper-normal", 11, "csv"))
     column = lines[0].split(",").index("flow_mps")
-    zeroed = [lines[0]] + [",".join("0.0" if i == column else cell
+    zeroed = [lines[0]] + [",".join("0.0" if i == column and cell else cell
                                     for i, cell in enumerate(line.split(",")))
                            for line in lines[1:]]
     log = tmp_path / "no_flow.csv"
@@ -162,9 +163,13 @@ def test_a_sensor_that_reads_one_value_throughout_is_reported(make_log, tmp_path
     assert isinstance(report, dict)
     flat = [n for n in report["notes"] if "throughout the log" in n]
     assert len(flat) == 1 and flat[0].startswith("flow reads 0 throughout"), flat
+    assert report["coverage"]["signals"]["not_judged"] == ["flow"]
+    assert "reads 0 throughout" in report["not_judged"]["flow"]
     _, normal = diagnose_outcome(make_log("paper-normal", 11, "csv"))
     assert isinstance(normal, dict)
     assert not [n for n in normal["notes"] if "throughout the log" in n]
+    assert normal["coverage"]["signals"]["not_judged"] == []
     still = np.zeros((99, 1))
-    assert flat_sensor_notes(still, ("depth",), 0.1) == []
-    assert flat_sensor_notes(np.vstack([still, [[np.nan]], still]), ("depth",), 0.1)
+    assert flat_sensors(still, ("depth",), 0.1) == {}
+    assert list(flat_sensors(np.vstack([still, [[np.nan]], still]), ("depth",), 0.1)) == [
+        "depth"]

@@ -25,6 +25,7 @@ from auvdiag_cli.engine.detection import (
     look_up,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
+from auvdiag_cli.engine.flat_signals import not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -135,7 +136,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                       mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
     new_replay_budget()
     frame, signals = log.frame, log.signals
-    judging = Judging.of(model, profile)
+    judging = Judging.of(model, profile).without(
+        not_judged_flat(frame.sensors, frame.sensor_names, profile.dt_s))
     not_judged, decision = judging.not_judged, judging.decision_steps
     segments = segments_of(log, judging.profile)
     # Every DMS is a test of its own: the replay starts afresh from the measured state.

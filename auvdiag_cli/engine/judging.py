@@ -38,6 +38,11 @@ class Judging:
                    round(profile.decision_window_s / profile.dt_s), judged,
                    not_judged_signals(model), model)
 
+    def without(self, reasons: dict[str, str]) -> "Judging":
+        """This judging with ``reasons``' signals also left unjudged (a log's own
+        reasons: a sensor it never fed)."""
+        return replace(self, not_judged={**self.not_judged, **reasons})
+
     @property
     def scales(self) -> np.ndarray:
         return np.asarray([self.full_scale[name] for name in self.sensor_names])
