@@ -136,8 +136,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                       mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
     new_replay_budget()
     frame, signals = log.frame, log.signals
-    judging = Judging.of(model, profile).without(
-        not_judged_flat(frame.sensors, frame.sensor_names, profile.dt_s))
+    judging = Judging.of(model, profile).without(not_judged_flat(frame.flat))
     not_judged, decision = judging.not_judged, judging.decision_steps
     segments = segments_of(log, judging.profile)
     # Every DMS is a test of its own: the replay starts afresh from the measured state.

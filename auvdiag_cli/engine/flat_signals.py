@@ -26,14 +26,11 @@ def flat_sensors(sensors: np.ndarray, names: tuple[str, ...], dt_s: float) -> di
     return flat
 
 
-def flat_sensor_notes(sensors: np.ndarray, names: tuple[str, ...], dt_s: float) -> list[str]:
+def flat_sensor_notes(flat: dict[str, str]) -> list[str]:
     """One note per flat sensor (`flat_sensors`)."""
-    return [f"{name} {reads}: {FLAT_WHY}"
-            for name, reads in flat_sensors(sensors, names, dt_s).items()]
+    return [f"{name} {reads}: {FLAT_WHY}" for name, reads in flat.items()]
 
 
-def not_judged_flat(sensors: np.ndarray, names: tuple[str, ...], dt_s: float
-                    ) -> dict[str, str]:
-    """The reason a report prints for each flat sensor it leaves unjudged."""
-    return {name: f"not judged ({reads}: {FLAT_WHY})"
-            for name, reads in flat_sensors(sensors, names, dt_s).items()}
+def not_judged_flat(flat: dict[str, str]) -> dict[str, str]:
+    """The reason a report prints for each flat sensor (`flat_sensors`) it leaves unjudged."""
+    return {name: f"not judged ({reads}: {FLAT_WHY})" for name, reads in flat.items()}

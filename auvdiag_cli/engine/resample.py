@@ -74,6 +74,7 @@ class AlignedFrame:
     inputs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (steps, n_inputs)
     input_names: tuple[str, ...] = ()
     not_operating_s: float = 0.0        # time on the grid the vehicle was not operating
+    flat: dict[str, str] = field(default_factory=dict)   # sensor -> what it reads throughout
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
