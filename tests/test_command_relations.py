@@ -72,17 +72,20 @@ def test_normal_missions_keep_every_command_within_its_relation(tmp_path, scenar
     assert all(0.0 < peak < 1.0 for peak in check["peak_over_threshold"].values())
 
 
-def test_thrusters_that_act_alike_are_named_together(tmp_path):
-    """On the BlueROV2 the diagonally opposite horizontal thrusters always push the same
-    way (the mixer drives them with opposite commands): a weak motor 1 cannot be told from
-    a weak motor 3 by the commands, and both are named."""
+def test_thrusters_the_controller_drives_apart_are_told_apart(tmp_path):
+    """The BlueROV2's controller holds its track (the sideways velocity) besides its speed
+    and heading, so no two horizontal thrusters always push alike: a weak motor 1 is named
+    alone by the commands, not with its diagonal partner (a controller holding speed and
+    heading only drives motors 1 and 3 with equal magnitudes). The depth loop drives both
+    vertical thrusters alike on normal dives (the level hold only trims them), so the
+    commands still take those two as one."""
     relations = load_model(default_model_dir("bluerov2")).relations
-    assert relations is not None and relations.groups == ((0, 2), (1, 3), (4, 5))
+    assert relations is not None and relations.groups == ((0,), (1,), (2,), (3,), (4, 5))
     log = _dive(tmp_path / "weak.tlog", "bluerov2", "mission-thruster-1-weak", 7, "tlog")
     code, report = diagnose_json(log, "--profile", "bluerov2")
-    assert code == 1 and report["verdict"] == "fault" and report["component"] is None
-    assert report["candidates"] == ["thruster_1", "thruster_3"]
-    assert any("act alike on the vehicle" in note for note in report["notes"])
+    assert code == 1 and report["verdict"] == "fault" and report["component"] == "thruster_1"
+    assert report["commands_check"]["named"] == ["thruster_1"]
+    assert report["candidates"] == ["thruster_1"]
 
 
 def test_the_relation_reads_back_from_json_and_takes_logs_of_any_length():

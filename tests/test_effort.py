@@ -260,11 +260,19 @@ def test_crazypad_cut_propeller_found_and_named_without_false_alarms():
         assert judged(model, log) == ("motor_3",)
 
 
-def test_a_simulated_quadrotor_names_its_weak_rotor(tmp_path: Path):
-    """The arducopter_quad profile flown by its hover-and-turn controller and written as
-    real .tlog files: learnt from normal missions, a normal mission of another seed is not
-    flagged, and a rotor keeping half its thrust from 60 s is named alone, its command risen
-    by about 1/sqrt(0.5) where the others stay."""
+@pytest.mark.parametrize(("vehicle", "weak", "component", "member"), [
+    ("arducopter_quad", "mission-motor-2-weak", "motor_2", 1),
+    # A vectored ROV holding its track and its level: a weak horizontal thruster is driven
+    # harder alone, not with its diagonal partner (motor 3), a weak vertical one alone too.
+    ("bluerov2", "mission-thruster-1-weak", "thruster_1", 0),
+    ("bluerov2", "mission-thruster-6-weak", "thruster_6", 5),
+])
+def test_a_simulated_vehicle_names_its_weak_actuator(tmp_path: Path, vehicle: str, weak: str,
+                                                     component: str, member: int):
+    """The profile flown by its own controller and written as real .tlog files: learnt from
+    normal missions, a normal mission of another seed is not flagged, and an actuator keeping
+    half its thrust from 60 s is named alone, its command risen by about 1/sqrt(0.5) where
+    its group's others move far less."""
     from auvdiag_cli.engine.effort_check import check_effort
     from auvdiag_cli.engine.ingest import ingest
     from auvdiag_cli.jobs.effort import effort_log
@@ -272,13 +280,12 @@ def test_a_simulated_quadrotor_names_its_weak_rotor(tmp_path: Path):
     from auvdiag_cli.vehicle.profile import load_profile
     from models.effort_model import learn_effort
 
-    profile = load_profile(Path("arducopter_quad"))
+    profile = load_profile(Path(vehicle))
 
-    def flown(scenario: str, seed: int, *extra: str) -> Path:
+    def flown(scenario: str, seed: int) -> Path:
         path = tmp_path / f"{scenario}-{seed}.tlog"
-        code, output = invoke("simulate", scenario, "--profile", "arducopter_quad",
-                              "--format", "tlog", "--seed", str(seed), "-o", str(path),
-                              *extra)
+        code, output = invoke("simulate", scenario, "--profile", vehicle, "--format", "tlog",
+                              "--seed", str(seed), "-o", str(path))
         assert code == 0, output
         return path
 
@@ -298,9 +305,13 @@ def test_a_simulated_quadrotor_names_its_weak_rotor(tmp_path: Path):
 
     _, calm = judged(flown("mission-large-cw", 7))
     assert not calm.suspects
-    log, weak = judged(flown("mission-motor-2-weak", 8))
-    assert weak.named == ("motor_2",)
-    after = log.commands[round(75 / profile.dt_s):]
-    before = log.commands[round(20 / profile.dt_s):round(55 / profile.dt_s)]
-    risen = np.median(after, axis=0) / np.median(before, axis=0)
-    assert risen[1] > 1.3 and np.all(np.abs(risen[[0, 2, 3]] - 1) < 0.06)
+    log, found = judged(flown(weak, 8))
+    assert found.named == (component,)
+    group = next(g for g in profile.effort_groups if profile.commands[member].name in g.members)
+    columns = [i for i, c in enumerate(profile.commands) if c.name in group.members]
+    after = np.abs(log.commands[round(75 / profile.dt_s):, columns]).mean(axis=0)
+    before = np.abs(log.commands[round(20 / profile.dt_s):round(55 / profile.dt_s),
+                                 columns]).mean(axis=0)
+    risen = after / before
+    own = columns.index(member)
+    assert risen[own] > 1.25 and np.all(np.delete(risen, own) < risen[own] - 0.15)

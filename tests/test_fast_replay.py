@@ -21,7 +21,12 @@ def test_numpy_path_matches_torch_on_random_command_steps(vehicle, engine):
     start = rng.normal(0.0, 0.05, len(model.sensor_names))
     reference = replay(model.network, model.normaliser, commands, start)
     fast = fast_replay(model.fast, model.normaliser, commands, start, engine)
-    np.testing.assert_allclose(fast, reference, rtol=0, atol=1e-6)
+    # Both run in float32 with their sums in different orders, and random steps drive a
+    # model far outside what it learnt (the BlueROV2's roll rate to 40 of its spreads): the
+    # rounding is judged against the largest state reached, in the model's own units.
+    scale = np.asarray(model.normaliser.state_scale)
+    extent = float(np.abs(reference / scale).max())
+    np.testing.assert_allclose(fast / scale, reference / scale, rtol=0, atol=1e-5 * extent)
 
 
 @pytest.mark.parametrize("engine", ENGINES)

@@ -1,11 +1,12 @@
 """The vehicle's own mission controller: dead-reckoning navigation from its sensors, a
 turn-then-go waypoint guidance, PI loops on speed (flow sensor) and yaw rate (yaw-rate
-sensor), for vehicles that keep depth a depth loop on the integrated heave rate, and for
+sensor), for vehicles that keep depth a depth loop on the integrated heave rate, for
 vehicles that must hold their attitude (multirotors) PI loops holding the roll and pitch
-rates at zero. Because the loops are closed on the sensors, a sensor fault changes the
-commands, as it did on the real vehicle, and a weak actuator is driven harder. The loops
-output efforts (surge, yaw, heave, roll, pitch) that the profile's mix turns into actuator
-commands."""
+rates at zero, and for vehicles that can push sideways (vectored ROVs) a PI loop holding the
+sideways velocity at zero. Because the loops are closed on the sensors, a sensor fault
+changes the commands, as it did on the real vehicle, and a weak actuator is driven harder.
+The loops output efforts (surge, yaw, heave, roll, pitch, sway) that the profile's mix turns
+into actuator commands."""
 
 import math
 from collections.abc import Mapping, Sequence
@@ -14,7 +15,7 @@ from typing import Protocol
 
 import numpy as np
 
-EFFORTS = ("surge", "yaw", "heave", "roll", "pitch")
+EFFORTS = ("surge", "yaw", "heave", "roll", "pitch", "sway")
 CONTROLLER_KINDS = ("turn-then-go", "hover-and-turn")
 
 
@@ -43,6 +44,8 @@ class ControllerGains:
     heave_bias: float = 0.0              # heave effort that holds the vehicle up (a hover)
     rate_hold_kp: float = 0.02           # roll and pitch rate holds, effort per rad/s
     rate_hold_ki: float = 0.1
+    sway_hold_kp: float = 0.5            # sideways velocity hold, effort per m/s
+    sway_hold_ki: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -50,8 +53,9 @@ class ControllerSpec:
     """The vehicle's own mission controller, for closed-loop replays: its kind
     ("turn-then-go", a vehicle that sails its path; "hover-and-turn", a multirotor that holds
     its place and turns to each leg's heading), the sensors it is fed (a heave-rate sensor
-    when it also keeps depth or height, roll and pitch rates when it holds its attitude), how
-    its efforts are mixed onto the commands, and gains that differ from the defaults."""
+    when it also keeps depth or height, roll and pitch rates when it holds its attitude, the
+    sideways velocity when it holds its track), how its efforts are mixed onto the commands,
+    and gains that differ from the defaults."""
 
     kind: str
     speed: str | None                    # none for a vehicle that does not sail its path
@@ -62,6 +66,7 @@ class ControllerSpec:
     heave_sign: float = 1.0              # -1: the heave sensor reads up positive (a climb)
     roll_rate: str | None = None
     pitch_rate: str | None = None
+    sway: str | None = None
 
     def gains_for(self, cruise_speed_mps: float | None = None) -> ControllerGains:
         """The gains, with a mission's own cruise speed where it sets one."""
@@ -163,18 +168,18 @@ class PathFollower(FollowerLoops):
                 "heave": self.heave_effort(signals.get("heave", 0.0), dt_s)}
 
 
-class RateHold:
-    """PI loop holding an angular rate (roll or pitch) at zero: a multirotor's attitude hold,
-    whose integral carries the steady torque a weak actuator leaves unbalanced."""
+class ZeroHold:
+    """PI loop holding a rate at zero: a multirotor's roll or pitch rate (its attitude
+    hold), a vectored ROV's sideways velocity (its track). The integral carries the steady
+    torque or force a weak actuator leaves unbalanced."""
 
-    def __init__(self, gains: ControllerGains) -> None:
-        self.gains = gains
+    def __init__(self, kp: float, ki: float, integral_limit: float) -> None:
+        self.kp, self.ki, self.integral_limit = kp, ki, integral_limit
         self.integral = 0.0
 
-    def step(self, rate_rps: float, dt_s: float) -> float:
-        g = self.gains
-        self.integral = _clip(self.integral - rate_rps * dt_s, g.integral_limit)
-        return -g.rate_hold_kp * rate_rps + g.rate_hold_ki * self.integral
+    def step(self, rate: float, dt_s: float) -> float:
+        self.integral = _clip(self.integral - rate * dt_s, self.integral_limit)
+        return -self.kp * rate + self.ki * self.integral
 
 
 class Follower(Protocol):
@@ -211,9 +216,13 @@ class VehicleController:
         roles = {"speed": spec.speed, "yaw_rate": spec.yaw_rate, "heave": spec.heave}
         self.roles = {role: sensor_names.index(name) for role, name in roles.items()
                       if name is not None}
-        self.holds = {effort: (sensor_names.index(name), RateHold(spec.gains))
-                      for effort, name in (("roll", spec.roll_rate), ("pitch", spec.pitch_rate))
-                      if name is not None}
+        g = spec.gains
+        holds = (("roll", spec.roll_rate, g.rate_hold_kp, g.rate_hold_ki),
+                 ("pitch", spec.pitch_rate, g.rate_hold_kp, g.rate_hold_ki),
+                 ("sway", spec.sway, g.sway_hold_kp, g.sway_hold_ki))
+        self.holds = {effort: (sensor_names.index(name),
+                               ZeroHold(kp, ki, g.integral_limit))
+                      for effort, name, kp, ki in holds if name is not None}
 
     def step(self, readings: Sequence[float] | np.ndarray, dt_s: float) -> np.ndarray:
         signals = {role: float(readings[index]) for role, index in self.roles.items()}

@@ -276,7 +276,7 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
     kind = reader.get("kind", str)
     if kind not in CONTROLLER_KINDS:
         raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
-    for key in ("speed", "yaw_rate", "heave", "roll_rate", "pitch_rate"):
+    for key in ("speed", "yaw_rate", "heave", "roll_rate", "pitch_rate", "sway"):
         if key in reader.table and reader.get(key, str) not in sensor_names:
             raise ProfileError(f"key '{reader.key(key)}' names no sensor")
     if kind == "turn-then-go" and "speed" not in reader.table:
@@ -303,7 +303,8 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
     return ControllerSpec(kind, reader.get("speed", str, None), reader.get("yaw_rate", str),
                           mix, ControllerGains(**gains), reader.get("heave", str, None),
                           -1.0 if reader.get("heave_up", bool, False) else 1.0,
-                          reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None))
+                          reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None),
+                          reader.get("sway", str, None))
 
 
 def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
