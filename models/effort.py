@@ -13,7 +13,9 @@ means little). Steady: operating, and the level at least ``min_level``.
 
 Noise model of a span's departure from normal (share − normal share): a between-log offset
 (spread σ_b, measured between normal logs) plus within-log noise that averages out over the
-span (σ_w for one window of W seconds, measured between a log's windows). For a span of T
+span (σ_w for one window of W seconds, measured between a log's windows: the larger of
+what windows of W and of LONG_WINDOW·W say, in the same units, so that a slow wander, which
+windows shorter than it do not average out, is not taken for noise that does). For a span of T
 seconds: σ(T)² = σ_b² + σ_w² · W · (1/T − 1/T_typ), where σ_b is measured on logs of the
 typical steady time T_typ, each member's drawn towards the group's (`between_spread`). A new
 log's z = departure / (σ(T) √(1 + 1/n)) is Student-t under normal operation, with the
@@ -36,6 +38,7 @@ MIN_WINDOWS = 2               # steady windows a log needs to be summarised or j
 CONDITIONED_GAIN = 0.9        # condition on the level only when it cuts the spread this much
 MIN_BIN_LOGS = 2              # logs with steady time in a level bin for its own share
 SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
+LONG_WINDOW = 4               # windows this many times longer measure the slow wander
 WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the rest: later starts
 DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
 
@@ -67,6 +70,9 @@ class GroupLog:
     level: np.ndarray        # (bins,): Σ level
     within_var: np.ndarray   # (members,): variance of its windows' shares about its own
     windows: int
+    # The same over windows LONG_WINDOW times as long (None: fewer than MIN_WINDOWS of them).
+    long_var: np.ndarray | None = None
+    long_windows: int = 0
 
     @property
     def share(self) -> np.ndarray:
@@ -81,13 +87,18 @@ class GroupLog:
     def to_json(self) -> dict[str, Any]:
         return {"log": self.log, "steady_s": round(self.steady_s, 3),
                 "effort": self.effort.round(6).tolist(), "level": self.level.round(6).tolist(),
-                "within_var": self.within_var.round(9).tolist(), "windows": self.windows}
+                "within_var": self.within_var.round(9).tolist(), "windows": self.windows,
+                **({} if self.long_var is None else {
+                    "long_var": self.long_var.round(9).tolist(),
+                    "long_windows": self.long_windows})}
 
     @classmethod
     def from_json(cls, entry: dict[str, Any]) -> "GroupLog":
         return cls(str(entry["log"]), float(entry["steady_s"]), np.asarray(entry["effort"], float),
                    np.asarray(entry["level"], float), np.asarray(entry["within_var"], float),
-                   int(entry["windows"]))
+                   int(entry["windows"]),
+                   None if "long_var" not in entry else np.asarray(entry["long_var"], float),
+                   int(entry.get("long_windows", 0)))
 
 
 def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
@@ -111,10 +122,33 @@ def summarise(name: str, effort: np.ndarray, level: np.ndarray, bins: np.ndarray
     sums = np.zeros((n_bins, effort.shape[1]))
     np.add.at(sums, bins, effort)
     levels = np.bincount(bins, weights=level, minlength=n_bins)
-    shares, _ = window_shares(effort, level, window_steps)
     own = effort.sum(axis=0) / level.sum()
-    within = ((shares - own) ** 2).sum(axis=0) / (len(shares) - 1)
-    return GroupLog(name, len(level) * dt_s, sums, levels, within, len(shares))
+
+    def variance(steps: int) -> tuple[np.ndarray, int]:
+        shares, _ = window_shares(effort, level, steps)
+        return ((shares - own) ** 2).sum(axis=0) / max(1, len(shares) - 1), len(shares)
+
+    within, windows = variance(window_steps)
+    if len(level) < MIN_WINDOWS * LONG_WINDOW * window_steps:
+        return GroupLog(name, len(level) * dt_s, sums, levels, within, windows)
+    long_var, long_windows = variance(LONG_WINDOW * window_steps)
+    return GroupLog(name, len(level) * dt_s, sums, levels, within, windows, long_var,
+                    long_windows)
+
+
+def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:
+    """(members,) σ_w of one window, pooled over the logs: the larger of what the windows
+    and the long windows say (a long window's variance times LONG_WINDOW: how a span's
+    noise would shrink with its length were the windows independent)."""
+    dof = sum(g.windows - 1 for g in logs)
+    short = np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0) / max(1, dof)
+    long = [g for g in logs if g.long_var is not None]
+    long_dof = sum(g.long_windows - 1 for g in long)
+    if not long_dof:
+        return np.asarray(np.sqrt(short))
+    slow = LONG_WINDOW * np.sum([g.long_var * (g.long_windows - 1) for g in long],
+                                axis=0) / long_dof
+    return np.asarray(np.sqrt(np.maximum(short, slow)))
 
 
 def _bin_means(logs: Sequence[GroupLog], conditioned: bool) -> np.ndarray:
@@ -180,9 +214,7 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     conditioned = bool(np.sqrt((_departures(logs, True, True) ** 2).mean())
                        <= CONDITIONED_GAIN * pooled)
     n = len(logs)
-    windows = sum(g.windows for g in logs)
-    within = np.sqrt(np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0)
-                     / max(1, windows - n))
+    within = pooled_within(logs)
     typical = float(np.median([g.steady_s for g in logs]))
     # With few logs, the windows inside them say how much a log's share wanders at least.
     floor = within * math.sqrt(window_s / typical)
