@@ -142,12 +142,11 @@ def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:
     noise would shrink with its length were the windows independent)."""
     dof = sum(g.windows - 1 for g in logs)
     short = np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0) / max(1, dof)
-    long = [g for g in logs if g.long_var is not None]
-    long_dof = sum(g.long_windows - 1 for g in long)
+    long = [(g.long_var, g.long_windows - 1) for g in logs if g.long_var is not None]
+    long_dof = sum(n for _, n in long)
     if not long_dof:
         return np.asarray(np.sqrt(short))
-    slow = LONG_WINDOW * np.sum([g.long_var * (g.long_windows - 1) for g in long],
-                                axis=0) / long_dof
+    slow = LONG_WINDOW * np.sum([v * n for v, n in long], axis=0) / long_dof
     return np.asarray(np.sqrt(np.maximum(short, slow)))
 
 
