@@ -82,6 +82,27 @@ def test_the_part_moving_most_of_what_changed_comes_first():
                            profile)[:3] == ["rudder", "engine", "ailerons"]
 
 
+def test_what_a_signal_carried_from_the_onset_outweighs_what_crossed_at_the_alarm():
+    # Signal 0 drifts from 80 s, about two spreads of a window mean, for good, and stays
+    # under its thresholds; signal 1 jumps at 89 s and crosses at once (the vehicle's
+    # answer): the alarm is signal 1's, but over the run up to it signal 0 carried more
+    # above its usual level.
+    residual = _noise(150.0, seed=4)
+    residual[800:, 0] += 0.6
+    residual[890:, 1] += 4.0
+    time_s = np.arange(residual.shape[0]) * DT_S
+    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    assert check.alarm_s == pytest.approx(89.9) and list(check.flagged) == ["yaw"]
+    assert check.evidence["speed"] > check.evidence["yaw"] > 0.0
+    # On the aircraft: the engine's signals carried the change from the onset, the roll
+    # rate crossed at the alarm; without what was carried, the ailerons come first.
+    profile = api.load_profile("arduplane_carbonz")
+    flagged = {"roll_rate": 1.3}
+    carried = {"accel_x": 0.6, "climb": 0.4, "ground_speed": 0.1, "roll_rate": 0.3}
+    assert change_suspects(flagged, profile)[0] == "ailerons"
+    assert change_suspects(flagged, profile, carried)[0] == "engine"
+
+
 def test_a_sensor_is_suspected_only_where_every_change_is_its_own():
     profile = api.load_profile("arduplane_carbonz")
     # yaw and roll rate are the gyro's, the climb the GPS's: no one sensor reads them all.

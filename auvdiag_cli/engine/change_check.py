@@ -57,6 +57,9 @@ class ChangeCheck:
     onset_error_s: float = 0.0         # give or take
     # Signal -> its statistic over its threshold at the alarm (the larger of the two).
     flagged: Mapping[str, float] = field(default_factory=dict)
+    # Judged signal -> how much more of the change it carried from the onset to the alarm
+    # than before the onset (`_carried`), where ``flagged`` says only where it ended.
+    evidence: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def judged(self) -> bool:
@@ -120,6 +123,20 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int
         z = (means - mean) / spread
     z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
     return ends, z
+
+
+def _carried(ratios: np.ndarray, first: int, at: int) -> np.ndarray:
+    """Per signal, its ratio to its threshold averaged from step ``first`` (the onset) to
+    ``at`` (the alarm), less its average before the onset, never below 0. The part that
+    failed moves what it moves from the onset on, though some of it stays under its
+    threshold; what else crosses near the alarm is often the vehicle's answer to the
+    failure. Before the onset is each signal's own usual level (a noisy signal sits nearer
+    its threshold), which carries nothing."""
+    run = np.nan_to_num(ratios[first:at + 1], nan=0.0).mean(axis=0)
+    before = ratios[:first]
+    known = np.isfinite(before)
+    usual = np.where(known, before, 0.0).sum(axis=0) / np.maximum(known.sum(axis=0), 1)
+    return np.asarray(np.maximum(run - usual, 0.0))
 
 
 def change_judged(model: LoadedModel, replay_judged: Sequence[str]) -> list[str]:
@@ -211,11 +228,14 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # second or two to stand out of the noise; the windows before carry part of it).
     rest = np.flatnonzero(~(statistics[SUM][:at, strongest] > 0))
     start = 0 if not rest.size else int(rest[-1]) + 1
-    onset = float(time_s[max(start - window + 1, 0)])
+    first = max(start - window + 1, 0)
+    onset = float(time_s[first])
     # The change began before the alarm, and about when that run began: a noise window that
     # happened to join the run puts it early, a change that grew slowly out of the noise
     # late. The error spans the run up to the alarm, a window at least.
     error = max(window * dt_s, float(time_s[at]) - onset)
+    evidence = {n: round(float(v), 3)
+                for n, v in zip(names_judged, _carried(combined, first, at), strict=True)}
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
                        round(onset, 3), round(error, 3),
-                       dict(sorted(flagged.items(), key=lambda item: -item[1])))
+                       dict(sorted(flagged.items(), key=lambda item: -item[1])), evidence)

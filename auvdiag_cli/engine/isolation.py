@@ -83,7 +83,7 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if row is not None and row.components:
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
-    ranked = change_suspects(change.flagged, judging.profile)
+    ranked = change_suspects(change.flagged, judging.profile, change.evidence)
     if len(ranked) > 1:
         note += "; the part that moves most of what changed is named, before " + ", ".join(
             ranked[1:])
@@ -100,26 +100,31 @@ def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
     return any(s.moved_by for s in profile.sensors if s.name in change.flagged)
 
 
-def change_suspects(flagged: Mapping[str, float], profile: Profile) -> list[str]:
+def change_suspects(flagged: Mapping[str, float], profile: Profile,
+                    evidence: Mapping[str, float] | None = None) -> list[str]:
     """The parts that could explain the signals that changed, likeliest first: each signal
-    counts, by how far it went past its threshold, for the parts that move what it
-    measures, and a part moving several of them gathers their weight; a signal barely over
-    its threshold is weak evidence, so a part that moved one signal far outweighs one that
-    nudged several. A sensor is a suspect only where every signal that changed is its own:
-    a sensor's fault shows in its own readings, while a part that moves the vehicle changes
-    what other sensors measure too. On a tie the part that moves comes first: a vehicle
-    that stops following its set points the same way has first changed in what moves it."""
+    counts for the parts that move what it measures, and a part moving several of them
+    gathers their weight. A signal counts by how much of the change it carried from the
+    onset to the alarm (``evidence``, `ChangeCheck.evidence`: every judged signal, over
+    its threshold at the alarm or not), else by how far it went past its threshold at the
+    alarm (``flagged``); a signal barely over is weak evidence, so a part that moved one
+    signal far outweighs one that nudged several. A sensor is a suspect only where every
+    signal that crossed is its own: a sensor's fault shows in its own readings, while a
+    part that moves the vehicle changes what other sensors measure too. On a tie the part
+    that moves comes first: a vehicle that stops following its set points the same way has
+    first changed in what moves it."""
+    weights = dict(evidence) if evidence else {n: r - 1.0 for n, r in flagged.items()}
     weight: dict[str, float] = {}
     movers: set[str] = set()
-    sensors = [s for s in profile.sensors if s.name in flagged]
-    own = {s.component for s in sensors}
-    for sensor in sensors:
-        excess = flagged[sensor.name] - 1.0
+    for sensor in (s for s in profile.sensors if s.name in weights):
         for part in sensor.moved_by:
-            weight[part] = weight.get(part, 0.0) + excess
+            weight[part] = weight.get(part, 0.0) + weights[sensor.name]
             movers.add(part)
-        if len(own) == 1:
-            weight[sensor.component] = weight.get(sensor.component, 0.0) + excess
+    own = {s.component for s in profile.sensors if s.name in flagged}
+    if len(own) == 1:
+        (component,) = own
+        weight[component] = weight.get(component, 0.0) + sum(
+            weights.get(name, 0.0) for name in flagged)
     return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
 
 

@@ -124,6 +124,7 @@ class ChangePart:
     onset_s: float | None = None
     onset_error_s: float | None = None
     flagged: Numbers = field(default_factory=dict)
+    carried: Numbers = field(default_factory=dict)
 
 
 @dataclass(frozen=True, kw_only=True)
