@@ -158,6 +158,42 @@ def test_a_thruster_weakening_mid_log_is_found_first_by_the_change_test(calibrat
     assert any(note.startswith("found by the change test") for note in diagnosis.notes)
 
 
+def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(calibrated,
+                                                                            make_log,
+                                                                            tmp_path):
+    """A sensor the profile has judged only against the log's own beginning (a ground speed
+    with the day's wind) raises no replay bit and takes no replay threshold, but the change
+    test judges it and the coverage counts it; a sensor a log never fed is set aside by
+    every judge, the change test too."""
+    from dataclasses import replace
+
+    from auvdiag_cli.engine.judging import replay_judged
+
+    model, _ = calibrated
+    base = api.load_profile(None)
+    profile = replace(base, sensors=tuple(
+        replace(s, own_log_only="a flow that depends on the day's current")
+        if s.name == "flow" else s for s in base.sensors))
+    assert replay_judged(model, profile) == ["yaw_rate"]
+    diagnosis = api.diagnose(make_log("mission-thruster-0-weak", 11), profile, model)
+    assert diagnosis.not_judged["flow"].startswith("judged only against the log's own")
+    check = diagnosis.change_check
+    assert check is not None and all("flow" in limits for limits in check.thresholds.values())
+    assert "flow" in diagnosis.coverage.signals_judged and diagnosis.set_aside == ()
+    assert (diagnosis.histories.b_series[:, 0] == 0).all()
+    # A channel never fed (the flow's cells all 0): set aside, the change test leaves it out.
+    lines = make_log("paper-normal", 9, "csv").read_text().splitlines()
+    column = lines[0].split(",").index("flow_mps")
+    zeroed = tmp_path / "no_flow.csv"
+    zeroed.write_text("\n".join([lines[0]] + [",".join(
+        "0.0" if i == column and cell else cell for i, cell in enumerate(line.split(",")))
+        for line in lines[1:]]) + "\n")
+    flat = api.diagnose(zeroed, base, model)
+    assert flat.set_aside == ("flow",) and flat.change_check is not None
+    assert all(list(limits) == ["yaw_rate"] for limits in flat.change_check.thresholds.values())
+    assert "flow" not in flat.coverage.signals_judged
+
+
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     from types import SimpleNamespace
 

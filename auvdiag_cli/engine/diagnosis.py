@@ -35,7 +35,7 @@ from auvdiag_cli.engine.isolation import (
     isolate,
     names_a_mover,
 )
-from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.judging import Judging, skilled
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
@@ -171,7 +171,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
-        not_judged=not_judged,
+        not_judged=not_judged, set_aside=tuple(sorted(judging.set_aside)),
         command_check=_check_commands(log, segments, judging, notes),
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s, outing(
@@ -234,8 +234,8 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
     (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
     profile, model = judging.profile, judging.model
     names = profile.sensor_names
-    judged = change_judged(model, [n for n, j in zip(names, judging.judged_mask, strict=True)
-                                   if j])
+    judged = [name for name in change_judged(model, skilled(model, profile))
+              if name not in judging.set_aside]
     thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):

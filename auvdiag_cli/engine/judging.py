@@ -23,8 +23,10 @@ class Judging:
     window: int                          # K, samples of g's mean
     decision_steps: int                  # b is collected this long after the first alarm
     profile: Profile                     # with the thresholds calibrated into the model
-    not_judged: dict[str, str]           # signal -> why the model cannot judge it
+    not_judged: dict[str, str]           # signal -> why the replay does not judge it
     model: LoadedModel                   # the model it judges with
+    # Signals no judge takes in this log (a sensor it never fed): the change test neither.
+    set_aside: frozenset[str] = frozenset()
 
     @classmethod
     def of(cls, model: LoadedModel, profile: Profile) -> "Judging":
@@ -36,12 +38,13 @@ class Judging:
                    profile.window_samples if card.window_samples is None
                    else card.window_samples,
                    round(profile.decision_window_s / profile.dt_s), judged,
-                   not_judged_signals(model), model)
+                   not_judged_signals(model) | own_log_only(profile), model)
 
     def without(self, reasons: dict[str, str]) -> "Judging":
-        """This judging with ``reasons``' signals also left unjudged (a log's own
+        """This judging with ``reasons``' signals set aside by every judge (a log's own
         reasons: a sensor it never fed)."""
-        return replace(self, not_judged={**self.not_judged, **reasons})
+        return replace(self, not_judged={**self.not_judged, **reasons},
+                       set_aside=self.set_aside | frozenset(reasons))
 
     @property
     def scales(self) -> np.ndarray:
@@ -64,6 +67,26 @@ class Judging:
         bits = (np.zeros(len(self.sensor_names), bool) if alarm is None
                 else decided_b(b, alarm, self.decision_steps))
         return {name: int(bits[i]) for i, name in enumerate(self.sensor_names)}
+
+
+def own_log_only(profile: Profile) -> dict[str, str]:
+    """The signals the profile has judged only against the log's own beginning (the change
+    test), with the reason reports print."""
+    return {s.name: f"judged only against the log's own beginning ({s.own_log_only})"
+            for s in profile.sensors if s.own_log_only}
+
+
+def replay_judged(model: LoadedModel, profile: Profile) -> list[str]:
+    """The signals the replay judges with this model and profile."""
+    left_out = not_judged_signals(model) | own_log_only(profile)
+    return [name for name in profile.sensor_names if name not in left_out]
+
+
+def skilled(model: LoadedModel, profile: Profile) -> list[str]:
+    """The signals the model has the skill to judge, by the replay or only against the
+    log's own beginning: what the change test may judge with a model that has no
+    predictor a moment ahead."""
+    return [name for name in profile.sensor_names if name not in not_judged_signals(model)]
 
 
 def not_judged_signals(model: LoadedModel) -> dict[str, str]:

@@ -66,6 +66,7 @@ class Observations:
     completeness: Completeness | None = None
     not_operating_s: float = 0.0      # time the operating flag excluded from judgement
     not_judged: Mapping[str, str] = field(default_factory=dict)   # signal -> why not
+    set_aside: tuple[str, ...] = ()   # of those, what no judge takes in this log (flat)
     command_check: CommandCheck | None = None   # the commands judged against the motion
     start_check: StartCheck | None = None       # the log's start against normal starts
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
@@ -105,9 +106,14 @@ class Diagnosis(Observations, Finding):
 
     @property
     def coverage(self) -> Coverage:
-        """What the verdict looked at: signals, actuators, the start."""
+        """What the verdict looked at: signals (by the replay or against the log's own
+        beginning), actuators, the start."""
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
-        return coverage_of(self.histories.sensor_names or tuple(self.b), list(self.not_judged),
+        change = self.change_check
+        by_change = set() if change is None or not change.judged else {
+            name for limits in change.thresholds.values() for name in limits}
+        return coverage_of(self.histories.sensor_names or tuple(self.b),
+                           [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check)
 
 

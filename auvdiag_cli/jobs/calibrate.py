@@ -21,7 +21,7 @@ from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.judging import not_judged_signals
+from auvdiag_cli.engine.judging import replay_judged, skilled
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
 from auvdiag_cli.jobs.budget import (
@@ -216,7 +216,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
                                                                         strict=True)]
     labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name
               for p in normal_logs]
-    judged = [n for n in profile.sensor_names if n not in not_judged_signals(model)]
+    judged = replay_judged(model, profile)
     modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, judged)
     hours = sum(m.hours for m in modes)
     if hours == 0:
@@ -229,7 +229,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start)
-    evidence = change_evidence(diagnoses, judged, model, profile)
+    evidence = change_evidence(diagnoses, skilled(model, profile), model, profile)
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)

@@ -35,14 +35,16 @@ ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedModel,
                      profile: Profile) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per judged signal in one normal log (NaN: too
-    short)."""
+    short, or set aside in that log: a sensor it never fed)."""
     residual = diagnosis.histories.change_residual
     assert residual is not None
     names = list(profile.sensor_names)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
-    return change_peaks(residual[:, columns], list(judged),
-                        window, profile.dt_s)
+    peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s)
+    return {statistic: {name: float("nan") if name in diagnosis.set_aside else value
+                        for name, value in values.items()}
+            for statistic, values in peaks.items()}
 
 
 @dataclass(frozen=True)

@@ -66,6 +66,9 @@ class Sensor:
     truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
     # The actuators (or command components) that move what it measures ([[actuators]]).
     moved_by: tuple[str, ...] = ()
+    # Why it is judged only against the log's own beginning (None: by every judge): it answers
+    # the commands differently from log to log (a ground speed, with the day's wind).
+    own_log_only: str | None = None
 
 
 @dataclass(frozen=True)
@@ -183,7 +186,8 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
     sensors = tuple(
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
-               r.get("truth_column", str, None), parse_moved_by(r, movers))
+               r.get("truth_column", str, None), parse_moved_by(r, movers),
+               r.get("own_log_only", str, None))
         for r in top.items("sensors")
     )
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
