@@ -113,6 +113,10 @@ def test_the_operating_fallback_is_read_as_a_value_map():
      "key 'sensors[4].moved_by' names 'tail', which is no actuator or command component"),
     ("arduplane_carbonz", 'kind = "engine"', 'kind = "jet"',
      "key 'actuators[3].kind' must be one of"),
+    ("arduplane_carbonz", 'own_log_only = "the ground speed', 'own_log_only = 3 # "',
+     "key 'sensors[6].own_log_only' must be a string, got 3"),
+    ("bluerov2", 'sway = "sway"\nroll_rate', 'sway = "drift"\nroll_rate',
+     "key 'controller.sway' names no sensor"),
 ])
 def test_actuator_kinds_and_what_moves_a_sensor_are_checked(tmp_path, profile_name, old, new,
                                                             message):
