@@ -58,3 +58,14 @@ def assert_same_signals(read: Any, reference: Any) -> None:
         assert np.array_equal(series.times_ns, reference.series[name].times_ns), name
         assert np.array_equal(series.values, reference.series[name].values), name
     assert len(read.markers) == len(reference.markers)
+
+
+def zeroed_column(log: Path, column_name: str, out: Path) -> Path:
+    """A copy of the CSV ``log`` with one column's cells all 0 (a channel written but never
+    fed)."""
+    lines = log.read_text().splitlines()
+    column = lines[0].split(",").index(column_name)
+    out.write_text("\n".join([lines[0]] + [",".join(
+        "0.0" if i == column and cell else cell for i, cell in enumerate(line.split(",")))
+        for line in lines[1:]]) + "\n")
+    return out

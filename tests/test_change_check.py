@@ -5,6 +5,7 @@ dive it was not calibrated on; the part that moves what changed is named."""
 
 import numpy as np
 import pytest
+from helpers import zeroed_column
 
 from auvdiag_cli import api
 from auvdiag_cli.engine.change_check import (
@@ -182,12 +183,8 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     assert "flow" in diagnosis.coverage.signals_judged and diagnosis.set_aside == ()
     assert (diagnosis.histories.b_series[:, 0] == 0).all()
     # A channel never fed (the flow's cells all 0): set aside, the change test leaves it out.
-    lines = make_log("paper-normal", 9, "csv").read_text().splitlines()
-    column = lines[0].split(",").index("flow_mps")
-    zeroed = tmp_path / "no_flow.csv"
-    zeroed.write_text("\n".join([lines[0]] + [",".join(
-        "0.0" if i == column and cell else cell for i, cell in enumerate(line.split(",")))
-        for line in lines[1:]]) + "\n")
+    zeroed = zeroed_column(make_log("paper-normal", 9, "csv"), "flow_mps",
+                           tmp_path / "no_flow.csv")
     flat = api.diagnose(zeroed, base, model)
     assert flat.set_aside == ("flow",) and flat.change_check is not None
     assert all(list(limits) == ["yaw_rate"] for limits in flat.change_check.thresholds.values())

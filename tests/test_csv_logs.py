@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import diagnose_outcome
+from helpers import diagnose_outcome, zeroed_column
 from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
@@ -146,19 +146,34 @@ def test_a_csv_log_of_another_vehicle_names_the_shipped_profile_that_reads_it(tm
     assert line.endswith("the shipped profiles that fit this log: haizhe (--profile NAME)")
 
 
+def test_a_channel_never_fed_sets_no_threshold_in_calibrate(make_log, tmp_path):
+    """Calibrated with a log whose flow was never fed beside normal ones, the flow's
+    threshold is what the normal logs give: that log's flow g (the model's speed against a
+    channel that reads 0) says nothing of the model."""
+    from auvdiag_cli import api
+
+    normal = [make_log("paper-normal", seed, "csv") for seed in (3, 4)]
+    flat = zeroed_column(make_log("paper-normal", 5, "csv"), "flow_mps",
+                        tmp_path / "no_flow.csv")
+    profile = api.load_profile(None)
+
+    def thresholds(logs: list[Path]) -> dict[str, float]:
+        model = api.load_model(None, profile)
+        api.calibrate(logs, profile, model)
+        return dict(model.card.thresholds["mission"])
+
+    alone, beside = thresholds(normal), thresholds([*normal, flat])
+    assert beside["flow"] == pytest.approx(alone["flow"], rel=0.02)
+    assert beside["yaw_rate"] >= alone["yaw_rate"]
+
+
 def test_a_sensor_that_reads_one_value_throughout_is_named_and_not_judged(make_log, tmp_path):
     """A channel written but never fed (zeros in every one of its cells) is named in a note
     and left unjudged in that log; a sensor that moves is judged, and a short stretch alike
     is no flat channel."""
     from auvdiag_cli.engine.flat_signals import flat_sensors
 
-    lines = _rows(make_log("paper-normal", 11, "csv"))
-    column = lines[0].split(",").index("flow_mps")
-    zeroed = [lines[0]] + [",".join("0.0" if i == column and cell else cell
-                                    for i, cell in enumerate(line.split(",")))
-                           for line in lines[1:]]
-    log = tmp_path / "no_flow.csv"
-    log.write_text("\n".join(zeroed) + "\n")
+    log = zeroed_column(make_log("paper-normal", 11, "csv"), "flow_mps", tmp_path / "no_flow.csv")
     _, report = diagnose_outcome(log)
     assert isinstance(report, dict)
     flat = [n for n in report["notes"] if "throughout the log" in n]
