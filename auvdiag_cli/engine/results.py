@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, fields, replace
 from enum import StrEnum
 from pathlib import Path
 
+import numpy as np
+
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.command_check import CommandCheck
@@ -103,6 +105,16 @@ class Diagnosis(Observations, Finding):
     def of(cls, observed: Observations, finding: Finding) -> "Diagnosis":
         return cls(**{f.name: getattr(observed, f.name) for f in fields(Observations)},
                    **{f.name: getattr(finding, f.name) for f in fields(Finding)})
+
+    @property
+    def judged_g(self) -> np.ndarray:
+        """g per step and signal, NaN for a signal this log set aside (a sensor it never
+        fed: its g says nothing of the model)."""
+        histories = self.histories
+        assert histories.matching is not None
+        g = histories.matching.g_percent.copy()
+        g[:, [histories.sensor_names.index(name) for name in self.set_aside]] = np.nan
+        return g
 
     @property
     def coverage(self) -> Coverage:

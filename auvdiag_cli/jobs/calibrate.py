@@ -126,17 +126,12 @@ def _mode_key(segment_name: str) -> str:
 
 
 def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
-    """The log's g per mode; NaN for a signal it set aside (a sensor it never fed: its g
-    says nothing of the model, and would set the threshold for every other log)."""
-    assert diagnosis.histories.matching is not None
-    g = diagnosis.histories.matching.g_percent.copy()
-    names = list(diagnosis.histories.sensor_names)
-    g[:, [names.index(name) for name in diagnosis.set_aside]] = np.nan
+    """The log's g per mode (`Diagnosis.judged_g`: NaN where it set a signal aside)."""
+    g, time_s = diagnosis.judged_g, diagnosis.histories.time_s
     result: dict[str, list[np.ndarray]] = {}
-    for segment in diagnosis.segments:
-        inside = ((diagnosis.histories.time_s >= segment.segment.start_s)
-                  & (diagnosis.histories.time_s <= segment.segment.end_s))
-        result.setdefault(_mode_key(segment.segment.name), []).append(g[inside])
+    for part in diagnosis.segments:
+        inside = (time_s >= part.segment.start_s) & (time_s <= part.segment.end_s)
+        result.setdefault(_mode_key(part.segment.name), []).append(g[inside])
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
 
 
