@@ -140,14 +140,22 @@ def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:
     """(members,) σ_w of one window, pooled over the logs: the larger of what the windows
     and the long windows say (a long window's variance times LONG_WINDOW: how a span's
     noise would shrink with its length were the windows independent)."""
+    return within_and_dof(logs)[0]
+
+
+def within_and_dof(logs: Sequence[GroupLog]) -> tuple[np.ndarray, float]:
+    """`pooled_within`, and the degrees of freedom it rests on: every log's windows (the
+    long windows', fewer, where any log has them). Many more than the between-log spread's
+    n - 1: a change within one log is judged on far firmer ground than a log against the
+    others when the normal logs are few."""
     dof = sum(g.windows - 1 for g in logs)
     short = np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0) / max(1, dof)
     long = [(g.long_var, g.long_windows - 1) for g in logs if g.long_var is not None]
     long_dof = sum(n for _, n in long)
     if not long_dof:
-        return np.asarray(np.sqrt(short))
+        return np.asarray(np.sqrt(short)), float(max(1, dof))
     slow = LONG_WINDOW * np.sum([v * n for v, n in long], axis=0) / long_dof
-    return np.asarray(np.sqrt(np.maximum(short, slow)))
+    return np.asarray(np.sqrt(np.maximum(short, slow))), float(long_dof)
 
 
 def _bin_means(logs: Sequence[GroupLog], conditioned: bool) -> np.ndarray:
@@ -194,6 +202,7 @@ class GroupFit:
     typical_s: float           # median steady time of a normal log
     logs: int
     dof: float                 # of the spread's estimate
+    within_dof: float          # of σ_w's
     loo_z: np.ndarray          # (logs, members): each normal log judged by the others
 
     def sigma(self, span_s: float | np.ndarray) -> np.ndarray:
@@ -213,13 +222,13 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     conditioned = bool(np.sqrt((_departures(logs, True, True) ** 2).mean())
                        <= CONDITIONED_GAIN * pooled)
     n = len(logs)
-    within = pooled_within(logs)
+    within, within_dof = within_and_dof(logs)
     typical = float(np.median([g.steady_s for g in logs]))
     # With few logs, the windows inside them say how much a log's share wanders at least.
     floor = within * math.sqrt(window_s / typical)
     spread, dof = between_spread(_departures(logs, conditioned, False), floor)
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
-                   spread, within, typical, n, dof, np.zeros((n, len(group.members))))
+                   spread, within, typical, n, dof, within_dof, np.zeros((n, len(group.members))))
     loo = []
     for i, log in enumerate(logs):
         others = [g for j, g in enumerate(logs) if j != i]
@@ -275,10 +284,12 @@ class Thresholds:
         return self.inflation * quantile(1 - share, fit.dof)
 
     def later_start(self, fit: GroupFit, starts: int) -> float:
-        """For the departure from one of ``starts`` later window starts to the end."""
+        """For the departure from one of ``starts`` later window starts to the end: a change
+        against the log's own beginning, whose noise is the windows' (σ_w, on its own
+        degrees of freedom; the between-log inflation is not its to carry)."""
         share = (1 - WHOLE_LOG_BUDGET) * self.false_alarm_rate / (self.actuators
                                                                   * max(1, starts))
-        return self.inflation * quantile(1 - share, fit.dof)
+        return quantile(1 - share, fit.within_dof)
 
 
 def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:

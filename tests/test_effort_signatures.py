@@ -5,13 +5,14 @@ from auvdiag_cli.engine.effort_check import (
     CLEAR_MATCH,
     ActuatorEffort,
     EffortCheck,
+    _named,
     signature_matches,
 )
 
 
-def _group(departures: list[float], harder: int) -> tuple[ActuatorEffort, ...]:
+def _group(departures: list[float], *harder: int) -> tuple[ActuatorEffort, ...]:
     return tuple(ActuatorEffort(f"motor_{i + 1}", f"motor_{i + 1}", "rotors", 1.0 + d, 1.0,
-                                0.01, d, 2.0 if i == harder else 0.5, None)
+                                0.01, d, 2.0 if i in harder else 0.5, None)
                  for i, d in enumerate(departures))
 
 
@@ -21,14 +22,14 @@ def _check(actuators: tuple[ActuatorEffort, ...]) -> EffortCheck:
 
 
 def test_one_weak_rotor_matches_its_own_signature():
-    check = _check(_group([-0.02, -0.01, 0.06, -0.03], harder=2))
+    check = _check(_group([-0.02, -0.01, 0.06, -0.03], 2))
     (best, match), (_, other) = check.matches[:2]
     assert best == "motor_3" and match > 0.95 and other < 0.1
     assert "the shares match motor_3 weak (0.9" in check.describe()
 
 
 def test_a_load_between_two_rotors_matches_none_well():
-    check = _check(_group([-0.04, -0.04, 0.04, 0.04], harder=2))
+    check = _check(_group([-0.04, -0.04, 0.04, 0.04], 2))
     assert check.matches[0][1] < CLEAR_MATCH
     assert "match no one actuator's weakness well" in check.describe()
 
@@ -36,5 +37,18 @@ def test_a_load_between_two_rotors_matches_none_well():
 def test_no_alarm_no_pattern():
     quiet = tuple(ActuatorEffort(a.name, a.component, a.group, a.share, a.normal_share,
                                  a.spread, a.departure, 0.5, None)
-                  for a in _group([0.0, 0.0, 0.01, -0.01], harder=0))
+                  for a in _group([0.0, 0.0, 0.01, -0.01], 0))
     assert signature_matches(quiet) == ()
+
+
+def test_one_clear_weakness_is_named_alone_two_are_named_together():
+    # Motor 3's weakness, and motor 1 crossing beside it (a drift within the log): one named.
+    clear = _group([0.01, -0.03, 0.06, -0.04], 0, 2)
+    assert signature_matches(clear)[0][0] == "motor_3"
+    assert _named(clear, signature_matches(clear)) == ("motor_3",)
+    # A load between motors 3 and 4 matches no one weakness: both named.
+    shared = _group([-0.04, -0.04, 0.04, 0.04], 2, 3)
+    assert _named(shared, signature_matches(shared)) == ("motor_3", "motor_4")
+    # The clearest match is not among those driven harder: every one driven harder named.
+    elsewhere = _group([0.01, -0.03, 0.06, -0.04], 0)
+    assert _named(elsewhere, signature_matches(elsewhere)) == ("motor_1",)

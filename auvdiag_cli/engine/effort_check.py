@@ -162,6 +162,20 @@ def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, f
                         key=lambda item: -item[1]))
 
 
+def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, float]]
+           ) -> tuple[str, ...]:
+    """The components of the actuators driven harder; in the strongest suspect's group,
+    where its departure matches the weakness of one member driven harder clearly
+    (CLEAR_MATCH), that member alone. Another member crossing beside it (a slow drift of
+    its share within the log, seen by the test against the log's own beginning) is not a
+    second weakness the shares show: two weak members, or a load between them, match no
+    one signature."""
+    clear = matches[0][0] if matches and matches[0][1] >= CLEAR_MATCH else None
+    group = next((a.group for a in actuators if a.name == clear and a.driven_harder), None)
+    return tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder and (
+        a.group != group or a.name == clear)))
+
+
 def _cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
                 ) -> tuple[np.ndarray, np.ndarray]:
     """Running sums with a zero row in front: effort (steps+1, members) and level per bin
@@ -309,12 +323,13 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
             for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
-    named = tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder))
+    matches = signature_matches(actuators)
+    named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.commands}
     failure = next((kinds[a.name] for a in actuators if a.driven_harder), "")
     return EffortCheck(tuple(actuators), model.false_alarm_rate,
                        None if first is None else round(first[0], 3),
                        None if first is None else round(first[1], 3), named, tuple(series),
-                       failure, signature_matches(actuators),
+                       failure, matches,
                        None if first is None or first[2] is None else round(first[2], 3))

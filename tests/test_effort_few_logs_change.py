@@ -1,0 +1,61 @@
+"""A weakness that begins during a log, judged with three normal logs. The log against its own
+beginning carries no between-log offset: its noise is the windows', measured on every
+window of the normal logs, so its threshold rests on those many degrees of freedom, not on
+the two that three logs give the spread between logs (which would put it near twice as
+high and hide a change the windows show plainly)."""
+
+from pathlib import Path
+
+import numpy as np
+
+from auvdiag_cli.engine.effort_check import check_effort
+from auvdiag_cli.vehicle.profile import load_profile
+from models.effort_model import EffortLog, learn_effort
+
+PROFILE = load_profile(Path("arducopter_quad"))
+STEPS = 1500                       # 150 s at 10 Hz
+SHARES = np.array([1.03, 0.97, 1.02, 0.98])
+NOISE = 0.06                       # of a command, step to step
+WEAK_FROM = 900                    # 90 s
+
+
+def _commands(rng: np.random.Generator, harder: float = 1.0) -> np.ndarray:
+    """Four rotors hovering near half throttle; motor_1 driven ``harder`` from WEAK_FROM."""
+    level = 0.5 + 0.03 * np.sin(np.arange(STEPS) / 80.0) + rng.normal(0, 0.01)
+    offset = 1 + rng.normal(0, 0.005, 4)           # this log's own trim
+    commands = level[:, None] * SHARES * offset * (1 + rng.normal(0, NOISE, (STEPS, 4)))
+    commands[WEAK_FROM:, 0] *= harder
+    return commands
+
+
+def _log(commands: np.ndarray, name: str) -> EffortLog:
+    return EffortLog(name, commands, np.ones(len(commands), bool), PROFILE.command_names)
+
+
+def _check(model, commands: np.ndarray):  # type: ignore[no-untyped-def]
+    return check_effort(model, PROFILE, commands, np.ones(len(commands), bool),
+                        PROFILE.dt_s * np.arange(len(commands)))
+
+
+def test_three_normal_logs_date_a_weakness_that_begins_mid_log_and_keep_the_budget():
+    rng = np.random.default_rng(7)
+    model, _ = learn_effort(PROFILE.effort_groups,
+                            [_log(_commands(rng), f"normal-{i}") for i in range(3)],
+                            PROFILE.dt_s)
+    assert model is not None and model.thresholds is not None
+    fit = model.fits[0]
+    assert fit is not None and fit.logs == 3 and fit.within_dof > fit.dof
+    # New normal logs: within the budget of 1 % per log (40 logs: 0.4 expected).
+    alarms = sum(bool(_check(model, _commands(rng)).suspects) for _ in range(40))
+    assert alarms <= 2
+    # Motor 1 driven 6 % harder from 90 s: found, named alone, dated near its start.
+    found = 0
+    for _ in range(5):
+        check = _check(model, _commands(rng, harder=1.06))
+        if check.named == ("motor_1",):
+            found += 1
+            assert check.onset_s is not None and check.onset_error_s is not None
+            assert abs(check.onset_s - WEAK_FROM * PROFILE.dt_s) <= max(
+                check.onset_error_s, 2.0)
+            assert check.alarm_s is not None and check.alarm_s - 90.0 < 15.0
+    assert found >= 4
