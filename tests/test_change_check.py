@@ -254,3 +254,29 @@ def test_one_normal_log_that_alone_sets_a_change_threshold_is_named():
         "odd alone sets the change test's thresholds of climb (sum: 30.0, 6.0x the next "
         "log's): check that log for a failure or a disturbance; if it was not normal, "
         "calibrate without it"]
+
+
+def test_one_log_far_beyond_every_other_is_left_out_of_the_thresholds_and_named():
+    from auvdiag_cli.jobs.change_calibration import (
+        ChangeEvidence,
+        change_thresholds,
+        dominated_by_one_log,
+        without_outliers,
+    )
+
+    sums = [4.0, 5.1, 3.2, 4.4, 26.9, 3.8]      # one flight that lost height at full throttle
+    peaks = [{WINDOW_Z: {"climb": 3.0 + i / 10}, SUM: {"climb": s}} for i, s in enumerate(sums)]
+    names = ["a", "b", "c", "d", "odd", "e"]
+    evidence = without_outliers(ChangeEvidence(["climb"], peaks))
+    assert [(o.log, o.statistic, o.value, o.following) for o in evidence.outliers] == [
+        (4, SUM, 26.9, 5.1)]
+    thresholds = change_thresholds(evidence, 2.0, None)
+    assert thresholds[SUM]["climb"] == (5.1, 10.2)              # from the other five
+    assert thresholds[WINDOW_Z]["climb"] == (3.5, 7.0)          # its window kept: not an outlier
+    assert dominated_by_one_log(evidence, names) == [
+        "odd left out of the change test's thresholds of climb (sum: 26.9, 5.3x the next "
+        "log's): a log that departs from its own beginning so far beyond every other is taken "
+        "for one that was not normal; check it for a failure or a disturbance"]
+    # With fewer logs the next log's value says too little: kept, and only named.
+    few = without_outliers(ChangeEvidence(["climb"], peaks[2:5]))
+    assert few.outliers == () and change_thresholds(few, 2.0, None)[SUM]["climb"][0] == 26.9

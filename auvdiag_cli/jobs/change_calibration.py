@@ -26,8 +26,10 @@ from models.store import LoadedModel
 # paper's mission one reached 6.1 where three others peaked at 3.3. And the largest of a
 # handful of normal logs' peaks understates the next log's.
 MIN_CHANGE_THRESHOLDS = {WINDOW: 6.0, SUM: 8.0}
-# One normal log whose largest value is this many times the next log's is worth a warning.
+# One normal log whose largest value is this many times the next log's is worth a warning;
+# with this many logs judged or more, it is left out (`without_outliers`).
 DOMINANCE_WARNING = 2.0
+MIN_LOGS_FOR_OUTLIERS = 5
 # statistic -> signal -> (its largest value on the normal logs, its threshold)
 ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 
@@ -48,18 +50,61 @@ def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedM
 
 
 @dataclass(frozen=True)
+class Outlier:
+    """One log's largest value of a statistic on a signal, left out of its threshold."""
+
+    log: int
+    statistic: str
+    name: str
+    value: float
+    following: float       # the next log's
+
+
+@dataclass(frozen=True)
 class ChangeEvidence:
-    """The signals the change test judges, and each normal log's largest statistics."""
+    """The signals the change test judges, and each normal log's largest statistics (an
+    outlier's left out: NaN)."""
 
     judged: list[str]
     peaks: list[dict[str, dict[str, float]]]
+    outliers: tuple[Outlier, ...] = ()
 
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
                     model: LoadedModel, profile: Profile) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
-    return ChangeEvidence(judged, [log_change_peaks(d, judged, model, profile)
-                                   for d in diagnoses])
+    return without_outliers(ChangeEvidence(
+        judged, [log_change_peaks(d, judged, model, profile) for d in diagnoses]))
+
+
+def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[float, int]]:
+    """(value, log) of every log the statistic judged on the signal, largest first."""
+    return sorted(((value, i) for i, p in enumerate(evidence.peaks)
+                   if np.isfinite(value := p.get(statistic, {}).get(name, np.nan))),
+                  reverse=True)
+
+
+def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
+    """The evidence with each log's value that is DOMINANCE_WARNING times the next log's or
+    more left out, where MIN_LOGS_FOR_OUTLIERS logs or more were judged. Within a log, the
+    test is how far a change stands out against the log's own beginning; one normal log
+    whose statistic is twice every other's is far likelier a log that was not normal (a
+    failure, a disturbance) than the tail of normal flying, and kept it would set the
+    threshold past every failure like it (on ALFA, one flight labelled normal that loses
+    height at high throttle set the sums of five signals at 3-5 times every other flight's).
+    Each one left out is named (`outlier_warnings`)."""
+    outliers = []
+    peaks = [{s: dict(v) for s, v in p.items()} for p in evidence.peaks]
+    for statistic in STATISTICS:
+        for name in evidence.judged:
+            ranked = _ranked(evidence, statistic, name)
+            if len(ranked) < MIN_LOGS_FOR_OUTLIERS or ranked[1][0] <= 0:
+                continue
+            (largest, log), (following, _) = ranked[:2]
+            if largest >= DOMINANCE_WARNING * following:
+                outliers.append(Outlier(log, statistic, name, largest, following))
+                peaks[log][statistic][name] = float("nan")
+    return ChangeEvidence(evidence.judged, peaks, tuple(outliers))
 
 
 def change_thresholds(evidence: ChangeEvidence, margin: float,
@@ -84,27 +129,33 @@ def change_thresholds(evidence: ChangeEvidence, margin: float,
 
 
 def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[str]:
-    """A warning for each normal log whose largest value of a statistic on a signal is
-    DOMINANCE_WARNING times the next log's or more: that log alone sets those thresholds, and
-    a log that is not normal (a real failure, a disturbance) blinds the test on every later
-    log."""
+    """A warning for each normal log whose largest value of a statistic on a signal was left
+    out of that threshold (`without_outliers`), and for each that alone sets one, with fewer
+    logs than that judges outliers by."""
+    left_out: dict[str, list[str]] = {}
+    for o in evidence.outliers:
+        left_out.setdefault(logs[o.log], []).append(
+            f"{o.name} ({o.statistic}: {o.value:.1f}, {o.value / o.following:.1f}x the next "
+            "log's)")
+    warnings = [f"{log} left out of the change test's thresholds of {', '.join(which)}: a "
+                "log that departs from its own beginning so far beyond every other is taken "
+                "for one that was not normal; check it for a failure or a disturbance"
+                for log, which in left_out.items()]
     dominated: dict[str, list[str]] = {}
     for statistic in STATISTICS:
         for name in evidence.judged:
-            ranked = sorted(((p.get(statistic, {}).get(name, np.nan), log)
-                             for p, log in zip(evidence.peaks, logs, strict=True)
-                             if np.isfinite(p.get(statistic, {}).get(name, np.nan))),
-                            reverse=True)
+            ranked = _ranked(evidence, statistic, name)
             if len(ranked) < 2 or ranked[1][0] <= 0:
                 continue
             (largest, log), (following, _) = ranked[:2]
             if largest >= DOMINANCE_WARNING * following:
-                dominated.setdefault(log, []).append(
+                dominated.setdefault(logs[log], []).append(
                     f"{name} ({statistic}: {largest:.1f}, {largest / following:.1f}x the next "
                     "log's)")
-    return [f"{log} alone sets the change test's thresholds of {', '.join(which)}: check "
-            "that log for a failure or a disturbance; if it was not normal, calibrate without "
-            "it" for log, which in dominated.items()]
+    return warnings + [
+        f"{log} alone sets the change test's thresholds of {', '.join(which)}: check that log "
+        "for a failure or a disturbance; if it was not normal, calibrate without it"
+        for log, which in dominated.items()]
 
 
 def change_entry(thresholds: ChangeThresholds) -> dict[str, object]:
