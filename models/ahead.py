@@ -90,29 +90,62 @@ def fit_ahead(commands: Sequence[np.ndarray], sensors: Sequence[np.ndarray],
               names: Sequence[str], dt_s: float,
               cuts: Sequence[Sequence[int]] | None = None) -> AheadPredictor | None:
     """Least squares on the normal logs (one array per log); None where they hold too few
-    complete rows to fit it."""
+    complete rows to fit it.
+
+    Each log has its own constant in the fit: a log's trim, payload or wind offsets the
+    changes a little, and one constant for all would bend every weight towards those
+    offsets. The predictor keeps their mean (the change test judges a log against its own
+    beginning, where a constant cancels). A channel a log never fed (one value throughout:
+    a sensor not fitted that day) is, as a feature, only that log's constant again, and its
+    own changes there are left out of its fit: they say nothing of how it moves."""
     steps = max(1, round(AHEAD_S / dt_s))
     lag = max(1, steps // 2)
     every_cut = cuts or [()] * len(sensors)
-    parts = [_design(c, x, steps, lag, q)
-             for c, x, q in zip(commands, sensors, every_cut, strict=True)]
-    features = np.vstack([p[1] for p in parts])
-    change = np.vstack([p[2] for p in parts])
-    if len(features) < 10 * features.shape[1]:
+    fed = [_fed(x) for x in sensors]
+    parts = [_design(c, np.where(f, x, 0.0), steps, lag, q)
+             for c, x, f, q in zip(commands, sensors, fed, every_cut, strict=True)]
+    if sum(len(p[0]) for p in parts) < 10 * (parts[0][1].shape[1] + len(parts)):
         return None
-    weights, *_ = np.linalg.lstsq(features, change, rcond=None)
+    logs = np.repeat(np.arange(len(parts)), [len(p[0]) for p in parts])
+    constants = np.eye(len(parts))[logs]
+    features = np.hstack([np.vstack([p[1][:, :-1] for p in parts]), constants])
+    change = np.vstack([p[2] for p in parts])
+    weights = np.zeros((parts[0][1].shape[1], change.shape[1]))
+    for signal in range(change.shape[1]):
+        rows = np.array([f[signal] for f in fed])[logs]
+        if rows.sum() < 10 * features.shape[1]:
+            continue      # too few logs fed it: its weights stay 0 (no skill, not judged)
+        solved, *_ = np.linalg.lstsq(features[rows], change[rows, signal], rcond=None)
+        fed_logs = np.unique(logs[rows])
+        weights[:, signal] = np.append(solved[:-len(parts)], solved[-len(parts):][fed_logs].mean())
     fitted = AheadPredictor(steps, weights, {})
-    errors = [fitted.residual(c, x) for c, x in zip(heldout_commands, heldout_sensors,
-                                                    strict=True)]
-    return AheadPredictor(steps, weights, _skill(errors, heldout_sensors, steps, names))
+    held = [np.where(_fed(x), x, np.nan) for x in heldout_sensors]
+    errors = [fitted.residual(c, x) for c, x in zip(heldout_commands, held, strict=True)]
+    return AheadPredictor(steps, weights, _skill(errors, held, steps, names))
+
+
+def _column_means(values: np.ndarray) -> np.ndarray:
+    """Each column's mean over its finite values (0 where it has none)."""
+    finite = np.isfinite(values)
+    return np.where(finite, values, 0.0).sum(axis=0) / np.maximum(finite.sum(axis=0), 1)
+
+
+def _fed(sensors: np.ndarray) -> np.ndarray:
+    """(signals,) whether the log fed each: more than one value over its samples."""
+    finite = np.isfinite(sensors)
+    return np.asarray(np.where(finite, sensors, -np.inf).max(axis=0)
+                      > np.where(finite, sensors, np.inf).min(axis=0))
 
 
 def _skill(errors: Sequence[np.ndarray], sensors: Sequence[np.ndarray], steps: int,
            names: Sequence[str]) -> dict[str, float]:
-    """1 - rms error / rms change over ``steps``, per signal (NaN where nothing held out)."""
+    """1 - rms error / rms change over ``steps``, per signal (NaN where nothing held out).
+    Each log's error is taken about its own mean, as the change test takes it: the
+    predictor's constant is the training logs' mean, and a log's own offset from it (its
+    trim, its wind) cancels against the log's beginning."""
     if not errors:
         return {}
-    error = np.vstack(errors)
+    error = np.vstack([e - _column_means(e) for e in errors])
     change = np.vstack([x[steps:] - x[:-steps] for x in sensors])
     with np.errstate(invalid="ignore", divide="ignore"):
         skill = 1.0 - np.sqrt(np.nanmean(error ** 2, axis=0)) / np.sqrt(
