@@ -104,7 +104,7 @@ def fit_ahead(commands: Sequence[np.ndarray], sensors: Sequence[np.ndarray],
     fed = [_fed(x) for x in sensors]
     parts = [_design(c, np.where(f, x, 0.0), steps, lag, q)
              for c, x, f, q in zip(commands, sensors, fed, every_cut, strict=True)]
-    if sum(len(p[0]) for p in parts) < 10 * (parts[0][1].shape[1] + len(parts)):
+    if not parts or sum(len(p[0]) for p in parts) < 10 * (parts[0][1].shape[1] + len(parts)):
         return None
     logs = np.repeat(np.arange(len(parts)), [len(p[0]) for p in parts])
     constants = np.eye(len(parts))[logs]

@@ -91,8 +91,8 @@ def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
     whose statistic is twice every other's is far likelier a log that was not normal (a
     failure, a disturbance) than the tail of normal flying, and kept it would set the
     threshold past every failure like it (on ALFA, one flight labelled normal that loses
-    height at high throttle set the sums of five signals at 3-5 times every other flight's).
-    Each one left out is named (`outlier_warnings`)."""
+    height at high throttle set the sums of five signals at 2.5-4.5 times every other
+    flight's). Each one left out is named (`dominated_by_one_log`)."""
     outliers = []
     peaks = [{s: dict(v) for s, v in p.items()} for p in evidence.peaks]
     for statistic in STATISTICS:
