@@ -8,7 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import check_effort
+from auvdiag_cli.engine.effort_check import check_effort, typical_later_threshold
+from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort_model import EffortLog, learn_effort
 
@@ -45,6 +46,11 @@ def test_three_normal_logs_date_a_weakness_that_begins_mid_log_and_keep_the_budg
     assert model is not None and model.thresholds is not None
     fit = model.fits[0]
     assert fit is not None and fit.logs == 3 and fit.within_dof > fit.dof
+    # The training report gives both thresholds and what the second rests on.
+    later = typical_later_threshold(model.setups[0], fit, model.thresholds, PROFILE.dt_s)
+    (line,) = effort_lines(model)
+    assert (f"changed within a log past z {later:.2f} (a log of 150 s of steady effort; its "
+            f"windows' noise rests on {fit.within_dof:.0f} degrees of freedom)") in line
     # New normal logs: within the budget of 1 % per log (40 logs: 0.4 expected).
     alarms = sum(bool(_check(model, _commands(rng)).suspects) for _ in range(40))
     assert alarms <= 2

@@ -222,6 +222,22 @@ class _Spans:
                           / np.maximum(spread, SPREAD_FLOOR))
 
 
+def later_starts(steps: int, window: int) -> list[int]:
+    """The later starts a log of ``steps`` steady steps is tried from (every
+    STARTS_PER_WINDOW-th of a window, each with a window of the log before it and
+    WINDOWS_AFTER_START after it)."""
+    return list(range(window, steps - WINDOWS_AFTER_START * window + 1,
+                      max(1, window // STARTS_PER_WINDOW)))
+
+
+def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
+                            dt_s: float) -> float:
+    """The later-start test's threshold for a log of the normal logs' typical steady time
+    (each log's own depends on its length: the number of starts it tries)."""
+    return thresholds.later_start(fit, len(later_starts(
+        round(fit.typical_s / dt_s), setup.window_steps(dt_s))))
+
+
 def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
                  seen_s: float) -> float:
     """How far the change point may lie from the best later start: to the earliest and the
@@ -252,7 +268,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     # window (a sixth of a typical log); each start still has a window of the log before it
     # and WINDOWS_AFTER_START after it, and the threshold allows for every start tried.
     stride = max(1, window // STARTS_PER_WINDOW)
-    starts = list(range(window, n - WINDOWS_AFTER_START * window + 1, stride))
+    starts = later_starts(n, window)
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.

@@ -5,6 +5,7 @@ paper's vehicle only); the thresholds, which log set each, and what to be wary o
 import math
 from collections.abc import Sequence
 
+from auvdiag_cli.engine.effort_check import typical_later_threshold
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibrate import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
@@ -160,7 +161,10 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"{', by level' if fit.conditioned else ''}): share {parts}; driven harder past "
             f"z {effort.thresholds.whole_log(fit):.2f} (false alarms budgeted at "
             f"{effort.false_alarm_rate:.1%} of normal logs; each normal log judged by the "
-            f"others: largest z {float(fit.loo_z.max()):.2f})")
+            f"others: largest z {float(fit.loo_z.max()):.2f}); changed within a log past z "
+            f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s):.2f} "
+            f"(a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
+            f"on {fit.within_dof:.0f} degrees of freedom)")
     return lines
 
 
