@@ -277,6 +277,10 @@ def test_one_log_far_beyond_every_other_is_left_out_of_the_thresholds_and_named(
         "odd left out of the change test's thresholds of climb (sum: 26.9, 5.3x the next "
         "log's): a log that departs from its own beginning so far beyond every other is taken "
         "for one that was not normal; check it for a failure or a disturbance"]
+    # Under the statistic's floor no value sets a threshold: none left out, none named.
+    quiet = [{SUM: {"climb": v}} for v in (0.1, 0.3, 0.05, 0.2, 0.7)]
+    calm = without_outliers(ChangeEvidence(["climb"], quiet))
+    assert calm.outliers == () and dominated_by_one_log(calm, names[:5]) == []
     # With fewer logs the next log's value says too little: kept, and only named.
     few = without_outliers(ChangeEvidence(["climb"], peaks[2:5]))
     assert few.outliers == () and change_thresholds(few, 2.0, None)[SUM]["climb"][0] == 26.9

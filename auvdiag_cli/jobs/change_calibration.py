@@ -84,9 +84,22 @@ def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[f
                   reverse=True)
 
 
+def _dominant(ranked: list[tuple[float, int]], statistic: str) -> tuple[float, int, float] | None:
+    """(value, log, the next log's value) where the largest is DOMINANCE_WARNING times the
+    next or more and reaches the statistic's floor (`MIN_CHANGE_THRESHOLDS`: below it, no
+    log's value sets a threshold)."""
+    if len(ranked) < 2 or ranked[1][0] <= 0:
+        return None
+    (largest, log), (following, _) = ranked[:2]
+    if largest < DOMINANCE_WARNING * following or largest < MIN_CHANGE_THRESHOLDS[statistic]:
+        return None
+    return largest, log, following
+
+
 def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
     """The evidence with each log's value that is DOMINANCE_WARNING times the next log's or
-    more left out, where MIN_LOGS_FOR_OUTLIERS logs or more were judged. Within a log, the
+    more (and past the statistic's floor) left out, where MIN_LOGS_FOR_OUTLIERS logs or more
+    were judged. Within a log, the
     test is how far a change stands out against the log's own beginning; one normal log
     whose statistic is twice every other's is far likelier a log that was not normal (a
     failure, a disturbance) than the tail of normal flying, and kept it would set the
@@ -98,10 +111,9 @@ def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
     for statistic in STATISTICS:
         for name in evidence.judged:
             ranked = _ranked(evidence, statistic, name)
-            if len(ranked) < MIN_LOGS_FOR_OUTLIERS or ranked[1][0] <= 0:
-                continue
-            (largest, log), (following, _) = ranked[:2]
-            if largest >= DOMINANCE_WARNING * following:
+            found = _dominant(ranked, statistic) if len(ranked) >= MIN_LOGS_FOR_OUTLIERS else None
+            if found is not None:
+                largest, log, following = found
                 outliers.append(Outlier(log, statistic, name, largest, following))
                 peaks[log][statistic][name] = float("nan")
     return ChangeEvidence(evidence.judged, peaks, tuple(outliers))
@@ -144,11 +156,9 @@ def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[
     dominated: dict[str, list[str]] = {}
     for statistic in STATISTICS:
         for name in evidence.judged:
-            ranked = _ranked(evidence, statistic, name)
-            if len(ranked) < 2 or ranked[1][0] <= 0:
-                continue
-            (largest, log), (following, _) = ranked[:2]
-            if largest >= DOMINANCE_WARNING * following:
+            found = _dominant(_ranked(evidence, statistic, name), statistic)
+            if found is not None:
+                largest, log, following = found
                 dominated.setdefault(logs[log], []).append(
                     f"{name} ({statistic}: {largest:.1f}, {largest / following:.1f}x the next "
                     "log's)")
