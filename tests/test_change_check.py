@@ -284,3 +284,29 @@ def test_one_log_far_beyond_every_other_is_left_out_of_the_thresholds_and_named(
     # With fewer logs the next log's value says too little: kept, and only named.
     few = without_outliers(ChangeEvidence(["climb"], peaks[2:5]))
     assert few.outliers == () and change_thresholds(few, 2.0, None)[SUM]["climb"][0] == 26.9
+
+
+def test_a_law_fitted_to_enough_logs_sets_the_threshold_below_the_margin_rules_floor():
+    """Twelve normal logs whose sums peak at 2-4: the law fitted to them (its share checked
+    on each log left out) sets the sum's threshold, below the floor that guards the margin
+    rule; four logs fit no law, and the floor holds."""
+    from auvdiag_cli.jobs.budget import FalseAlarmBudget, budget_thresholds, change_judges
+    from auvdiag_cli.jobs.change_calibration import ChangeEvidence, change_thresholds
+
+    peaks = [{SUM: {"climb": value}, WINDOW_Z: {"climb": value + 1.0}}
+             for value in np.random.default_rng(3).uniform(2.0, 4.0, 12)]
+    budget = FalseAlarmBudget.parse("0.05")
+
+    def thresholds(logs: list[dict[str, dict[str, float]]]) -> dict[str, float]:
+        fitted = budget_thresholds(change_judges(logs, ["climb"]), 0, budget,
+                                   [0.05] * len(logs))
+        result = change_thresholds(ChangeEvidence(["climb"], logs), 1.5, fitted)
+        return {statistic: values["climb"][1] for statistic, values in result.items()}
+
+    many = thresholds(peaks)
+    largest = max(p[SUM]["climb"] for p in peaks)
+    assert largest < many[SUM] < MIN_CHANGE_THRESHOLDS[SUM]
+    few = thresholds(peaks[:4])
+    assert few[SUM] == MIN_CHANGE_THRESHOLDS[SUM]       # 1.5 x a sum of 2-4 is below it
+    assert few[WINDOW_Z] == pytest.approx(max(
+        1.5 * max(p[WINDOW_Z]["climb"] for p in peaks[:4]), MIN_CHANGE_THRESHOLDS[WINDOW_Z]), abs=1e-3)

@@ -201,8 +201,9 @@ def calibrate(
     is where a distribution fitted to its normal values reaches that share (an extreme-value
     law for per-log peaks), so that it extrapolates beyond the largest value seen; each
     log is then judged with the thresholds fitted on the others, and the count reported.
-    Judges with fewer than 5 logs keep the margin rule. The change test (each log against
-    its own beginning) leaves out of a threshold one log whose largest value there is
+    Judges with fewer than 5 logs keep the margin rule (for the change test never below a
+    window |z| of 6 and a sum of 8; a fitted law may go lower). The change test (each log
+    against its own beginning) leaves out of a threshold one log whose largest value there is
     twice every other log's (with 5 logs or more), and names it: check it for a failure.
     Where the profile groups actuators that act alike ([[effort]]), the normal effort
     shares are refitted with these logs added (learnt from them if the model has none),
