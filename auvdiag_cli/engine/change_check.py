@@ -31,7 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from auvdiag_cli.engine.change_signatures import Signature, signatures, with_signatures
 from auvdiag_cli.engine.residuals import Matching
+from auvdiag_cli.vehicle.actuators import Actuator
 from models.store import LoadedModel
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
@@ -60,6 +62,14 @@ class ChangeCheck:
     # Judged signal -> how much more of the change it carried from the onset to the alarm
     # than before the onset (`_carried`), where ``flagged`` says only where it ended.
     evidence: Mapping[str, float] = field(default_factory=dict)
+    # Each signature judged (`change_signatures`) -> the signals it sums.
+    members: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    @property
+    def changed(self) -> tuple[str, ...]:
+        """The signals that changed: each flagged, and the members of a flagged signature."""
+        return tuple(dict.fromkeys(
+            n for name in self.flagged for n in self.members.get(name, (name,))))
 
     @property
     def judged(self) -> bool:
@@ -159,11 +169,13 @@ def change_residual(model: LoadedModel, commands: np.ndarray, matching: Matching
     return ahead.residual(commands, matching.measured, cuts)
 
 
-def change_statistics(residual: np.ndarray, window: int, reference_min: int
-                      ) -> dict[str, np.ndarray]:
+def change_statistics(residual: np.ndarray, window: int, reference_min: int,
+                      found: Sequence[Signature] = ()) -> dict[str, np.ndarray]:
     """Each statistic per step and signal, as of the last whole window (NaN until the
-    reference is long enough)."""
+    reference is long enough); after the signals' columns, one per signature in ``found``
+    (`change_signatures`: one-sided, a move against it adds nothing)."""
     ends, z = _standardised(residual, window, reference_min)
+    z, one_sided = with_signatures(z, found)
     sums = np.full(z.shape, np.nan)
     high = np.zeros(z.shape[1])
     low = np.zeros(z.shape[1])
@@ -171,36 +183,46 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int
         known = np.isfinite(row)
         high[known] = np.maximum(0.0, high[known] + row[known] - DRIFT_ALLOWANCE)
         low[known] = np.maximum(0.0, low[known] - row[known] - DRIFT_ALLOWANCE)
+        low[one_sided] = 0.0
         sums[block] = np.where(known | (high + low > 0), np.maximum(high, low), np.nan)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
-        out = np.full(residual.shape, np.nan)
+        out = np.full((residual.shape[0], z.shape[1]), np.nan)
         for block, end in enumerate(ends):
             out[end:end + window] = per_window[block]
         return out
 
-    return {WINDOW: on_steps(np.abs(z)), SUM: on_steps(sums)}
+    return {WINDOW: on_steps(np.where(one_sided, np.maximum(z, 0.0), np.abs(z))),
+            SUM: on_steps(sums)}
 
 
-def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float
-                 ) -> dict[str, dict[str, float]]:
-    """Each statistic's largest value per signal in a log (NaN where it is never judged):
-    what calibrate sets the thresholds from."""
-    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s))
+def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
+                 actuators: Sequence[Actuator] = ()) -> dict[str, dict[str, float]]:
+    """Each statistic's largest value per signal in a log, and per signature of the
+    ``actuators`` over these signals (NaN where it is never judged): what calibrate sets
+    the thresholds from."""
+    found = signatures(actuators, names)
+    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found)
+    every = [*names, *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
-                        else float("nan") for i, name in enumerate(names)}
+                        else float("nan") for i, name in enumerate(every)}
             for statistic, values in statistics.items()}
 
 
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
-                 window: int, dt_s: float) -> ChangeCheck:
+                 window: int, dt_s: float, actuators: Sequence[Actuator] = ()) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
-    threshold (``thresholds``: statistic -> signal -> threshold)."""
-    judged = [i for i, name in enumerate(names)
-              if any(name in limits for limits in thresholds.values())]
-    names_judged = [names[i] for i in judged]
-    statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s))
+    threshold (``thresholds``: statistic -> signal -> threshold), and the signatures of
+    the ``actuators`` over them that have one."""
+    def limited(name: str) -> bool:
+        return any(name in limits for limits in thresholds.values())
+
+    judged = [i for i, name in enumerate(names) if limited(name)]
+    found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
+    names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
+    statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
+                                   found)
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     ratios = {}
@@ -213,8 +235,10 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     peaks = {s: {n: round(float(np.nanmax(values[:, k])), 3)
                  for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
              for s, values in statistics.items()}
+    members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
     check = ChangeCheck(kept, peaks,
-                        round(float(time_s[started[0]]), 3) if started.size else None)
+                        round(float(time_s[started[0]]), 3) if started.size else None,
+                        members=members)
     with np.errstate(invalid="ignore"):
         over = np.flatnonzero((combined > 1).any(axis=1))
     if not over.size:
@@ -238,4 +262,5 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                 for n, v in zip(names_judged, _carried(combined, first, at), strict=True)}
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
                        round(onset, 3), round(error, 3),
-                       dict(sorted(flagged.items(), key=lambda item: -item[1])), evidence)
+                       dict(sorted(flagged.items(), key=lambda item: -item[1])), evidence,
+                       members)

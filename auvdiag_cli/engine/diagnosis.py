@@ -14,6 +14,7 @@ from auvdiag_cli.engine.change_check import (
     change_residual,
     check_change,
 )
+from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -205,7 +206,7 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
             return apply_change_alarm(seen, normal, change, judging, _healthy_replay(
                 judging, frame, change.onset_s, dms_starts))
         # The change came first: its b and times, named as the replay's alarm would be.
-        b = {name: int(name in change.flagged) for name in frame.sensor_names}
+        b = {name: int(name in change.changed) for name in frame.sensor_names}
         onset = int(np.searchsorted(frame.time_s, change.onset_s))
         test = weigh_hypotheses(judging, frame, matching, thresholds, onset, dms_starts)
         return isolate(seen, normal.noted(f"found by the change test: {change.describe()}"),
@@ -236,12 +237,13 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
     names = profile.sensor_names
     judged = [name for name in change_judged(model, skilled(model, profile))
               if name not in judging.set_aside]
+    judged += signature_names(profile.actuators, judged)
     thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None
     return check_change(residual, names, thresholds, time_s,
-                        judging.window, profile.dt_s)
+                        judging.window, profile.dt_s, profile.actuators)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

@@ -25,12 +25,12 @@ def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
         start + horizon_steps, len(histories.time_s))
     if stop - start < 2:
         return ""
-    columns = [histories.sensor_names.index(name) for name in change.flagged]
+    columns = [histories.sensor_names.index(name) for name in change.changed]
     read = np.flatnonzero(np.isfinite(matching.measured[start:stop, columns]).all(axis=1)
                           & np.isfinite(healthy[start:stop, columns]).all(axis=1))
     last = start + int(read[-1]) if read.size and read[-1] > 0 else None
     gaps, ends = [], []
-    for name, column in zip(change.flagged, columns, strict=True):
+    for name, column in zip(change.changed, columns, strict=True):
         unit = seen.sensor_units.get(name, "")
         before = matching.measured[:start, column] - matching.modelled[:start, column]
         gap = matching.measured[start:, column] - healthy[start:, column]

@@ -10,6 +10,7 @@ import numpy as np
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
 from auvdiag_cli.engine.change_check import ChangeCheck
+from auvdiag_cli.engine.change_signatures import signature_parts
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
@@ -75,7 +76,7 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     changed (`change_suspects`). ``healthy``: the model of the healthy vehicle replayed
     from the measured state at the onset, which gives the failure's effect (none: the
     effect is not said)."""
-    b = {name: int(name in change.flagged) for name in finding.b}
+    b = {name: int(name in change.changed) for name in finding.b}
     finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
                       onset_s=change.onset_s)
     note = f"found by the change test: {change.describe()}"
@@ -97,7 +98,8 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
 def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
     """Whether the profile says which parts move what changed (`moved_by`): those name the
     part; otherwise the replay's isolation does (pattern table, hypotheses)."""
-    return any(s.moved_by for s in profile.sensors if s.name in change.flagged)
+    return bool(set(change.flagged) & set(change.members)) or any(
+        s.moved_by for s in profile.sensors if s.name in change.flagged)
 
 
 def change_suspects(flagged: Mapping[str, float], profile: Profile,
@@ -120,7 +122,13 @@ def change_suspects(flagged: Mapping[str, float], profile: Profile,
         for part in sensor.moved_by:
             weight[part] = weight.get(part, 0.0) + weights[sensor.name]
             movers.add(part)
-    own = {s.component for s in profile.sensors if s.name in flagged}
+    # A part's signature (`change_signatures`) is evidence for that part alone.
+    for name, part in signature_parts(list(weights), profile.actuators).items():
+        weight[part] = weight.get(part, 0.0) + weights[name]
+        movers.add(part)
+    # A signature that crossed is several signals moving together: no one sensor's fault.
+    own = set() if signature_parts(list(flagged), profile.actuators) else {
+        s.component for s in profile.sensors if s.name in flagged}
     if len(own) == 1:
         (component,) = own
         weight[component] = weight.get(component, 0.0) + sum(

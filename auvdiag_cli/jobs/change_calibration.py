@@ -14,6 +14,7 @@ from auvdiag_cli.engine.change_check import (
     change_judged,
     change_peaks,
 )
+from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.profile import Profile
@@ -47,7 +48,8 @@ def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedM
     names = list(profile.sensor_names)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
-    peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s)
+    peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
+                         profile.actuators)
     return {statistic: {name: float("nan") if name in diagnosis.set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}
@@ -78,7 +80,8 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
                     model: LoadedModel, profile: Profile) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
-        judged, [log_change_peaks(d, judged, model, profile) for d in diagnoses]))
+        [*judged, *signature_names(profile.actuators, judged)],
+        [log_change_peaks(d, judged, model, profile) for d in diagnoses]))
 
 
 def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[float, int]]:

@@ -38,6 +38,9 @@ class Actuator:
     name: str
     kind: str
     description: str = ""
+    # Its signature in the change test (`engine.change_signatures`): signal -> +1 or -1,
+    # where its weakening leaves that signal above or below the prediction.
+    weakened: tuple[tuple[str, float], ...] = ()
 
     @property
     def failure(self) -> str:
@@ -57,11 +60,32 @@ def parse_actuators(rows: list[TableReader]) -> tuple[Actuator, ...]:
     for reader in rows:
         kind = parse_kind(reader, "", tuple(ACTUATOR_KINDS))
         actuators.append(Actuator(reader.get("name", str), kind,
-                                  reader.get("description", str, "")))
+                                  reader.get("description", str, ""), _weakened(reader)))
     names = [a.name for a in actuators]
     if len(set(names)) != len(names):
         raise ProfileError("actuator names in 'actuators' must be unique")
     return tuple(actuators)
+
+
+def _weakened(reader: TableReader) -> tuple[tuple[str, float], ...]:
+    entry = reader.get("weakened", dict, {})
+    signs = []
+    for name, value in entry.items():
+        if isinstance(value, bool) or value not in (1, -1):
+            raise ProfileError(f"key '{reader.key('weakened')}.{name}' must be 1 or -1 (the "
+                               f"signal reads above or below the prediction), got {value!r}")
+        signs.append((str(name), float(value)))
+    return tuple(signs)
+
+
+def check_weakened(actuators: Iterable[Actuator], sensor_names: Iterable[str]) -> None:
+    """Every signal an actuator's `weakened` names is a sensor."""
+    known = set(sensor_names)
+    for actuator in actuators:
+        strangers = [name for name, _ in actuator.weakened if name not in known]
+        if strangers:
+            raise ProfileError(f"actuator {actuator.name!r}: 'weakened' names {strangers[0]!r}, "
+                               f"which is no sensor (known: {', '.join(sorted(known))})")
 
 
 def parse_moved_by(reader: TableReader, known: set[str]) -> tuple[str, ...]:

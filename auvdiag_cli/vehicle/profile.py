@@ -11,6 +11,7 @@ from auvdiag_cli.vehicle.actuators import (
     ACTUATOR_KINDS,
     SET_POINT,
     Actuator,
+    check_weakened,
     parse_actuators,
     parse_kind,
     parse_moved_by,
@@ -47,9 +48,8 @@ class Command:
 
 @dataclass(frozen=True)
 class Input:
-    """A measured quantity that drives the model beside the commands (the battery voltage: a
-    thruster's force grows with it; the attitude, for gravity and buoyancy). Replayed as
-    logged, like the commands: never predicted, never judged, no actuator."""
+    """A measured quantity that drives the model beside the commands (a battery voltage, the
+    attitude): replayed as logged, like them; never predicted, never judged, no actuator."""
 
     name: str
     unit: str
@@ -162,8 +162,7 @@ class Profile:
 
 
 def _horizon(matching: TableReader) -> float | None:
-    """``[matching] horizon_s``: "auto" (train chooses; the default), "free" or inf (the
-    paper's free run), or seconds."""
+    """``[matching] horizon_s``: "auto" (the default), "free" or inf, or seconds."""
     value = matching.get("horizon_s", (str, float, int), "auto")
     if value == "auto":
         return None
@@ -190,6 +189,7 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
                r.get("own_log_only", str, None))
         for r in top.items("sensors")
     )
+    check_weakened(actuators, [s.name for s in sensors])
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
                    for r in (top.items("inputs") if "inputs" in top.table else []))
     if not commands or not sensors:
