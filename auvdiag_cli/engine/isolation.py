@@ -86,13 +86,22 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
                       judging)
     ranked = change_suspects(change.flagged, judging.profile, change.evidence)
     if len(ranked) > 1:
-        note += "; the part that moves most of what changed is named, before " + ", ".join(
-            ranked[1:])
+        note += (f"; the part that moves most of what changed{_carriers(change)} is named, "
+                 "before " + ", ".join(ranked[1:]))
     effect = "" if healthy is None else failure_effect(seen, change, healthy,
                                                           judging.model.horizon_steps)
     if effect:
         note += "; " + effect
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
+
+
+def _carriers(change: ChangeCheck, most: int = 3) -> str:
+    """The signals that carried most of the change from the onset to the alarm (their
+    ratio to their thresholds above their usual level), as the note gives them."""
+    carried = sorted(((v, n) for n, v in change.evidence.items() if v > 0), reverse=True)
+    return "" if not carried else (" (carried from the onset, in shares of each threshold "
+                                   "above its usual level: ") + ", ".join(
+        f"{n} {v:.2f}" for v, n in carried[:most]) + ")"
 
 
 def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
