@@ -18,7 +18,7 @@ from auvdiag_cli.engine.change_check import (
     WINDOW as WINDOW_Z,
 )
 from auvdiag_cli.engine.isolation import change_suspects
-from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS
+from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS, MIN_FITTED_THRESHOLDS
 from auvdiag_cli.reports.training import calibration_lines
 
 DT_S, WINDOW = 0.1, 10
@@ -311,3 +311,6 @@ def test_a_law_fitted_to_enough_logs_sets_the_threshold_below_the_margin_rules_f
     largest_window = max(p[WINDOW_Z]["climb"] for p in peaks[:4])
     assert few[WINDOW_Z] == pytest.approx(
         max(1.5 * largest_window, MIN_CHANGE_THRESHOLDS[WINDOW_Z]), abs=1e-3)
+    # Logs that all stayed quiet fit a law of no spread: its threshold would be 0.
+    quiet = thresholds([{SUM: {"climb": 0.0}, WINDOW_Z: {"climb": 2.0}} for _ in range(8)])
+    assert quiet[SUM] == MIN_FITTED_THRESHOLDS[SUM]

@@ -202,7 +202,7 @@ def calibrate(
     law for per-log peaks), so that it extrapolates beyond the largest value seen; each
     log is then judged with the thresholds fitted on the others, and the count reported.
     Judges with fewer than 5 logs keep the margin rule (for the change test never below a
-    window |z| of 6 and a sum of 8; a fitted law may go lower). The change test (each log
+    window |z| of 6 and a sum of 8; a fitted law may go as low as 4 and 4). The change test (each log
     against its own beginning) leaves out of a threshold one log whose largest value there is
     twice every other log's (with 5 logs or more), and names it: check it for a failure.
     Where the profile groups actuators that act alike ([[effort]]), the normal effort

@@ -31,6 +31,10 @@ from models.store import LoadedModel
 # floor had set 3-4 of each fold's 14-16 thresholds above the fitted ones, hiding two
 # engine failures.
 MIN_CHANGE_THRESHOLDS = {WINDOW: 6.0, SUM: 8.0}
+# And a fitted law never below these: Gaussian window means reach |z| 4 over an hour of
+# windows, and a sum of 4 (allowing a spread a window) about once in four hours; a law
+# fitted to logs that all stayed quiet (every sum 0) would otherwise set 0.
+MIN_FITTED_THRESHOLDS = {WINDOW: 4.0, SUM: 4.0}
 # One normal log whose largest value is this many times the next log's is worth a warning;
 # with this many logs judged or more, it is left out (`without_outliers`).
 DOMINANCE_WARNING = 2.0
@@ -129,9 +133,9 @@ def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
 
 def change_thresholds(evidence: ChangeEvidence, margin: float,
                       fitted: BudgetThresholds | None) -> ChangeThresholds:
-    """Each statistic's threshold per signal: the budget's where it fitted the judge,
-    else margin x its largest value on the normal logs, never below
-    `MIN_CHANGE_THRESHOLDS`. A signal no log is long enough to judge gets none (the test
+    """Each statistic's threshold per signal: the budget's where it fitted the judge (never
+    below `MIN_FITTED_THRESHOLDS`), else margin x its largest value on the normal logs,
+    never below `MIN_CHANGE_THRESHOLDS`. A signal no log is long enough to judge gets none (the test
     leaves it out)."""
     budgeted = {} if fitted is None else fitted.thresholds("change")
     result: ChangeThresholds = {}
@@ -142,8 +146,10 @@ def change_thresholds(evidence: ChangeEvidence, margin: float,
             if not values:
                 continue
             largest = max(values)
-            threshold = budgeted.get((statistic, name)) or max(
-                margin * largest, MIN_CHANGE_THRESHOLDS[statistic])
+            fitted_value = budgeted.get((statistic, name))
+            threshold = (max(fitted_value, MIN_FITTED_THRESHOLDS[statistic])
+                         if fitted_value is not None
+                         else max(margin * largest, MIN_CHANGE_THRESHOLDS[statistic]))
             result.setdefault(statistic, {})[name] = (round(largest, 3), round(threshold, 3))
     return result
 
