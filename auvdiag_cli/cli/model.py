@@ -202,9 +202,10 @@ def calibrate(
     law for per-log peaks), so that it extrapolates beyond the largest value seen; each
     log is then judged with the thresholds fitted on the others, and the count reported.
     Judges with fewer than 5 logs keep the margin rule (for the change test never below a
-    window |z| of 6 and a sum of 8; a fitted law may go as low as 4 and 4). The change test (each log
-    against its own beginning) leaves out of a threshold one log whose largest value there is
-    twice every other log's (with 5 logs or more), and names it: check it for a failure.
+    window |z| of 6 and a sum of 8; a fitted law may go as low as 4 and 4). The change
+    test (each log against its own beginning) leaves out of a threshold one log whose
+    largest value there is twice every other log's (with 5 logs or more), and names it:
+    check it for a failure.
     Where the profile groups actuators that act alike ([[effort]]), the normal effort
     shares are refitted with these logs added (learnt from them if the model has none),
     their thresholds set for their share of R (default: the model's budget)."""
