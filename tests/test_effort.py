@@ -121,6 +121,10 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
 
     text = "".join(page.extract_text() for page in PdfReader(tmp_path / "d.pdf").pages)
     assert "Share of the group's effort" in text and "motor_3 (driven harder)" in text
+    # Named from the effort, not from a row of the pattern table: the report says so, and
+    # not that the verdict names no component.
+    assert report["case"] is None and "named from the other evidence" in text
+    assert "names no component" not in text
 
 
 def test_a_weakness_in_the_last_windows_is_dated_where_it_began(flights: Path, model: Path):

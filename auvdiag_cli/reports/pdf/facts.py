@@ -29,7 +29,8 @@ def summary_facts(report: Report) -> list[tuple[str, str]]:
         facts.append(("When", when_sentence(report)))
     b = " ".join(f"{k}={v}" for k, v in report.b.items())
     facts.append(("Pattern table", f"case {report.case}, b = {b}" if report.case is not None
-                  else f"b = {b} fits no row"))
+                  else f"b = {b}: no row names the part; named from the other evidence"
+                  if report.component else f"b = {b} fits no row"))
     if report.hypotheses:
         facts.append(("Hypotheses", hypotheses_sentence(report.hypotheses)))
     if report.coverage:
@@ -85,6 +86,10 @@ def _margin(report: Report, series: Series | None) -> str:
 def _single_fault(report: Report) -> str:
     if report.verdict != "fault":
         return "nothing was found to fail"
+    if report.case is None and report.component:
+        return ("no row of the pattern table names the part: it was named from the other "
+                "evidence (what changed and the parts that move it, the hypotheses), which "
+                "two faults at once could mislead too")
     if report.case is None:
         return ("b fits no row of the pattern table: more than one fault, or one the table "
                 "does not describe; the verdict names no component")
