@@ -18,7 +18,9 @@ up what goes beyond the allowance `DRIFT_ALLOWANCE` window after window ("sum"):
     S+ = max(0, S+ + z - k),  S- = max(0, S- - z - k),  S = max(S+, S-)
 
 so that a shift that lasts (an engine that stopped pushing, a surface that stuck) builds
-up even when no single window stands out, while noise within the allowance does not. A
+up even when no single window stands out, while noise within the allowance does not. Where
+the profile says which way a part's weakening moves several signals, their signed sum is
+judged as one more signal, one-sided (`change_signatures`). A
 signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
 are set by `auvdiag calibrate` from the largest of each statistic on normal logs, like the
 other judges; a model without them does not run the test. The onset is the start of the
