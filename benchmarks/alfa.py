@@ -75,8 +75,10 @@ class Outcome:
     peaks_after: dict[tuple[str, str], float] = field(default_factory=dict)
     # The same within each of GOAL_DELAYS_S of the onset.
     peaks_soon: dict[float, dict[tuple[str, str], float]] = field(default_factory=dict)
-    # Where the change test's alarm made the verdict: its onset and the error it stated.
+    # Where the change test's alarm made the verdict: its onset and the error it stated,
+    # and the signal (or a part's signature) furthest over its threshold at the alarm.
     stated_onset: tuple[float, float] | None = None
+    crossed: str | None = None
 
     @property
     def named_right(self) -> bool:
@@ -163,7 +165,8 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
                 flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
                 diagnosis.component, time.perf_counter() - started, judge,
                 *_change_peaks(diagnosis, onset_s, profile),
-                stated))
+                stated, None if stated is None or change is None
+                else next(iter(change.flagged), None)))
     return outcomes, judged
 
 
@@ -342,7 +345,7 @@ def main() -> None:
             return "–" if value is None else f"{value:.1f}"
         print(f"| {o.flight.folder.name} | {o.flight.kind} | {o.verdict} | "
               f"{when(o.onset_s)} | {when(o.detected_s)} | {o.component or '–'} | "
-              f"{o.judge or '–'} |")
+              f"{o.judge or '–'}{f' ({o.crossed})' if o.crossed else ''} |")
 
 
 if __name__ == "__main__":
