@@ -50,10 +50,11 @@ class FalseAlarmSetting:
         return {"rate": self.rate, "per": self.per}
 
 
-def _ahead(meta: Mapping[str, Any], n_commands: int, n_sensors: int) -> AheadPredictor | None:
+def _ahead(meta: Mapping[str, Any], n_commands: int, n_sensors: int, n_inputs: int
+           ) -> AheadPredictor | None:
     entry = meta.get("ahead_predictor") or {}
-    return None if "weights" not in entry else AheadPredictor.from_json(entry, n_commands,
-                                                                        n_sensors)
+    return None if "weights" not in entry else AheadPredictor.from_json(
+        entry, n_commands, n_sensors, n_inputs)
 
 
 def _optional_float(value: object) -> float | None:
@@ -271,5 +272,6 @@ class ModelCard:
                 str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
                 for statistic, values in (meta.get("change_test") or {}).get(
                     "thresholds", {}).items()}),
-            ahead=_ahead(meta, len(signals["commands"]), len(sensors)),
+            ahead=_ahead(meta, len(signals["commands"]), len(sensors),
+                         len(signals.get("inputs", []))),
             document_text=json.dumps(meta))

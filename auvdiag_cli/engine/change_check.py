@@ -161,14 +161,15 @@ def change_judged(model: LoadedModel, replay_judged: Sequence[str]) -> list[str]
             if ahead.skill.get(name, 0.0) >= MIN_AHEAD_SKILL]
 
 
-def change_residual(model: LoadedModel, commands: np.ndarray, matching: Matching,
-                    cuts: Sequence[int] = ()) -> np.ndarray:
+def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray | None,
+                    matching: Matching, cuts: Sequence[int] = ()) -> np.ndarray:
     """What the test judges: the error of the model's predictor a moment ahead
-    (`models.ahead`), or the replay's where the model has none (trained before it)."""
+    (`models.ahead`; ``inputs``: the measured inputs, None: the profile has none), or the
+    replay's where the model has none (trained before it)."""
     ahead = model.card.ahead
     if ahead is None:
         return matching.measured - matching.modelled
-    return ahead.residual(commands, matching.measured, cuts)
+    return ahead.residual(commands, matching.measured, inputs, cuts)
 
 
 def change_statistics(residual: np.ndarray, window: int, reference_min: int,

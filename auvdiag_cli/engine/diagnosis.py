@@ -144,8 +144,9 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     dms_starts = [int(np.searchsorted(frame.time_s, s.start_s)) for s in segments
                   if s.mode == ROUTINE_MODE]
     matching = match(model, frame, judging.full_scale, judging.window, dms_starts)
-    change_errors = change_residual(model, frame.commands, matching,
-                                   [*frame.restarts, *dms_starts])
+    change_errors = change_residual(model, frame.commands,
+                                    frame.inputs if frame.input_names else None, matching,
+                                    [*frame.restarts, *dms_starts])
     thresholds = threshold_matrix(segments, frame.time_s, frame.sensor_names)
     b_series = binary_vector(matching.g_percent, thresholds)
     b_series[:, ~judging.judged_mask] = 0   # a signal the model cannot predict raises no alarm

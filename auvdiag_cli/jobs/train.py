@@ -264,10 +264,13 @@ def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
     """model.json's `ahead_predictor`: the change test's predictor a moment ahead, or why
     there is none."""
     commands = len(profile.commands)     # the logs' model drive ends with measured inputs
+    measured = bool(profile.inputs)
     ahead = fit_ahead([t.commands[:, :commands] for t in training],
                       [t.sensors for t in training],
                       [t.commands[:, :commands] for t in heldout], [t.sensors for t in heldout],
-                      profile.sensor_names, profile.dt_s, [t.cuts for t in training])
+                      profile.sensor_names, profile.dt_s, [t.cuts for t in training],
+                      [t.commands[:, commands:] for t in training] if measured else None,
+                      [t.commands[:, commands:] for t in heldout] if measured else None)
     if ahead is None:
         return {"refused": "too few complete samples to fit it"}
     progress("the change test's predictor a moment ahead, held-out skill: " + ", ".join(
