@@ -23,7 +23,7 @@ from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import learn_relations, relation_log
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
-from models.ahead import fit_ahead
+from models.ahead import AheadLog, fit_ahead
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations, RelationLog
 from models.effort_model import EffortModel
@@ -239,7 +239,8 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                              stages, options.seed)
         metadata |= {"command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
-                     "ahead_predictor": _fit_ahead(training, heldout, profile, progress)}
+                     "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
+                                                     profile, progress)}
         save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     return result
 
@@ -259,22 +260,25 @@ def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_Re
     return relations, start_state
 
 
-def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
+def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog], whole: bool,
                profile: Profile, progress: Callable[[str], None]) -> dict[str, Any]:
     """model.json's `ahead_predictor`: the change test's predictor a moment ahead, or why
-    there is none."""
+    there is none. With ``whole`` held-out logs it is fitted to them too, its skill measured
+    log by log from fits to the others; else (the tail of a single log held out) on it."""
     commands = len(profile.commands)     # the logs' model drive ends with measured inputs
-    measured = bool(profile.inputs)
-    ahead = fit_ahead([t.commands[:, :commands] for t in training],
-                      [t.sensors for t in training],
-                      [t.commands[:, :commands] for t in heldout], [t.sensors for t in heldout],
-                      profile.sensor_names, profile.dt_s, [t.cuts for t in training],
-                      [t.commands[:, commands:] for t in training] if measured else None,
-                      [t.commands[:, commands:] for t in heldout] if measured else None)
+
+    def ahead_log(log: ScoringLog) -> AheadLog:
+        return AheadLog(log.commands[:, :commands], log.sensors,
+                        log.commands[:, commands:] if profile.inputs else None, log.cuts)
+
+    fitted = [ahead_log(t) for t in training]
+    held = [ahead_log(t) for t in heldout]
+    ahead = (fit_ahead([*fitted, *held], profile.sensor_names, profile.dt_s) if whole
+             else fit_ahead(fitted, profile.sensor_names, profile.dt_s, held))
     if ahead is None:
         return {"refused": "too few complete samples to fit it"}
-    progress("the change test's predictor a moment ahead, held-out skill: " + ", ".join(
-        f"{name} {skill:.2f}" for name, skill in ahead.skill.items()))
+    progress("the change test's predictor a moment ahead, skill on logs left out of its fit: "
+             + ", ".join(f"{name} {skill:.2f}" for name, skill in ahead.skill.items()))
     return ahead.to_json()
 
 
