@@ -182,3 +182,36 @@ def test_an_input_named_like_a_sensor_is_refused(tmp_path: Path):
                                  str(tmp_path / "p.toml")])
     assert result.exit_code == 2
     assert "must be unique" in result.output
+
+
+def _with_pitch(log: Path, out: Path, pitch: float) -> Path:
+    """The log with its pitch column overwritten by one value throughout."""
+    with log.open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    column = rows[0].index("pitch")
+    for row in rows[1:]:
+        row[column] = f"{pitch:.6f}"
+    with out.open("w", newline="") as stream:
+        csv.writer(stream).writerows(rows)
+    return out
+
+
+def test_an_input_a_log_never_fed_drives_the_model_at_its_typical_value(
+        pitched: dict[str, Path]):
+    """A pitch channel the logger filled with zeros would drive the model far from what it
+    learnt; it is held at its typical value on the training logs, and the report says so."""
+    from auvdiag_cli import api
+
+    folder = pitched["folder"]
+    log = write_pitched_vehicle(folder / "fed.csv", 22, 90.0)
+    meta = json.loads((pitched["model"] / "model.json").read_text())
+    typical = meta["signals"]["inputs"][0]["typical"]
+    profile = api.load_profile(pitched["with"])
+    model = api.load_model(pitched["model"], profile)
+    zeros = api.diagnose(_with_pitch(log, folder / "zeros.csv", 0.0), profile, model)
+    held = api.diagnose(_with_pitch(log, folder / "held.csv", typical), profile, model)
+    assert any(note.startswith("pitch reads 0 throughout the log") and "typical value" in note
+               for note in zeros.notes)
+    assert typical != 0.0
+    np.testing.assert_array_equal(zeros.histories.matching.modelled,
+                                  held.histories.matching.modelled)

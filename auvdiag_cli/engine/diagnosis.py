@@ -26,7 +26,7 @@ from auvdiag_cli.engine.detection import (
     look_up,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
-from auvdiag_cli.engine.flat_signals import not_judged_flat
+from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -132,10 +132,22 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
     return None
 
 
+def _inputs_held(log: IngestedLog, model: LoadedModel) -> IngestedLog:
+    """The log with each measured input it never fed held at its typical value on the
+    model's training logs (`flat_signals.held_at`)."""
+    frame = log.frame
+    if not frame.flat_inputs:
+        return log
+    typical = {i.name: i.typical for i in model.card.inputs}
+    return IngestedLog(log.signals, replace(frame, inputs=held_at(
+        frame.inputs, frame.input_names, frame.flat_inputs, typical)))
+
+
 def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                       companion_runs: Sequence[tuple[DmsRun, int]] = (),
                       mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
     new_replay_budget()
+    log = _inputs_held(log, model)
     frame, signals = log.frame, log.signals
     judging = Judging.of(model, profile).without(not_judged_flat(frame.flat))
     not_judged, decision = judging.not_judged, judging.decision_steps

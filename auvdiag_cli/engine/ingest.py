@@ -4,7 +4,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import Signals, read_log
-from auvdiag_cli.engine.flat_signals import flat_sensor_notes, flat_sensors
+from auvdiag_cli.engine.flat_signals import flat_input_notes, flat_sensor_notes, flat_sensors
 from auvdiag_cli.engine.outliers import remove_spikes
 from auvdiag_cli.engine.resample import AlignedFrame, NeverOperates, resample
 from auvdiag_cli.vehicle.profile import Profile
@@ -47,6 +47,9 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
         raise LogError(path, str(error)) from None
     frame.flat = flat_sensors(frame.sensors, frame.sensor_names, profile.dt_s)
     frame.notes += flat_sensor_notes(frame.flat)
+    if frame.input_names:
+        frame.flat_inputs = flat_sensors(frame.inputs, frame.input_names, profile.dt_s)
+        frame.notes += flat_input_notes(frame.flat_inputs)
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
                                  profile.full_scales)
     return IngestedLog(signals, frame)

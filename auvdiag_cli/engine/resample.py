@@ -75,6 +75,7 @@ class AlignedFrame:
     input_names: tuple[str, ...] = ()
     not_operating_s: float = 0.0        # time on the grid the vehicle was not operating
     flat: dict[str, str] = field(default_factory=dict)   # sensor -> what it reads throughout
+    flat_inputs: dict[str, str] = field(default_factory=dict)   # the same of the inputs
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]

@@ -13,19 +13,25 @@ import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.ingest import WHOLE, Part, ingest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.jobs.candidates import fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
-from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
-from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION, split_holdout, split_point
-from auvdiag_cli.jobs.operating import read_operating
-from auvdiag_cli.jobs.relate import learn_relations, relation_log
+from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
+from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
+from auvdiag_cli.jobs.relate import learn_relations
+from auvdiag_cli.jobs.training_logs import (
+    ReadLog,
+    median_rates,
+    read_and_split,
+    scoring_log,
+    split_in_time,
+    with_inputs_held,
+)
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
 from models.ahead import AheadLog, fit_ahead
 from models.card import Refused, StartReference
-from models.command_relations import CommandRelations, RelationLog
+from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
 from models.fast import PREDICTOR_KINDS
 from models.skill import (
@@ -109,70 +115,6 @@ class TrainingResult:
             isinstance(effort, EffortModel) and effort.judges_anything)
 
 
-@dataclass(frozen=True)
-class _ReadLog:
-    scoring: ScoringLog
-    relation: RelationLog
-    rates_hz: dict[str, float]          # the rate each signal was logged at (median)
-
-
-def _read(path: Path, profile: Profile, progress: Callable[[str], None],
-          part: Part = WHOLE) -> _ReadLog:
-    """The log (or its ``part``) on the model grid, for the network and for the command
-    relations."""
-    log = ingest(path, profile, part=part)
-    frame = log.frame
-    for note in frame.slow_commands:
-        progress(f"warning: {path.name}: {note}")
-    rates = {}
-    for name, series in log.signals.series.items():
-        steps = np.diff(series.times_ns)
-        if (steps > 0).any():
-            rates[name] = 1e9 / float(np.median(steps[steps > 0]))
-    return _ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts)),
-                    relation_log(log, profile), rates)
-
-
-def _scoring_log(path: Path, profile: Profile, progress: Callable[[str], None]) -> ScoringLog:
-    return _read(path, profile, progress).scoring
-
-
-def _median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
-                  ) -> dict[str, float]:
-    return {name: round(float(np.median(values)), 3) for name in names
-            if (values := [rates[name] for rates in per_log if name in rates])}
-
-
-def _split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
-    """The log up to where 1 - HELD_OUT_FRACTION of its usable (operating, complete) steps
-    lie, and the rest."""
-    cut = split_point(np.isfinite(log.sensors).all(axis=1), HELD_OUT_FRACTION)
-    head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
-                      tuple(c for c in log.cuts if c < cut))
-    tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
-                      log.sensors[cut:], tuple(c - cut for c in log.cuts if c > cut))
-    return head, tail
-
-
-def _read_and_split(logs: Sequence[Path], holdout: Sequence[Path], profile: Profile,
-                    progress: Callable[[str], None], healthy: HealthyParts = NO_HEALTHY_PARTS
-                    ) -> tuple[list[Path], list[Path], dict[Path, _ReadLog]]:
-    """Training and held-out logs among those in which the vehicle operates, each read
-    (only its healthy part where ``healthy`` lists one)."""
-    paths = list(dict.fromkeys([*logs, *holdout]))
-    # How many are held out is known only once the logs are read (see `split_holdout`).
-    progress(f"reading {len(paths)} log(s)"
-             + (f", {len(holdout)} of them held out as asked" if holdout else ""))
-    announce_healthy_parts(healthy, paths, progress)
-    every = read_operating(paths, lambda path: _read(path, profile, progress,
-                                                     healthy.of(path)), progress, "train on")
-    training_paths, heldout_paths = split_holdout([p for p in logs if p in every],
-                                                  [p for p in holdout if p in every])
-    if not training_paths:
-        raise UsageError("no training logs left after holding out")
-    return training_paths, heldout_paths, every
-
-
 def horizon_candidates(profile: Profile, horizon_s: float | None) -> list[float | None]:
     """Horizons to score: the one asked for (``inf``: free run), or every candidate (None:
     choose) not shorter than g's window."""
@@ -192,17 +134,16 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
-    training_paths, heldout_paths, every = _read_and_split(logs, options.holdout, profile,
+    training_paths, heldout_paths, every = read_and_split(logs, options.holdout, profile,
                                                            progress, options.healthy)
     read = [every[p] for p in training_paths]
-    training = [r.scoring for r in read]
-    rates = _median_rates([r.rates_hz for r in read], [*profile.command_names,
-                                                        *profile.sensor_names])
     read_heldout = [every[p] for p in heldout_paths]
-    heldout = [r.scoring for r in read_heldout]
+    training, heldout = with_inputs_held(read, read_heldout, profile)
+    rates = median_rates([r.rates_hz for r in read], [*profile.command_names,
+                                                        *profile.sensor_names])
     split = f"{len(heldout)} held-out log(s)"
     if not heldout:
-        training[0], tail = _split_in_time(training[0])
+        training[0], tail = split_in_time(training[0])
         heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * options.iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
@@ -245,7 +186,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     return result
 
 
-def _learn_beside_the_model(read: Sequence[_ReadLog], read_heldout: Sequence[_ReadLog],
+def _learn_beside_the_model(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
                             training: Sequence[ScoringLog], profile: Profile
                             ) -> tuple[CommandRelations | Refused, StartReference]:
     """The command relations and the start state (or why there are none). ``training`` is
@@ -393,7 +334,8 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
     if seen:
         raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
                          "it has not seen")
-    scoring = [_scoring_log(p, profile, progress) for p in logs]
+    typical = {i.name: i.typical for i in model.card.inputs}
+    scoring = [scoring_log(p, profile, progress, typical) for p in logs]
     scores = [replace(score, predictors=model.predictors) for score in assess(
         model.dynamics, np.asarray(model.normaliser.command_scale),
         np.asarray(model.normaliser.state_scale), scoring, scoring, profile.sensor_names,
