@@ -179,7 +179,6 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
 
     from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics
     from auvdiag_cli.engine.change_signatures import signatures
-    from auvdiag_cli.engine.judging import signature_only
 
     residual, time_s = diagnosis.histories.change_residual, diagnosis.histories.time_s
     if residual is None:
@@ -192,12 +191,11 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
         (after & (time_s <= (onset_s or 0.0) + delay), soon[delay]) for delay in GOAL_DELAYS_S]
     names = list(diagnosis.histories.sensor_names)
     found = signatures(profile.actuators, names)
-    within = signature_only(profile)          # no statistic of their own
     for statistic, values in change_statistics(
             residual, profile.window_samples, round(REFERENCE_MIN_S / profile.dt_s),
             found).items():
         for column, name in enumerate([*names, *(s.name for s in found)]):
-            for part, into in parts if name not in within else ():
+            for part, into in parts:
                 known = values[part, column]
                 if np.isfinite(known).any():
                     into[statistic, name] = float(np.nanmax(known))

@@ -67,36 +67,6 @@ def test_a_move_against_the_signature_is_no_evidence_for_it():
         assert peaks[1.0] < 3.0 < 8.0 < peaks[-1.0]
 
 
-def test_a_signal_judged_only_within_the_signature_never_alarms_alone():
-    """A forward acceleration that drops alone (a throttle the autopilot closed) raises
-    nothing when the profile judges it only within the engine's signature, though alone it
-    would cross: in the signature's sum its drop counts half (one member of four); with
-    the other three dropping too it counts in full."""
-    profile = api.load_profile("arduplane_carbonz")
-    within = {"ground_speed", "accel_x"}
-    names = [n for n in [*ENGINE, "engine weakened"] if n not in within]
-    for seed in range(5):
-        residual, time_s = _log(0.0, seed)
-        residual[900:, ENGINE.index("accel_x")] -= 2.0 * 0.32
-        alone = check_change(residual, ENGINE, _thresholds([*names, "accel_x"]), time_s,
-                             STEPS, DT_S, profile.actuators)
-        assert alone.alarm_s is not None and "accel_x" in alone.flagged
-        only = check_change(residual, ENGINE, _thresholds(names), time_s, STEPS, DT_S,
-                            profile.actuators, within)
-        assert only.alarm_s is None
-        assert only.members["engine weakened"] == tuple(ENGINE)
-        together, _ = _log(-1.0, seed)
-        check = check_change(together, ENGINE, _thresholds(names), time_s, STEPS, DT_S,
-                             profile.actuators, within)
-        # Without the two it judges only within the signature, pitch and climb alone sum
-        # to less.
-        two = check_change(together, ENGINE, _thresholds(names), time_s, STEPS, DT_S,
-                           profile.actuators)
-        assert two.members["engine weakened"] == ("pitch", "climb")
-        assert two.peaks[SUM]["engine weakened"] < check.peaks[SUM]["engine weakened"]
-        assert check.alarm_s is not None and "engine weakened" in check.flagged
-
-
 def test_a_signature_needs_two_judged_members():
     profile = api.load_profile("arduplane_carbonz")
     assert signature_names(profile.actuators, ["climb", "roll"]) == []

@@ -113,12 +113,8 @@ def test_the_operating_fallback_is_read_as_a_value_map():
      "key 'sensors[4].moved_by' names 'tail', which is no actuator or command component"),
     ("arduplane_carbonz", 'kind = "engine"', 'kind = "jet"',
      "key 'actuators[3].kind' must be one of"),
-    ("arduplane_carbonz", 'signature_only = "the ground speed', 'signature_only = 3 # "',
-     "key 'sensors[6].signature_only' must be a string, got 3"),
-    ("arduplane_carbonz", 'weakened = { pitch = -1, climb = -1, ground_speed = -1, accel_x = -1 }',
-     'weakened = { pitch = -1, climb = -1, ground_speed = -1 }',
-     "sensor 'accel_x' is judged only within a signature ('signature_only'), but no "
-     "actuator's 'weakened' names it"),
+    ("arduplane_carbonz", 'own_log_only = "the ground speed', 'own_log_only = 3 # "',
+     "key 'sensors[6].own_log_only' must be a string, got 3"),
     ("bluerov2", 'sway = "sway"\nroll_rate', 'sway = "drift"\nroll_rate',
      "key 'controller.sway' names no sensor"),
 ])

@@ -28,7 +28,7 @@ window where the strongest signal's sum last left zero (whichever statistic cros
 or take the run from there to the alarm.
 """
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -214,16 +214,14 @@ def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: 
 
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
-                 window: int, dt_s: float, actuators: Sequence[Actuator] = (),
-                 signature_only: Collection[str] = ()) -> ChangeCheck:
+                 window: int, dt_s: float, actuators: Sequence[Actuator] = ()) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
     threshold (``thresholds``: statistic -> signal -> threshold), and the signatures of
-    the ``actuators`` over them and over the ``signature_only`` signals (judged only in a
-    signature's sum) that have one."""
+    the ``actuators`` over them that have one."""
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
-    judged = [i for i, name in enumerate(names) if limited(name) or name in signature_only]
+    judged = [i for i, name in enumerate(names) if limited(name)]
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),

@@ -36,7 +36,7 @@ from auvdiag_cli.engine.isolation import (
     isolate,
     names_a_mover,
 )
-from auvdiag_cli.engine.judging import Judging, signature_only, skilled
+from auvdiag_cli.engine.judging import Judging, skilled
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
@@ -250,15 +250,13 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
     names = profile.sensor_names
     judged = [name for name in change_judged(model, skilled(model, profile))
               if name not in judging.set_aside]
-    within = signature_only(profile) & set(judged)
     judged += signature_names(profile.actuators, judged)
-    thresholds = {statistic: {name: value for name, value in limits.items()
-                              if name in judged and name not in within}
+    thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None
     return check_change(residual, names, thresholds, time_s,
-                        judging.window, profile.dt_s, profile.actuators, within)
+                        judging.window, profile.dt_s, profile.actuators)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

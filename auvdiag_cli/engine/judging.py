@@ -38,7 +38,7 @@ class Judging:
                    profile.window_samples if card.window_samples is None
                    else card.window_samples,
                    round(profile.decision_window_s / profile.dt_s), judged,
-                   not_judged_signals(model) | left_to_the_change_test(profile), model)
+                   not_judged_signals(model) | own_log_only(profile), model)
 
     def without(self, reasons: dict[str, str]) -> "Judging":
         """This judging with ``reasons``' signals set aside by every judge (a log's own
@@ -69,30 +69,16 @@ class Judging:
         return {name: int(bits[i]) for i, name in enumerate(self.sensor_names)}
 
 
-def left_to_the_change_test(profile: Profile) -> dict[str, str]:
-    """The signals the profile has judged only against the log's own beginning, or only
-    within a part's signature there, with the reason reports print."""
-    reasons = {}
-    for sensor in profile.sensors:
-        if sensor.signature_only:
-            parts = [a.name for a in profile.actuators
-                     if sensor.name in (name for name, _ in a.weakened)]
-            reasons[sensor.name] = (f"judged only within the signature of "
-                                    f"{' and '.join(parts)} weakened ({sensor.signature_only})")
-        elif sensor.own_log_only:
-            reasons[sensor.name] = ("judged only against the log's own beginning "
-                                    f"({sensor.own_log_only})")
-    return reasons
-
-
-def signature_only(profile: Profile) -> set[str]:
-    """The sensors the change test judges only within a part's signature."""
-    return {s.name for s in profile.sensors if s.signature_only}
+def own_log_only(profile: Profile) -> dict[str, str]:
+    """The signals the profile has judged only against the log's own beginning (the change
+    test), with the reason reports print."""
+    return {s.name: f"judged only against the log's own beginning ({s.own_log_only})"
+            for s in profile.sensors if s.own_log_only}
 
 
 def replay_judged(model: LoadedModel, profile: Profile) -> list[str]:
     """The signals the replay judges with this model and profile."""
-    left_out = not_judged_signals(model) | left_to_the_change_test(profile)
+    left_out = not_judged_signals(model) | own_log_only(profile)
     return [name for name in profile.sensor_names if name not in left_out]
 
 

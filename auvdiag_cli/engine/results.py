@@ -123,8 +123,7 @@ class Diagnosis(Observations, Finding):
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
         change = self.change_check
         by_change = set() if change is None or not change.judged else {
-            name for limits in change.thresholds.values() for name in limits} | {
-            name for signature in change.members.values() for name in signature}
+            name for limits in change.thresholds.values() for name in limits}
         return coverage_of(self.histories.sensor_names or tuple(self.b),
                            [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check)

@@ -15,7 +15,6 @@ from auvdiag_cli.engine.change_check import (
     change_peaks,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
-from auvdiag_cli.engine.judging import signature_only
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.profile import Profile
@@ -84,9 +83,8 @@ class ChangeEvidence:
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
                     model: LoadedModel, profile: Profile) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
-    within = signature_only(profile)      # in a signature's sum only: no threshold alone
     return without_outliers(ChangeEvidence(
-        [*(n for n in judged if n not in within), *signature_names(profile.actuators, judged)],
+        [*judged, *signature_names(profile.actuators, judged)],
         [log_change_peaks(d, judged, model, profile) for d in diagnoses]))
 
 

@@ -78,23 +78,14 @@ def _weakened(reader: TableReader) -> tuple[tuple[str, float], ...]:
     return tuple(signs)
 
 
-def check_weakened(actuators: Iterable[Actuator], sensor_names: Iterable[str],
-                   signature_only: Iterable[str] = ()) -> None:
-    """Every signal an actuator's `weakened` names is a sensor, and every sensor judged
-    only within a signature is in one."""
+def check_weakened(actuators: Iterable[Actuator], sensor_names: Iterable[str]) -> None:
+    """Every signal an actuator's `weakened` names is a sensor."""
     known = set(sensor_names)
-    members: set[str] = set()
     for actuator in actuators:
         strangers = [name for name, _ in actuator.weakened if name not in known]
         if strangers:
             raise ProfileError(f"actuator {actuator.name!r}: 'weakened' names {strangers[0]!r}, "
                                f"which is no sensor (known: {', '.join(sorted(known))})")
-        members |= {name for name, _ in actuator.weakened}
-    alone = [name for name in signature_only if name not in members]
-    if alone:
-        raise ProfileError(f"sensor {alone[0]!r} is judged only within a signature "
-                           "('signature_only'), but no actuator's 'weakened' names it: it "
-                           "would never be judged")
 
 
 def parse_moved_by(reader: TableReader, known: set[str]) -> tuple[str, ...]:

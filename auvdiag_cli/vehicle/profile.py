@@ -23,7 +23,6 @@ from auvdiag_cli.vehicle.controller import (
     ControllerSpec,
 )
 from auvdiag_cli.vehicle.effort_groups import parse_effort_groups
-from auvdiag_cli.vehicle.pattern_table import PatternRow, parse_pattern
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
@@ -70,10 +69,6 @@ class Sensor:
     # Why it is judged only against the log's own beginning (None: by every judge): it answers
     # the commands differently from log to log (a ground speed, with the day's wind).
     own_log_only: str | None = None
-    # Why it is judged only within a part's signature (`weakened`), never alone (None: it
-    # is judged alone too): it also moves with what the model is not given (a forward
-    # acceleration with the throttle).
-    signature_only: str | None = None
 
 
 @dataclass(frozen=True)
@@ -82,6 +77,13 @@ class Navigation:
 
     speed: str
     yaw_rate: str
+
+
+@dataclass(frozen=True)
+class PatternRow:
+    case: int
+    b: dict[str, int]
+    components: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -184,11 +186,10 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
                r.get("truth_column", str, None), parse_moved_by(r, movers),
-               r.get("own_log_only", str, None), r.get("signature_only", str, None))
+               r.get("own_log_only", str, None))
         for r in top.items("sensors")
     )
-    check_weakened(actuators, [s.name for s in sensors],
-                   [s.name for s in sensors if s.signature_only])
+    check_weakened(actuators, [s.name for s in sensors])
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
                    for r in (top.items("inputs") if "inputs" in top.table else []))
     if not commands or not sensors:
@@ -234,7 +235,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     thresholds = _thresholds(top.sub("thresholds"), sensor_names)
     components = ({c.component for c in commands} | {s.component for s in sensors}
                   | {a.name for a in actuators})
-    pattern = parse_pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
+    pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
 
     dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
@@ -308,6 +309,45 @@ def _controller(reader: TableReader, sensor_names: list[str], command_names: lis
                           -1.0 if reader.get("heave_up", bool, False) else 1.0,
                           reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None),
                           reader.get("sway", str, None))
+
+
+def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
+             ) -> tuple[PatternRow, ...]:
+    """The optional pattern table; a row that repeats another's case or b vector is an
+    error naming both rows."""
+    pattern: list[PatternRow] = []
+    for reader in rows:
+        row = _pattern_row(reader, sensor_names, components)
+        for earlier, other in zip(rows, pattern, strict=False):
+            if other.case == row.case:
+                raise ProfileError(f"key '{reader.key('case')}' repeats case {row.case} of "
+                                   f"{earlier.where}")
+            if other.b == row.b:
+                raise ProfileError(f"key '{reader.key('b')}' repeats the b vector of "
+                                   f"{earlier.where} (case {other.case})")
+        pattern.append(row)
+    return tuple(pattern)
+
+
+def _pattern_row(reader: TableReader, sensor_names: list[str], components: set[str]
+                 ) -> PatternRow:
+    b_reader = reader.sub("b")
+    unknown = [name for name in b_reader.table if name not in sensor_names]
+    if unknown:
+        raise ProfileError(f"key '{b_reader.key(unknown[0])}' names no sensor (b has one bit "
+                           f"per sensor: {', '.join(sensor_names)})")
+    b = {}
+    for name in sensor_names:
+        bit = b_reader.get(name, int)
+        if bit not in (0, 1):
+            raise ProfileError(f"key '{b_reader.key(name)}' must be 0 or 1")
+        b[name] = bit
+    named = [str(c) for c in reader.get("components", list)]
+    strangers = [c for c in named if c not in components]
+    if strangers:
+        raise ProfileError(f"key '{reader.key('components')}' names unknown component "
+                           f"{strangers[0]!r} (the profile's: {', '.join(sorted(components))})")
+    return PatternRow(reader.get("case", int), b, tuple(named))
 
 
 def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
