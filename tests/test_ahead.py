@@ -158,19 +158,3 @@ def test_without_held_out_logs_its_skill_is_each_logs_from_a_fit_to_the_others()
     strange = [*logs[:3], AheadLog(*_closed_loop(120.0, 5, gain=0.3))]
     odd = fit_ahead(strange, NAMES, DT_S)
     assert odd is not None and odd.skill["rate"] < crossed.skill["rate"] - 0.05
-
-
-def test_it_measures_the_spread_of_its_error_over_windows_and_keeps_it():
-    logs = [AheadLog(*_closed_loop(120.0, seed)) for seed in range(4)]
-    ahead = fit_ahead(logs, NAMES, DT_S, window=10)
-    assert ahead is not None and ahead.window == 10
-    # The spread of the error's one-second means, measured on each log from a fit to the
-    # others: about what any one log shows.
-    error = ahead.residual(*_closed_loop(120.0, 8))
-    means = error[20:1200].reshape(-1, 10, 2).mean(axis=1)
-    for k, name in enumerate(NAMES):
-        assert ahead.window_spread[name] == pytest.approx(np.std(means[:, k]), rel=0.3)
-    again = AheadPredictor.from_json(json.loads(json.dumps(ahead.to_json())), n_commands=1,
-                                     n_sensors=2, n_inputs=0)
-    assert again.window == 10 and again.window_spread == pytest.approx(ahead.window_spread)
-    assert fit_ahead(logs, NAMES, DT_S).window_spread == {}
