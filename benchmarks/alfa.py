@@ -36,7 +36,6 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from auvdiag_cli.engine.results import Diagnosis
     from auvdiag_cli.vehicle.profile import Profile
-    from models.store import LoadedModel
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "alfa"
 FALSE_ALARM_RATE = 0.05
@@ -165,25 +164,20 @@ def judge_day(day: str, every: list[Flight], work: Path, scale: float, guard_s: 
             outcomes[variant].append(Outcome(
                 flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
                 diagnosis.component, time.perf_counter() - started, judge,
-                *_change_peaks(diagnosis, onset_s, profile, model),
+                *_change_peaks(diagnosis, onset_s, profile),
                 stated, None if stated is None or change is None
                 else next(iter(change.flagged), None)))
     return outcomes, judged
 
 
-def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profile",
-                  model: "LoadedModel"
+def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profile"
                   ) -> tuple[dict[tuple[str, str], float], dict[tuple[str, str], float],
                              dict[float, dict[tuple[str, str], float]]]:
     """The change test's statistics on every signal and the profile's signatures over
     them, largest before the onset, after it, and within each of GOAL_DELAYS_S of it."""
     import numpy as np
 
-    from auvdiag_cli.engine.change_check import (
-        REFERENCE_MIN_S,
-        change_statistics,
-        prior_spread,
-    )
+    from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics
     from auvdiag_cli.engine.change_signatures import signatures
 
     residual, time_s = diagnosis.histories.change_residual, diagnosis.histories.time_s
@@ -197,10 +191,9 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
         (after & (time_s <= (onset_s or 0.0) + delay), soon[delay]) for delay in GOAL_DELAYS_S]
     names = list(diagnosis.histories.sensor_names)
     found = signatures(profile.actuators, names)
-    prior = prior_spread(model, names, profile.window_samples)
     for statistic, values in change_statistics(
             residual, profile.window_samples, round(REFERENCE_MIN_S / profile.dt_s),
-            found, prior).items():
+            found).items():
         for column, name in enumerate([*names, *(s.name for s in found)]):
             for part, into in parts:
                 known = values[part, column]

@@ -21,7 +21,7 @@ judged within each log.
 """
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -38,10 +38,6 @@ class AheadPredictor:
     weights: np.ndarray       # (features, n_sensors), physical units
     skill: Mapping[str, float]   # per signal on held-out data: 1 - rms error / rms change
     inputs: int = 0           # measured inputs in the state (a model fitted before: none)
-    # Per signal, the spread of its error's means over windows of ``window`` steps on
-    # normal logs left out of the fit (`window_spread`; empty: a model fitted before).
-    window_spread: Mapping[str, float] = field(default_factory=dict)
-    window: int = 0
 
     @property
     def lag(self) -> int:
@@ -64,8 +60,6 @@ class AheadPredictor:
                 "features": "s(k), s(k)-s(k-lag), c(k), c(k+steps//2), c(k+steps), 1 "
                             "(s: the sensors, then the measured inputs)",
                 "weights": np.round(self.weights, 9).tolist(),
-                "window_steps": self.window,
-                "window_spread": {n: round(v, 9) for n, v in self.window_spread.items()},
                 "heldout_skill": {n: round(v, 4) for n, v in self.skill.items()}}
 
     @classmethod
@@ -81,8 +75,7 @@ class AheadPredictor:
                              f"{n_sensors} signals and {n_inputs} inputs")
         return cls(int(entry["ahead_s_steps"]), weights,
                    {str(k): float(v) for k, v in entry.get("heldout_skill", {}).items()},
-                   inputs, {str(k): float(v) for k, v in entry.get("window_spread", {}).items()},
-                   int(entry.get("window_steps", 0)))
+                   inputs)
 
 
 def _state(sensors: np.ndarray, inputs: np.ndarray | None) -> np.ndarray:
@@ -158,7 +151,7 @@ def _errors(predictor: AheadPredictor, logs: Sequence[AheadLog]
 
 
 def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
-              heldout: Sequence[AheadLog] = (), window: int = 0) -> AheadPredictor | None:
+              heldout: Sequence[AheadLog] = ()) -> AheadPredictor | None:
     """Least squares on the normal logs; None where they hold too few complete rows to fit
     it. Its skill is measured on ``heldout`` where given, else on each log from a fit to the
     others (the logs in up to CROSS_FOLDS groups, each left out in turn): a least-squares fit
@@ -171,11 +164,7 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
     offsets. The predictor keeps their mean (the change test judges a log against its own
     beginning, where a constant cancels). A channel a log never fed (one value throughout:
     a sensor not fitted that day) is, as a feature, only that log's constant again, and its
-    own changes there are left out of its fit: they say nothing of how it moves.
-
-    With a ``window`` (steps), the spread of each signal's error averaged over such windows
-    is measured on the same errors (`window_spread`): what the change test weighs a log's
-    own early spread against."""
+    own changes there are left out of its fit: they say nothing of how it moves."""
     steps = max(1, round(AHEAD_S / dt_s))
     lag = max(1, steps // 2)
     weights = _weights(logs, len(names), steps, lag)
@@ -192,35 +181,7 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
                                         [logs[i] for i in group])
                 errors += more
                 held += sensors
-    return AheadPredictor(steps, weights, _skill(errors, held, steps, names), n_inputs,
-                          window_spread(errors, window, names) if window else {}, window)
-
-
-MIN_SPREAD_WINDOWS = 5      # a log with fewer whole windows says little of their spread
-
-
-def window_spread(errors: Sequence[np.ndarray], window: int, names: Sequence[str]
-                  ) -> dict[str, float]:
-    """Per signal, the median over logs of the spread of its error's means over whole
-    windows of ``window`` steps, each log's about its own mean (a window needs half its
-    steps known; a log, MIN_SPREAD_WINDOWS windows)."""
-    spreads = []
-    for error in errors:
-        whole = len(error) // window * window
-        blocks = error[:whole].reshape(-1, window, error.shape[1])
-        known = np.isfinite(blocks).sum(axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            means = np.where(known * 2 >= window, np.nansum(blocks, axis=1)
-                             / np.maximum(known, 1), np.nan)
-        finite = np.isfinite(means)
-        count = np.maximum(finite.sum(axis=0), 1)
-        centred = np.where(finite, means - np.where(finite, means, 0.0).sum(axis=0) / count, 0.0)
-        spreads.append(np.where(finite.sum(axis=0) >= MIN_SPREAD_WINDOWS,
-                                np.sqrt((centred ** 2).sum(axis=0) / count), np.nan))
-    per_log = np.array(spreads).reshape(len(spreads), len(names))
-    typical = {n: float(np.median(column[np.isfinite(column)]))
-               for n, column in zip(names, per_log.T, strict=True) if np.isfinite(column).any()}
-    return {n: v for n, v in typical.items() if v > 0}
+    return AheadPredictor(steps, weights, _skill(errors, held, steps, names), n_inputs)
 
 
 def _column_means(values: np.ndarray) -> np.ndarray:

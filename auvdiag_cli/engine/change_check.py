@@ -45,10 +45,6 @@ MIN_AHEAD_SKILL = 0.1
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
-# The spread of window means on normal logs counts as this many of a log's own windows: a
-# log's own spread from its first half-minute is itself uncertain by a seventh or so, and a
-# quiet beginning would make every later window stand out.
-PRIOR_WINDOWS = 60
 WINDOW, SUM = "window", "sum"
 STATISTICS = (WINDOW, SUM)
 
@@ -122,12 +118,10 @@ def _windowed_means(values: np.ndarray, window: int) -> np.ndarray:
     return means
 
 
-def _standardised(residual: np.ndarray, window: int, reference_min: int,
-                  prior: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def _standardised(residual: np.ndarray, window: int, reference_min: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """z of each whole window (its last step's index, and z per signal: NaN until the
-    earlier windows hold ``reference_min`` steps, and where a window has no mean). With a
-    ``prior`` (per signal, the spread of window means on normal logs; NaN: none), the
-    spread is the log's own pooled with it, the prior weighing as PRIOR_WINDOWS windows."""
+    earlier windows hold ``reference_min`` steps, and where a window has no mean)."""
     ends = np.arange(window - 1, residual.shape[0], window)
     means = _windowed_means(residual, window)[ends]
     finite = np.isfinite(means)
@@ -137,12 +131,7 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int,
     counts = _running(finite.astype(float))[:-1]
     with np.errstate(invalid="ignore", divide="ignore"):
         mean = first / counts
-        variance = np.maximum(second / counts - mean * mean, 0.0)
-        if prior is not None:
-            known = np.isfinite(prior)
-            variance = np.where(known, (counts * variance + PRIOR_WINDOWS * np.where(
-                known, prior, 0.0) ** 2) / (counts + PRIOR_WINDOWS), variance)
-        spread = np.sqrt(variance)
+        spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
         z = (means - mean) / spread
     z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
     return ends, z
@@ -183,24 +172,12 @@ def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray
     return ahead.residual(commands, matching.measured, inputs, cuts)
 
 
-def prior_spread(model: LoadedModel, names: Sequence[str], window: int) -> np.ndarray | None:
-    """Per signal of ``names``, the spread of the predictor's error averaged over windows
-    of ``window`` steps on normal logs (NaN: not measured), or None where the model's
-    predictor measured none at that window."""
-    ahead = model.card.ahead
-    if ahead is None or ahead.window != window or not ahead.window_spread:
-        return None
-    return np.array([ahead.window_spread.get(name, np.nan) for name in names])
-
-
 def change_statistics(residual: np.ndarray, window: int, reference_min: int,
-                      found: Sequence[Signature] = (), prior: np.ndarray | None = None
-                      ) -> dict[str, np.ndarray]:
+                      found: Sequence[Signature] = ()) -> dict[str, np.ndarray]:
     """Each statistic per step and signal, as of the last whole window (NaN until the
     reference is long enough); after the signals' columns, one per signature in ``found``
-    (`change_signatures`: one-sided, a move against it adds nothing). ``prior``: per
-    signal, the spread of window means on normal logs (`prior_spread`)."""
-    ends, z = _standardised(residual, window, reference_min, prior)
+    (`change_signatures`: one-sided, a move against it adds nothing)."""
+    ends, z = _standardised(residual, window, reference_min)
     z, one_sided = with_signatures(z, found)
     sums = np.full(z.shape, np.nan)
     high = np.zeros(z.shape[1])
@@ -223,14 +200,12 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
 
 
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
-                 actuators: Sequence[Actuator] = (), prior: np.ndarray | None = None
-                 ) -> dict[str, dict[str, float]]:
+                 actuators: Sequence[Actuator] = ()) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per signal in a log, and per signature of the
     ``actuators`` over these signals (NaN where it is never judged): what calibrate sets
     the thresholds from."""
     found = signatures(actuators, names)
-    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
-                                   prior)
+    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found)
     every = [*names, *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
                         else float("nan") for i, name in enumerate(every)}
@@ -239,12 +214,10 @@ def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: 
 
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
-                 window: int, dt_s: float, actuators: Sequence[Actuator] = (),
-                 prior: np.ndarray | None = None) -> ChangeCheck:
-    """The test on one log's residuals (columns ``names``; ``prior``: per column, the
-    spread of window means on normal logs), for the signals with a threshold
-    (``thresholds``: statistic -> signal -> threshold), and the signatures of the
-    ``actuators`` over them that have one."""
+                 window: int, dt_s: float, actuators: Sequence[Actuator] = ()) -> ChangeCheck:
+    """The test on one log's residuals (columns ``names``), for the signals with a
+    threshold (``thresholds``: statistic -> signal -> threshold), and the signatures of
+    the ``actuators`` over them that have one."""
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
@@ -252,7 +225,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
-                                   found, None if prior is None else prior[judged])
+                                   found)
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     ratios = {}

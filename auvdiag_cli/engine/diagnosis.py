@@ -13,7 +13,6 @@ from auvdiag_cli.engine.change_check import (
     change_judged,
     change_residual,
     check_change,
-    prior_spread,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
@@ -256,8 +255,8 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None
-    return check_change(residual, names, thresholds, time_s, judging.window, profile.dt_s,
-                        profile.actuators, prior_spread(model, names, judging.window))
+    return check_change(residual, names, thresholds, time_s,
+                        judging.window, profile.dt_s, profile.actuators)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

@@ -13,7 +13,6 @@ from auvdiag_cli.engine.change_check import (
     WINDOW,
     change_judged,
     change_peaks,
-    prior_spread,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.results import Diagnosis
@@ -54,7 +53,7 @@ def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedM
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
     peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
-                         profile.actuators, prior_spread(model, judged, window))
+                         profile.actuators)
     return {statistic: {name: float("nan") if name in diagnosis.set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}

@@ -214,9 +214,8 @@ def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog], wh
 
     fitted = [ahead_log(t) for t in training]
     held = [ahead_log(t) for t in heldout]
-    window = profile.window_samples
-    ahead = (fit_ahead([*fitted, *held], profile.sensor_names, profile.dt_s, window=window)
-             if whole else fit_ahead(fitted, profile.sensor_names, profile.dt_s, held, window))
+    ahead = (fit_ahead([*fitted, *held], profile.sensor_names, profile.dt_s) if whole
+             else fit_ahead(fitted, profile.sensor_names, profile.dt_s, held))
     if ahead is None:
         return {"refused": "too few complete samples to fit it"}
     progress("the change test's predictor a moment ahead, skill on logs left out of its fit: "
