@@ -215,3 +215,22 @@ def test_an_input_a_log_never_fed_drives_the_model_at_its_typical_value(
     assert typical != 0.0
     np.testing.assert_array_equal(zeros.histories.matching.modelled,
                                   held.histories.matching.modelled)
+
+
+def test_training_holds_an_input_a_log_never_fed_and_says_so(pitched: dict[str, Path]):
+    from auvdiag_cli import api
+
+    folder = pitched["folder"]
+    logs = [folder / f"run_{seed}.csv" for seed in range(4)]
+    logs[1] = _with_pitch(logs[1], folder / "run_1_no_pitch.csv", 0.0)
+    said: list[str] = []
+    api.train(logs, api.load_profile(pitched["with"]), folder / "one_unfed",
+              options=api.TrainOptions(iterations_scale=0.05, hidden=8, keep_unskilled=True),
+              progress=said.append)
+    (line,) = [line for line in said if line.startswith(
+        "pitch: one value throughout 1 of 4 logs (run_1_no_pitch.csv): held at ")]
+    held = float(line.split("held at ")[1].split(",")[0])
+    # Its median over the logs that fed it, not pulled towards the zeros.
+    fed = np.concatenate([np.loadtxt(logs[k], delimiter=",", skiprows=1, usecols=2)
+                          for k in (0, 2, 3)])
+    assert held == pytest.approx(float(np.median(fed)), abs=0.01) and abs(held) > 0.05

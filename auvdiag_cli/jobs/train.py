@@ -138,7 +138,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                                                            progress, options.healthy)
     read = [every[p] for p in training_paths]
     read_heldout = [every[p] for p in heldout_paths]
-    training, heldout = with_inputs_held(read, read_heldout, profile)
+    training, heldout = with_inputs_held(read, read_heldout, profile, progress)
     rates = median_rates([r.rates_hz for r in read], [*profile.command_names,
                                                         *profile.sensor_names])
     split = f"{len(heldout)} held-out log(s)"

@@ -45,12 +45,20 @@ def read_for_training(path: Path, profile: Profile, progress: Callable[[str], No
 
 
 def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
-                      profile: Profile) -> tuple[list[ScoringLog], list[ScoringLog]]:
+                     profile: Profile, progress: Callable[[str], None]
+                     ) -> tuple[list[ScoringLog], list[ScoringLog]]:
     """The training and held-out logs, each measured input a log never fed held at its
-    median over the logs that fed it (`flat_signals.held_at`)."""
+    median over the logs that fed it (`flat_signals.held_at`), which ``progress`` says."""
     every = [*read, *read_heldout]
     typical = typical_inputs([r.scoring.commands for r in every], profile.input_names,
                              [r.flat_inputs for r in every])
+    for name in profile.input_names:
+        unfed = [r.scoring.name for r in every if name in r.flat_inputs]
+        if unfed:
+            held_as = (f"held at {typical[name]:g}, its median on the other logs"
+                       if name in typical else "no log fed it")
+            progress(f"{name}: one value throughout {len(unfed)} of {len(every)} logs "
+                     f"({', '.join(unfed[:3])}{', ...' if len(unfed) > 3 else ''}): {held_as}")
 
     def held(log: ReadLog) -> ScoringLog:
         if not log.flat_inputs:
