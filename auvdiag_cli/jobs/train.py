@@ -135,12 +135,12 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
     training_paths, heldout_paths, every = read_and_split(logs, options.holdout, profile,
-                                                           progress, options.healthy)
+                                                          progress, options.healthy)
     read = [every[p] for p in training_paths]
     read_heldout = [every[p] for p in heldout_paths]
     training, heldout = with_inputs_held(read, read_heldout, profile, progress)
     rates = median_rates([r.rates_hz for r in read], [*profile.command_names,
-                                                        *profile.sensor_names])
+                                                      *profile.sensor_names])
     split = f"{len(heldout)} held-out log(s)"
     if not heldout:
         training[0], tail = split_in_time(training[0])

@@ -28,7 +28,7 @@ class ReadLog:
 
 
 def read_for_training(path: Path, profile: Profile, progress: Callable[[str], None],
-          part: Part = WHOLE) -> ReadLog:
+                      part: Part = WHOLE) -> ReadLog:
     """The log (or its ``part``) on the model grid, for the network and for the command
     relations."""
     log = ingest(path, profile, part=part)
@@ -41,7 +41,15 @@ def read_for_training(path: Path, profile: Profile, progress: Callable[[str], No
         if (steps > 0).any():
             rates[name] = 1e9 / float(np.median(steps[steps > 0]))
     return ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts)),
-                    relation_log(log, profile), rates, frame.flat_inputs)
+                   relation_log(log, profile), rates, frame.flat_inputs)
+
+
+def _held(log: ReadLog, profile: Profile, typical: Mapping[str, float]) -> ScoringLog:
+    """The log's scoring data, each measured input it never fed held at ``typical``."""
+    if not log.flat_inputs:
+        return log.scoring
+    return replace(log.scoring, commands=held_at(log.scoring.commands, profile.input_names,
+                                                 log.flat_inputs, typical))
 
 
 def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
@@ -59,23 +67,15 @@ def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
                        if name in typical else "no log fed it")
             progress(f"{name}: one value throughout {len(unfed)} of {len(every)} logs "
                      f"({', '.join(unfed[:3])}{', ...' if len(unfed) > 3 else ''}): {held_as}")
-
-    def held(log: ReadLog) -> ScoringLog:
-        if not log.flat_inputs:
-            return log.scoring
-        return replace(log.scoring, commands=held_at(log.scoring.commands, profile.input_names,
-                                                     log.flat_inputs, typical))
-
-    return [held(r) for r in read], [held(r) for r in read_heldout]
+    return ([_held(r, profile, typical) for r in read],
+            [_held(r, profile, typical) for r in read_heldout])
 
 
 def scoring_log(path: Path, profile: Profile, progress: Callable[[str], None],
                 typical: Mapping[str, float]) -> ScoringLog:
     """A log to score a model on, each measured input it never fed held at the model's
     ``typical`` value."""
-    log = read_for_training(path, profile, progress)
-    return replace(log.scoring, commands=held_at(log.scoring.commands, profile.input_names,
-                                                 log.flat_inputs, typical))
+    return _held(read_for_training(path, profile, progress), profile, typical)
 
 
 def median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
