@@ -271,9 +271,9 @@ class SignalCollector:
                            f"{self.namespace or '/'}: " + naming_hint(settled.namespace))
         self._apply(settled)
         self.namespace_fixed = True
-        signals = self.sources.signals
-        optional = {self.names[s.topic] for n, s in signals.items() if n in self.sources.fallbacks}
-        missing = sorted({self.names[s.topic] for s in signals.values()} - available - optional)
+        optional = self.sources.fallbacks.keys() | self.sources.optional
+        missing = sorted({self.names[s.topic] for n, s in self.sources.signals.items()
+                          if n not in optional} - available)
         if missing:
             raise LogError(self.path, f"missing topic(s) {', '.join(missing)}{where}")
 
@@ -292,8 +292,11 @@ class SignalCollector:
         if self.namespace:
             self.notes.append(f"topics read under the namespace {self.namespace}")
         empty = sorted(name for name, times in self.times.items() if not times)
-        if empty and require_all:
-            where = ", ".join(self._why_empty(n) for n in empty)
+        # An optional signal without samples is left out; what stands in for it is the
+        # reader's to say.
+        lacking = [name for name in empty if name not in self.sources.optional]
+        if lacking and require_all:
+            where = ", ".join(self._why_empty(n) for n in lacking)
             raise LogError(self.path, f"{MISSING_SIGNALS} {where}")
         series = {name: self._series(name, time_ordered) for name in self.times
                   if name not in empty}

@@ -62,10 +62,14 @@ class _Parsed:
         self.stopped: str | None = None        # where the file became unreadable
 
 
-def _parse(path: Path, wanted: list[str], time_column: str) -> tuple[_Parsed, list[str]]:
+def _parse(path: Path, wanted: list[str], time_column: str, optional: set[str]
+           ) -> tuple[_Parsed, list[str]]:
+    """The ``wanted`` columns' cells; a column of ``optional`` the header lacks is left
+    out of them."""
     table = CsvRows(path)
     rows = iter(table)
     header = [name.strip() for name in next(rows, [])]
+    wanted = [name for name in wanted if name in header or name not in optional]
     missing = [name for name in dict.fromkeys([time_column, *wanted]) if name not in header]
     if missing:
         offered = ", ".join(closest_first(missing[0], header))
@@ -164,8 +168,10 @@ class CsvAdapter:
                                  "the time (time = { column = ..., unit = ... })")
         collector = SignalCollector(path, sources)
         segment = sources.segment
-        wanted = sorted(collector.topics)
-        parsed, header = _parse(path, wanted, sources.time.column)
+        required = {s.topic for n, s in sources.signals.items() if n not in sources.optional}
+        optional = {s.topic for s in sources.signals.values()} - required
+        parsed, header = _parse(path, sorted(collector.topics), sources.time.column, optional)
+        wanted = list(parsed.cells)
         times = _times_ns(parsed.times, sources.time, collector.notes)
         timed = times >= 0
         bad_values = 0

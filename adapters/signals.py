@@ -100,6 +100,9 @@ class LogSources:
     # The ROS namespace the topics are under: None finds it from the log's topics, "" is
     # the root (`adapters.namespace`).
     namespace: str | None = None
+    # Signals a log may lack (a profile's measured inputs, which the model can hold at their
+    # typical value): no topic, column or message of theirs is no error.
+    optional: frozenset[str] = frozenset()
 
     @property
     def wanted(self) -> dict[str, FieldSource]:

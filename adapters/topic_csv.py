@@ -136,7 +136,7 @@ class TopicCsvAdapter:
         collector.resolve_topics(files)
         collector.require_topics(files)
         lost: dict[str, int] = {}
-        for topic in sorted(collector.topics):
+        for topic in sorted(collector.topics & files.keys()):   # less any optional one
             self._add_topic(collector, topic, files[topic], lost)
         if lost:
             collector.notes.append("left out: " + "; ".join(

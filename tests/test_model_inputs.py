@@ -196,10 +196,21 @@ def _with_pitch(log: Path, out: Path, pitch: float) -> Path:
     return out
 
 
+def _without_pitch(log: Path, out: Path) -> Path:
+    """The log without its pitch column."""
+    with log.open(newline="") as stream:
+        rows = list(csv.reader(stream))
+    column = rows[0].index("pitch")
+    with out.open("w", newline="") as stream:
+        csv.writer(stream).writerows([row[:column] + row[column + 1:] for row in rows])
+    return out
+
+
 def test_an_input_a_log_never_fed_drives_the_model_at_its_typical_value(
         pitched: dict[str, Path]):
     """A pitch channel the logger filled with zeros would drive the model far from what it
-    learnt; it is held at its typical value on the training logs, and the report says so."""
+    learnt; it is held at its typical value on the training logs, and the report says so.
+    A log without the pitch column at all is read the same way, not refused."""
     from auvdiag_cli import api
 
     folder = pitched["folder"]
@@ -215,6 +226,11 @@ def test_an_input_a_log_never_fed_drives_the_model_at_its_typical_value(
     assert typical != 0.0
     np.testing.assert_array_equal(zeros.histories.matching.modelled,
                                   held.histories.matching.modelled)
+    absent = api.diagnose(_without_pitch(log, folder / "no_pitch.csv"), profile, model)
+    assert any(note.startswith("pitch is not in this log") and "typical value" in note
+               for note in absent.notes)
+    np.testing.assert_array_equal(absent.histories.matching.modelled,
+                                  held.histories.matching.modelled)
 
 
 def test_training_holds_an_input_a_log_never_fed_and_says_so(pitched: dict[str, Path]):
@@ -222,15 +238,17 @@ def test_training_holds_an_input_a_log_never_fed_and_says_so(pitched: dict[str, 
 
     folder = pitched["folder"]
     logs = [folder / f"run_{seed}.csv" for seed in range(4)]
-    logs[1] = _with_pitch(logs[1], folder / "run_1_no_pitch.csv", 0.0)
+    logs[1] = _with_pitch(logs[1], folder / "run_1_zero_pitch.csv", 0.0)
+    logs[3] = _without_pitch(logs[3], folder / "run_3_no_pitch.csv")
     said: list[str] = []
-    api.train(logs, api.load_profile(pitched["with"]), folder / "one_unfed",
+    api.train(logs, api.load_profile(pitched["with"]), folder / "two_unfed",
               options=api.TrainOptions(iterations_scale=0.05, hidden=8, keep_unskilled=True),
               progress=said.append)
     (line,) = [line for line in said if line.startswith(
-        "pitch: one value throughout 1 of 4 logs (run_1_no_pitch.csv): held at ")]
+        "pitch: not fed (one value throughout, or not in the log) in 2 of 4 logs "
+        "(run_1_zero_pitch.csv, run_3_no_pitch.csv): held at ")]
     held = float(line.split("held at ")[1].split(",")[0])
     # Its median over the logs that fed it, not pulled towards the zeros.
     fed = np.concatenate([np.loadtxt(logs[k], delimiter=",", skiprows=1, usecols=2)
-                          for k in (0, 2, 3)])
+                          for k in (0, 2)])
     assert held == pytest.approx(float(np.median(fed)), abs=0.01) and abs(held) > 0.05

@@ -21,6 +21,7 @@ from auvdiag_cli import api
 from auvdiag_cli.audit.discovery import discover
 from auvdiag_cli.cli import app
 from auvdiag_cli.simulator.writers import write_log
+from auvdiag_errors import LogError
 
 runner = CliRunner()
 SCENARIO, SEED = "paper-flow-sensor-covered", 31
@@ -142,6 +143,54 @@ def test_alfa_flights_read_the_same_from_bag_and_csv_folder(sequence):
         assert np.array_equal(series.times_ns, other.times_ns), name
         np.testing.assert_allclose(other.values, series.values, rtol=1e-9, err_msg=name)
     assert abs(from_csv.start_ns - from_bag.start_ns) < 5_000_000
+
+
+def _bag_without(source: Path, target: Path, topic: str) -> Path:
+    """The bag's messages again, less those of ``topic``."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag1 import Writer
+
+    with AnyReader([source]) as reader, Writer(target) as writer:
+        kept = {c.id: writer.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data,
+                                            md5sum=c.digest)
+                for c in reader.connections if c.topic != topic}
+        for connection, time_ns, raw in reader.messages():
+            if connection.id in kept:
+                writer.write(kept[connection.id], time_ns, raw)
+    return target
+
+
+@pytest.mark.shared_data("alfa")
+def test_an_alfa_flight_without_its_airspeed_reads_with_the_input_held(tmp_path):
+    """A flight recorded without the measured airspeed (an aircraft without the sensor, a
+    recording that left the topic out) is read, not refused: the input is absent, so the
+    model holds it at its typical value; everything else reads as from the whole flight."""
+    from auvdiag_cli.engine.flat_signals import ABSENT
+    from auvdiag_cli.engine.ingest import ingest
+
+    profile = api.load_profile("arduplane_carbonz")
+    sequence = ALFA_WITH_BAGS[0]
+    folder = tmp_path / sequence
+    folder.mkdir()
+    for file in (ALFA / sequence).glob("*.csv"):
+        if "nav_info-airspeed" not in file.name:
+            (folder / file.name).symlink_to(file)
+    bag = _bag_without(ALFA / sequence / f"{sequence}.bag", tmp_path / f"{sequence}.bag",
+                       "/mavros/nav_info/airspeed")
+    whole = ingest(ALFA / sequence, profile).frame
+    for log in (folder, bag):
+        frame = ingest(log, profile).frame
+        assert frame.flat_inputs == {"airspeed": ABSENT}, log
+        assert not frame.inputs.any() and whole.inputs.any()
+        assert any(note.startswith("airspeed is not in this log") for note in frame.notes)
+        np.testing.assert_allclose(frame.sensors, whole.sensors, rtol=1e-9, err_msg=str(log))
+    result = runner.invoke(app, ["inspect", str(folder), "--profile", "arduplane_carbonz"])
+    assert result.exit_code == 0, result.output
+    assert "absent   airspeed" in result.output and "MISSING" not in result.output
+    # A signal the model is judged on is still required.
+    (folder / next(f.name for f in folder.iterdir() if "vfr_hud" in f.name)).unlink()
+    with pytest.raises(LogError, match=r"missing topic.*vfr_hud"):
+        ingest(folder, profile)
 
 
 @pytest.mark.shared_data("alfa")

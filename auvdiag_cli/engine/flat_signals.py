@@ -17,6 +17,7 @@ import numpy as np
 
 MIN_FLAT_S = 10.0       # a shorter log may simply not have moved
 FLAT_WHY = "a sensor not fitted, not logged or stuck"
+ABSENT = "is not in this log"     # a measured input the log lacks altogether
 FLAT_INPUT_WHY = ("an input not fitted, not logged or stuck: the model is driven by its "
                   "typical value on normal logs instead")
 

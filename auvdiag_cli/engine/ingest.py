@@ -4,7 +4,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import Signals, read_log
-from auvdiag_cli.engine.flat_signals import flat_input_notes, flat_sensor_notes, flat_sensors
+from auvdiag_cli.engine.flat_signals import (
+    ABSENT,
+    flat_input_notes,
+    flat_sensor_notes,
+    flat_sensors,
+)
 from auvdiag_cli.engine.outliers import remove_spikes
 from auvdiag_cli.engine.resample import AlignedFrame, NeverOperates, resample
 from auvdiag_cli.vehicle.profile import Profile
@@ -31,7 +36,7 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
         whole = signals
         signals = signals.cropped(*part)
         empty = [name for name in (*profile.drive_names, *profile.sensor_names)
-                 if not len(signals.series[name])]
+                 if name in whole.series and not len(signals.series[name])]
         if empty:
             raise LogError(path, f"its healthy part ({_seconds(part[0], 'its start')} to "
                                  f"{_seconds(part[1], 'its end')}) holds no sample of "
@@ -48,7 +53,8 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
     frame.flat = flat_sensors(frame.sensors, frame.sensor_names, profile.dt_s)
     frame.notes += flat_sensor_notes(frame.flat)
     if frame.input_names:
-        frame.flat_inputs = flat_sensors(frame.inputs, frame.input_names, profile.dt_s)
+        frame.flat_inputs = flat_sensors(frame.inputs, frame.input_names, profile.dt_s) | {
+            name: ABSENT for name in frame.input_names if name not in signals.series}
         frame.notes += flat_input_notes(frame.flat_inputs)
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
                                  profile.full_scales)

@@ -16,6 +16,8 @@ Method (documented for users in docs/method.md):
   restarts from the measured state after it (``restarts``);
 - measured inputs (the profile's ``[[inputs]]``: battery voltage, attitude) are averaged
   like sensors but drive the model like commands: a gap in one is treated as a command gap;
+  one the log lacks altogether (`LogSources.optional`) reads 0 throughout, as a channel
+  nothing fed (`ingest` holds it at its typical value);
 - where the profile names an operating flag (armed, under way), time when it is clear is
   treated like a command gap: sensors NaN, never judged or trained on, and the replay
   restarts from the measured state when operation begins again;
@@ -254,7 +256,8 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
     notes: list[str] = []
     max_gap_ns = round(max_gap_s * NS_PER_S)
     cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
-               for name in command_names + sensor_names + input_names}
+               for name in command_names + sensor_names + input_names
+               if name in signals.series or name not in input_names}
     drives = command_names + input_names
     empty = [name for name, s in cleaned.items() if not len(s)]
     if empty:
@@ -301,8 +304,8 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         slow_commands=slow_commands,
         restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
         operating=operating,
-        inputs=np.column_stack([columns[n] for n in input_names]) if input_names
-        else np.zeros((len(grid_ns), 0)),
+        inputs=np.array([columns.get(n, np.zeros(len(grid_ns))) for n in input_names],
+                        float).reshape(len(input_names), len(grid_ns)).T,
         input_names=input_names,
         not_operating_s=float((~operating).sum()) * dt_s,
     ), blind, grid_ns)

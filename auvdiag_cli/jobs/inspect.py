@@ -20,6 +20,7 @@ class SignalResolution:
     problem: str | None
     candidates: tuple[str, ...] = ()
     on_grid: str = ""            # how the signal is put on the model's step
+    optional: bool = False       # a measured input: where absent, held at its typical value
 
     @property
     def resolved(self) -> bool:
@@ -41,7 +42,8 @@ class Inspection:
     def usable(self) -> bool:
         """Every signal the diagnosis needs resolves in this log (True where no profile
         was given: there is nothing to miss)."""
-        return not self.checked or (self.mapped and all(s.resolved for s in self.signals))
+        return not self.checked or (self.mapped and all(s.resolved or s.optional
+                                                        for s in self.signals))
 
 
 def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
@@ -116,19 +118,22 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
                 problems[name] = error.problem
     results = []
     for name, source in shown.items():
-        if name in read:
-            series = read[name].series[name]
+        series = read[name].series.get(name) if name in read else None
+        optional = name in sources.optional
+        if series is not None:
             span_s = (int(series.times_ns.max()) - int(series.times_ns.min())) / 1e9
             rate = (len(series) - 1) / span_s if span_s > 0 else None
             results.append(SignalResolution(name, source.topic, source.field, len(series),
                                             rate, None, on_grid=on_grid(name, rate, profile)))
-        elif name in problems:
+        elif name in problems or source.topic in available:
             results.append(SignalResolution(name, source.topic, source.field, 0, None,
-                                            problems[name]))
+                                            problems.get(name, "no samples in the log"),
+                                            optional=optional))
         else:
             results.append(SignalResolution(name, source.topic, source.field, 0, None,
                                             f"no {source.topic} in the log",
-                                            _closest(source.topic, sorted(available))))
+                                            _closest(source.topic, sorted(available)),
+                                            optional=optional))
     first = next(iter(read.values()), None)
     if contents.start_ns is None and first is not None:     # a CSV: its clock is a column
         contents = replace(contents, start_ns=first.start_ns, end_ns=first.end_ns)

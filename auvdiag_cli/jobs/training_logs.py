@@ -65,7 +65,8 @@ def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
         if unfed:
             held_as = (f"held at {typical[name]:g}, its median on the other logs"
                        if name in typical else "no log fed it")
-            progress(f"{name}: one value throughout {len(unfed)} of {len(every)} logs "
+            progress(f"{name}: not fed (one value throughout, or not in the log) in "
+                     f"{len(unfed)} of {len(every)} logs "
                      f"({', '.join(unfed[:3])}{', ...' if len(unfed) > 3 else ''}): {held_as}")
     return ([_held(r, profile, typical) for r in read],
             [_held(r, profile, typical) for r in read_heldout])

@@ -180,7 +180,10 @@ def inspection_lines(inspection: Inspection) -> list[str]:
                          f"{_while_logged(s.count, s.rate_hz, duration)}; {s.on_grid})")
         else:
             hint = f"; closest: {', '.join(s.candidates)}" if s.candidates else ""
-            lines.append(f"    MISSING  {s.name:<12} {where}  ({s.problem}{hint})")
+            held = (": a measured input, held at its typical value on normal logs"
+                    if s.optional else "")
+            lines.append(f"    {'absent' if s.optional else 'MISSING':<8} {s.name:<12} {where}  "
+                         f"({s.problem}{held}{hint})")
     if inspection.markers:
         lines.append(f"  segment markers: {' '.join(inspection.markers)}")
     lines += [f"  warning: {warning}" for warning in inspection.warnings]

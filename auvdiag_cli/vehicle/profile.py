@@ -226,8 +226,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     vehicle = top.sub("vehicle")
     actuators = parse_actuators(top.items("actuators")) if "actuators" in data else ()
     commands, sensors, inputs = _signals(top, actuators)
-    sensor_names = [s.name for s in sensors]
-    signal_names = [c.name for c in commands] + sensor_names + [i.name for i in inputs]
+    sensor_names, input_names = [s.name for s in sensors], [i.name for i in inputs]
+    signal_names = [c.name for c in commands] + sensor_names + input_names
     matching = top.sub("matching")
     window = matching.get("window_samples", int)
     if window < 1:
@@ -242,7 +242,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
 
     sources_table = top.sub("sources")
-    sources = {family: log_sources(sources_table.sub(family), signal_names)
+    sources = {family: log_sources(sources_table.sub(family), signal_names, input_names)
                for family in sources_table.table}
     navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
         else None

@@ -1,6 +1,8 @@
 """A profile's ``[sources.FAMILY]`` tables: where each signal lives in a log of that format
 family, the operating flag (and its fallback), segment markers and a CSV clock."""
 
+from collections.abc import Sequence
+
 from adapters.signals import (
     OPERATING,
     TIME_UNITS,
@@ -60,7 +62,9 @@ def _operating(reader: TableReader) -> tuple[FieldSource, FieldSource | None]:
     return _field_source(rows[0]), _field_source(rows[1]) if len(rows) == 2 else None
 
 
-def log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
+def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence[str] = ()
+                ) -> LogSources:
+    """The family's sources of ``signal_names``; a log may lack those of ``optional``."""
     signals_table = reader.sub("signals")
     signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
     fallbacks = {}
@@ -80,4 +84,4 @@ def log_sources(reader: TableReader, signal_names: list[str]) -> LogSources:
                                f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
     # ROS: the namespace the topics are under ("" the root); found from the log if unset.
     namespace = reader.get("namespace", str, None)
-    return LogSources(signals, segment, time, fallbacks, namespace)
+    return LogSources(signals, segment, time, fallbacks, namespace, frozenset(optional))
