@@ -1,6 +1,7 @@
 """Write a simulated dive as a real log in any supported format, with its truth beside it."""
 
 import json
+import shutil
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -35,6 +36,19 @@ def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
     if namespace and "ros" in profile.sources:
         profile = replace(profile, sources={
             **profile.sources, "ros": profile.sources["ros"].moved_under(namespace)})
+    try:
+        _write(dive, profile, path, fmt, extra)
+    except BaseException:
+        # A log cut short by a failure would read as damaged and block the next try.
+        if path.is_dir():
+            shutil.rmtree(path)
+        path.unlink(missing_ok=True)
+        raise
+    _write_truth(dive, path, fmt)
+
+
+def _write(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
+           extra: Sequence[ExtraTopic]) -> None:
     if fmt in ("bag", "db3", "ros2-mcap"):
         write_rosbag(dive, profile, path, fmt, extra)
     elif fmt == "mcap":
@@ -49,7 +63,6 @@ def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
         write_ulog(dive, profile, path)
     else:
         write_dataflash(dive, profile, path)
-    _write_truth(dive, path, fmt)
 
 
 def _write_truth(dive: SimulatedDive, path: Path, fmt: str) -> None:

@@ -5,6 +5,7 @@ FMT record (type 128) earlier in the file."""
 import struct
 from pathlib import Path
 
+from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
 from auvdiag_cli.vehicle.profile import Profile
@@ -75,8 +76,20 @@ def _pack(message: _Message, record: Record, time_us: int) -> bytes:
     row: list[object] = [time_us]
     for column, code in zip(message.columns.split(",")[1:], message.fmt[1:], strict=True):
         value = values.get(column, b"" if code in "nNZ" else 0)
+        if isinstance(value, bytes) and code not in "nNZ":     # a `where` on a number (I = 0)
+            value = float(value)
         row.append(round(value) if code in "HB" else value)  # type: ignore[call-overload]
     return message.pack(*row)
+
+
+def _armed(profile: Profile) -> Record | None:
+    """The record that says the vehicle operates (armed) from boot, where the profile reads
+    its operating time from one (ArduPilot logs ARM when the vehicle arms)."""
+    source = family_sources(profile, "dataflash").signals.get(OPERATING)
+    if source is None:
+        return None
+    raw = source.bits or next((r for r, meaning in source.values if meaning), 1)
+    return Record(0, source.topic, ((source.field, float(raw)),), source.where)
 
 
 def write_dataflash(dive: SimulatedDive, profile: Profile, path: Path) -> None:
@@ -86,6 +99,9 @@ def write_dataflash(dive: SimulatedDive, profile: Profile, path: Path) -> None:
         for message in (FMT, *formats.values()):
             stream.write(_format_record(message))
         stream.write(formats["MSG"].pack(0, b"ArduSub V4.5.0 (auvdiag simulate)"))
+        armed = _armed(profile)
+        if armed is not None:
+            stream.write(_pack(formats[armed.topic], armed, 0))
         for record in dive_records(dive, profile, "dataflash"):
             time_us = (record.time_ns - dive.start_ns) // 1000
             stream.write(_pack(formats[record.topic], record, time_us))
