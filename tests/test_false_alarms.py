@@ -199,3 +199,33 @@ def test_normal_dives_that_start_alike_do_not_alarm_after_a_budgeted_calibration
                            options=api.CalibrateOptions(budget=FalseAlarmBudget(0.05)))
     assert result.budget is not None and result.budget.in_sample_alarmed == 0
     assert api.diagnose(normal[0], profile, model).verdict == api.Verdict.NORMAL
+
+
+def _wandering_g(rng: np.random.Generator, logs: int, steps: int = 1200) -> np.ndarray:
+    """|a moving average| of white noise: a residual index that wanders, one row per log."""
+    width = 30
+    total = np.cumsum(rng.normal(0.0, 1.0, (logs, steps + width)), axis=1)
+    return np.abs(total[:, width:] - total[:, :-width]) / np.sqrt(width)
+
+
+def test_with_two_normal_logs_a_g_judge_is_fitted_to_blocks_of_them():
+    """Two peaks are too few for a law; twelve blocks of the two logs are not. The
+    threshold holds the budget on fresh logs of the same kind without sitting far above
+    what it needs; with five logs or more, the law is of the logs' peaks as before."""
+    from auvdiag_cli.jobs.budget import BLOCKS_PER_LOG, g_judges
+
+    rng = np.random.default_rng(1)
+    calibration = _wandering_g(rng, 2)
+    (judge,) = g_judges([{"mission": g[:, None]} for g in calibration], ["mission"],
+                        ["depth"], ["depth"])
+    assert judge.blocks is not None and len(judge.blocks.peaks) == 2 * BLOCKS_PER_LOG
+    fitted = budget_thresholds([judge], 0, FalseAlarmBudget(0.05), [0.03, 0.03])
+    (fit,) = fitted.fits
+    assert fit.by_block and fit.offered == pytest.approx(1 - 0.95 ** (1 / BLOCKS_PER_LOG))
+    fresh = _wandering_g(rng, 4000).max(axis=1)
+    assert (fresh >= fit.threshold).mean() <= 0.05
+    assert fit.threshold < 1.5 * np.quantile(fresh, 0.95)
+    (many,) = g_judges([{"mission": g[:, None]} for g in _wandering_g(rng, 5)], ["mission"],
+                       ["depth"], ["depth"])
+    assert many.blocks is None
+    assert not budget_thresholds([many], 0, FalseAlarmBudget(0.05), [0.03] * 5).fits[0].by_block

@@ -27,6 +27,7 @@ from auvdiag_errors import UsageError
 from models.card import StartReference
 from models.command_relations import CommandRelations
 from models.false_alarms import (
+    MIN_LOGS,
     LawFit,
     checked_share,
     effective_judges,
@@ -34,6 +35,9 @@ from models.false_alarms import (
     judge_share,
 )
 
+# With fewer calibration logs than a law over logs needs (`MIN_LOGS`), a g judge's law is
+# fitted to the peaks of blocks of its logs, each this share of a log of the median length.
+BLOCKS_PER_LOG = 6
 RATE_PATTERN = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(/\s*h)?\s*$")
 
 
@@ -73,6 +77,40 @@ class FalseAlarmBudget:
 
 
 @dataclass(frozen=True)
+class Blocks:
+    """A judge's peak over each block of its calibration logs: two or three normal logs are
+    too few for a law of their peaks, but their blocks are not. A log of the median length
+    holds ``per_log`` blocks, so a log's share s of the budget is 1 - (1 - s)^(1/per_log)
+    per block; blocks of one log are not quite independent (a slow disturbance spans
+    them), which the law's predictive allowance for few values only partly covers."""
+
+    peaks: tuple[float, ...]
+    logs: tuple[int, ...]        # the calibration log of each block
+    per_log: float
+
+    def share(self, log_share: float) -> float:
+        return 1.0 - (1.0 - log_share) ** (1.0 / self.per_log)
+
+
+def blocks_of(series: Sequence[np.ndarray | None]) -> Blocks | None:
+    """The peak over each block (BLOCKS_PER_LOG to a log of the median length; a last
+    block under half that length left out) of each log's ``series`` (None: not in that
+    log)."""
+    lengths = [len(s) for s in series if s is not None and len(s)]
+    if not lengths:
+        return None
+    steps = max(1, int(np.median(lengths)) // BLOCKS_PER_LOG)
+    peaks, logs = [], []
+    for log, values in enumerate(series):
+        for start in range(0, 0 if values is None else len(values), steps):
+            block = np.asarray(values)[start:start + steps]
+            if 2 * len(block) >= steps and np.isfinite(highest := peak(block)):
+                peaks.append(highest)
+                logs.append(log)
+    return Blocks(tuple(peaks), tuple(logs), float(np.median(lengths)) / steps)
+
+
+@dataclass(frozen=True)
 class Judge:
     """One judge and its statistic per calibration log (NaN: none in that log)."""
 
@@ -83,6 +121,8 @@ class Judge:
     # The same statistic on other normal logs (the training logs' starts): they inform the
     # law, but are not among the calibration logs counted.
     more: tuple[float, ...] = ()
+    # Its peaks over blocks of the logs, where the logs are too few for a law of their own.
+    blocks: Blocks | None = None
 
     @property
     def label(self) -> str:
@@ -113,6 +153,8 @@ class JudgeFit:
     judge: Judge
     fit: LawFit
     share: float
+    offered: float               # what the budget offered it (per block for a block law)
+    by_block: bool = False       # its law is of its logs' blocks (`Blocks`)
 
     @property
     def threshold(self) -> float:
@@ -139,7 +181,7 @@ class BudgetThresholds:
     @property
     def lowered(self) -> tuple[JudgeFit, ...]:
         """The judges whose left-out logs alarmed more often than their law promised."""
-        return tuple(f for f in self.fits if f.share < self.share)
+        return tuple(f for f in self.fits if f.share < f.offered)
 
     def thresholds(self, kind: str) -> dict[tuple[str | None, str], float]:
         """(mode, name) -> threshold for one kind of judge."""
@@ -149,8 +191,12 @@ class BudgetThresholds:
     def _flags(self, over: bool) -> np.ndarray:
         flags = np.zeros(self.logs, bool)
         for f in self.fits:
-            flags |= (f.judge.over(f.threshold) if over
-                      else np.asarray(f.fit.loo_alarms(f.share))[:self.logs])
+            if over:
+                flags |= f.judge.over(f.threshold)
+            elif f.by_block and f.judge.blocks is not None:   # a log alarms by any block
+                np.logical_or.at(flags, list(f.judge.blocks.logs), f.fit.loo_alarms(f.share))
+            else:
+                flags |= np.asarray(f.fit.loo_alarms(f.share))[:self.logs]
         return flags
 
     @property
@@ -171,17 +217,24 @@ class BudgetThresholds:
                 "leave_one_log_out": {"logs": self.logs, "alarmed": self.loo_logs_alarmed},
                 "calibration_logs_over_thresholds": self.in_sample_alarmed,
                 "judges": [{"judge": f.judge.label, "threshold": f.threshold,
-                            "law": f.fit.law, "logs": f.fit.logs,
+                            "law": f.fit.law, "logs": f.fit.logs, "by_block": f.by_block,
                             "share_after_leave_one_log_out": round(f.share, 5),
                             "loo_alarms": f.loo_alarms} for f in self.fits]}
 
 
 def g_judges(per_log: Sequence[dict[str, np.ndarray]], modes: Sequence[str],
              judged: Sequence[str], sensor_names: Sequence[str]) -> list[Judge]:
-    """Each judged signal's peak g per log in each mode (``per_log``: mode -> g, per log)."""
-    return [Judge("g", name, mode, tuple(
-        peak(g[mode][:, sensor_names.index(name)]) if mode in g else float("nan")
-        for g in per_log)) for mode in modes for name in judged]
+    """Each judged signal's peak g per log in each mode (``per_log``: mode -> g, per log),
+    and over blocks of the logs where they are too few for a law of their peaks."""
+    judges = []
+    for mode in modes:
+        for name in judged:
+            series = [g[mode][:, sensor_names.index(name)] if mode in g else None
+                      for g in per_log]
+            judges.append(Judge("g", name, mode, tuple(
+                float("nan") if s is None else peak(s) for s in series),
+                blocks=blocks_of(series) if len(per_log) < MIN_LOGS else None))
+    return judges
 
 
 def start_judges(start: StartReference, readings: Sequence[StartReading | None],
@@ -249,13 +302,26 @@ def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
     in the sharing all the same: they may alarm too). Each judge's share is checked on its
     own left-out logs: a heavy-tailed judge is held back without costing the others."""
     per_log = budget.per_log(log_hours)
-    fits = [(judge, fit_law([*judge.values, *judge.more], judge.law)) for judge in judges]
     independent = effective_judges(np.array([judge.statistic for judge in judges])
                                    if judges else np.empty((0, 0)))
     share = judge_share(per_log, independent + effort_actuators)
-    kept = tuple(JudgeFit(judge, fit, checked_share(fit, share)) for judge, fit in fits
-                 if fit is not None)
+    kept = tuple(fit for judge in judges if (fit := _judge_fit(judge, share)) is not None)
     effort_rate = (round(1.0 - (1.0 - share) ** effort_actuators, 6)
                    if effort_actuators else None)
     return BudgetThresholds(budget, per_log, share, kept, effort_rate, len(log_hours),
                             independent)
+
+
+def _judge_fit(judge: Judge, share: float) -> JudgeFit | None:
+    """The judge's law of its logs' statistics with its checked ``share``; with too few
+    logs for that, the law of its logs' blocks with the share spread over a log's blocks;
+    None where neither has enough values (calibrate's rule then stays)."""
+    fit = fit_law([*judge.values, *judge.more], judge.law)
+    if fit is not None:
+        return JudgeFit(judge, fit, checked_share(fit, share), share)
+    blocks = judge.blocks
+    fit = None if blocks is None else fit_law(blocks.peaks, judge.law)
+    if fit is None or blocks is None:
+        return None
+    offered = blocks.share(share)
+    return JudgeFit(judge, fit, checked_share(fit, offered), offered, by_block=True)

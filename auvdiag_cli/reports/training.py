@@ -185,9 +185,12 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
              "final thresholds"]
     width = max((len(f.judge.label) for f in budget.fits), default=0)
     for f in budget.fits:
-        share = "" if f.share >= budget.share else f", share lowered to {f.share:.2%}"
+        share = "" if f.share >= f.offered else f", share lowered to {f.share:.2%}"
+        values = (f"{f.fit.logs} blocks of its logs (a log's share spread over "
+                  f"{f.judge.blocks.per_log:.1f} blocks: {f.offered:.4%} each)"
+                  if f.by_block and f.judge.blocks is not None else f"{f.fit.logs} logs")
         lines.append(f"    {f.judge.label:<{width}} threshold {f.threshold:.4g}  ({f.fit.law} "
-                     f"fit to {f.fit.logs} logs; left out, {f.loo_alarms} alarm{share})")
+                     f"fit to {values}; left out, {f.loo_alarms} alarm{share})")
     if budget.effort_rate is not None:
         lines.append(f"    effort shares: a budget of {budget.effort_rate:.2%} of logs")
     return lines
