@@ -319,3 +319,40 @@ def test_a_simulated_vehicle_names_its_weak_actuator(tmp_path: Path, vehicle: st
     risen = after / before
     own = columns.index(member)
     assert risen[own] > 1.25 and np.all(np.delete(risen, own) < risen[own] - 0.15)
+
+
+def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_it(
+        tmp_path: Path):
+    """A quadrotor whose motor dies cannot be replayed by any single fault the model knows
+    (it loses control), but the effort its rotors carry matches that motor's weakness
+    alone: it is named, from the DataFlash logs the simulator writes. A normal flight of
+    another seed is normal."""
+    from auvdiag_cli import api
+
+    def flown(scenario: str, seed: int) -> Path:
+        path = tmp_path / f"{scenario}-{seed}.bin"
+        code, output = invoke("simulate", scenario, "--profile", "arducopter_quad",
+                              "--format", "bin", "--seed", str(seed), "-o", str(path))
+        assert code == 0, output
+        return path
+
+    profile = api.load_profile("arducopter_quad")
+    normal = [flown(name, 5) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
+    api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
+        iterations_scale=0.05, hidden=8, keep_unskilled=True), progress=lambda _: None)
+    model = api.load_model(tmp_path / "model", profile)
+    # Two more normal flights set the thresholds, from blocks of them (too few for a law
+    # of their peaks).
+    calibration = api.calibrate([flown(name, 6) for name in ("mission-sprint-ccw",
+                                                             "mission-fast-cw")],
+                                profile, model, options=api.CalibrateOptions(
+                                    budget=api.FalseAlarmBudget(0.01)))
+    assert calibration.budget is not None and all(f.by_block for f in calibration.budget.fits
+                                                  if f.judge.kind == "g")
+    dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
+    assert dead.verdict.value == "fault" and dead.component == "motor_3"
+    assert any("no single-component fault explains it" in note
+               and "the shares match motor_3 weak" in note for note in dead.notes)
+    assert dead.onset_s == pytest.approx(60.0, abs=3.0)
+    calm = api.diagnose(flown("paper-normal", 7), profile, model)
+    assert calm.verdict.value == "normal"

@@ -205,15 +205,22 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     """No row of the pattern table names the component (or there is no table): the
     hypothesis that explains the log does, when one does."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
+    effort = seen.effort_check
     if not best.explains:
         raised = ", ".join(k for k, v in finding.b.items() if v)
-        return finding.noted(f"anomaly on {raised}: no single-component fault explains it "
-                             f"(the closest, {best.describe()}, leaves g at "
-                             f"{best.peak_g_ratio:.0%} of its threshold)")
+        note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
+                f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
+        if effort is None or len(effort.named) != 1 or not effort.clear_match or not (
+                finding.onset_s is not None and effort.began_by(finding.onset_s)):
+            return finding.noted(note)
+        # The model cannot replay what followed (a vehicle that lost control), but the
+        # effort its group carries matches one actuator's weakness alone, begun with it.
+        return _found(seen, finding, list(effort.named), note + "; named by the effort its "
+                      f"group carries: the shares match {effort.matches[0][0]} weak "
+                      f"({effort.matches[0][1]:.2f}) alone", judging)
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
-    effort = seen.effort_check
     if (effort is not None and len(effort.named) == 1 and margin is not None
             and margin < DECISIVE_MARGIN):
         # The motion departed, but several single faults explain it about as well; the
