@@ -352,7 +352,7 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
     assert dead.verdict.value == "fault" and dead.component == "motor_3"
     assert any("no single-component fault explains it" in note
-               and "the shares match motor_3 weak" in note for note in dead.notes)
+               and "its shares match motor_3 weak alone" in note for note in dead.notes)
     assert dead.onset_s == pytest.approx(60.0, abs=3.0)
     calm = api.diagnose(flown("paper-normal", 7), profile, model)
     assert calm.verdict.value == "normal"

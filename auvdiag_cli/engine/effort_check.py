@@ -94,17 +94,16 @@ class EffortCheck:
     def judged(self) -> bool:
         return any(a.not_judged is None for a in self.actuators)
 
-    def began_by(self, time_s: float) -> bool:
-        """``time_s`` lies between the earliest the weakness may have begun (its onset less
-        the error stated) and when it was seen: the same event as one seen then."""
-        if self.onset_s is None or self.alarm_s is None or self.onset_error_s is None:
-            return False
-        return self.onset_s - self.onset_error_s <= time_s <= self.alarm_s
-
-    @property
-    def clear_match(self) -> bool:
-        """The departure matches one actuator's weakness clearly (`CLEAR_MATCH`)."""
-        return bool(self.matches) and self.matches[0][1] >= CLEAR_MATCH
+    def alone_by(self, time_s: float | None) -> str | None:
+        """The one component named, where the shares match its actuator's weakness clearly
+        (`CLEAR_MATCH`) and ``time_s`` lies between the earliest it may have begun (its
+        onset less the error stated) and when it was seen: the same event as one seen then."""
+        if (time_s is None or len(self.named) != 1 or not self.matches
+                or self.matches[0][1] < CLEAR_MATCH or self.onset_s is None
+                or self.alarm_s is None or self.onset_error_s is None):
+            return None
+        return self.named[0] if (self.onset_s - self.onset_error_s <= time_s
+                                 <= self.alarm_s) else None
 
     @property
     def suspects(self) -> tuple[ActuatorEffort, ...]:

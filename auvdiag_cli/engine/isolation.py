@@ -203,21 +203,19 @@ def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandChe
 def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTest,
                        judging: Judging) -> Finding:
     """No row of the pattern table names the component (or there is no table): the
-    hypothesis that explains the log does, when one does."""
+    hypothesis that explains the log does, when one does; when none does (a vehicle that
+    lost control), the actuator whose effort shares match its weakness alone, begun then."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
     effort = seen.effort_check
     if not best.explains:
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
-        if effort is None or len(effort.named) != 1 or not effort.clear_match or not (
-                finding.onset_s is not None and effort.began_by(finding.onset_s)):
+        alone = None if effort is None else effort.alone_by(finding.onset_s)
+        if alone is None:
             return finding.noted(note)
-        # The model cannot replay what followed (a vehicle that lost control), but the
-        # effort its group carries matches one actuator's weakness alone, begun with it.
-        return _found(seen, finding, list(effort.named), note + "; named by the effort its "
-                      f"group carries: the shares match {effort.matches[0][0]} weak "
-                      f"({effort.matches[0][1]:.2f}) alone", judging)
+        return _found(seen, finding, [alone], f"{note}; named by the effort its group carries"
+                      f" (its shares match {alone} weak alone)", judging)
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
