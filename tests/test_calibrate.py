@@ -64,8 +64,10 @@ def test_calibrate_to_a_copy_leaves_the_model_alone(make_log, tmp_path):
     assert (model / "model.json").read_text() == before
     assert json.loads((copy / "model.json").read_text())["calibration"]["margin"] == 2.0
     assert (copy / "weights.npz").read_bytes() == (model / "weights.npz").read_bytes()
-    # One log is too few for the margin rule to be trusted, and the output says so.
+    # One log is too few for the margin rule to be trusted, and of one day: the output
+    # says both.
     assert "1 calibration log(s): the margin times the largest" in result.output
+    assert "every calibration log was recorded on 2026-11-22" in result.output
     bad = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
                               str(model), "--margin", "0.5"])
     assert bad.exit_code == 2 and "margin below 1" in bad.stderr

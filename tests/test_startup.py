@@ -34,8 +34,10 @@ TRAINING_SCENARIOS = ["paper-normal", "mission-ccw", "mission-large-cw", "missio
 
 
 def _simulate(scenario: str, seed: int, target: Path, profile: str) -> Path:
+    """The dive of that seed, on a day of its own (normal dives of several days)."""
     result = runner.invoke(app, ["simulate", scenario, "--seed", str(seed), "--format", "csv",
-                                 "--profile", profile, "--output", str(target)])
+                                 "--profile", profile, "--output", str(target),
+                                 "--start", f"2026-10-{seed:02d}T10:00:00"])
     assert result.exit_code == 0, result.output
     return target
 

@@ -326,12 +326,3 @@ def _judge_fit(judge: Judge, share: float) -> JudgeFit | None:
     offered = blocks.share(share)
     return JudgeFit(judge, fit, checked_share(fit, offered), offered, by_block=True)
 
-
-def few_logs(logs: int, budgeted: bool) -> list[str]:
-    """The warning calibrate's margin rule deserves with fewer logs than a law needs: the
-    largest of a few peaks understates the next normal log's."""
-    if logs >= MIN_LOGS or budgeted:
-        return []
-    return [f"{logs} calibration log(s): the margin times the largest of so few peaks is "
-            "often reached by the next normal log; add normal logs, or set --false-alarm-rate, "
-            "which fits each signal's g to blocks of these logs"]

@@ -30,7 +30,6 @@ from auvdiag_cli.jobs.budget import (
     budget_thresholds,
     change_judges,
     command_judges,
-    few_logs,
     g_judges,
     start_judges,
     with_command_thresholds,
@@ -48,6 +47,7 @@ from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
+from auvdiag_cli.jobs.thin_evidence import thin_evidence
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
@@ -246,7 +246,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     result = CalibrationResult(
         margin, modes, thresholds, hours, 3.0 / hours, checks_faulty,
         [p.name for p in in_sample], widening,
-        _warnings(modes, in_sample, normal_logs, widening, evidence, budget is not None),
+        _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
         fitted, change)
     model.update_entries(calibration=_record(result, normal_logs, floor_at_profile))
@@ -338,10 +338,10 @@ def _refit_effort(model: LoadedModel, profile: Profile, logs: Sequence[IngestedL
 
 
 def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
-              normal_logs: Sequence[Path], widening: dict[str, float],
+              normal_logs: Sequence[IngestedLog], widening: dict[str, float],
               change: ChangeEvidence, budgeted: bool) -> list[str]:
-    warnings = (dominated_by_one_log(change, [p.name for p in normal_logs])
-                + few_logs(len(normal_logs), budgeted))
+    warnings = (dominated_by_one_log(change, [log.signals.path.name for log in normal_logs])
+                + thin_evidence(normal_logs, budgeted))
     if in_sample:
         which = ("every calibration log was" if len(in_sample) == len(normal_logs)
                  else f"{len(in_sample)} of the calibration logs were")

@@ -1,0 +1,29 @@
+"""What `calibrate` warns of when its normal logs cannot show how much the next normal log
+may differ: too few of them for the margin rule, or all of one day."""
+
+from collections.abc import Sequence
+from datetime import UTC, datetime
+
+from auvdiag_cli.engine.ingest import IngestedLog
+from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
+from models.false_alarms import MIN_LOGS
+
+
+def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool) -> list[str]:
+    """The warnings: the margin rule on fewer logs than a law needs (the largest of a few
+    peaks understates the next normal log's), and logs of a single day (on UTC clocks),
+    whose wind, sea state and payload say nothing of another day's."""
+    warnings = []
+    if len(logs) < MIN_LOGS and not budgeted:
+        warnings.append(f"{len(logs)} calibration log(s): the margin times the largest of so "
+                        "few peaks is often reached by the next normal log; add normal logs, "
+                        "or set --false-alarm-rate, which fits each signal's g to blocks of "
+                        "these logs")
+    starts = [log.signals.start_ns for log in logs]
+    days = {datetime.fromtimestamp(start / 1e9, UTC).date() for start in starts}
+    if starts and min(starts) > EPOCH_CLOCK_NS and len(days) == 1:
+        warnings.append(f"every calibration log was recorded on {days.pop()}: the thresholds "
+                        "have seen one day's conditions (wind or current, sea state, payload), "
+                        "and logs of other days may reach past them; calibrate on logs of "
+                        "several days")
+    return warnings
