@@ -10,7 +10,9 @@ alarms when any judge does: with k independent judges each gets 1 - (1 - R)^(1/k
 counted from how the judges' statistics move together over the normal logs
 (`models.false_alarms.effective_judges`). A start judge's law
 is fitted to the training logs' starts as well as the calibration logs': the start is not
-fitted by the model, so those are fair normal data, and more of them steady the law."""
+fitted by the model, so those are fair normal data, and more of them steady the law. With
+fewer calibration logs than a law of their peaks needs, a signal's g is judged from the
+peaks of blocks of them (`Blocks`)."""
 
 import math
 import re
@@ -325,4 +327,3 @@ def _judge_fit(judge: Judge, share: float) -> JudgeFit | None:
         return None
     offered = blocks.share(share)
     return JudgeFit(judge, fit, checked_share(fit, offered), offered, by_block=True)
-
