@@ -16,9 +16,10 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool) -> list[str]:
     warnings = []
     if len(logs) < MIN_LOGS and not budgeted:
         warnings.append(f"{len(logs)} calibration log(s): the margin times the largest of so "
-                        "few peaks is often reached by the next normal log; add normal logs, "
-                        "or set --false-alarm-rate, which fits each signal's g to blocks of "
-                        "these logs")
+                        "few peaks is often reached by the next normal log; add normal logs "
+                        "(the training logs count too: their in-sample g is widened), or set "
+                        "--false-alarm-rate, which fits each signal's g to blocks of these "
+                        "logs")
     starts = [log.signals.start_ns for log in logs]
     days = {datetime.fromtimestamp(start / 1e9, UTC).date() for start in starts}
     if starts and min(starts) > EPOCH_CLOCK_NS and len(days) == 1:
