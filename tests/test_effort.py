@@ -349,6 +349,9 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
                                     budget=api.FalseAlarmBudget(0.01)))
     assert calibration.budget is not None and all(f.by_block for f in calibration.budget.fits
                                                   if f.judge.kind == "g")
+    # The change test's thresholds still rest on two logs' peaks, and calibrate says so.
+    assert any("2 calibration log(s): the change test's thresholds" in warning
+               for warning in calibration.warnings)
     dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
     assert dead.verdict.value == "fault" and dead.component == "motor_3"
     assert any("no single-component fault explains it" in note

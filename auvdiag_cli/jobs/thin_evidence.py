@@ -10,16 +10,19 @@ from models.false_alarms import MIN_LOGS
 
 
 def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool) -> list[str]:
-    """The warnings: the margin rule on fewer logs than a law needs (the largest of a few
-    peaks understates the next normal log's), and logs of a single day (on UTC clocks),
-    whose wind, sea state and payload say nothing of another day's."""
+    """The warnings: fewer logs than a law needs, where the margin rule sets thresholds (all
+    of them, or with ``budgeted`` those g's blocks do not: the largest of a few peaks
+    understates the next normal log's), and logs of a single day (on UTC clocks), whose
+    wind, sea state and payload say nothing of another day's."""
     warnings = []
-    if len(logs) < MIN_LOGS and not budgeted:
-        warnings.append(f"{len(logs)} calibration log(s): the margin times the largest of so "
-                        "few peaks is often reached by the next normal log; add normal logs "
-                        "(the training logs count too: their in-sample g is widened), or set "
-                        "--false-alarm-rate, which fits each signal's g to blocks of these "
-                        "logs")
+    if len(logs) < MIN_LOGS:
+        which = ("the change test's thresholds (and the commands') take the "
+                 "margin rule" if budgeted else "the margin times the largest of so few peaks "
+                 "is often reached by the next normal log")
+        warnings.append(f"{len(logs)} calibration log(s): {which}; add normal logs (the "
+                        "training logs count too: their in-sample g is widened)"
+                        + ("" if budgeted else ", or set --false-alarm-rate, which fits each "
+                           "signal's g to blocks of these logs"))
     starts = [log.signals.start_ns for log in logs]
     days = {datetime.fromtimestamp(start / 1e9, UTC).date() for start in starts}
     if starts and min(starts) > EPOCH_CLOCK_NS and len(days) == 1:
