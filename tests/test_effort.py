@@ -114,6 +114,14 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
     assert f"it began at ~{actuators['onset_s']:.1f} s (give or take {error:.1f} s)" in (
         actuators["summary"])
     assert "carries" in output and "more of the effort" in output
+    # The audit table carries the effort's own onset and detection.
+    from auvdiag_cli.audit.record import AuditRecord
+    from auvdiag_cli.audit.table import table_row
+
+    row = table_row(AuditRecord.from_report({**report, "log": "weak_motor_3.csv"}))
+    assert (row["effort_onset_s"], row["effort_detected_at_s"]) == (
+        actuators["onset_s"], actuators["alarm_s"])
+    assert 13.0 <= row["effort_onset_s"] < row["effort_detected_at_s"] <= 20.0
     # The profile's rotors are worded as rotors, not a marine vehicle's thrusters.
     assert "a damaged propeller or a weak motor" in actuators["summary"]
     assert "fouled" not in actuators["summary"]

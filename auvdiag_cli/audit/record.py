@@ -41,6 +41,10 @@ class AuditRecord:
     driven_harder: tuple[str, ...] = ()
     worst_effort_ratio: float | None = None
     worst_effort_actuator: str | None = None
+    # When the effort shares say a weakness began and when they saw it (None: no alarm
+    # there); onset_s and detected_at_s are the verdict's, which another judge may set.
+    effort_onset_s: float | None = None
+    effort_detected_at_s: float | None = None
     recommended_dms: tuple[str, ...] = ()
     model: str | None = None             # the model's name
     model_path: str | None = None
@@ -89,6 +93,7 @@ class AuditRecord:
         worst, signal = _worst_g(report.segments, not_judged)
         shares = {} if report.actuators is None else dict(report.actuators.shares)
         effort_ratio, effort_actuator = _worst_effort(shares)
+        effort = report.actuators
         coverage = report.coverage
         return cls(
             log=log, verdict=report.verdict, format=report.format, vehicle=report.vehicle,
@@ -106,6 +111,8 @@ class AuditRecord:
             else report.degradation.thrust_fraction,
             driven_harder=tuple(n for n, e in shares.items() if e.driven_harder),
             worst_effort_ratio=effort_ratio, worst_effort_actuator=effort_actuator,
+            effort_onset_s=None if effort is None else effort.onset_s,
+            effort_detected_at_s=None if effort is None else effort.alarm_s,
             recommended_dms=() if report.active_diagnosis is None
             else report.active_diagnosis.recommended_dms,
             model=report.model.name, model_path=report.model.path,

@@ -17,7 +17,8 @@ FIXED_COLUMNS = ["log", "format", "vehicle", "fleet_vehicle", "start_time_utc", 
                  "onset_s", "detected_at_s",
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "driven_harder",
-                 "worst_effort_ratio", "worst_effort_actuator", "recommended_dms",
+                 "worst_effort_ratio", "worst_effort_actuator", "effort_onset_s",
+                 "effort_detected_at_s", "recommended_dms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
 
 
@@ -39,6 +40,8 @@ def table_row(record: AuditRecord) -> dict[str, object]:
         "driven_harder": ";".join(record.driven_harder),
         "worst_effort_ratio": record.worst_effort_ratio,
         "worst_effort_actuator": record.worst_effort_actuator,
+        "effort_onset_s": record.effort_onset_s,
+        "effort_detected_at_s": record.effort_detected_at_s,
         "recommended_dms": ";".join(record.recommended_dms), "model": record.model,
         "error": record.error, "log_sha256": record.log_sha256,
         "result_file": record.result_file, "seconds": record.seconds}
