@@ -75,7 +75,9 @@ def _windows(sequences: Sequence[TrainingLog], horizon: int, normaliser: Normali
 
 class _Progress:
     """Progress inside the stages, with the time left estimated from the time per
-    iteration-step so far (an iteration costs about its horizon in steps)."""
+    iteration-step so far (an iteration costs about its horizon in steps), counted from the
+    end of the first iteration: the first carries one-off costs (the batches, the first
+    pass through the network) that made its estimate hundreds of times too long."""
 
     REPORT_EVERY_S = 2.0
 
@@ -83,20 +85,26 @@ class _Progress:
                  report: Callable[[str], None] | None) -> None:
         self.work = [s.iterations * h for s, h in zip(stages, horizons, strict=True)]
         self.stages, self.horizons, self.report = stages, horizons, report
-        self.started = self.last = time.perf_counter()
+        self.last = time.perf_counter()
         self.done = 0
+        self.measured_from: tuple[float, int] | None = None   # (time, work done) then
 
     def step(self, stage: int, iteration: int, loss: float) -> None:
         self.done += self.horizons[stage]
         now = time.perf_counter()
+        if self.measured_from is None:
+            self.measured_from = (now, self.done)
         finished = iteration + 1 == self.stages[stage].iterations
         if self.report is None or not (finished or now - self.last >= self.REPORT_EVERY_S):
             return
         self.last = now
-        left = (now - self.started) / self.done * (sum(self.work) - self.done)
+        since, done_then = self.measured_from
+        rate = (now - since) / (self.done - done_then) if self.done > done_then else None
+        left = "" if rate is None else \
+            f", about {_duration(rate * (sum(self.work) - self.done))} left"
         self.report(f"stage {stage + 1}/{len(self.stages)} (horizon {self.horizons[stage]} "
                     f"steps): {iteration + 1}/{self.stages[stage].iterations} iterations, "
-                    f"loss {loss:.5f}, about {_duration(left)} left")
+                    f"loss {loss:.5f}{left}")
 
 
 def _duration(seconds: float) -> str:
