@@ -7,7 +7,8 @@ import models.training
 from models.training import Stage, _Progress
 
 
-def test_the_time_left_ignores_the_first_iterations_setup(monkeypatch: pytest.MonkeyPatch):
+def test_the_time_left_ignores_the_first_iterations_setup(monkeypatch: pytest.MonkeyPatch
+                                                          ) -> None:
     clock = iter([0.0, 120.0, 121.0, 122.0, 123.0, 124.0, 125.0])  # setup: 2 min, then 1 s
     monkeypatch.setattr(models.training.time, "perf_counter", lambda: next(clock))
     lines: list[str] = []
