@@ -211,6 +211,20 @@ def test_the_audit_table_and_the_trend_carry_the_shares():
     assert record.fleet_vehicle == "cf"          # no vehicle assigned: the folder
 
 
+def test_why_a_profile_without_groups_judges_no_effort_is_its_own():
+    from auvdiag_cli.jobs.effort import learn_effort_model
+    from auvdiag_cli.vehicle.profile import load_profile
+    from models.card import Refused
+
+    # Thrusters not grouped: the profile could group them.
+    refused, _ = learn_effort_model([], load_profile(Path("twin_burger")))
+    assert isinstance(refused, Refused) and "add [[effort]] groups" in refused.reason
+    # Driven by set points: no actuator output is read, so no group could be added.
+    refused, _ = learn_effort_model([], load_profile(Path("arduplane_carbonz")))
+    assert isinstance(refused, Refused) and "set points" in refused.reason
+    assert "add [[effort]]" not in refused.reason
+
+
 def test_effort_groups_in_a_profile_are_checked(tmp_path: Path):
     from auvdiag_cli.vehicle.profile import load_profile, profile_text
 

@@ -3,6 +3,7 @@ part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."
 
 from collections.abc import Sequence
 
+from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused
 from models.command_relations import RelationLog
@@ -11,6 +12,9 @@ from models.effort_model import EffortLog, EffortModel, learn_effort
 
 NO_GROUPS = ("not judged (the profile declares no actuators that act alike: add [[effort]] "
              "groups)")
+# A model driven by set points reads no actuator outputs: no group could be added.
+NO_OUTPUTS = ("not judged (the profile's commands are the controller's set points: it reads no "
+              "actuator outputs whose shares could be compared)")
 
 
 def effort_log(log: RelationLog, profile: Profile) -> EffortLog:
@@ -24,7 +28,8 @@ def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
                        ) -> tuple[EffortModel | Refused, list[str]]:
     """The effort model (or why there is none), and notes on logs left out."""
     if not profile.effort_groups:
-        return Refused(NO_GROUPS), []
+        set_points_only = all(c.kind == SET_POINT for c in profile.commands)
+        return Refused(NO_OUTPUTS if set_points_only else NO_GROUPS), []
     model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
                                 profile.dt_s, false_alarm_rate)
     if model is None:
