@@ -8,6 +8,7 @@ import csv
 import json
 import random
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -108,7 +109,8 @@ def test_an_unreadable_clock_cell_is_counted_not_fatal(exported, tmp_path):
     assert any("1 row(s) whose time does not read" in note for note in signals.notes)
 
 
-def test_an_audit_root_holds_each_folder_as_one_log(exported, tmp_path):
+def test_an_audit_root_holds_each_folder_as_one_log(exported, tmp_path, dive_cache,
+                                                    profile):
     bag, folder = exported
     root = tmp_path / "flights"
     for name in ("a", "b"):
@@ -117,8 +119,16 @@ def test_an_audit_root_holds_each_folder_as_one_log(exported, tmp_path):
         for file in copy.iterdir():
             file.rename(copy / file.name.replace("flight-", f"{name}-"))
     shutil.copyfile(bag, root / "b" / "b.bag")           # the bag it was exported from
+    dive = dive_cache(SCENARIO, SEED)                   # and an hour later, another flight
+    write_log(replace(dive, start_ns=dive.start_ns + 3600 * 10**9), profile,
+              root / "a" / "later.bag", "bag")
     found = discover([str(root)])
-    assert sorted(p.relative_to(root).as_posix() for p in found.logs) == ["a", "b", "b/b.bag"]
+    # The bag a folder was exported from is the same flight: audited once, as the folder.
+    assert sorted(p.relative_to(root).as_posix() for p in found.logs) == ["a", "a/later.bag",
+                                                                         "b"]
+    assert dict(found.skipped)[root / "b" / "b.bag"] == (
+        "the same recording as the folder it lies in, b (100% of its time span on the same "
+        "clock)")
     result = runner.invoke(app, ["audit", str(root), "--output", str(tmp_path / "audit"),
                                  "--jobs", "1", "--fail-on", "none"])
     assert result.exit_code == 0, result.output

@@ -2,7 +2,8 @@
 content: the same bytes, or the first bytes of the other (a download cut short), or the same
 stretch of time on the logs' absolute clocks (the dive recorded again, in another format or
 by another recorder) make it a copy, not a dive of its own; anything else (a continuation,
-another dive) is a dive."""
+another dive) is a dive. So is a log file inside a folder of per-topic CSVs over the same
+time: the bag the folder was exported from."""
 
 from collections.abc import Sequence
 from pathlib import Path
@@ -18,11 +19,11 @@ SAME_RECORDING = 0.5     # shared time, as a share of the shorter log's span
 
 def copies(logs: Sequence[Path]) -> dict[Path, str]:
     """The logs of ``logs`` that are copies of another, each with why (naming the other)."""
+    found = _exported_from(logs)
     by_folder: dict[Path, dict[str, Path]] = {}
     for log in logs:
         if log.is_file():
             by_folder.setdefault(log.parent, {})[log.stem] = log
-    found: dict[Path, str] = {}
     for log in logs:
         parts = log.name.split(".")
         beside = by_folder.get(log.parent, {})
@@ -33,6 +34,21 @@ def copies(logs: Sequence[Path]) -> dict[Path, str]:
             judged = _copy(log, original)
             if judged is not None:
                 found[judged[0]] = judged[1]
+    return found
+
+
+def _exported_from(logs: Sequence[Path]) -> dict[Path, str]:
+    """A log file inside a folder that is itself a log (a folder of per-topic CSVs holding
+    the bag they were exported from, as ALFA keeps its flights) over the same stretch of
+    time: one flight in two formats, audited once, as the folder."""
+    folders = {log.resolve() for log in logs if log.is_dir()}
+    found: dict[Path, str] = {}
+    for log in logs:
+        if log.is_file() and log.parent.resolve() in folders:
+            shared = _shared_time(log, log.parent)
+            if shared is not None and shared >= SAME_RECORDING:
+                found[log] = (f"the same recording as the folder it lies in, {log.parent.name} "
+                              f"({shared:.0%} of its time span on the same clock)")
     return found
 
 

@@ -87,8 +87,8 @@ def _walk(folder: Path, found: Discovery, exclude: set[Path]) -> None:
     if (folder / ROS2_METADATA).is_file():
         found.logs.append(folder)        # a ROS 2 bag: one log, its files are not walked
         return
-    # A folder of per-topic CSVs is one log; other files beside them (the bag they were
-    # exported from) are logs of their own.
+    # A folder of per-topic CSVs is one log; other files beside them are logs of their own
+    # (the bag they were exported from, over the same time, is then a copy: `copies`).
     topics = set(topic_csv_files(folder))
     if topics:
         found.logs.append(folder)
