@@ -29,6 +29,10 @@ MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
 # Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one; a
 # ULog topic's multi id is read as `instance`).
 INSTANCE_FIELDS = ("I", "Instance", "instance")
+# The instance a message without an instance field is (ArduPilot before 4.1 logged its first
+# IMU, BARO, MAG as IMU, BARO, MAG with no `I` field and the others as IMU2, IMU3...): a
+# `where` asking for this instance reads such messages whole.
+FIRST_INSTANCE = "0"
 # A topic's messages as columns: field path → one value per message.
 ColumnSource = Callable[[str], np.ndarray]
 
@@ -37,15 +41,23 @@ class _Extractor:
     def __init__(self, name: str, source: FieldSource) -> None:
         self.name, self.source = name, source
         self.get: Callable[[Any], Any] = field_getter(source.field)
-        self.where = [(field_getter(key), value) for key, value in source.where]
+        self.where = [(key, field_getter(key), value) for key, value in source.where]
 
     def matches(self, message: Any) -> bool:
-        return all(_text(get(message)) == value for get, value in self.where)
+        return all(_text(get(message)) == value for key, get, value in self.where
+                   if not _before_instances(key, value, _resolves(message, key)))
 
-    def rows_matching(self, column: ColumnSource, rows: int) -> np.ndarray:
+    def filters(self, fields: Sequence[str]) -> list[tuple[str, str]]:
+        """The `where` conditions messages with these fields are filtered on: none on an
+        instance field they lack when the first instance is wanted (`FIRST_INSTANCE`)."""
+        return [(key, value) for key, value in self.source.where
+                if not _before_instances(key, value, key in fields)]
+
+    def rows_matching(self, column: ColumnSource, rows: int, fields: Sequence[str]
+                      ) -> np.ndarray:
         """The `where` filter on columns: each distinct value is compared once."""
         keep = np.ones(rows, bool)
-        for key, value in self.source.where:
+        for key, value in self.filters(fields):
             distinct, which = np.unique(column(key), return_inverse=True)
             keep &= np.array([_text(d) == value for d in distinct.tolist()], bool)[which]
         return keep
@@ -61,6 +73,12 @@ class _Extractor:
                 if values.size > 1:
                     return key, [_text(v) for v in values.tolist()]
         return None
+
+
+def _before_instances(key: str, value: str, present: bool) -> bool:
+    """A `where` on the first instance of a sensor, on a message from before instance
+    fields: it is that instance."""
+    return not present and key in INSTANCE_FIELDS and value == FIRST_INSTANCE
 
 
 def _with_state_before(flag: Series, start_ns: int) -> Series:
@@ -209,7 +227,7 @@ class SignalCollector:
             self.values[extractor.name].append(converted)
 
     def add_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource,
-                    fields: Sequence[str] = ()) -> None:
+                    fields: Sequence[str]) -> None:
         """Every message of ``topic`` at once, as columns (readers that decode whole
         message types into arrays). Same result as `add` per message. ``fields``: the
         paths these messages offer (for errors, and to find sensor instances)."""
@@ -229,11 +247,11 @@ class SignalCollector:
                                                       text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
             wanted = extractor.source.field
+            filters = extractor.filters(fields)
             try:
-                for wanted in (*(key for key, _ in extractor.source.where),
-                               extractor.source.field):
+                for wanted in (*(key for key, _ in filters), extractor.source.field):
                     column(wanted)
-                keep = extractor.rows_matching(column, rows) if extractor.where else slice(None)
+                keep = extractor.rows_matching(column, rows, fields) if filters else slice(None)
                 numbers = column(extractor.source.field)[keep]
             except (IndexError, KeyError, TypeError, ValueError):
                 raise LogError(self.path, unresolved(topic, wanted, extractor.name,
@@ -241,8 +259,8 @@ class SignalCollector:
             if numbers.dtype.kind not in "biuf":
                 raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
                                           f"holds {numbers.dtype}, not numbers")
-            if extractor.where and not numbers.size and rows:
-                key = extractor.source.where[0][0]
+            if filters and not numbers.size and rows:
+                key = filters[0][0]
                 self.filtered_out[extractor.name] = sorted(
                     {_text(v) for v in np.unique(column(key)).tolist()})
             mixed = extractor.mixed_instances(column, fields, keep)

@@ -2,6 +2,7 @@
 the field (not the signal) named, the message's fields listed closest first; a `where` on a
 key that does not exist says so; several instances of one sensor are never merged silently."""
 
+import json
 import re
 import shutil
 from importlib import resources
@@ -89,6 +90,46 @@ def test_a_chosen_or_merged_instance_is_read(make_log, tmp_path, choice):
     profile = _profile(tmp_path, 'field = "GyrZ"', choice)
     result = runner.invoke(app, ["diagnose", str(log), "--profile", str(profile), "--quiet"])
     assert result.exit_code == 0, result.output
+
+
+def _before_instance_fields(source, target):
+    """The DataFlash log as ArduPilot before 4.1 wrote it: IMU without its instance field."""
+    from adapters.mavlink_scan import index_file
+
+    index = index_file(source, "bin")
+    imu = next(t for t, f in index.formats.items() if f.name == "IMU")
+    data, ends = bytes(index.data), np.append(index.offsets[1:], index.data.size)
+    at = 3 + 8                                                     # header, TimeUS: then I
+    parts = []
+    for start, end, kind in zip(index.offsets.tolist(), ends.tolist(),
+                                index.type_ids.tolist(), strict=True):
+        record = data[start:end]
+        if kind == imu:
+            record = record[:at] + record[at + 1:]
+        elif record[2] == 128 and record[3] == imu:                # the FMT of IMU
+            fmt = record[9:25].rstrip(b"\0").replace(b"QB", b"Q", 1).ljust(16, b"\0")
+            columns = record[25:89].rstrip(b"\0").replace(b"TimeUS,I,", b"TimeUS,", 1)
+            record = record[:4] + bytes([record[4] - 1]) + record[5:9] + fmt + \
+                columns.ljust(64, b"\0")
+        parts.append(record)
+    target.write_bytes(b"".join(parts))
+    return target
+
+
+def test_the_first_instance_reads_a_log_from_before_instance_fields(make_log, tmp_path):
+    new = make_log("paper-normal", 11, "bin")
+    old = _before_instance_fields(new, tmp_path / "old.bin")
+    first = _profile(tmp_path, 'field = "GyrZ"', 'field = "GyrZ", where = { I = 0 }')
+    verdicts = []
+    for log in (new, old):
+        result = runner.invoke(app, ["diagnose", str(log), "--profile", str(first), "--json",
+                                     str(tmp_path / f"{log.stem}.json")])
+        assert result.exit_code == 0, result.output
+        verdicts.append(json.loads((tmp_path / f"{log.stem}.json").read_text())["segments"])
+    assert verdicts[0] == verdicts[1]
+    # Another instance than the first is no such message there: the field is said missing.
+    line = _refusal(old, _profile(tmp_path, 'field = "GyrZ"', 'field = "GyrZ", where = { I = 1 }'))
+    assert "IMU has no field 'I' (signal yaw_rate)" in line
 
 
 def test_inspect_shows_the_valid_fields_of_a_misspelt_one(make_log, tmp_path):
