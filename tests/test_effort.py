@@ -371,8 +371,12 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
                                     budget=api.FalseAlarmBudget(0.01)))
     assert calibration.budget is not None and all(f.by_block for f in calibration.budget.fits
                                                   if f.judge.kind == "g")
-    # The change test's thresholds still rest on two logs' peaks, and calibrate says so.
-    assert any("2 calibration log(s): the change test's thresholds" in warning
+    # The change test's thresholds rest on the two logs' peaks and the three the model was
+    # trained on (it keeps them): a law of five; the commands' keep the margin rule.
+    assert any(f.judge.kind == "change" and len(f.judge.more) == 3 and not f.by_block
+               for f in calibration.budget.fits)
+    assert any("2 calibration log(s): the commands' thresholds (the change test's count the "
+               "logs trained on) take the margin rule" in warning
                for warning in calibration.warnings)
     dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
     assert dead.verdict.value == "fault" and dead.component == "motor_3"

@@ -10,7 +10,9 @@ alarms when any judge does: with k independent judges each gets 1 - (1 - R)^(1/k
 counted from how the judges' statistics move together over the normal logs
 (`models.false_alarms.effective_judges`). A start judge's law
 is fitted to the training logs' starts as well as the calibration logs': the start is not
-fitted by the model, so those are fair normal data, and more of them steady the law. With
+fitted by the model, so those are fair normal data, and more of them steady the law; so is
+a change-test judge's, to the largest statistics of the logs trained on that the model
+keeps (`jobs.training_change`). With
 fewer calibration logs than a law of their peaks needs, a signal's g is judged from the
 peaks of blocks of them (`Blocks`)."""
 
@@ -285,14 +287,24 @@ def with_command_thresholds(relations: CommandRelations,
     return relations.with_window_thresholds(windows)
 
 
-def change_judges(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence[str]
-                  ) -> list[Judge]:
+def change_judges(peaks: Sequence[dict[str, dict[str, float]]], judged: Sequence[str],
+                  trained: int = 0) -> list[Judge]:
     """Each judged signal's largest change-test statistic per log, a judge per statistic
-    (its ``mode``; NaN: the log is too short)."""
+    (its ``mode``; NaN: the log is too short); the last ``trained`` logs are logs the model
+    was trained on, whose values inform the law beside the calibration logs' (`Judge.more`:
+    the test judges each log against itself, which fitting the model to it does not
+    shrink)."""
     statistics = sorted({statistic for p in peaks for statistic in p})
-    judges = [Judge("change", name, statistic, tuple(
-        p.get(statistic, {}).get(name, float("nan")) for p in peaks))
-        for statistic in statistics for name in judged]
+    calibration = len(peaks) - trained
+
+    def values(statistic: str, name: str, logs: Sequence[dict[str, dict[str, float]]]
+               ) -> tuple[float, ...]:
+        return tuple(p.get(statistic, {}).get(name, float("nan")) for p in logs)
+
+    judges = [Judge("change", name, statistic, values(statistic, name, peaks[:calibration]),
+                    tuple(v for v in values(statistic, name, peaks[calibration:])
+                          if math.isfinite(v)))
+              for statistic in statistics for name in judged]
     # A judge no calibration log is long enough for gets no threshold and never alarms:
     # it takes no share of the budget from the others.
     return [j for j in judges if np.isfinite(j.values).any()]

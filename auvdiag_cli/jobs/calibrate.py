@@ -11,9 +11,7 @@ The effort shares (`models.effort`) are refitted with the normal logs added.
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -34,6 +32,7 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
     with_command_thresholds,
 )
+from auvdiag_cli.jobs.calibration_record import calibration_record
 from auvdiag_cli.jobs.change_calibration import (
     DOMINANCE_WARNING,
     ChangeEvidence,
@@ -48,6 +47,7 @@ from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_he
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.jobs.thin_evidence import thin_evidence
+from auvdiag_cli.jobs.training_change import stored_training_peaks
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
@@ -120,6 +120,7 @@ class CalibrationResult:
     # The change test: statistic -> signal -> (largest on these logs, its threshold);
     # empty where no log is long enough to judge it.
     change: ChangeThresholds = field(default_factory=dict)
+    change_trained_on: tuple[str, ...] = ()   # logs trained on whose peaks it counted too
 
 
 def _mode_key(segment_name: str) -> str:
@@ -134,11 +135,6 @@ def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
         inside = (time_s >= part.segment.start_s) & (time_s <= part.segment.end_s)
         result.setdefault(_mode_key(part.segment.name), []).append(g[inside])
     return {mode: np.concatenate(parts) for mode, parts in result.items()}
-
-
-def _in_sample(model: LoadedModel, logs: Sequence[Path]) -> list[Path]:
-    """The logs the model was trained on, recognised by their content digests."""
-    return [p for p in logs if log_digest(p) in model.card.training_digests]
 
 
 def _widening(model: LoadedModel, diagnoses: Sequence[Diagnosis],
@@ -204,7 +200,10 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     kept = read_operating(normal_logs, lambda path: ingest(
         path, profile, part=options.healthy.of(path)), progress, "calibrate with")
     normal_logs, ingested = list(kept), list(kept.values())
-    in_sample = _in_sample(model, normal_logs)
+    # The logs the model was trained on are recognised by their content digests.
+    digests = [log_digest(p) for p in normal_logs]
+    in_sample = [p for p, d in zip(normal_logs, digests, strict=True)
+                 if d in model.card.training_digests]
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = model.with_entries(thresholds=profile.thresholds)
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
@@ -229,7 +228,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start)
-    evidence = change_evidence(diagnoses, skilled(model, profile), model, profile)
+    evidence = change_evidence(diagnoses, skilled(model, profile), model, profile,
+                               stored_training_peaks(model, digests))
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
@@ -248,8 +248,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
-        fitted, change)
-    model.update_entries(calibration=_record(result, normal_logs, floor_at_profile))
+        fitted, change, evidence.trained_on)
+    model.update_entries(calibration=calibration_record(result, normal_logs,
+                                                            floor_at_profile))
     return result
 
 
@@ -291,7 +292,7 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
                         profile.sensor_names),
               *start_judges(start, readings, profile.sensor_names),
               *command_judges(relations, checks, profile.command_names),
-              *change_judges(change.peaks, change.judged)]
+              *change_judges(change.peaks, change.judged, len(change.trained_on))]
     actuators = sum(len(group.members) for group in profile.effort_groups)
     fitted = budget_thresholds(judges, actuators, budget, log_hours)
     if start.usable:
@@ -341,7 +342,7 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
               normal_logs: Sequence[IngestedLog], widening: dict[str, float],
               change: ChangeEvidence, budgeted: bool) -> list[str]:
     warnings = (dominated_by_one_log(change, [log.signals.path.name for log in normal_logs])
-                + thin_evidence(normal_logs, budgeted))
+                + thin_evidence(normal_logs, budgeted, len(change.peaks)))
     if in_sample:
         which = ("every calibration log was" if len(in_sample) == len(normal_logs)
                  else f"{len(in_sample)} of the calibration logs were")
@@ -361,40 +362,3 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
                     f"{evidence.next_peak:g} %): check that log for a spike, a fault or a "
                     "disturbance")
     return warnings
-
-
-def _record(result: CalibrationResult, normal_logs: Sequence[Path], floor_at_profile: bool
-            ) -> dict[str, Any]:
-    budget = result.budget
-    return {
-        "created": datetime.now(UTC).isoformat(timespec="seconds"),
-        "method": "threshold = margin x the largest g on the normal logs, per mode and "
-                  "signal; the g of logs the model was trained on multiplied by the widening"
-                  if budget is None else
-                  "thresholds to a false-alarm budget: each judge's statistic on the normal "
-                  "logs fitted (g and extra effort: Gumbel law of per-log peaks; starts: "
-                  "Student-t), the budget shared among the judges; margin rule where a judge "
-                  "has too few logs",
-        "false_alarm_budget": None if budget is None else budget.to_json(),
-        "margin": result.margin,
-        "floor_at_profile": floor_at_profile,
-        "normal_logs": [p.name for p in normal_logs],
-        "in_sample_logs": result.in_sample_logs,
-        "widening": result.widening,
-        "normal_hours": round(result.normal_hours, 4),
-        "false_alarms_on_normal_logs": 0 if budget is None else budget.in_sample_alarmed,
-        # The rule-of-three bound holds only where no calibration log alarms (the margin rule).
-        "false_alarm_rate_upper_95_per_hour": round(result.false_alarm_bound_per_hour, 3)
-        if budget is None else None,
-        "modes": [{"mode": m.mode, "samples": m.samples, "max_g": m.max_g,
-                   "thresholds": m.thresholds, "kept_profile_default": m.kept_default,
-                   "not_judged_kept_profile_threshold": list(m.skipped),
-                   "set_by": {k: {"log": e.set_by, "peak_g": e.peak, "next_log_peak_g":
-                                  e.next_peak} for k, e in m.evidence.items()}}
-                  for m in result.modes],
-        "warnings": result.warnings,
-        "relation_thresholds_raised": result.relation_thresholds_raised,
-        "start_thresholds_raised": result.start_thresholds_raised,
-        "faulty_logs": [c.__dict__ for c in result.faulty],
-    }
-

@@ -2,7 +2,8 @@
 each judged signal's largest S on the normal logs."""
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,6 +20,9 @@ from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
+
+if TYPE_CHECKING:
+    from auvdiag_cli.jobs.training_change import TrainingPeaks
 
 # The margin rule (too few logs to fit a law of their peaks) never sets a threshold below
 # these. Over an hour's windows even Gaussian window means reach |z| of about 4
@@ -73,19 +77,23 @@ class Outlier:
 @dataclass(frozen=True)
 class ChangeEvidence:
     """The signals the change test judges, and each normal log's largest statistics (an
-    outlier's left out: NaN)."""
+    outlier's left out: NaN): the calibration logs', then those the model keeps of the logs
+    it was trained on (`training_change`)."""
 
     judged: list[str]
     peaks: list[dict[str, dict[str, float]]]
     outliers: tuple[Outlier, ...] = ()
+    trained_on: tuple[str, ...] = ()     # the logs trained on, last in ``peaks``
 
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
-                    model: LoadedModel, profile: Profile) -> ChangeEvidence:
+                    model: LoadedModel, profile: Profile,
+                    trained: Sequence["TrainingPeaks"] = ()) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
-        [log_change_peaks(d, judged, model, profile) for d in diagnoses]))
+        [*(log_change_peaks(d, judged, model, profile) for d in diagnoses),
+         *(t.peaks for t in trained)], trained_on=tuple(t.log for t in trained)))
 
 
 def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[float, int]]:
@@ -128,7 +136,7 @@ def without_outliers(evidence: ChangeEvidence) -> ChangeEvidence:
                 largest, log, following = found
                 outliers.append(Outlier(log, statistic, name, largest, following))
                 peaks[log][statistic][name] = float("nan")
-    return ChangeEvidence(evidence.judged, peaks, tuple(outliers))
+    return replace(evidence, peaks=peaks, outliers=tuple(outliers))
 
 
 def change_thresholds(evidence: ChangeEvidence, margin: float,
@@ -158,6 +166,7 @@ def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[
     """A warning for each normal log whose largest value of a statistic on a signal was left
     out of that threshold (`without_outliers`), and for each that alone sets one, with fewer
     logs than that judges outliers by."""
+    logs = [*logs, *(f"{log} (trained on)" for log in evidence.trained_on)]
     left_out: dict[str, list[str]] = {}
     for o in evidence.outliers:
         left_out.setdefault(logs[o.log], []).append(

@@ -9,16 +9,20 @@ from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
 from models.false_alarms import MIN_LOGS
 
 
-def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool) -> list[str]:
+def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
+                  change_logs: int | None = None) -> list[str]:
     """The warnings: fewer logs than a law needs, where the margin rule sets thresholds (all
     of them, or with ``budgeted`` those g's blocks do not: the largest of a few peaks
-    understates the next normal log's), and logs of a single day (on UTC clocks), whose
-    wind, sea state and payload say nothing of another day's."""
+    understates the next normal log's; the change test's rest on ``change_logs``, the
+    training logs the model keeps counted too), and logs of a single day (on UTC clocks),
+    whose wind, sea state and payload say nothing of another day's."""
     warnings = []
     if len(logs) < MIN_LOGS:
-        which = ("the change test's thresholds (and the commands') take the "
-                 "margin rule" if budgeted else "the margin times the largest of so few peaks "
-                 "is often reached by the next normal log")
+        ruled = ("the change test's thresholds (and the commands')"
+                 if (len(logs) if change_logs is None else change_logs) < MIN_LOGS
+                 else "the commands' thresholds (the change test's count the logs trained on)")
+        which = (f"{ruled} take the margin rule" if budgeted else "the margin times the "
+                 "largest of so few peaks is often reached by the next normal log")
         warnings.append(f"{len(logs)} calibration log(s): {which}; add normal logs (the "
                         "training logs count too: their in-sample g is widened)"
                         + ("" if budgeted else ", or set --false-alarm-rate, which fits each "

@@ -19,6 +19,7 @@ from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
 from auvdiag_cli.jobs.relate import learn_relations
+from auvdiag_cli.jobs.training_change import ENTRY, training_change_entry
 from auvdiag_cli.jobs.training_logs import (
     ReadLog,
     median_rates,
@@ -183,7 +184,21 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
                                                      profile, progress)}
         save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
+        _keep_change_peaks(output, profile, [*training_paths, *heldout_paths],
+                           options.healthy, progress)
     return result
+
+
+def _keep_change_peaks(output: Path, profile: Profile, logs: Sequence[Path],
+                       healthy: HealthyParts, progress: Callable[[str], None]) -> None:
+    """The written model with the change test's largest statistics on the logs it was
+    trained on (`training_change`), which calibrate counts beside its own logs."""
+    from models.store import load_model, write_model
+
+    model = load_model(output)
+    model.update_entries(**{ENTRY: training_change_entry(model, profile, logs, healthy,
+                                                         progress)})
+    write_model(model, output)
 
 
 def _learn_beside_the_model(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],

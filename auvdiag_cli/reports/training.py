@@ -233,9 +233,11 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
     if result.effort is not None:
         lines += effort_lines(result.effort)
         lines += [f"  left out: {note}" for note in result.effort_notes]
+    also = (f" and the {len(result.change_trained_on)} trained on"
+            if result.change_trained_on else "")
     for statistic, values in result.change.items():
         lines.append(f"  change test ({statistic}; each log against its own beginning): "
-                     "largest on these logs -> threshold: " + ", ".join(
+                     f"largest on these logs{also} -> threshold: " + ", ".join(
                          f"{name} {largest:g} -> {threshold:g}"
                          for name, (largest, threshold) in values.items()))
     lines += [f"warning: {warning}" for warning in result.warnings]
