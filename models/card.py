@@ -12,6 +12,7 @@ from types import MappingProxyType
 from typing import Any, Protocol, runtime_checkable
 
 from models.ahead import AheadPredictor
+from models.change_training import ChangeTraining
 from models.fast import NETWORK
 
 
@@ -180,6 +181,8 @@ class ModelCard:
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
+    # The change test's largest statistics on the logs trained on (none: trained before).
+    change_training: ChangeTraining = field(default_factory=ChangeTraining)
     # model.json as the card writes it back: every entry, the records kept for people
     # (how it was trained and calibrated) among them, as JSON text so that it stays frozen.
     document_text: str = field(default="{}", repr=False, compare=False)
@@ -274,4 +277,5 @@ class ModelCard:
                     "thresholds", {}).items()}),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
+            change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             document_text=json.dumps(meta))

@@ -362,6 +362,16 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     normal = [flown(name, 5) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
     api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
         iterations_scale=0.05, hidden=8, keep_unskilled=True), progress=lambda _: None)
+    # The model keeps the change test's largest statistics on the three it was trained on,
+    # as strict JSON (a statistic never judged is null, not NaN).
+    def no_constants(name: str) -> float:
+        raise AssertionError(f"{name} in model.json")
+
+    document = json.loads((tmp_path / "model" / "model.json").read_text(),
+                          parse_constant=no_constants)
+    kept = document["change_training"]["logs"]
+    assert [entry["log"] for entry in kept] == [path.name for path in normal]
+    assert all(entry["peaks"]["sum"] for entry in kept)
     model = api.load_model(tmp_path / "model", profile)
     # Two more normal flights set the thresholds, from blocks of them (too few for a law
     # of their peaks).

@@ -47,7 +47,6 @@ from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_he
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
 from auvdiag_cli.jobs.thin_evidence import thin_evidence
-from auvdiag_cli.jobs.training_change import stored_training_peaks
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
@@ -229,7 +228,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     if start.usable:
         model.update_entries(start_state=start)
     evidence = change_evidence(diagnoses, skilled(model, profile), model, profile,
-                               stored_training_peaks(model, digests))
+                               model.card.change_training.without(set(digests)))
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)

@@ -22,7 +22,7 @@ from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
 if TYPE_CHECKING:
-    from auvdiag_cli.jobs.training_change import TrainingPeaks
+    from models.change_training import TrainedOnPeaks
 
 # The margin rule (too few logs to fit a law of their peaks) never sets a threshold below
 # these. Over an hour's windows even Gaussian window means reach |z| of about 4
@@ -88,12 +88,13 @@ class ChangeEvidence:
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
                     model: LoadedModel, profile: Profile,
-                    trained: Sequence["TrainingPeaks"] = ()) -> ChangeEvidence:
+                    trained: Sequence["TrainedOnPeaks"] = ()) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
         [*(log_change_peaks(d, judged, model, profile) for d in diagnoses),
-         *(t.peaks for t in trained)], trained_on=tuple(t.log for t in trained)))
+         *({s: dict(v) for s, v in t.peaks.items()} for t in trained)],
+        trained_on=tuple(t.log for t in trained)))
 
 
 def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[float, int]]:

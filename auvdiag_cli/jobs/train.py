@@ -19,7 +19,7 @@ from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
 from auvdiag_cli.jobs.relate import learn_relations
-from auvdiag_cli.jobs.training_change import ENTRY, training_change_entry
+from auvdiag_cli.jobs.training_change import training_change_peaks
 from auvdiag_cli.jobs.training_logs import (
     ReadLog,
     median_rates,
@@ -196,8 +196,8 @@ def _keep_change_peaks(output: Path, profile: Profile, logs: Sequence[Path],
     from models.store import load_model, write_model
 
     model = load_model(output)
-    model.update_entries(**{ENTRY: training_change_entry(model, profile, logs, healthy,
-                                                         progress)})
+    model.update_entries(change_training=training_change_peaks(model, profile, logs, healthy,
+                                                               progress))
     write_model(model, output)
 
 

@@ -1,0 +1,43 @@
+"""model.json's `change_training`: the change test's largest statistics on each log a model
+was trained on (`auvdiag_cli.jobs.training_change` computes them when `train` writes the
+model; `calibrate` counts them beside its own logs)."""
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+# statistic -> signal (or signature) -> the log's largest value (NaN: not judged there)
+Peaks = Mapping[str, Mapping[str, float]]
+
+
+@dataclass(frozen=True)
+class TrainedOnPeaks:
+    """One log trained on (its name and content digest) and its largest statistics."""
+
+    log: str
+    sha256: str
+    peaks: Peaks
+
+
+@dataclass(frozen=True)
+class ChangeTraining:
+    logs: tuple[TrainedOnPeaks, ...] = ()
+
+    def to_json(self) -> dict[str, object]:
+        return {"logs": [{"log": t.log, "sha256": t.sha256, "peaks": {
+            statistic: {name: value if math.isfinite(value) else None
+                        for name, value in values.items()}
+            for statistic, values in t.peaks.items()}} for t in self.logs]}
+
+    @classmethod
+    def from_json(cls, entry: Mapping[str, Any]) -> "ChangeTraining":
+        return cls(tuple(TrainedOnPeaks(str(t["log"]), str(t["sha256"]), {
+            str(statistic): {str(name): math.nan if value is None else float(value)
+                             for name, value in values.items()}
+            for statistic, values in (t.get("peaks") or {}).items()})
+            for t in entry.get("logs", [])))
+
+    def without(self, digests: frozenset[str] | set[str]) -> tuple[TrainedOnPeaks, ...]:
+        """The logs but those whose content digest is among ``digests``."""
+        return tuple(t for t in self.logs if t.sha256 not in digests)
