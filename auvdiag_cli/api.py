@@ -43,7 +43,8 @@ if TYPE_CHECKING:
     from auvdiag_cli.engine.results import Diagnosis, Verdict
     from auvdiag_cli.engine.signatures import DerivedTable
     from auvdiag_cli.jobs.budget import FalseAlarmBudget
-    from auvdiag_cli.jobs.calibrate import CalibrateOptions, CalibrationResult
+    from auvdiag_cli.jobs.calibrate import CalibrateOptions
+    from auvdiag_cli.jobs.calibration_result import CalibrationResult
     from auvdiag_cli.jobs.healthy import HealthyParts, read_healthy_parts
     from auvdiag_cli.jobs.inspect import Inspection
     from auvdiag_cli.jobs.train import TrainingResult, TrainOptions

@@ -240,7 +240,7 @@ def test_no_untyped_dict_crosses_a_layer_for_the_model_or_the_diagnosis():
 
     from auvdiag_cli import api
     from auvdiag_cli.engine.results import Diagnosis
-    from auvdiag_cli.jobs.calibrate import CalibrationResult
+    from auvdiag_cli.jobs.calibration_result import CalibrationResult
     from auvdiag_cli.jobs.train import TrainingResult
     from models.card import ModelCard
 

@@ -10,7 +10,7 @@ The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -32,11 +32,16 @@ from auvdiag_cli.jobs.budget import (
     start_judges,
     with_command_thresholds,
 )
-from auvdiag_cli.jobs.calibration_record import calibration_record
+from auvdiag_cli.jobs.calibration_result import (
+    CalibrationResult,
+    FaultyCheck,
+    ModeCalibration,
+    SignalEvidence,
+    calibration_record,
+)
 from auvdiag_cli.jobs.change_calibration import (
     DOMINANCE_WARNING,
     ChangeEvidence,
-    ChangeThresholds,
     change_entry,
     change_evidence,
     change_thresholds,
@@ -61,65 +66,6 @@ MIN_SAMPLES_PER_MODE = 300     # 30 s at 10 Hz: fewer and the profile's threshol
 # counts only widened by the ratio of the model's held-out error to its error on these logs,
 # per signal, and at least by this factor.
 IN_SAMPLE_MIN_WIDENING = 1.25
-
-
-@dataclass(frozen=True)
-class SignalEvidence:
-    """Which log set a signal's threshold in one mode, and the next log's peak beside it
-    (the threshold if that log were left out would be margin x next_peak)."""
-
-    set_by: str
-    peak: float
-    next_peak: float | None
-
-    @property
-    def dominance(self) -> float | None:
-        if self.next_peak is None or self.next_peak <= 0:
-            return None
-        return self.peak / self.next_peak
-
-
-@dataclass(frozen=True)
-class ModeCalibration:
-    mode: str
-    samples: int
-    hours: float
-    max_g: dict[str, float]
-    thresholds: dict[str, float]
-    kept_default: bool
-    evidence: dict[str, SignalEvidence]     # the judged signals only
-    skipped: tuple[str, ...] = ()           # not judged: the profile's thresholds kept
-
-
-@dataclass(frozen=True)
-class FaultyCheck:
-    log: str
-    verdict: str
-    component: str | None
-    candidates: tuple[str, ...]
-    peak_ratio: float     # the largest g / threshold of a judged signal anywhere in the log
-
-
-@dataclass(frozen=True)
-class CalibrationResult:
-    margin: float
-    modes: list[ModeCalibration]
-    thresholds: dict[str, dict[str, float]]
-    normal_hours: float
-    false_alarm_bound_per_hour: float
-    faulty: list[FaultyCheck]
-    in_sample_logs: list[str]           # calibration logs the model was trained on
-    widening: dict[str, float]          # per signal, applied to the in-sample logs' g
-    warnings: list[str]
-    relation_thresholds_raised: dict[str, float]   # command -> extra effort now allowed
-    start_thresholds_raised: list[str]             # sensors whose start allowance was raised
-    effort: EffortModel | Refused | None = None    # the refitted effort model, if any
-    effort_notes: tuple[str, ...] = ()             # calibration logs it left out, and why
-    budget: BudgetThresholds | None = None         # --false-alarm-rate: the fitted judges
-    # The change test: statistic -> signal -> (largest on these logs, its threshold);
-    # empty where no log is long enough to judge it.
-    change: ChangeThresholds = field(default_factory=dict)
-    change_trained_on: tuple[str, ...] = ()   # logs trained on whose peaks it counted too
 
 
 def _mode_key(segment_name: str) -> str:
@@ -199,21 +145,12 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     kept = read_operating(normal_logs, lambda path: ingest(
         path, profile, part=options.healthy.of(path)), progress, "calibrate with")
     normal_logs, ingested = list(kept), list(kept.values())
-    # The logs the model was trained on are recognised by their content digests.
     digests = [log_digest(p) for p in normal_logs]
-    in_sample = [p for p, d in zip(normal_logs, digests, strict=True)
-                 if d in model.card.training_digests]
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = model.with_entries(thresholds=profile.thresholds)
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
-    widening = _widening(model, [d for p, d in zip(normal_logs, diagnoses, strict=True)
-                                 if p in in_sample], profile.sensor_names) if in_sample else {}
-    factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
-    per_log = [{mode: g * factor if path in in_sample else g
-                for mode, g in _g_by_mode(d).items()} for path, d in zip(normal_logs, diagnoses,
-                                                                        strict=True)]
-    labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name
-              for p in normal_logs]
+    in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
+                                                      diagnoses)
     judged = replay_judged(model, profile)
     modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, judged)
     hours = sum(m.hours for m in modes)
@@ -251,6 +188,23 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result
+
+
+def _g_per_log(model: LoadedModel, profile: Profile, logs: Sequence[Path],
+               digests: Sequence[str], diagnoses: Sequence[Diagnosis]
+               ) -> tuple[list[Path], dict[str, float], list[dict[str, np.ndarray]], list[str]]:
+    """The logs the model was trained on (recognised by their content digests), the
+    widening their in-sample g gets, each log's g per mode (widened there) and its label."""
+    in_sample = [p for p, d in zip(logs, digests, strict=True)
+                 if d in model.card.training_digests]
+    widening = _widening(model, [d for p, d in zip(logs, diagnoses, strict=True)
+                                 if p in in_sample], profile.sensor_names) if in_sample else {}
+    factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
+    per_log = [{mode: g * factor if path in in_sample else g
+                for mode, g in _g_by_mode(d).items()}
+               for path, d in zip(logs, diagnoses, strict=True)]
+    labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name for p in logs]
+    return in_sample, widening, per_log, labels
 
 
 def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],

@@ -14,7 +14,7 @@ import numpy as np
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
-from auvdiag_cli.jobs.candidates import fit_candidates
+from auvdiag_cli.jobs.candidates import Candidates, fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
@@ -132,7 +132,6 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     """Train on normal ``logs`` and write the model to ``output`` (where it judges
     anything, or ``options.keep_unskilled``). ``trainer``: `models.training.train` unless
     another is given (benchmarks compare)."""
-    from models.store import save_model
     from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
 
     training_paths, heldout_paths, every = read_and_split(logs, options.holdout, profile,
@@ -183,21 +182,23 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
                                                      profile, progress)}
-        save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
-        _keep_change_peaks(output, profile, [*training_paths, *heldout_paths],
-                           options.healthy, progress)
+        _save(output, fitted, metadata, profile, [*training_paths, *heldout_paths], options,
+              progress)
     return result
 
 
-def _keep_change_peaks(output: Path, profile: Profile, logs: Sequence[Path],
-                       healthy: HealthyParts, progress: Callable[[str], None]) -> None:
-    """The written model with the change test's largest statistics on the logs it was
-    trained on (`training_change`), which calibrate counts beside its own logs."""
-    from models.store import load_model, write_model
+def _save(output: Path, fitted: Candidates, metadata: dict[str, Any], profile: Profile,
+          logs: Sequence[Path], options: "TrainOptions", progress: Callable[[str], None]
+          ) -> None:
+    """Write the model, then add the change test's largest statistics on the logs it was
+    trained on (`training_change`: they need the model), which calibrate counts beside its
+    own logs."""
+    from models.store import load_model, save_model, write_model
 
+    save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     model = load_model(output)
-    model.update_entries(change_training=training_change_peaks(model, profile, logs, healthy,
-                                                               progress))
+    model.update_entries(change_training=training_change_peaks(
+        model, profile, logs, options.healthy, progress))
     write_model(model, output)
 
 

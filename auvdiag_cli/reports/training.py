@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 from auvdiag_cli.engine.effort_check import typical_later_threshold
 from auvdiag_cli.jobs.budget import BudgetThresholds
-from auvdiag_cli.jobs.calibrate import CalibrationResult
+from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
