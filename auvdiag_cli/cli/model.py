@@ -203,7 +203,9 @@ def calibrate(
     log is then judged with the thresholds fitted on the others, and the count reported.
     Judges with fewer than 5 logs keep the margin rule (for the change test never below a
     window |z| of 6 and a sum of 8; a fitted law may go as low as 4 and 4). The change
-    test (each log against its own beginning) leaves out of a threshold one log whose
+    test (each log against its own beginning) counts the logs the model was trained on
+    too (train keeps their largest values in the model), and leaves out of a threshold one
+    log whose
     largest value there is twice every other log's (with 5 logs or more), and names it:
     check it for a failure.
     Where the profile groups actuators that act alike ([[effort]]), the normal effort

@@ -1,7 +1,7 @@
 """The diagnosis engine: one log in, one `Diagnosis` out. Rendering never recomputes."""
 
 from collections.abc import Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -143,22 +143,50 @@ def _inputs_held(log: IngestedLog, model: LoadedModel) -> IngestedLog:
         frame.inputs, frame.input_names, frame.flat_inputs, typical)))
 
 
-def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
-                      companion_runs: Sequence[tuple[DmsRun, int]] = (),
-                      mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
+@dataclass(frozen=True)
+class _Replayed:
+    """A log replayed by the model: what every judge starts from."""
+
+    log: IngestedLog                  # its measured inputs held where it never fed them
+    judging: Judging
+    segments: list[Segment]
+    dms_starts: list[int]             # where the replay starts afresh (each DMS run)
+    matching: Matching
+    change_errors: np.ndarray         # what the change test judges
+
+
+def _replay(log: IngestedLog, profile: Profile, model: LoadedModel) -> _Replayed:
     new_replay_budget()
     log = _inputs_held(log, model)
-    frame, signals = log.frame, log.signals
+    frame = log.frame
     judging = Judging.of(model, profile).without(not_judged_flat(frame.flat))
-    not_judged, decision = judging.not_judged, judging.decision_steps
     segments = segments_of(log, judging.profile)
     # Every DMS is a test of its own: the replay starts afresh from the measured state.
     dms_starts = [int(np.searchsorted(frame.time_s, s.start_s)) for s in segments
                   if s.mode == ROUTINE_MODE]
     matching = match(model, frame, judging.full_scale, judging.window, dms_starts)
-    change_errors = change_residual(model, frame.commands,
-                                    frame.inputs if frame.input_names else None, matching,
-                                    [*frame.restarts, *dms_starts])
+    return _Replayed(log, judging, segments, dms_starts, matching, change_residual(
+        model, frame.commands, frame.inputs if frame.input_names else None, matching,
+        [*frame.restarts, *dms_starts]))
+
+
+def change_errors_of(log: IngestedLog, profile: Profile, model: LoadedModel
+                     ) -> tuple[np.ndarray, tuple[str, ...]]:
+    """What the change test judges on a log, without the rest of a diagnosis, and the
+    signals set aside there (never fed)."""
+    replayed = _replay(log, profile, model)
+    return replayed.change_errors, tuple(sorted(replayed.judging.set_aside))
+
+
+def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
+                      companion_runs: Sequence[tuple[DmsRun, int]] = (),
+                      mission_legs: Sequence[MissionLeg] = ()) -> Diagnosis:
+    replayed = _replay(log, profile, model)
+    log, judging, segments, dms_starts, matching, change_errors = (
+        replayed.log, replayed.judging, replayed.segments, replayed.dms_starts,
+        replayed.matching, replayed.change_errors)
+    frame, signals = log.frame, log.signals
+    not_judged, decision = judging.not_judged, judging.decision_steps
     thresholds = threshold_matrix(segments, frame.time_s, frame.sensor_names)
     b_series = binary_vector(matching.g_percent, thresholds)
     b_series[:, ~judging.judged_mask] = 0   # a signal the model cannot predict raises no alarm

@@ -47,18 +47,16 @@ MIN_LOGS_FOR_OUTLIERS = 5
 ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 
 
-def log_change_peaks(diagnosis: Diagnosis, judged: Sequence[str], model: LoadedModel,
-                     profile: Profile) -> dict[str, dict[str, float]]:
-    """Each statistic's largest value per judged signal in one normal log (NaN: too
-    short, or set aside in that log: a sensor it never fed)."""
-    residual = diagnosis.histories.change_residual
-    assert residual is not None
+def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Sequence[str],
+                     model: LoadedModel, profile: Profile) -> dict[str, dict[str, float]]:
+    """Each statistic's largest value per judged signal in one normal log's change
+    residual (NaN: too short, or ``set_aside`` in that log: a sensor it never fed)."""
     names = list(profile.sensor_names)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
     peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
                          profile.actuators)
-    return {statistic: {name: float("nan") if name in diagnosis.set_aside else value
+    return {statistic: {name: float("nan") if name in set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}
 
@@ -92,9 +90,16 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
-        [*(log_change_peaks(d, judged, model, profile) for d in diagnoses),
+        [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
+           for d in diagnoses),
          *({s: dict(v) for s, v in t.peaks.items()} for t in trained)],
         trained_on=tuple(t.log for t in trained)))
+
+
+def _residual(diagnosis: Diagnosis) -> np.ndarray:
+    residual = diagnosis.histories.change_residual
+    assert residual is not None
+    return residual
 
 
 def _ranked(evidence: ChangeEvidence, statistic: str, name: str) -> list[tuple[float, int]]:

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.change_check import change_judged
-from auvdiag_cli.engine.diagnosis import diagnose_ingested
+from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.judging import skilled
 from auvdiag_cli.jobs.change_calibration import log_change_peaks
@@ -26,12 +26,12 @@ from models.store import LoadedModel
 def training_change_peaks(model: LoadedModel, profile: Profile, logs: Sequence[Path],
                           healthy: HealthyParts,
                           progress: Callable[[str], None] = lambda _: None) -> ChangeTraining:
-    """Each log trained on (the part of it trained on) diagnosed with the new model, its
+    """Each log trained on (the part of it trained on) replayed by the new model, its
     largest change-test statistics; none where the change test judges nothing."""
     judged = change_judged(model, skilled(model, profile))
     if not judged:
         return ChangeTraining()
     progress(f"the change test on the {len(logs)} log(s) trained on (calibrate counts them)")
     return ChangeTraining(tuple(TrainedOnPeaks(path.name, log_digest(path), log_change_peaks(
-        diagnose_ingested(ingest(path, profile, part=healthy.of(path)), profile, model),
+        *change_errors_of(ingest(path, profile, part=healthy.of(path)), profile, model),
         judged, model, profile)) for path in logs))
