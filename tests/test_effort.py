@@ -375,10 +375,9 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     model = api.load_model(tmp_path / "model", profile)
     # Two more normal flights set the thresholds, from blocks of them (too few for a law
     # of their peaks).
-    calibration = api.calibrate([flown(name, 6) for name in ("mission-sprint-ccw",
-                                                             "mission-fast-cw")],
-                                profile, model, options=api.CalibrateOptions(
-                                    budget=api.FalseAlarmBudget(0.01)))
+    calibration_logs = [flown(name, 6) for name in ("mission-sprint-ccw", "mission-fast-cw")]
+    calibration = api.calibrate(calibration_logs, profile, model, options=api.CalibrateOptions(
+        budget=api.FalseAlarmBudget(0.01)))
     assert calibration.budget is not None and all(f.by_block for f in calibration.budget.fits
                                                   if f.judge.kind == "g")
     # The change test's thresholds rest on the two logs' peaks and the three the model was
@@ -388,6 +387,12 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     assert any("2 calibration log(s): the commands' thresholds (the change test's count the "
                "logs trained on) take the margin rule" in warning
                for warning in calibration.warnings)
+    assert calibration.change_trained_on == tuple(path.name for path in normal)
+    # A log trained on and calibrated with counts once.
+    again = api.calibrate([*normal[:1], *calibration_logs], profile,
+                          api.load_model(tmp_path / "model", profile),
+                          options=api.CalibrateOptions(budget=api.FalseAlarmBudget(0.01)))
+    assert again.change_trained_on == tuple(path.name for path in normal[1:])
     dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
     assert dead.verdict.value == "fault" and dead.component == "motor_3"
     assert any("no single-component fault explains it" in note
