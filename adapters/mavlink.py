@@ -4,7 +4,7 @@ The records are walked once (`adapters.mavlink_scan`) and only the message types
 profile names are decoded, each type all at once (`adapters.mavlink_columns`), with
 pymavlink's message definitions for MAVLink and the log's FMT records for DataFlash. A
 tlog's times are the ground station's receive times; a DataFlash log's are the autopilot's
-TimeUS (µs since boot)."""
+TimeUS (µs since boot; TimeMS, ms, in logs of ArduPilot 3.2 and before)."""
 
 from functools import cache
 from pathlib import Path
@@ -68,8 +68,8 @@ class DataflashAdapter:
             except UnknownFormat as error:
                 raise LogError(path, f"cannot decode {topic}: {error}") from None
             if rows.size and (times_us == NO_TIME).all():
-                raise LogError(path, f"{topic} records carry no TimeUS, so they cannot be "
-                                     "placed in time")
+                raise LogError(path, f"{topic} records carry no TimeUS (or TimeMS), so they "
+                                     "cannot be placed in time")
             _add_timed(collector, topic, times_us, rows, divisors)
         return _finish(collector, "bin", None, index, "DataFlash")
 

@@ -133,7 +133,8 @@ def dataflash_layout(types: str, columns: tuple[str, ...]
 
 def decode_dataflash(index: RecordIndex, type_id: int
                      ) -> tuple[np.ndarray, np.ndarray, dict[str, float]]:
-    """Record times (µs, -1 for formats without TimeUS), rows, and per-column divisors."""
+    """Record times (µs, -1 for formats without a clock: `RECORD_CLOCKS`), rows, and
+    per-column divisors."""
     declared = index.formats[type_id]
     dtype, divisors = dataflash_layout(declared.types, declared.columns)
     payload = declared.length - DATAFLASH_HEADER_LENGTH

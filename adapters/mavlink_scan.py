@@ -157,19 +157,29 @@ def _parse_fmt(record: bytes) -> DataflashFormat:
                            tuple(c for c in text(record[25:89]).split(",") if c))
 
 
+# A record's time, where its format starts with one: (column, format characters, the
+# stored word, µs per unit). ArduPilot 3.2 and before logged TimeMS (ms, 32 bits).
+RECORD_CLOCKS = (("TimeUS", "Qq", "<u8", 1), ("TimeMS", "Ii", "<u4", 1000))
+
+
 def index_dataflash(data: mmap.mmap | bytes) -> RecordIndex:
-    """TimeUS, when a format starts with it, is the first 8 payload bytes."""
+    """A record's time is the first payload word, where its format starts with a clock
+    (`RECORD_CLOCKS`)."""
     raw = np.frombuffer(data, np.uint8)
     walked, formats, problem = _walk_dataflash(data)
     offsets = np.frombuffer(walked, np.int64) if walked else np.zeros(0, np.int64)
     type_ids = raw[offsets + 2].astype(np.int64)
-    timed = np.zeros(256, bool)
+    clock = np.full(256, -1)
     for type_id, declared in formats.items():
-        timed[type_id] = declared.columns[:1] == ("TimeUS",) and declared.types[:1] in "Qq"
+        clock[type_id] = next((k for k, (column, types, _, _) in enumerate(RECORD_CLOCKS)
+                               if declared.columns[:1] == (column,)
+                               and declared.types[:1] in types), -1)
     times = np.full(offsets.size, NO_TIME, np.int64)
-    has_time = timed[type_ids]
-    starts = offsets[has_time] + DATAFLASH_HEADER_LENGTH
-    times[has_time] = _checked_times(gather_words(raw, starts, "<u8"))
+    for k, (_, _, word, scale) in enumerate(RECORD_CLOCKS):
+        has_time = clock[type_ids] == k
+        starts = offsets[has_time] + DATAFLASH_HEADER_LENGTH
+        times[has_time] = _checked_times(gather_words(raw, starts, word).astype(np.uint64)
+                                         * np.uint64(scale))
     names = {type_id: declared.name for type_id, declared in formats.items()}
     return RecordIndex(raw, offsets, type_ids, names, times, problem, formats)
 

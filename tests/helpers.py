@@ -69,3 +69,32 @@ def zeroed_column(log: Path, column_name: str, out: Path) -> Path:
         "0.0" if i == column and cell else cell for i, cell in enumerate(line.split(",")))
         for line in lines[1:]]) + "\n")
     return out
+
+
+FMT_TYPE = 128
+
+
+def rewrite_dataflash(source: Path, target: Path, change: Any) -> Path:
+    """The DataFlash log with each record (header included) replaced by
+    ``change(record, type_id, formats)``: bytes, empty to drop it, or several records."""
+    import numpy as np
+
+    from adapters.mavlink_scan import index_file
+
+    index = index_file(source, "bin")
+    data, ends = bytes(index.data), np.append(index.offsets[1:], index.data.size)
+    target.write_bytes(b"".join(
+        change(data[start:end], kind, index.formats) for start, end, kind in zip(
+            index.offsets.tolist(), ends.tolist(), index.type_ids.tolist(), strict=True)))
+    return target
+
+
+def refit_format(record: bytes, old: tuple[bytes, bytes], new: tuple[bytes, bytes],
+                 shrink: int) -> bytes:
+    """An FMT record whose format characters and columns begin ``new`` instead of ``old``
+    (each a (format, columns) prefix pair), its record length ``shrink`` bytes less."""
+    fmt, columns = record[9:25].rstrip(b"\0"), record[25:89].rstrip(b"\0")
+    assert fmt.startswith(old[0]) and columns.startswith(old[1]), (fmt, columns)
+    fmt, columns = new[0] + fmt[len(old[0]):], new[1] + columns[len(old[1]):]
+    return (record[:4] + bytes([record[4] - shrink]) + record[5:9] + fmt.ljust(16, b"\0")
+            + columns.ljust(64, b"\0"))

@@ -7,8 +7,8 @@ import re
 import shutil
 from importlib import resources
 
-import numpy as np
 import pytest
+from helpers import FMT_TYPE, refit_format, rewrite_dataflash
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -57,23 +57,15 @@ def test_a_where_on_a_key_that_does_not_exist_says_so(make_log, tmp_path):
 
 def _with_second_imu(source, target):
     """The DataFlash log with every IMU record followed by instance 1 of the same sensor."""
-    from adapters.mavlink_scan import index_file
+    at = 3 + 8                                                     # header, TimeUS: then I
 
-    index = index_file(source, "bin")
-    imu = next(t for t, f in index.formats.items() if f.name == "IMU")
-    assert index.formats[imu].types[:2] == "QB"                    # TimeUS, then I
-    assert index.formats[imu].columns[:2] == ("TimeUS", "I")
-    at = 3 + 8                                                     # header, TimeUS
-    data, ends = bytes(index.data), np.append(index.offsets[1:], index.data.size)
-    parts = []
-    for start, end, kind in zip(index.offsets.tolist(), ends.tolist(),
-                                index.type_ids.tolist(), strict=True):
-        record = data[start:end]
-        parts.append(record)
-        if kind == imu:
-            parts.append(record[:at] + b"\x01" + record[at + 1:])
-    target.write_bytes(b"".join(parts))
-    return target
+    def change(record, kind, formats):
+        if formats.get(kind) is None or formats[kind].name != "IMU":
+            return record
+        assert formats[kind].columns[:2] == ("TimeUS", "I")
+        return record + record[:at] + b"\x01" + record[at + 1:]
+
+    return rewrite_dataflash(source, target, change)
 
 
 def test_interleaved_sensor_instances_are_refused_with_the_choice(make_log, tmp_path):
@@ -94,26 +86,17 @@ def test_a_chosen_or_merged_instance_is_read(make_log, tmp_path, choice):
 
 def _before_instance_fields(source, target):
     """The DataFlash log as ArduPilot before 4.1 wrote it: IMU without its instance field."""
-    from adapters.mavlink_scan import index_file
-
-    index = index_file(source, "bin")
-    imu = next(t for t, f in index.formats.items() if f.name == "IMU")
-    data, ends = bytes(index.data), np.append(index.offsets[1:], index.data.size)
     at = 3 + 8                                                     # header, TimeUS: then I
-    parts = []
-    for start, end, kind in zip(index.offsets.tolist(), ends.tolist(),
-                                index.type_ids.tolist(), strict=True):
-        record = data[start:end]
-        if kind == imu:
-            record = record[:at] + record[at + 1:]
-        elif record[2] == 128 and record[3] == imu:                # the FMT of IMU
-            fmt = record[9:25].rstrip(b"\0").replace(b"QB", b"Q", 1).ljust(16, b"\0")
-            columns = record[25:89].rstrip(b"\0").replace(b"TimeUS,I,", b"TimeUS,", 1)
-            record = record[:4] + bytes([record[4] - 1]) + record[5:9] + fmt + \
-                columns.ljust(64, b"\0")
-        parts.append(record)
-    target.write_bytes(b"".join(parts))
-    return target
+
+    def change(record, kind, formats):
+        if formats.get(kind) is not None and formats[kind].name == "IMU":
+            return record[:at] + record[at + 1:]
+        if kind == FMT_TYPE and formats.get(record[3]) is not None and \
+                formats[record[3]].name == "IMU":
+            return refit_format(record, (b"QB", b"TimeUS,I,"), (b"Q", b"TimeUS,"), 1)
+        return record
+
+    return rewrite_dataflash(source, target, change)
 
 
 def test_the_first_instance_reads_a_log_from_before_instance_fields(make_log, tmp_path):
@@ -130,6 +113,43 @@ def test_the_first_instance_reads_a_log_from_before_instance_fields(make_log, tm
     # Another instance than the first is no such message there: the field is said missing.
     line = _refusal(old, _profile(tmp_path, 'field = "GyrZ"', 'field = "GyrZ", where = { I = 1 }'))
     assert "IMU has no field 'I' (signal yaw_rate)" in line
+
+
+def _in_milliseconds(source, target):
+    """The DataFlash log as ArduPilot 3.2 and before wrote it: TimeMS (ms, 32 bits) first in
+    each record instead of TimeUS (µs, 64 bits)."""
+    import struct
+
+    def timed(formats, type_id):
+        declared = formats.get(type_id)
+        return declared is not None and declared.columns[:1] == ("TimeUS",)
+
+    def change(record, kind, formats):
+        if kind == FMT_TYPE and timed(formats, record[3]):
+            return refit_format(record, (b"Q", b"TimeUS"), (b"I", b"TimeMS"), 4)
+        if timed(formats, kind):
+            (time_us,) = struct.unpack_from("<Q", record, 3)
+            return record[:3] + struct.pack("<I", time_us // 1000) + record[11:]
+        return record
+
+    return rewrite_dataflash(source, target, change)
+
+
+def test_a_log_timed_in_milliseconds_reads_the_same(make_log, tmp_path):
+    new = make_log("paper-normal", 11, "bin")
+    old = _in_milliseconds(new, tmp_path / "old.bin")
+    reports = []
+    for log in (new, old):
+        result = runner.invoke(app, ["diagnose", str(log), "--json",
+                                     str(tmp_path / f"{log.stem}.json")])
+        assert result.exit_code == 0, result.output
+        reports.append(json.loads((tmp_path / f"{log.stem}.json").read_text()))
+    # The same to the millisecond its clock keeps.
+    assert reports[1]["duration_s"] == pytest.approx(reports[0]["duration_s"], abs=0.002)
+    assert reports[1]["verdict"] == reports[0]["verdict"]
+    for ours, theirs in zip(reports[0]["segments"], reports[1]["segments"], strict=True):
+        assert (theirs["name"], theirs["b"]) == (ours["name"], ours["b"])
+        assert theirs["start_s"] == pytest.approx(ours["start_s"], abs=0.002)
 
 
 def test_inspect_shows_the_valid_fields_of_a_misspelt_one(make_log, tmp_path):
