@@ -388,6 +388,10 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
                "logs trained on) take the margin rule" in warning
                for warning in calibration.warnings)
     assert calibration.change_trained_on == tuple(path.name for path in normal)
+    from auvdiag_cli.reports.training import calibration_lines
+
+    assert any("largest on these logs and the 3 trained on -> threshold" in line
+               for line in calibration_lines(calibration))
     # A log trained on and calibrated with counts once.
     again = api.calibrate([*normal[:1], *calibration_logs], profile,
                           api.load_model(tmp_path / "model", profile),
