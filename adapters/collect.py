@@ -1,7 +1,9 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
+import operator
 from array import array
 from collections.abc import Callable, Iterable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -45,13 +47,13 @@ class _Extractor:
 
     def matches(self, message: Any) -> bool:
         return all(_text(get(message)) == value for key, get, value in self.where
-                   if not _before_instances(key, value, _resolves(message, key)))
+                   if not _before_instances(key, value, partial(_resolves, message, key)))
 
     def filters(self, fields: Sequence[str]) -> list[tuple[str, str]]:
         """The `where` conditions messages with these fields are filtered on: none on an
         instance field they lack when the first instance is wanted (`FIRST_INSTANCE`)."""
         return [(key, value) for key, value in self.source.where
-                if not _before_instances(key, value, key in fields)]
+                if not _before_instances(key, value, partial(operator.contains, fields, key))]
 
     def rows_matching(self, column: ColumnSource, rows: int, fields: Sequence[str]
                       ) -> np.ndarray:
@@ -75,10 +77,11 @@ class _Extractor:
         return None
 
 
-def _before_instances(key: str, value: str, present: bool) -> bool:
+def _before_instances(key: str, value: str, present: Callable[[], bool]) -> bool:
     """A `where` on the first instance of a sensor, on a message from before instance
-    fields: it is that instance."""
-    return not present and key in INSTANCE_FIELDS and value == FIRST_INSTANCE
+    fields: it is that instance. ``present`` (whether the message has the field) is asked
+    only then: on the per-message path it costs a field lookup a message."""
+    return key in INSTANCE_FIELDS and value == FIRST_INSTANCE and not present()
 
 
 def _with_state_before(flag: Series, start_ns: int) -> Series:
