@@ -51,6 +51,8 @@ class RelationLog:
     commands: np.ndarray
     sensors: np.ndarray
     usable: np.ndarray
+    # Actuator outputs that are not commands (read for the effort check only), if any.
+    outputs: np.ndarray | None = None
 
 
 def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:

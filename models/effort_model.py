@@ -34,7 +34,8 @@ LEARNT_MIN_LEVEL = 0.5        # of the median operating level: steady from there
 
 @dataclass(frozen=True)
 class EffortLog:
-    """One log's commands on the model grid, and the steps that may be judged."""
+    """One log's actuator signals (commands, outputs) on the model grid, and the steps that
+    may be judged."""
 
     name: str
     commands: np.ndarray          # (steps, n_commands)
@@ -42,7 +43,10 @@ class EffortLog:
     command_names: tuple[str, ...]
 
     def group_commands(self, group: EffortGroup) -> np.ndarray:
-        columns = [self.command_names.index(name) for name in group.members]
+        return self.group_commands_of(group.members)
+
+    def group_commands_of(self, members: Sequence[str]) -> np.ndarray:
+        columns = [self.command_names.index(name) for name in members]
         return self.commands[:, columns]
 
     def group_efforts(self, group: EffortGroup) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

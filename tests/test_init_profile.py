@@ -153,6 +153,31 @@ def test_a_csv_whose_command_names_are_unknown_proposes_the_held_columns_as_comm
     assert set(profile.sensor_names) == {"speed_over_ground_xyz", "heading_noise"}
 
 
+def test_a_log_with_set_points_is_drafted_as_a_closed_loop_with_outputs(tmp_path):
+    """Set points and motor outputs in one log: the set points drive the model, the motors
+    are outputs read for the effort check only, grouped as acting alike."""
+    import numpy as np
+
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    rng = np.random.default_rng(5)
+    steps = 800
+    roll = np.repeat(rng.uniform(-0.3, 0.3, steps // 40 + 1), 40)[:steps]
+    motors = 0.5 + 0.05 * rng.standard_normal((steps, 4))
+    log, draft = tmp_path / "flight.csv", tmp_path / "draft.toml"
+    rows = ["time,roll_commanded,motor_1,motor_2,motor_3,motor_4,roll_rate"]
+    rows += [f"{0.05 * k:.2f},{roll[k]:.3f}," + ",".join(f"{m:.4f}" for m in motors[k])
+             + f",{rng.normal(0, 0.1):.4f}" for k in range(steps)]
+    log.write_text("\n".join(rows) + "\n")
+    text = _draft_and_inspect(log, draft)
+    assert "[[outputs]]" in text and "move an output to [[commands]]" in text
+    profile = load_profile(draft)
+    assert profile.command_names == ("roll_commanded",)
+    assert profile.commands[0].kind == "set_point"
+    assert profile.output_names == ("motor_1", "motor_2", "motor_3", "motor_4")
+    assert [sorted(g.members) for g in profile.effort_groups] == [list(profile.output_names)]
+
+
 def test_the_documented_minimal_profile_loads_and_reads_a_log(tmp_path):
     """The tutorial's complete minimal profile is a working profile, not a sketch."""
     from auvdiag_cli.vehicle.profile import load_profile

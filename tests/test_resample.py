@@ -148,3 +148,24 @@ def test_the_centred_median_is_pandas_rolling_median(window, min_periods):
         expected = pd.Series(values).rolling(window, center=True,
                                              min_periods=min_periods).median().to_numpy()
         np.testing.assert_allclose(centred_median(values, window, min_periods), expected)
+
+
+def test_outputs_are_held_for_the_effort_alone_and_shape_nothing_else():
+    """An actuator output (read for the effort check only) that starts late, falls silent
+    and comes back: held where heard, NaN before, inside its gap and where the log lacks it;
+    the grid and the sensors are those without it."""
+    times = [k / 10 for k in range(41)]
+    late = [t for t in times if 0.8 <= t <= 1.5 or t >= 3.0]
+    frame = resample(signals(c=(times, [0.5] * 41), s=(times, times),
+                             out=(late, [2.0 if t < 2 else 3.0 for t in late]),
+                             empty=([1.0], [float("nan")])),
+                     ("c",), ("s",), 0.1, output_names=("out", "empty", "absent"))
+    assert frame.time_s[0] == 0.0 and frame.time_s[-1] == pytest.approx(4.0)
+    assert not np.isnan(frame.sensors).any() and not frame.restarts
+    out = frame.outputs[:, 0]
+    assert np.isnan(out[frame.time_s < 0.75]).all()
+    assert (out[(frame.time_s > 0.75) & (frame.time_s < 1.55)] == 2.0).all()
+    assert np.isnan(out[(frame.time_s > 1.6) & (frame.time_s < 2.9)]).all()
+    assert (out[frame.time_s > 3.05] == 3.0).all()
+    assert np.isnan(frame.outputs[:, 1:]).all()
+    assert frame.efforts.shape == (len(frame.time_s), 4)

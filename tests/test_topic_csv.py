@@ -254,7 +254,8 @@ def test_a_profile_drafted_from_an_alfa_folder_takes_set_points_as_set_points(tm
     result = runner.invoke(app, ["init-profile", str(folder), "--output", str(drafted)])
     assert result.exit_code == 0, result.output
     profile = load_profile(drafted)
-    set_points = [c for c in profile.commands if c.description.endswith(" commanded")]
-    assert set_points and all(c.kind == "set_point" for c in set_points)
+    assert {"roll_commanded", "pitch_commanded"} <= set(profile.command_names)
+    assert all(c.kind == "set_point" for c in profile.commands)
+    assert "throttle" in profile.output_names      # read for the effort check only
     assert not any(set(g.members) & {c.name for c in profile.commands
                                      if c.kind == "set_point"} for g in profile.effort_groups)

@@ -316,7 +316,7 @@ def _check_effort(log: IngestedLog, segments: list[Segment], judging: Judging,
                 why or "the model has no effort model (train it again to learn one)"))
         return None
     frame = log.frame
-    return check_effort(effort, profile, frame.commands,
+    return check_effort(effort, profile, frame.efforts,
                         mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
 
 

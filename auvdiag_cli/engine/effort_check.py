@@ -317,19 +317,32 @@ def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndar
                         fit.sigma(setup.window_s))
 
 
-def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
+def _unread(members: Sequence[str], log: EffortLog) -> str | None:
+    """Why a group cannot be judged on this log: an actuator the profile does not read, or
+    an output this log lacks."""
+    missing = [m for m in members if m not in log.command_names]
+    if missing:
+        return (f"not judged (the model's group holds {', '.join(missing)}, which the profile "
+                "does not read)")
+    columns = log.group_commands_of(members)
+    absent = [m for k, m in enumerate(members) if not np.isfinite(columns[:, k]).any()]
+    return f"not judged (this log has no {', '.join(absent)})" if absent else None
+
+
+def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                  usable: np.ndarray, time_s: np.ndarray) -> EffortCheck:
-    """Judge one log's effort shares (``usable``: operating and not a DMS run)."""
-    log = EffortLog("", commands, usable, profile.command_names)
-    component = {c.name: c.component for c in profile.commands}
+    """Judge one log's effort shares (``efforts``: the commands, then the actuator outputs;
+    ``usable``: operating and not a DMS run)."""
+    log = EffortLog("", efforts, usable, profile.effort_names)
+    component = {c.name: c.component for c in profile.effort_actuators}
     actuators: list[ActuatorEffort] = []
     series: list[EffortSeries] = []
     # (alarm, onset, its error, group) of each group that alarmed
     onsets: list[tuple[float, float, float | None, str]] = []
     for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
         members = setup.group.members
-        why = refused
-        if fit is not None and model.thresholds is not None:
+        why = refused if refused is not None else _unread(members, log)
+        if why is None and fit is not None and model.thresholds is not None:
             _, level, ok = log.group_efforts(setup.group)
             steady_s = float(setup.steady(level, ok).sum()) * model.dt_s
             if steady_s < setup.needs_s():
@@ -337,8 +350,8 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
                        f"at {setup.min_level:.3g} of full scale or more, needs "
                        f"{setup.needs_s():.0f} s)")
         if why is not None or fit is None or model.thresholds is None:
-            actuators += [ActuatorEffort(m, component[m], setup.group.name, None, None, None,
-                                         None, None, why) for m in members]
+            actuators += [ActuatorEffort(m, component.get(m, m), setup.group.name, None, None,
+                                         None, None, None, why) for m in members]
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma) = _judge_group(
             setup, fit, model.thresholds, log, time_s, model.dt_s)
@@ -353,7 +366,7 @@ def check_effort(model: EffortModel, profile: Profile, commands: np.ndarray,
     matches = signature_matches(actuators)
     named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
-    kinds = {c.name: c.failure for c in profile.commands}
+    kinds = {c.name: c.failure for c in profile.effort_actuators}
     failure = next((kinds[a.name] for a in actuators if a.driven_harder), "")
     return EffortCheck(tuple(actuators), model.false_alarm_rate,
                        None if first is None else round(first[0], 3),

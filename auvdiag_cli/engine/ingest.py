@@ -45,7 +45,8 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
                                  "its own clock")
     try:
         frame = resample(signals, profile.command_names, profile.sensor_names, profile.dt_s,
-                         max_gap_s, profile.idle_after_s, profile.input_names)
+                         max_gap_s, profile.idle_after_s, profile.input_names,
+                         profile.output_names)
     except NeverOperates as error:
         raise LogNotOperating(path, str(error)) from None
     except ValueError as error:
@@ -56,6 +57,8 @@ def ingest(path: Path, profile: Profile, max_gap_s: float = 1.0, part: Part = WH
         frame.flat_inputs = flat_sensors(frame.inputs, frame.input_names, profile.dt_s) | {
             name: ABSENT for name in frame.input_names if name not in signals.series}
         frame.notes += flat_input_notes(frame.flat_inputs)
+    frame.notes += [f"{name} {ABSENT}: an actuator output only the effort check reads"
+                    for name in frame.output_names if name not in signals.series]
     frame.notes += remove_spikes(frame.sensors, frame.time_s, frame.sensor_names,
                                  profile.full_scales)
     return IngestedLog(signals, frame)

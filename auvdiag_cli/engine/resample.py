@@ -18,6 +18,10 @@ Method (documented for users in docs/method.md):
   like sensors but drive the model like commands: a gap in one is treated as a command gap;
   one the log lacks altogether (`LogSources.optional`) reads 0 throughout, as a channel
   nothing fed (`ingest` holds it at its typical value);
+- actuator outputs (the profile's ``[[outputs]]``, read for the effort check only) are
+  held like commands but drive nothing and set neither the grid nor the gaps of the
+  others: they are NaN inside their own gaps, before they are first heard, long after they
+  are last heard, and throughout where the log lacks them;
 - where the profile names an operating flag (armed, under way), time when it is clear is
   treated like a command gap: sensors NaN, never judged or trained on, and the replay
   restarts from the measured state when operation begins again;
@@ -78,6 +82,9 @@ class AlignedFrame:
     not_operating_s: float = 0.0        # time on the grid the vehicle was not operating
     flat: dict[str, str] = field(default_factory=dict)   # sensor -> what it reads throughout
     flat_inputs: dict[str, str] = field(default_factory=dict)   # the same of the inputs
+    # Actuator outputs read for the effort check only, held; NaN in gaps and where absent.
+    outputs: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (steps, n_outputs)
+    output_names: tuple[str, ...] = ()
 
     def sensor(self, name: str) -> np.ndarray:
         return self.sensors[:, self.sensor_names.index(name)]
@@ -90,6 +97,11 @@ class AlignedFrame:
     def drive_with(self, commands: np.ndarray) -> np.ndarray:
         """`drive`, with other commands (a fault assumed) and this log's measured inputs."""
         return np.hstack([commands, self.inputs]) if self.input_names else commands
+
+    @property
+    def efforts(self) -> np.ndarray:
+        """What the effort check reads: the commands, then the actuator outputs."""
+        return np.hstack([self.commands, self.outputs]) if self.output_names else self.commands
 
 
 def _unjump(series: Series, name: str, max_gap_ns: int, start_ns: int, notes: list[str]
@@ -204,6 +216,14 @@ def _held(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray) -> np.n
     return values[np.clip(index, 0, None)]
 
 
+def _held_output(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray,
+                 max_gap_ns: int) -> np.ndarray:
+    """An output held, unknown (NaN) before it is first heard and long after it is last."""
+    held = _held(times_ns, values, grid_ns)
+    held[(grid_ns < times_ns[0]) | (grid_ns > times_ns[-1] + max_gap_ns)] = np.nan
+    return held
+
+
 def _bin_mean(times_ns: np.ndarray, values: np.ndarray, grid_ns: np.ndarray, dt_ns: int
               ) -> np.ndarray:
     right = np.searchsorted(times_ns, grid_ns, side="right")
@@ -249,21 +269,33 @@ def _operating_steps(signals: Signals, grid_ns: np.ndarray, commands: np.ndarray
     return operating
 
 
+def _cleaned(signals: Signals, required: tuple[str, ...], optional: tuple[str, ...],
+             output_names: tuple[str, ...], max_gap_ns: int, notes: list[str]
+             ) -> dict[str, Series]:
+    """Each signal cleaned: one without a usable sample refused, but an ``optional`` one
+    (a measured input, an output) the log lacks left out, and an output without a usable
+    sample too."""
+    cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
+               for name in required + optional if name in signals.series or name in required}
+    cleaned = {n: c for n, c in cleaned.items() if len(c) or n not in output_names}
+    empty = [name for name, series in cleaned.items() if not len(series)]
+    if empty:
+        raise ValueError(f"no usable samples for {', '.join(empty)}")
+    return cleaned
+
+
 def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tuple[str, ...],
              dt_s: float, max_gap_s: float = 1.0, idle_after_s: float | None = None,
-             input_names: tuple[str, ...] = ()) -> AlignedFrame:
+             input_names: tuple[str, ...] = (), output_names: tuple[str, ...] = ()
+             ) -> AlignedFrame:
     """Align ``signals`` on a Δt grid as described in the module docstring."""
     notes: list[str] = []
     max_gap_ns = round(max_gap_s * NS_PER_S)
-    cleaned = {name: _clean(signals.series[name], name, max_gap_ns, signals.start_ns, notes)
-               for name in command_names + sensor_names + input_names
-               if name in signals.series or name not in input_names}
+    cleaned = _cleaned(signals, command_names + sensor_names, input_names + output_names,
+                       output_names, max_gap_ns, notes)
     drives = command_names + input_names
-    empty = [name for name, s in cleaned.items() if not len(s)]
-    if empty:
-        raise ValueError(f"no usable samples for {', '.join(empty)}")
     dt_ns = round(dt_s * NS_PER_S)
-    grid_ns = _grid(cleaned, dt_ns)
+    grid_ns = _grid({n: c for n, c in cleaned.items() if n not in output_names}, dt_ns)
     gaps: list[Gap] = []
     columns: dict[str, np.ndarray] = {}
     blind = np.zeros(len(grid_ns), dtype=bool)     # inside a command gap
@@ -274,6 +306,8 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         if name in command_names:
             columns[name] = _held(times_ns, values, grid_ns)
             command_rates[name] = _rate_hz(times_ns)
+        elif name in output_names:
+            columns[name] = _held_output(times_ns, values, grid_ns, max_gap_ns)
         else:
             columns[name] = _bin_mean(times_ns, values, grid_ns, dt_ns)
         for start_ns, end_ns in _gaps(times_ns, max_gap_ns):
@@ -304,11 +338,19 @@ def resample(signals: Signals, command_names: tuple[str, ...], sensor_names: tup
         slow_commands=slow_commands,
         restarts=sorted(r for r in restarts if 0 < r < len(grid_ns)),
         operating=operating,
-        inputs=np.array([columns.get(n, np.zeros(len(grid_ns))) for n in input_names],
-                        float).reshape(len(input_names), len(grid_ns)).T,
+        inputs=_stacked(columns, input_names, len(grid_ns), 0.0),
         input_names=input_names,
+        outputs=_stacked(columns, output_names, len(grid_ns), np.nan),
+        output_names=output_names,
         not_operating_s=float((~operating).sum()) * dt_s,
     ), blind, grid_ns)
+
+
+def _stacked(columns: dict[str, np.ndarray], names: tuple[str, ...], steps: int,
+             absent: float) -> np.ndarray:
+    """(steps, len(names)) of these columns, ``absent`` for one the log lacks."""
+    return np.array([columns.get(n, np.full(steps, absent)) for n in names],
+                    float).reshape(len(names), steps).T
 
 
 def _without_long_blind_runs(frame: AlignedFrame, blind: np.ndarray, grid_ns: np.ndarray
@@ -326,4 +368,5 @@ def _without_long_blind_runs(frame: AlignedFrame, blind: np.ndarray, grid_ns: np
             "restarts after each such stretch")
     return replace(frame, time_s=frame.time_s[keep], commands=frame.commands[keep],
                    sensors=frame.sensors[keep], operating=frame.operating[keep],
-                   inputs=frame.inputs[keep], restarts=restarts, notes=[*frame.notes, note])
+                   inputs=frame.inputs[keep], outputs=frame.outputs[keep], restarts=restarts,
+                   notes=[*frame.notes, note])

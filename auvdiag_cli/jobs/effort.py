@@ -3,6 +3,8 @@ part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused
@@ -12,15 +14,16 @@ from models.effort_model import EffortLog, EffortModel, learn_effort
 
 NO_GROUPS = ("not judged (the profile declares no actuators that act alike: add [[effort]] "
              "groups)")
-# A model driven by set points reads no actuator outputs: no group could be added.
-NO_OUTPUTS = ("not judged (the profile's commands are the controller's set points: it reads no "
-              "actuator outputs whose shares could be compared)")
+# A model driven by set points reads actuator outputs only where the profile lists them.
+NO_OUTPUTS = ("not judged (the profile's commands are the controller's set points and it reads "
+              "no actuator outputs: list them in [[outputs]] and group them in [[effort]])")
 
 
 def effort_log(log: RelationLog, profile: Profile) -> EffortLog:
     """The steps an effort share may speak for are those a command relation may: operating,
     outside the DMS runs (fixed commands, not a controller's)."""
-    return EffortLog(log.name, log.commands, log.usable, profile.command_names)
+    efforts = log.commands if log.outputs is None else np.hstack([log.commands, log.outputs])
+    return EffortLog(log.name, efforts, log.usable, profile.effort_names)
 
 
 def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
@@ -28,7 +31,8 @@ def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
                        ) -> tuple[EffortModel | Refused, list[str]]:
     """The effort model (or why there is none), and notes on logs left out."""
     if not profile.effort_groups:
-        set_points_only = all(c.kind == SET_POINT for c in profile.commands)
+        set_points_only = not profile.outputs and all(
+            c.kind == SET_POINT for c in profile.commands)
         return Refused(NO_OUTPUTS if set_points_only else NO_GROUPS), []
     model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
                                 profile.dt_s, false_alarm_rate)

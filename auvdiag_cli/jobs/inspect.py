@@ -51,6 +51,8 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
     step = f"{profile.dt_s:g} s step"
     if name in profile.command_names:
         return f"held: the last command at each {step}"
+    if name in profile.output_names:
+        return f"held: the last output at each {step}, read for the effort check only"
     if name not in profile.sensor_names + profile.input_names:
         return "a flag: the last value holds"
     per_step = (rate_hz or 0.0) * profile.dt_s

@@ -229,8 +229,9 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                     ", CTUN CRt in cm/s)" if factor == -0.01 else ")")
             full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
             sensors.append(Proposal(name, source, unit, check, _nice(full_scale)))
-    commands = _unique(commands)
-    return commands, _unique(sensors), effort_groups(commands, _repeated(commands, command_values))
+    named = _unique(commands + sensors)
+    commands, sensors = named[:len(commands)], named[len(commands):]
+    return commands, sensors, effort_groups(commands, _repeated(commands, command_values))
 
 
 def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
@@ -243,6 +244,12 @@ def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozens
 
 
 def _unique(proposals: list[Proposal]) -> list[Proposal]:
+    """Names told apart: a field name that several topics share takes its topic's last part
+    (nav_info/roll `commanded` -> roll_commanded); one still alike a count."""
+    shared = {p.name for p in proposals if [q.name for q in proposals].count(p.name) > 1}
+    proposals = [replace(p, name=_signal_name("", f"{p.source.topic.rsplit('/', 1)[-1]}_"
+                                                  f"{p.name}")) if p.name in shared else p
+                 for p in proposals]
     seen: dict[str, int] = {}
     unique = []
     for proposal in proposals:
@@ -328,12 +335,21 @@ def _render(path: Path, name: str, family: str, commands: list[Proposal],
              "# what the log cannot tell: read them before you train.", "",
              "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
              "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
+    # With set points in the log, the model follows the closed loop: driven by the set
+    # points, the actuators read for the effort check only.
+    closed_loop = any(is_set_point(p) for p in commands)
+    if closed_loop:
+        lines += ["# The log holds the controller's set points: they drive the model (how the "
+                  "vehicle follows", "# them is what a model predicts best), and the "
+                  "actuator outputs are [[outputs]], read", "# for the effort check only. "
+                  "CHECK: move an output to [[commands]] to drive the model by it.", ""]
     for proposal in commands:
         kind = ('kind = "set_point"   # CHECK: a controller\'s set point (drives a model of '
                 'the closed loop; no actuator)' if is_set_point(proposal) else
-                'kind = "thruster"   # CHECK: thruster, rotor, control_surface, engine or '
-                'set_point')
-        lines += ["[[commands]]", f'name = "{proposal.name}"',
+                'kind = "thruster"   # CHECK: thruster, rotor, control_surface or engine' + (
+                    "" if closed_loop else " (or set_point)"))
+        table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"
+        lines += [table, f'name = "{proposal.name}"',
                   f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
     for proposal in sensors:

@@ -8,14 +8,14 @@ from models.effort import EffortGroup
 
 
 def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
-    """``[[effort]]``: ``name``, ``actuators`` (two or more commands), optional ``factors``
-    (the frame's mixing factor of each, by magnitude), ``min_level`` (steady from this
-    command level up) and ``window_s``."""
+    """``[[effort]]``: ``name``, ``actuators`` (two or more commands or outputs), optional
+    ``factors`` (the frame's mixing factor of each, by magnitude), ``min_level`` (steady from
+    this command level up) and ``window_s``."""
     members = reader.get("actuators", list)
     unknown = [m for m in members if m not in names]
     if unknown or len(members) < 2 or len(set(members)) != len(members):
         raise ProfileError(f"key '{reader.key('actuators')}' must name two or more distinct "
-                           f"commands (the profile's: {', '.join(names)})")
+                           f"commands or outputs (the profile's: {', '.join(names)})")
     factors = reader.get("factors", list, [1.0] * len(members))
     if len(factors) != len(members) or not all(
             isinstance(f, int | float) and not isinstance(f, bool) and f != 0 for f in factors):
@@ -32,8 +32,9 @@ def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
 
 def parse_effort_groups(rows: list[TableReader], kinds: dict[str, str]
                         ) -> tuple[EffortGroup, ...]:
-    """The [[effort]] groups (``kinds``: each command's kind), each of actuators of one kind:
-    their shares compare like with like, and a departure is worded for that kind."""
+    """The [[effort]] groups (``kinds``: each command's and output's kind), each of actuators
+    of one kind: their shares compare like with like, and a departure is worded for that
+    kind."""
     groups = []
     for reader in rows:
         group = parse_effort_group(reader, list(kinds))

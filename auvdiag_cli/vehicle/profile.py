@@ -2,7 +2,7 @@
 
 import math
 import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -16,12 +16,8 @@ from auvdiag_cli.vehicle.actuators import (
     parse_kind,
     parse_moved_by,
 )
-from auvdiag_cli.vehicle.controller import (
-    CONTROLLER_KINDS,
-    EFFORTS,
-    ControllerGains,
-    ControllerSpec,
-)
+from auvdiag_cli.vehicle.controller import ControllerSpec
+from auvdiag_cli.vehicle.controller_table import parse_controller
 from auvdiag_cli.vehicle.effort_groups import parse_effort_groups
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
@@ -35,6 +31,9 @@ ROUTINE_THRESHOLDS = "routine"     # thresholds shared by every DMS without its 
 
 @dataclass(frozen=True)
 class Command:
+    """A command that drives the model or, in ``[[outputs]]``, an actuator output that only
+    the effort check reads."""
+
     name: str
     component: str
     description: str
@@ -126,6 +125,9 @@ class Profile:
     inputs: tuple[Input, ...] = ()
     # The parts that move the vehicle where they are not its commands ([[actuators]]).
     actuators: tuple[Actuator, ...] = ()
+    # Actuator outputs read for the effort check only: a model driven by the controller's set
+    # points does not read them, yet what each actuator carries is judged ([[outputs]]).
+    outputs: tuple[Command, ...] = ()
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -134,6 +136,19 @@ class Profile:
     @property
     def input_names(self) -> tuple[str, ...]:
         return tuple(i.name for i in self.inputs)
+
+    @property
+    def output_names(self) -> tuple[str, ...]:
+        return tuple(o.name for o in self.outputs)
+
+    @property
+    def effort_actuators(self) -> tuple[Command, ...]:
+        """What an effort group may name: the commands, then the actuator outputs."""
+        return self.commands + self.outputs
+
+    @property
+    def effort_names(self) -> tuple[str, ...]:
+        return self.command_names + self.output_names
 
     @property
     def drive_names(self) -> tuple[str, ...]:
@@ -174,14 +189,22 @@ def _horizon(matching: TableReader) -> float | None:
     return float(value)
 
 
+def _command(reader: TableReader, kinds: tuple[str, ...]) -> Command:
+    return Command(reader.get("name", str), reader.get("component", str),
+                   reader.get("description", str, ""), parse_kind(reader, "thruster", kinds))
+
+
+def _rows(top: TableReader, key: str) -> list[TableReader]:
+    """The rows of an optional array of tables."""
+    return top.items(key) if key in top.table else []
+
+
 def _signals(top: TableReader, actuators: tuple[Actuator, ...]
-             ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...]]:
-    commands = tuple(
-        Command(r.get("name", str), r.get("component", str), r.get("description", str, ""),
-                parse_kind(r, "thruster", (*ACTUATOR_KINDS, SET_POINT)))
-        for r in top.items("commands")
-    )
-    movers = {a.name for a in actuators} | {c.component for c in commands}
+             ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...],
+                        tuple[Command, ...]]:
+    commands = tuple(_command(r, (*ACTUATOR_KINDS, SET_POINT)) for r in top.items("commands"))
+    outputs = tuple(_command(r, tuple(ACTUATOR_KINDS)) for r in _rows(top, "outputs"))
+    movers = {a.name for a in actuators} | {c.component for c in commands + outputs}
     sensors = tuple(
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
@@ -191,17 +214,18 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
     )
     check_weakened(actuators, [s.name for s in sensors])
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
-                   for r in (top.items("inputs") if "inputs" in top.table else []))
+                   for r in _rows(top, "inputs"))
     if not commands or not sensors:
         raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
-    signal_names = [c.name for c in commands] + [s.name for s in sensors] + [
+    signal_names = [c.name for c in commands + outputs] + [s.name for s in sensors] + [
         i.name for i in inputs]
     if len(set(signal_names)) != len(signal_names):
-        raise ProfileError("signal names in 'commands', 'sensors' and 'inputs' must be unique")
+        raise ProfileError("signal names in 'commands', 'sensors', 'inputs' and 'outputs' must "
+                           "be unique")
     if OPERATING in signal_names:
         raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
                            "([sources.FAMILY] operating = {...})")
-    return commands, sensors, inputs
+    return commands, sensors, inputs, outputs
 
 
 def _thresholds(table: TableReader, sensor_names: list[str]) -> dict[str, dict[str, float]]:
@@ -225,15 +249,18 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     top = TableReader(data, "")
     vehicle = top.sub("vehicle")
     actuators = parse_actuators(top.items("actuators")) if "actuators" in data else ()
-    commands, sensors, inputs = _signals(top, actuators)
-    sensor_names, input_names = [s.name for s in sensors], [i.name for i in inputs]
-    signal_names = [c.name for c in commands] + sensor_names + input_names
+    commands, sensors, inputs, outputs = _signals(top, actuators)
+    sensor_names = [s.name for s in sensors]
+    # A log may lack a measured input or an actuator output: the model then holds the input
+    # at its typical value, and the effort check says it cannot judge.
+    optional = [i.name for i in inputs] + [o.name for o in outputs]
+    signal_names = [c.name for c in commands] + sensor_names + optional
     matching = top.sub("matching")
     window = matching.get("window_samples", int)
     if window < 1:
         raise ProfileError("key 'matching.window_samples' must be at least 1")
     thresholds = _thresholds(top.sub("thresholds"), sensor_names)
-    components = ({c.component for c in commands} | {s.component for s in sensors}
+    components = ({c.component for c in commands + outputs} | {s.component for s in sensors}
                   | {a.name for a in actuators})
     pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
@@ -242,11 +269,11 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
 
     sources_table = top.sub("sources")
-    sources = {family: log_sources(sources_table.sub(family), signal_names, input_names)
+    sources = {family: log_sources(sources_table.sub(family), signal_names, optional)
                for family in sources_table.table}
     navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
         else None
-    controller = _controller(top.sub("controller"), sensor_names,
+    controller = parse_controller(top.sub("controller"), sensor_names,
                              [c.name for c in commands]) if "controller" in data else None
     return Profile(
         name=vehicle.get("name", str),
@@ -268,47 +295,12 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         source_path=source_path,
         idle_after_s=positive(top.sub("operating"), "idle_after_s")
         if "operating" in data else None,
-        effort_groups=parse_effort_groups(top.items("effort"), {c.name: c.kind for c in commands})
-        if "effort" in data else (),
+        effort_groups=parse_effort_groups(_rows(top, "effort"),
+                                          {c.name: c.kind for c in commands + outputs}),
         inputs=inputs,
+        outputs=outputs,
         actuators=actuators,
     )
-
-
-def _controller(reader: TableReader, sensor_names: list[str], command_names: list[str]
-                ) -> ControllerSpec:
-    kind = reader.get("kind", str)
-    if kind not in CONTROLLER_KINDS:
-        raise ProfileError(f"key '{reader.key('kind')}' must be one of {CONTROLLER_KINDS}")
-    for key in ("speed", "yaw_rate", "heave", "roll_rate", "pitch_rate", "sway"):
-        if key in reader.table and reader.get(key, str) not in sensor_names:
-            raise ProfileError(f"key '{reader.key(key)}' names no sensor")
-    if kind == "turn-then-go" and "speed" not in reader.table:
-        raise ProfileError(f"key '{reader.key('speed')}' is missing: a turn-then-go "
-                           "controller needs a speed sensor")
-    mix_table = reader.sub("mix")
-    mix = {}
-    for command in mix_table.table:
-        if command not in command_names:
-            raise ProfileError(f"key '{mix_table.key(command)}' names no command")
-        row = mix_table.sub(command)
-        for effort in row.table:
-            if effort not in EFFORTS:
-                raise ProfileError(f"key '{row.key(effort)}' must be one of {EFFORTS}")
-        mix[command] = {effort: row.get(effort, float) for effort in row.table}
-    gains_reader = reader.sub("gains") if "gains" in reader.table else TableReader({}, "gains")
-    known = {f.name for f in fields(ControllerGains)}
-    gains = {}
-    for name in gains_reader.table:
-        if name not in known:
-            raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
-                               f"{kind} (known: {', '.join(sorted(known))})")
-        gains[name] = gains_reader.get(name, float)
-    return ControllerSpec(kind, reader.get("speed", str, None), reader.get("yaw_rate", str),
-                          mix, ControllerGains(**gains), reader.get("heave", str, None),
-                          -1.0 if reader.get("heave_up", bool, False) else 1.0,
-                          reader.get("roll_rate", str, None), reader.get("pitch_rate", str, None),
-                          reader.get("sway", str, None))
 
 
 def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
