@@ -51,8 +51,9 @@ class RelationLog:
     commands: np.ndarray
     sensors: np.ndarray
     usable: np.ndarray
-    # Actuator outputs that are not commands (read for the effort check only), if any.
-    outputs: np.ndarray | None = None
+    # What the effort check reads, where it is more than the commands: the commands, then
+    # the actuator outputs that drive nothing.
+    efforts: np.ndarray | None = None
 
 
 def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:

@@ -3,8 +3,6 @@ part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."
 
 from collections.abc import Sequence
 
-import numpy as np
-
 from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused
@@ -22,7 +20,7 @@ NO_OUTPUTS = ("not judged (the profile's commands are the controller's set point
 def effort_log(log: RelationLog, profile: Profile) -> EffortLog:
     """The steps an effort share may speak for are those a command relation may: operating,
     outside the DMS runs (fixed commands, not a controller's)."""
-    efforts = log.commands if log.outputs is None else np.hstack([log.commands, log.outputs])
+    efforts = log.commands if log.efforts is None else log.efforts
     return EffortLog(log.name, efforts, log.usable, profile.effort_names)
 
 

@@ -34,7 +34,7 @@ def relation_log(log: IngestedLog, profile: Profile) -> RelationLog:
     frame = log.frame
     return RelationLog(log.signals.path.name, frame.commands, frame.sensors,
                        mission_steps(segments_of(log, profile), frame.time_s, frame.operating),
-                       frame.outputs if frame.output_names else None)
+                       frame.efforts if frame.output_names else None)
 
 
 def _split_in_time(log: RelationLog) -> tuple[RelationLog, RelationLog]:
