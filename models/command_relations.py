@@ -51,9 +51,7 @@ class RelationLog:
     commands: np.ndarray
     sensors: np.ndarray
     usable: np.ndarray
-    # What the effort check reads, where it is more than the commands: the commands, then
-    # the actuator outputs that drive nothing.
-    efforts: np.ndarray | None = None
+    efforts: np.ndarray | None = None   # the commands, then outputs only the effort reads
 
 
 def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:

@@ -21,13 +21,16 @@ PAPER_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
 
 @pytest.fixture(scope="module")
 def quick_model(make_log, tmp_path_factory):
-    """A model trained by `auvdiag train` on real logs, with shortened stages."""
+    """A model trained by `auvdiag train` on real logs, with shortened stages; without the
+    network on top of the linear model, a second network's training (test_predictors
+    trains it)."""
     logs = [make_log(name, 11) for name in ("dms-za", "dms-zb", "dms-zc", "paper-normal",
                                              "mission-large-ccw")]
     output = tmp_path_factory.mktemp("model") / "quick"
     result = CliRunner().invoke(app, [
         "train", *map(str, logs), "--holdout", str(make_log("mission-ccw", 12)),
-        "--output", str(output), "--iterations-scale", "0.3", "--hidden", "16"])
+        "--output", str(output), "--iterations-scale", "0.3", "--hidden", "16",
+        "--predictor", "network", "--predictor", "linear", "--predictor", "linear-replay"])
     assert result.exit_code == 0, result.output
     return output, result
 
