@@ -55,7 +55,8 @@ def real_model(tmp_path_factory):
     result = runner.invoke(app, ["train", str(DATA / "small.tlog"), str(DATA / "small.BIN"),
                                  "--holdout", str(DATA / "small.BIN"), "--profile",
                                  "bluerov2_standard", "--output", str(output),
-                                 "--iterations-scale", "0.02", "--keep-unskilled"])
+                                 "--iterations-scale", "0.02", "--keep-unskilled",
+                                 "--predictor", "network", "--predictor", "linear"])
     assert result.exit_code in (0, 1) and (output / "model.json").is_file(), result.output
     assert "are logged at 2.0 Hz" in result.output             # QGroundControl's rate
     return output
