@@ -167,17 +167,22 @@ def inspect(path: Path, profile: Profile | None = None) -> Inspection:
     return inspect_log(path, profile)
 
 
-def draft_profile(path: Path, name: str | None = None, like: str | Path | None = None) -> str:
+def draft_profile(path: Path, name: str | None = None, like: str | Path | None = None,
+                  closed_loop: bool = False) -> str:
     """The TOML text of a starting profile for the vehicle that wrote the log at ``path``
     (fields it cannot place are marked CHECK; ``name`` defaults to the log's), or with
-    ``like`` that profile (a file or a built-in name) with its mapping fitted to the log:
-    `auvdiag init-profile`."""
+    ``like`` that profile (a file or a built-in name) with its mapping fitted to the log;
+    ``closed_loop``: the model driven by the controller's set points (ArduPilot's ATT,
+    RATE, CTUN), the motor outputs read for the effort check only: `auvdiag init-profile`."""
     from auvdiag_cli.jobs.profile_draft import draft_profile as draft
     from auvdiag_cli.jobs.profile_like import draft_like
 
     if like is not None:
+        if closed_loop:
+            raise UsageError("--closed-loop drafts from the log; with --like the profile "
+                             "says what drives its model")
         return draft_like(path, Path(like))
-    return draft(path, name or path.stem)
+    return draft(path, name or path.stem, closed_loop)
 
 
 def train(logs: Sequence[Path], profile: Profile, output: Path, *,

@@ -97,6 +97,44 @@ def test_like_bluerov2_on_real_logs(tmp_path):
         in result.output
 
 
+@pytest.mark.shared_data("ardusub")
+def test_a_closed_loop_draft_of_a_real_ardusub_log(tmp_path):
+    """--closed-loop on a real ArduSub DataFlash log: the controller's attitude and rate set
+    points drive the model, in SI units like what it measured beside each (a sensor), and
+    the thruster outputs are read for the effort check only; the draft resolves."""
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    log = SHARED_DATA / "ardusub" / "small.BIN"
+    drafted = runner.invoke(app, ["init-profile", str(log), "--closed-loop",
+                                  "--output", str(tmp_path / "sub.toml")])
+    assert drafted.exit_code == 0, drafted.output
+    shown = runner.invoke(app, ["inspect", str(log), "--profile", str(tmp_path / "sub.toml")])
+    assert shown.exit_code == 0 and "MISSING" not in shown.stdout, shown.stdout
+    profile = load_profile(tmp_path / "sub.toml")
+    assert {"att_desroll", "rate_rdes", "rate_ydes"} <= set(profile.command_names)
+    assert all(c.kind == "set_point" for c in profile.commands)
+    assert {"att_roll", "rate_r", "rate_y"} <= set(profile.sensor_names)
+    assert profile.sensor("rate_r").unit == "rad/s" and profile.sensor("att_roll").unit == "rad"
+    desired = profile.sources["dataflash"].signals["rate_rdes"]
+    assert (desired.topic, desired.field, desired.scale) == ("RATE", "RDes",
+                                                             pytest.approx(0.0174533))
+    assert profile.output_names and all(
+        profile.sources["dataflash"].signals[n].topic == "RCOU" for n in profile.output_names)
+    # Without it, the same log is drafted from its thruster outputs, as before.
+    plain = runner.invoke(app, ["init-profile", str(log)])
+    assert plain.exit_code == 0 and "[[outputs]]" not in plain.stdout
+    assert "RATE" not in plain.stdout
+
+
+def test_closed_loop_needs_set_points_and_no_like(make_log):
+    log = make_log("paper-normal", 11)
+    refused = runner.invoke(app, ["init-profile", str(log), "--closed-loop"])
+    assert refused.exit_code == 2 and "found no controller set point" in refused.output
+    both = runner.invoke(app, ["init-profile", str(log), "--closed-loop", "--like",
+                               "twin_burger"])
+    assert both.exit_code == 2 and "--closed-loop drafts from the log" in both.output
+
+
 def test_a_csv_whose_sensor_names_are_unknown_gets_every_varying_column_to_check(tmp_path):
     """Columns named as a Crazyflie logs them (stateEstimate_vz, a clock in µs since boot):
     no sensor is recognised by name, so every column that varies is proposed, marked CHECK;

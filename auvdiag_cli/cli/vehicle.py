@@ -106,6 +106,13 @@ def init_profile(
         "--like", help="Start from this profile (a file, or a built-in one such as "
                        "bluerov2_standard) and fit its mapping to the log.", dir_okay=False)
     ] = None,
+    closed_loop: Annotated[bool, typer.Option(
+        "--closed-loop", help="Draft a model of the closed loop from an ArduPilot DataFlash "
+                              "log: the controller's set points (ATT DesRoll, DesPitch; RATE "
+                              "RDes, PDes, YDes; CTUN DCRt) drive the model, what it measured "
+                              "beside each is a sensor, the motor outputs are read for the "
+                              "effort check only. A log whose set points are named commanded, "
+                              "desired or target is drafted so without it.")] = False,
 ) -> None:
     """Write a starting vehicle profile from what a log holds.
 
@@ -120,7 +127,7 @@ def init_profile(
 
     with user_errors(log):
         api.log_format(log)
-        text = api.draft_profile(log, name, like)
+        text = api.draft_profile(log, name, like, closed_loop)
         if output is None:
             typer.echo(text, nl=False)
             return

@@ -7,7 +7,7 @@ cannot tell (units, full scales, which component fails how, thresholds) is writt
 ``CHECK`` comment. The draft loads, and every signal in it resolves on the log it came from."""
 
 import re
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +15,8 @@ import numpy as np
 from adapters import LogInventory, inventory, read_log
 from adapters.csv_log import csv_rows
 from adapters.recognise import is_number
-from adapters.signals import OPERATING, FieldSource, LogSources, TimeColumn
+from adapters.signals import FieldSource, LogSources, TimeColumn
+from auvdiag_cli.jobs.draft_text import Proposal, is_set_point, render_draft
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -29,25 +30,21 @@ SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_vel
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
                           r"^EKF_|^REQUEST_|^PARAM)", re.IGNORECASE)
-# A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
-# it drives a model of the closed loop, but it is no actuator.
-SET_POINT_NAME = re.compile(r"(commanded|desired|^des|setpoint|set_point|target)",
-                            re.IGNORECASE)
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNORECASE)
 MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
 HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
-
-
-@dataclass(frozen=True)
-class Proposal:
-    name: str
-    source: FieldSource
-    unit: str
-    check: str            # what the user must check
-    full_scale: float = 1.0
-    level: float = 0.0    # a command's median magnitude where it is not neutral
-    two_way: bool = False  # a command that also runs negative (a thruster that reverses)
+DEGREES = 0.017453292519943295
+# ArduPilot's controllers log each set point beside what they measured (Copter and Sub:
+# ATT in degrees, RATE in deg/s, CTUN's climb rates in cm/s): message -> (set point,
+# measured, scale to SI, unit). The climb rates are negated like a drafted climb (down
+# positive, as a depth rate).
+ARDUPILOT_SET_POINTS = {
+    "ATT": (("DesRoll", "Roll", DEGREES, "rad"), ("DesPitch", "Pitch", DEGREES, "rad")),
+    "RATE": (("RDes", "R", DEGREES, "rad/s"), ("PDes", "P", DEGREES, "rad/s"),
+             ("YDes", "Y", DEGREES, "rad/s")),
+    "CTUN": (("DCRt", "CRt", -0.01, "m/s"),),
+}
 
 
 ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
@@ -73,20 +70,37 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
     return [group for group in names if frozenset(group) not in identical]
 
 
-def is_set_point(proposal: Proposal) -> bool:
-    return bool(SET_POINT_NAME.search(proposal.source.field.rsplit(".", 1)[-1]))
-
-
 def _signal_name(topic: str, field: str) -> str:
     text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
     return text.lower() or "signal"
 
 
-def _candidates(contents: LogInventory, family: str, every_field: bool = False
-                ) -> list[tuple[str, FieldSource]]:
-    """(kind, source) for every field whose name or topic looks like a command or a sensor;
-    ``every_field``: any other field is a sensor too (names this does not recognise)."""
+def _set_point_pairs(contents: LogInventory) -> list[tuple[str, FieldSource]]:
+    """("set_point", source) and ("sensor", source) of each ArduPilot set point the log
+    holds beside what was measured (`ARDUPILOT_SET_POINTS`)."""
     found: list[tuple[str, FieldSource]] = []
+    for topic in contents.topics:
+        for desired, measured, _, _ in ARDUPILOT_SET_POINTS.get(topic.name, ()):
+            if {desired, measured} <= set(topic.fields):
+                found += [("set_point", FieldSource(topic.name, desired)),
+                          ("sensor", FieldSource(topic.name, measured))]
+    return found
+
+
+def _paired(source: FieldSource) -> tuple[float, str] | None:
+    """The scale to SI and the unit of an ArduPilot set point or what was measured beside
+    it; None for any other field."""
+    return next(((scale, unit) for desired, measured, scale, unit
+                 in ARDUPILOT_SET_POINTS.get(source.topic, ())
+                 if source.field in (desired, measured)), None)
+
+
+def _candidates(contents: LogInventory, family: str, every_field: bool = False,
+                closed_loop: bool = False) -> list[tuple[str, FieldSource]]:
+    """(kind, source) for every field whose name or topic looks like a command or a sensor;
+    ``every_field``: any other field is a sensor too (names this does not recognise);
+    ``closed_loop``: ArduPilot's set points and what was measured beside them too."""
+    found = _set_point_pairs(contents) if closed_loop and family == "dataflash" else []
     for topic in contents.topics:
         if topic.count < 2:
             continue
@@ -184,12 +198,14 @@ def _holds_its_value(series: np.ndarray) -> bool:
 
 
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
-               every_field: bool = False, guess_commands: bool = False
+               every_field: bool = False, guess_commands: bool = False,
+               closed_loop: bool = False
                ) -> tuple[list[Proposal], list[Proposal], list[list[str]]]:
     """``every_field``: fields with unknown names are sensors; ``guess_commands``: those of
-    them that hold their value between changes are commands (marked CHECK)."""
+    them that hold their value between changes are commands (marked CHECK);
+    ``closed_loop``: ArduPilot's set points (`ARDUPILOT_SET_POINTS`) are commands."""
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
-           for kind, source in _candidates(contents, family, every_field)}
+           for kind, source in _candidates(contents, family, every_field, closed_loop)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
     commands, sensors = [], []
     command_values: list[np.ndarray] = []
@@ -198,8 +214,16 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         if series is None or series.size < 2 or not np.nanstd(series) > 0:
             continue                                   # not in the log, or never moves
         name = _signal_name(source.topic, source.field)
+        paired = _paired(source) if closed_loop else None
+        if paired is not None:
+            name = _signal_name("", f"{source.topic}_{source.field}")
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
-        if kind == "command" or guessed:
+        if kind == "set_point" and paired is not None:
+            commands.append(Proposal(name, replace(source, scale=paired[0]), paired[1],
+                                     "the controller's set point, in the unit of what it "
+                                     "measured beside it", set_point=True))
+            command_values.append(series * paired[0])
+        elif kind == "command" or guessed:
             pwm = 800 <= float(np.nanmedian(series)) <= 2200
             converted = replace(source, scale=PWM_SCALE, offset=-PWM_CENTRE_US * PWM_SCALE) \
                 if pwm else source
@@ -216,9 +240,11 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                                      two_way=bool((value < -NEUTRAL).any())))
             command_values.append(value)
         else:
-            unit = _sensor_unit(source.field)
+            unit = _sensor_unit(source.field) if paired is None else paired[1]
             check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
-            if not SENSOR_NAME.search(source.field):
+            if paired is not None:
+                source, check = replace(source, scale=paired[0]), "as its set point's"
+            elif not SENSOR_NAME.search(source.field):
                 check = ("not recognised by its name: keep it only if it measures the "
                          "vehicle's motion (remove battery, position fixes, bookkeeping); "
                          + check)
@@ -287,32 +313,22 @@ def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource |
     return FieldSource("HEARTBEAT", "base_mode", where=(("type", str(kind)),), bits=128)
 
 
-def _entry(source: FieldSource, family: str) -> str:
-    key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
-        else "topic"
-    parts = [f'{key} = "{source.topic}"'] if family == "csv" else [
-        f'{key} = "{source.topic}"', f'field = "{source.field}"']
-    if source.scale != 1.0:
-        parts.append(f"scale = {source.scale:g}")
-    if source.offset:
-        parts.append(f"offset = {source.offset:g}")
-    if source.where:
-        parts.append("where = { " + ", ".join(f'{k} = "{v}"' for k, v in source.where) + " }")
-    if source.bits:
-        parts.append(f"bits = {source.bits}")
-    if source.changes_only:
-        parts.append("changes_only = true")
-    return "{ " + ", ".join(parts) + " }"
-
-
-def draft_profile(path: Path, name: str) -> str:
-    """The text of a starting profile for the vehicle that wrote the log at ``path``."""
+def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
+    """The text of a starting profile for the vehicle that wrote the log at ``path``;
+    ``closed_loop``: a model driven by ArduPilot's set points, the motor outputs read for
+    the effort check only (a log whose set points are named as such is drafted so
+    anyway)."""
     contents, family = inventory(path)
     time = guess_time_column(contents, path) if family == "csv" else None
     if family == "csv" and time is None:
         raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
                          "write [sources.csv] time = { column, unit } by hand")
-    commands, sensors, groups = _proposals(path, family, contents, time)
+    commands, sensors, groups = _proposals(path, family, contents, time,
+                                           closed_loop=closed_loop)
+    if closed_loop and not any(is_set_point(c) for c in commands):
+        raise UsageError(f"{path}: --closed-loop found no controller set point that varies "
+                         "in this log (ArduPilot DataFlash ATT DesRoll, RATE RDes, CTUN DCRt "
+                         "…, or fields named commanded, desired, setpoint or target)")
     if not commands or not sensors:   # names it does not know: every field that varies
         commands, sensors, groups = _proposals(path, family, contents, time, every_field=True,
                                                guess_commands=not commands)
@@ -324,66 +340,4 @@ def draft_profile(path: Path, name: str) -> str:
                          "(`auvdiag inspect LOG` lists the fields; docs/vehicles.md has a complete "
                          "minimal profile)")
     operating = _operating(path, family, contents)
-    return _render(path, name, family, commands, sensors, operating, time, groups)
-
-
-def _render(path: Path, name: str, family: str, commands: list[Proposal],
-            sensors: list[Proposal], operating: FieldSource | None,
-            time: TimeColumn | None, groups: list[list[str]]) -> str:
-    lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
-             "# Every signal below is in that log and varies there. Lines marked CHECK are",
-             "# what the log cannot tell: read them before you train.", "",
-             "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
-             "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
-    # With set points in the log, the model follows the closed loop: driven by the set
-    # points, the actuators read for the effort check only.
-    closed_loop = any(is_set_point(p) for p in commands)
-    if closed_loop:
-        lines += ["# The log holds the controller's set points: they drive the model (how the "
-                  "vehicle follows", "# them is what a model predicts best), and the "
-                  "actuator outputs are [[outputs]], read", "# for the effort check only. "
-                  "CHECK: move an output to [[commands]] to drive the model by it.", ""]
-    for proposal in commands:
-        kind = ('kind = "set_point"   # CHECK: a controller\'s set point (drives a model of '
-                'the closed loop; no actuator)' if is_set_point(proposal) else
-                'kind = "thruster"   # CHECK: thruster, rotor, control_surface or engine' + (
-                    "" if closed_loop else " (or set_point)"))
-        table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"
-        lines += [table, f'name = "{proposal.name}"',
-                  f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
-                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
-    for proposal in sensors:
-        lines += ["[[sensors]]", f'name = "{proposal.name}"',
-                  f'component = "{proposal.name}_sensor"   # CHECK: the part that fails',
-                  f'unit = "{proposal.unit}"   # CHECK: {proposal.check}',
-                  f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
-                  "percentile",
-                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
-    for number, group in enumerate(groups, 1):
-        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
-                  "levels in this", "# log): each one's share of their effort is judged. "
-                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
-                  "thrusters apart), add the mixing factors.", "[[effort]]",
-                  f'name = "group_{number}"',
-                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
-    names = [p.name for p in sensors]
-    lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
-              'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",
-              "# CHECK: the paper's mission threshold: calibrate on normal logs",
-              "[thresholds.mission]", *(f"{n} = 15.0" for n in names), "",
-              "# CHECK: only 'nothing' is known; name the components each b vector means",
-              "[[pattern]]", "case = 0",
-              "b = { " + ", ".join(f"{n} = 0" for n in names) + " }", "components = []", "",
-              f"[sources.{family}]"]
-    if time is not None:
-        lines.append(f'time = {{ column = "{time.column}", unit = "{time.unit}" }}'
-                     "   # CHECK: the clock's unit")
-    if operating is not None:
-        lines.append(f"{OPERATING} = {_entry(operating, family)}   # armed flag")
-    lines += ["", f"[sources.{family}.signals]"]
-    for proposal in commands:
-        lines.append(f"{proposal.name} = {_entry(proposal.source, family)}   "
-                     f"# CHECK: {proposal.check}")
-    for proposal in sensors:
-        lines.append(f"{proposal.name} = {_entry(proposal.source, family)}")
-    return "\n".join(lines) + "\n"
+    return render_draft(path, name, family, commands, sensors, operating, time, groups)

@@ -1,0 +1,110 @@
+"""The text of a profile `auvdiag init-profile` drafts: each proposed signal with what the
+user must check, the tables a profile needs, and where each signal lives in the log."""
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+from adapters.signals import OPERATING, FieldSource, TimeColumn
+
+# A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
+# it drives a model of the closed loop, but it is no actuator.
+SET_POINT_NAME = re.compile(r"(commanded|desired|^des|setpoint|set_point|target)",
+                            re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class Proposal:
+    name: str
+    source: FieldSource
+    unit: str
+    check: str            # what the user must check
+    full_scale: float = 1.0
+    level: float = 0.0    # a command's median magnitude where it is not neutral
+    two_way: bool = False  # a command that also runs negative (a thruster that reverses)
+    set_point: bool = False  # a controller's set point, whatever its name
+
+
+def is_set_point(proposal: Proposal) -> bool:
+    return proposal.set_point or bool(
+        SET_POINT_NAME.search(proposal.source.field.rsplit(".", 1)[-1]))
+
+
+def entry(source: FieldSource, family: str) -> str:
+    key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
+        else "topic"
+    parts = [f'{key} = "{source.topic}"'] if family == "csv" else [
+        f'{key} = "{source.topic}"', f'field = "{source.field}"']
+    if source.scale != 1.0:
+        parts.append(f"scale = {source.scale:g}")
+    if source.offset:
+        parts.append(f"offset = {source.offset:g}")
+    if source.where:
+        parts.append("where = { " + ", ".join(f'{k} = "{v}"' for k, v in source.where) + " }")
+    if source.bits:
+        parts.append(f"bits = {source.bits}")
+    if source.changes_only:
+        parts.append("changes_only = true")
+    return "{ " + ", ".join(parts) + " }"
+
+
+def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
+            sensors: list[Proposal], operating: FieldSource | None,
+            time: TimeColumn | None, groups: list[list[str]]) -> str:
+    lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
+             "# Every signal below is in that log and varies there. Lines marked CHECK are",
+             "# what the log cannot tell: read them before you train.", "",
+             "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
+             "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
+    # With set points in the log, the model follows the closed loop: driven by the set
+    # points, the actuators read for the effort check only.
+    closed_loop = any(is_set_point(p) for p in commands)
+    if closed_loop:
+        lines += ["# The log holds the controller's set points: they drive the model (how the "
+                  "vehicle follows", "# them is what a model predicts best), and the "
+                  "actuator outputs are [[outputs]], read", "# for the effort check only. "
+                  "CHECK: move an output to [[commands]] to drive the model by it.", ""]
+    for proposal in commands:
+        kind = ('kind = "set_point"   # CHECK: a controller\'s set point (drives a model of '
+                'the closed loop; no actuator)' if is_set_point(proposal) else
+                'kind = "thruster"   # CHECK: thruster, rotor, control_surface or engine' + (
+                    "" if closed_loop else " (or set_point)"))
+        table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"
+        lines += [table, f'name = "{proposal.name}"',
+                  f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
+                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+    for proposal in sensors:
+        lines += ["[[sensors]]", f'name = "{proposal.name}"',
+                  f'component = "{proposal.name}_sensor"   # CHECK: the part that fails',
+                  f'unit = "{proposal.unit}"   # CHECK: {proposal.check}',
+                  f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
+                  "percentile",
+                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+    for number, group in enumerate(groups, 1):
+        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
+                  "levels in this", "# log): each one's share of their effort is judged. "
+                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
+                  "thrusters apart), add the mixing factors.", "[[effort]]",
+                  f'name = "group_{number}"',
+                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
+    names = [p.name for p in sensors]
+    lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
+              'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",
+              "# CHECK: the paper's mission threshold: calibrate on normal logs",
+              "[thresholds.mission]", *(f"{n} = 15.0" for n in names), "",
+              "# CHECK: only 'nothing' is known; name the components each b vector means",
+              "[[pattern]]", "case = 0",
+              "b = { " + ", ".join(f"{n} = 0" for n in names) + " }", "components = []", "",
+              f"[sources.{family}]"]
+    if time is not None:
+        lines.append(f'time = {{ column = "{time.column}", unit = "{time.unit}" }}'
+                     "   # CHECK: the clock's unit")
+    if operating is not None:
+        lines.append(f"{OPERATING} = {entry(operating, family)}   # armed flag")
+    lines += ["", f"[sources.{family}.signals]"]
+    for proposal in commands:
+        lines.append(f"{proposal.name} = {entry(proposal.source, family)}   "
+                     f"# CHECK: {proposal.check}")
+    for proposal in sensors:
+        lines.append(f"{proposal.name} = {entry(proposal.source, family)}")
+    return "\n".join(lines) + "\n"
