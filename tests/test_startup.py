@@ -63,7 +63,7 @@ def vehicle(request, tmp_path_factory) -> tuple[str, list[str]]:
     model = work / "model"
     trained = runner.invoke(app, ["train", *logs, *[a for h in held for a in ("--holdout", h)],
                                   "--profile", str(profile), "--output", str(model),
-                                  "--iterations-scale", "0.2", "--hidden", "24",
+                                  "--iterations-scale", "0.1", "--hidden", "24",
                                   # not the network on top of the linear model: a second
                                   # network to train, and the start-up is the same
                                   "--predictor", "network", "--predictor", "linear",
