@@ -197,6 +197,11 @@ def _holds_its_value(series: np.ndarray) -> bool:
     return finite.size > 2 and float(np.mean(np.diff(finite) == 0)) >= HELD_SHARE
 
 
+def _set_point(name: str, source: FieldSource, scale: float, unit: str) -> Proposal:
+    return Proposal(name, replace(source, scale=scale), unit, "the controller's set point, "
+                    "in the unit of what it measured beside it", set_point=True)
+
+
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
                every_field: bool = False, guess_commands: bool = False,
                closed_loop: bool = False
@@ -219,9 +224,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             name = _signal_name("", f"{source.topic}_{source.field}")
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
         if kind == "set_point" and paired is not None:
-            commands.append(Proposal(name, replace(source, scale=paired[0]), paired[1],
-                                     "the controller's set point, in the unit of what it "
-                                     "measured beside it", set_point=True))
+            commands.append(_set_point(name, source, *paired))
             command_values.append(series * paired[0])
         elif kind == "command" or guessed:
             pwm = 800 <= float(np.nanmedian(series)) <= 2200
