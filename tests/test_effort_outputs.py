@@ -181,6 +181,18 @@ def test_a_normal_flight_is_normal_and_a_log_without_outputs_is_still_judged(
                in note for note in report["notes"])
 
 
+def test_training_on_logs_without_the_outputs_says_so(flights: Path, tmp_path: Path):
+    logs = [write_flight(tmp_path / f"bare_{seed}.csv", 60 + seed, motors=False)
+            for seed in range(3)]
+    code, output = invoke("train", *map(str, logs), "--profile", str(flights / "quad.toml"),
+                          "--output", str(tmp_path / "bare"), "--iterations-scale", "0.02",
+                          "--hidden", "8", "--predictor", "linear", "--keep-unskilled")
+    assert code in (0, 1), output
+    effort = json.loads((tmp_path / "bare" / "model.json").read_text())["effort"]
+    assert effort["refused"] == ("not judged (no log trained on holds motor_1, motor_2, "
+                                 "motor_3, motor_4)")
+
+
 def test_inspect_says_an_output_is_read_for_the_effort_only(flights: Path):
     code, output = invoke("inspect", str(flights / "normal_0.csv"), "--profile",
                           str(flights / "quad.toml"))

@@ -3,6 +3,8 @@ part of `auvdiag train`, refitted by `auvdiag calibrate` with more normal logs."
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused
@@ -32,11 +34,16 @@ def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
         set_points_only = not profile.outputs and all(
             c.kind == SET_POINT for c in profile.commands)
         return Refused(NO_OUTPUTS if set_points_only else NO_GROUPS), []
-    model, notes = learn_effort(profile.effort_groups, [effort_log(g, profile) for g in logs],
-                                profile.dt_s, false_alarm_rate)
+    effort_logs = [effort_log(g, profile) for g in logs]
+    model, notes = learn_effort(profile.effort_groups, effort_logs, profile.dt_s,
+                                false_alarm_rate)
     if model is None:
-        return Refused("not judged (the actuators of its groups never work at a steady "
-                       "level, min_level or more, in these logs)"), notes
+        unheard = [name for name in profile.effort_names
+                   if not any(np.isfinite(log.group_commands_of([name])).any()
+                              for log in effort_logs)]
+        return Refused(f"not judged (no log trained on holds {', '.join(unheard)})" if unheard
+                       else "not judged (the actuators of its groups never work at a steady "
+                            "level, min_level or more, in these logs)"), notes
     return model, notes
 
 
