@@ -220,7 +220,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                                     [*(c.kind for c in profile.commands),
                                      *(a.kind for a in profile.actuators)])),
         effort_check=_check_effort(log, segments, judging, notes),
-        change_check=_check_change(change_errors, judging, frame.time_s),
+        change_check=_check_change(change_errors, judging, frame, notes),
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
@@ -270,8 +270,8 @@ def _healthy_replay(judging: Judging, frame: AlignedFrame, onset_s: float,
                  [*dms_starts, onset], since=onset).modelled
 
 
-def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
-                  ) -> ChangeCheck | None:
+def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
+                  notes: list[str]) -> ChangeCheck | None:
     """The log against its own beginning, for the signals the test judges
     (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
     profile, model = judging.profile, judging.model
@@ -283,7 +283,13 @@ def _check_change(residual: np.ndarray, judging: Judging, time_s: np.ndarray
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None
-    return check_change(residual, names, thresholds, time_s,
+    ahead = model.card.ahead
+    if frame.flat_inputs and ahead is not None and ahead.inputs:
+        notes.append(f"change test: {', '.join(sorted(frame.flat_inputs))} not fed in this "
+                     "log, though its predictor a moment ahead reads it as part of the "
+                     "state: it predicts this log with less than the logs its thresholds "
+                     "were set on had, and an alarm here is less certain")
+    return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators)
 
 
