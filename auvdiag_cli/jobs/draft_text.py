@@ -49,8 +49,8 @@ def entry(source: FieldSource, family: str) -> str:
 
 
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
-            sensors: list[Proposal], operating: FieldSource | None,
-            time: TimeColumn | None, groups: list[list[str]]) -> str:
+                 sensors: list[Proposal], operating: FieldSource | None,
+                 time: TimeColumn | None, groups: list[list[str]]) -> str:
     lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
              "# Every signal below is in that log and varies there. Lines marked CHECK are",
              "# what the log cannot tell: read them before you train.", "",

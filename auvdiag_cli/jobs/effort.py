@@ -38,7 +38,8 @@ def learn_effort_model(logs: Sequence[RelationLog], profile: Profile,
     model, notes = learn_effort(profile.effort_groups, effort_logs, profile.dt_s,
                                 false_alarm_rate)
     if model is None:
-        unheard = [name for name in profile.effort_names
+        members = dict.fromkeys(m for group in profile.effort_groups for m in group.members)
+        unheard = [name for name in members
                    if not any(np.isfinite(log.group_commands_of([name])).any()
                               for log in effort_logs)]
         return Refused(f"not judged (no log trained on holds {', '.join(unheard)})" if unheard
