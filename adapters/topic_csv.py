@@ -4,15 +4,18 @@ tools such as bagpy (``Time`` in s, then ``<path>`` columns) write them. The fol
 log, read with the profile's ``[sources.ros]`` mapping, so that one profile reads a flight
 from its bag and from its CSV export alike; one such CSV given alone is a log of one topic.
 
-A file's topic is its name with the folder's name (the recording's, as the exports prefix
-it) taken off the front and ``-`` read as ``/`` (ROS names hold no ``-``):
-``flight-mavros-imu-data.csv`` in ``flight/`` is ``/mavros/imu/data``. A profile's field
+A file's topic is its name with the recording's name taken off the front and ``-`` read as
+``/`` (ROS names hold no ``-``): ``flight-mavros-imu-data.csv`` in ``flight/`` is
+``/mavros/imu/data``. The recording's name is the folder's, as the exports prefix it; in a
+folder renamed since, it is what every file's name begins with up to its last ``-``-part
+that starts with a digit (a ROS name's parts never do, a recording's date does:
+``carbonZ_2018-07-30-17-20-01_engine_failure-mavros-imu-data.csv``). A profile's field
 path ``channels[0]`` is the column ``field.channels0`` (``rostopic``'s flattening) or
 ``channels[0]``; ``%time`` (the time the recorder received the message) is the clock, as a
 bag's record time is."""
 
 import csv
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,19 +41,38 @@ from auvdiag_errors import LogError
 TOPIC_TYPE = "per-topic CSV"
 
 
-def topic_of(path: Path, folder: Path) -> str:
-    """The ROS topic a per-topic CSV holds, from its file name (see the module's note)."""
+def topic_of(path: Path, recording: str) -> str:
+    """The ROS topic a per-topic CSV holds, from its file name and the ``recording``'s name
+    (see the module's note)."""
     stem = path.stem
-    if stem.startswith(folder.name + "-"):
-        stem = stem[len(folder.name) + 1:]
+    if stem.startswith(recording + "-"):
+        stem = stem[len(recording) + 1:]
     return "/" + stem.replace("-", "/")
+
+
+def recording_name(folder: Path, files: Sequence[Path]) -> str:
+    """The name the exports put in front of each topic: the folder's where every file
+    begins with it, else every file's common ``-``-parts up to the last that starts with a
+    digit ("" where there is none)."""
+    stems = [file.stem for file in files]
+    if all(stem.startswith(folder.name + "-") for stem in stems):
+        return folder.name
+    split = [stem.split("-")[:-1] for stem in stems]
+    common = 0
+    while split and all(len(parts) > common and parts[common] == split[0][common]
+                        for parts in split):
+        common += 1
+    dated = [i for i, part in enumerate(split[0][:common]) if part[:1].isdigit()] if split else []
+    return "-".join(split[0][:dated[-1] + 1]) if dated else ""
 
 
 def topic_files(path: Path) -> dict[str, Path]:
     """Topic → its CSV, for a folder of per-topic CSVs or one such CSV."""
     if not path.is_dir():
-        return {topic_of(path, path.parent): path}
-    files = {topic_of(file, path): file for file in topic_csv_files(path)}
+        return {topic_of(path, path.parent.name): path}
+    found = topic_csv_files(path)
+    recording = recording_name(path, found)
+    files = {topic_of(file, recording): file for file in found}
     if not files:
         raise LogError(path, "the folder holds no per-topic CSV (a CSV whose header starts "
                              "with %time or Time)")

@@ -70,6 +70,24 @@ def test_one_topic_csv_alone_is_a_log_of_its_topic(exported):
     assert "angular_velocity.z" in held.topics[0].fields and held.duration_s > 100
 
 
+def test_a_renamed_folder_still_reads_its_topics(exported, tmp_path):
+    """Files named after a dated recording (`rostopic echo -p` exports of
+    `flight_2026-11-22-10-00-00.bag`) in a folder renamed since: the recording's name is
+    what every file begins with up to its last part that starts with a digit, which no ROS
+    name's part does; the topics read as from the folder with the recording's name."""
+    bag, folder = exported
+    renamed = tmp_path / "dive 42"
+    renamed.mkdir()
+    for file in folder.glob("*.csv"):
+        topic = file.name.removeprefix("flight-")
+        shutil.copy(file, renamed / f"flight_2026-11-22-10-00-00-{topic}")
+    held, _ = inventory(renamed)
+    assert {t.name for t in held.topics} == {t.name for t in inventory(folder)[0].topics}
+    diagnosis = _diagnosis(renamed)
+    assert not any("namespace" in note for note in diagnosis.notes), diagnosis.notes
+    assert _summary(diagnosis) == _summary(_diagnosis(bag))
+
+
 def test_a_missing_topic_is_one_line_naming_the_folder_and_topic(exported, tmp_path):
     _, folder = exported
     damaged = tmp_path / "flight"
