@@ -132,6 +132,11 @@ def test_a_noisy_sensor_is_read_from_the_linear_model_fitted_to_the_replay(tmp_p
                                  "--iterations-scale", "0.02", "--hidden", "8",
                                  "--predictor", "linear", "--predictor", "linear-replay"])
     assert result.exit_code == 0, result.output
+    # No signal may be read from the network alone: it is not trained (most of the time
+    # `train` takes), only held in the model file.
+    assert "the network alone is not trained" in result.output
+    assert "stage 1/" not in result.output
+    assert json.loads((output / "model.json").read_text())["training"]["stages"] == []
     signal = json.loads((output / "model.json").read_text())["skill"]["signals"]["speed"]
     assert json.loads((output / "model.json").read_text())["predictors"]["per_signal"] == {
         "speed": "linear-replay"}

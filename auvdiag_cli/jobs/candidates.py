@@ -45,8 +45,9 @@ def fit_candidates(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog]
                    sensor_names: Sequence[str], dt_s: float,
                    horizons: Sequence[float | None], kinds: Sequence[str],
                    fit_network: NetworkFit, progress: Callable[[str], None]) -> Candidates:
-    """Fit every predictor of ``kinds`` (the network is always trained: the model file is
-    built around it) and score each on ``heldout`` at every horizon."""
+    """Fit every predictor of ``kinds`` and score each on ``heldout`` at every horizon. The
+    model file is built around the network: ``fit_network`` gives it even where ``kinds``
+    leave it out (untrained, `train.network_asked`)."""
     network, normaliser = fit_network(None)
     command_scale = np.asarray(normaliser.command_scale)
     state_scale = np.asarray(normaliser.state_scale)

@@ -34,7 +34,7 @@ from models.ahead import AheadLog, fit_ahead
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
-from models.fast import PREDICTOR_KINDS
+from models.fast import NETWORK, PREDICTOR_KINDS
 from models.skill import (
     HORIZON_CANDIDATES_S,
     MIN_SCORED_SAMPLES,
@@ -85,6 +85,12 @@ class TrainOptions:
 
 
 DEFAULT_TRAINING = TrainOptions()
+
+
+def network_asked(predictors: Sequence[str]) -> bool:
+    """Whether a signal may be read from the network alone: asked for, or the only choice
+    left where the least-squares model is not (the refined one alone may not be kept)."""
+    return NETWORK in predictors or "linear" not in predictors
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -148,10 +154,17 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     stages = [Stage(s.horizon_steps, max(1, round(s.iterations * options.iterations_scale)),
                     s.learning_rate) for s in DEFAULT_STAGES]
     sequences = [TrainingLog(t.name, t.commands, t.sensors) for t in training]
+    network_read = network_asked(options.predictors)
+    if not network_read:
+        progress("the network alone is not trained: no signal may be read from it "
+                 f"(--predictor {', '.join(options.predictors)})")
 
     def fit_network(linear: np.ndarray | None) -> Any:
-        return (trainer or train)(sequences, hidden=options.hidden, stages=stages,
-                                  seed=options.seed,
+        # The model file holds the network alone even where no signal is read from it;
+        # untrained, it costs nothing (its training is most of `train`'s time).
+        trained = network_read or linear is not None
+        return (trainer or train)(sequences, hidden=options.hidden,
+                                  stages=stages if trained else [], seed=options.seed,
                                   progress=progress, linear=linear)
 
     try:
@@ -177,7 +190,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     result = replace(result, written=result.judges_anything or options.keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
-                             stages, options.seed)
+                             stages if network_read else [], options.seed)
         metadata |= {"command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
