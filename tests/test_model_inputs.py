@@ -168,6 +168,7 @@ def test_a_model_driven_by_an_input_refuses_a_profile_without_it(pitched: dict[s
                                  "--model", str(pitched["model"])])
     assert result.exit_code == 2
     assert "driven by the measured inputs ['pitch']" in result.output
+    assert "train the model with this profile" in result.output
     assert str(log) in result.output
 
 

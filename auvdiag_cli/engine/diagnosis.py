@@ -65,21 +65,26 @@ from models.fast import new_replay_budget
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
+# A profile whose signals changed since a model was trained (a shipped one, updated) needs
+# the model trained again; another vehicle's model needs its own profile.
+REFIT = "train the model with this profile, or diagnose with the profile it was trained with"
+
+
 def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
     """Refuse a model trained for other signals or another step than the profile's."""
     if model.command_names != profile.command_names or model.sensor_names != profile.sensor_names:
         raise ModelError(
             f"{log}: model {model.path} expects commands {list(model.command_names)} and sensors "
             f"{list(model.sensor_names)}, profile {profile.name!r} gives "
-            f"{list(profile.command_names)} and {list(profile.sensor_names)}")
+            f"{list(profile.command_names)} and {list(profile.sensor_names)}: {REFIT}")
     if model.input_names != profile.input_names:
         raise ModelError(
             f"{log}: model {model.path} is driven by the measured inputs "
             f"{list(model.input_names) or 'none'}, profile {profile.name!r} gives "
-            f"{list(profile.input_names) or 'none'}")
+            f"{list(profile.input_names) or 'none'}: {REFIT}")
     if abs(model.card.dt_s - profile.dt_s) > 1e-9:
         raise ModelError(f"{log}: model step {model.card.dt_s} s differs from the profile's "
-                         f"{profile.dt_s} s")
+                         f"{profile.dt_s} s: {REFIT}")
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
