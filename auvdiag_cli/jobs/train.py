@@ -14,7 +14,7 @@ import numpy as np
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
-from auvdiag_cli.jobs.candidates import Candidates, fit_candidates
+from auvdiag_cli.jobs.candidates import Candidates, NetworkFit, fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
@@ -138,8 +138,6 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     """Train on normal ``logs`` and write the model to ``output`` (where it judges
     anything, or ``options.keep_unskilled``). ``trainer``: `models.training.train` unless
     another is given (benchmarks compare)."""
-    from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
-
     training_paths, heldout_paths, every = read_and_split(logs, options.holdout, profile,
                                                           progress, options.healthy)
     read = [every[p] for p in training_paths]
@@ -151,22 +149,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if not heldout:
         training[0], tail = split_in_time(training[0])
         heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
-    stages = [Stage(s.horizon_steps, max(1, round(s.iterations * options.iterations_scale)),
-                    s.learning_rate) for s in DEFAULT_STAGES]
-    sequences = [TrainingLog(t.name, t.commands, t.sensors) for t in training]
-    network_read = network_asked(options.predictors)
-    if not network_read:
-        progress("the network alone is not trained: no signal may be read from it "
-                 f"(--predictor {', '.join(options.predictors)})")
-
-    def fit_network(linear: np.ndarray | None) -> Any:
-        # The model file holds the network alone even where no signal is read from it;
-        # untrained, it costs nothing (its training is most of `train`'s time).
-        trained = network_read or linear is not None
-        return (trainer or train)(sequences, hidden=options.hidden,
-                                  stages=stages if trained else [], seed=options.seed,
-                                  progress=progress, linear=linear)
-
+    fit_network, stages = _network_fit(training, options, progress, trainer)
     try:
         fitted = fit_candidates(training, heldout, profile.sensor_names, profile.dt_s,
                                 horizon_candidates(profile, options.horizon_s),
@@ -190,7 +173,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     result = replace(result, written=result.judges_anything or options.keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
-                             stages if network_read else [], options.seed)
+                             stages, options.seed)
         metadata |= {"command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
@@ -198,6 +181,32 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         _save(output, fitted, metadata, profile, [*training_paths, *heldout_paths], options,
               progress)
     return result
+
+
+def _network_fit(training: Sequence[ScoringLog], options: TrainOptions,
+                 progress: Callable[[str], None], trainer: Callable[..., Any] | None
+                 ) -> tuple[NetworkFit, list[Any]]:
+    """How `fit_candidates` trains a network, and the stages any network is trained in
+    (none where none is). The model file holds the network alone even where no signal may
+    be read from it: untrained there, it costs nothing (its training is most of `train`'s
+    time)."""
+    from models.training import DEFAULT_STAGES, Stage, TrainingLog, train
+
+    stages = [Stage(s.horizon_steps, max(1, round(s.iterations * options.iterations_scale)),
+                    s.learning_rate) for s in DEFAULT_STAGES]
+    sequences = [TrainingLog(t.name, t.commands, t.sensors) for t in training]
+    alone = network_asked(options.predictors)
+    if not alone:
+        progress("the network alone is not trained: no signal may be read from it "
+                 f"(--predictor {', '.join(options.predictors)})")
+
+    def fit_network(linear: np.ndarray | None) -> Any:
+        return (trainer or train)(sequences, hidden=options.hidden,
+                                  stages=stages if alone or linear is not None else [],
+                                  seed=options.seed, progress=progress, linear=linear)
+
+    on_linear = "network-on-linear" in options.predictors
+    return fit_network, stages if alone or on_linear else []
 
 
 def _save(output: Path, fitted: Candidates, metadata: dict[str, Any], profile: Profile,
