@@ -258,36 +258,3 @@ def test_training_holds_an_input_a_log_never_fed_and_says_so(pitched: dict[str, 
     fed = np.concatenate([np.loadtxt(logs[k], delimiter=",", skiprows=1, usecols=2)
                           for k in (0, 2)])
     assert held == pytest.approx(float(np.median(fed)), abs=0.01) and abs(held) > 0.05
-
-
-def test_an_input_read_ahead_only_drives_the_change_tests_predictor_not_the_replay(
-        pitched: dict[str, Path]):
-    """`replay = false`: the pitch is part of the state the change test's predictor a moment
-    ahead reads, while the replay, which runs free from the commands, holds it at its
-    typical value (an input computed from the motion the replay predicts would feed the
-    measurement back into it)."""
-    folder = pitched["folder"]
-    profile = folder / "ahead_only.toml"
-    profile.write_text(_profile_text(PITCH_INPUT + "replay = false\n",
-                                     'pitch = { column = "pitch" }'))
-    logs = [folder / f"run_{seed}.csv" for seed in range(4)]
-    model, _ = _train(folder, logs, profile, "ahead_only")
-    meta = json.loads((model / "model.json").read_text())
-    (entry,) = meta["signals"]["inputs"]
-    assert entry["name"] == "pitch" and entry["drives_replay"] is False
-    # The replay predicts the depth as a model without the pitch does; the predictor a
-    # moment ahead reads it, and predicts the depth better than one without it.
-    assert _skill(model, "depth") < 1 / 3
-    blind = json.loads((pitched["blind_model"] / "model.json").read_text())
-    assert meta["ahead_predictor"]["state_inputs"] == 1
-    assert (meta["ahead_predictor"]["heldout_skill"]["depth"]
-            > blind["ahead_predictor"]["heldout_skill"]["depth"] + 0.1)
-    log = write_pitched_vehicle(folder / "ahead_only_later.csv", 23, 60.0)
-    result = runner.invoke(app, ["inspect", str(log), "--profile", str(profile)])
-    assert "read by the change test's predictor alone" in result.output
-    # A profile whose replay reads the pitch does not fit this model: one line.
-    result = runner.invoke(app, ["diagnose", str(log), "--profile", str(pitched["with"]),
-                                 "--model", str(model)])
-    assert result.exit_code == 2, result.output
-    assert "replay is driven by the measured inputs none" in result.output
-    assert len(result.output.strip().splitlines()) == 1
