@@ -30,7 +30,6 @@ class ModelInput:
     name: str
     unit: str
     typical: float            # its median on the training logs (held there in simulations)
-    drives_replay: bool = True   # False: the replay holds it at ``typical`` (read ahead only)
 
 
 @dataclass(frozen=True)
@@ -242,8 +241,7 @@ class ModelCard:
             dt_s=float(meta["dt_s"]),
             command_names=tuple(str(c) for c in signals["commands"]),
             sensor_names=sensors,
-            inputs=tuple(ModelInput(str(i["name"]), str(i.get("unit", "")), float(i["typical"]),
-                                    bool(i.get("drives_replay", True)))
+            inputs=tuple(ModelInput(str(i["name"]), str(i.get("unit", "")), float(i["typical"]))
                          for i in signals.get("inputs", [])),
             hidden=int(meta["architecture"]["hidden"]),
             drive_width=int(meta["architecture"]["n_commands"]),

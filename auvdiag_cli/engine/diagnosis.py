@@ -1,6 +1,6 @@
 """The diagnosis engine: one log in, one `Diagnosis` out. Rendering never recomputes."""
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -82,12 +82,6 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
             f"{log}: model {model.path} is driven by the measured inputs "
             f"{list(model.input_names) or 'none'}, profile {profile.name!r} gives "
             f"{list(profile.input_names) or 'none'}: {REFIT}")
-    replay_read = [i.name for i in model.card.inputs if i.drives_replay]
-    if replay_read != [i.name for i in profile.inputs if i.drives_replay]:
-        raise ModelError(
-            f"{log}: model {model.path}'s replay is driven by the measured inputs "
-            f"{replay_read or 'none'}, profile {profile.name!r} gives "
-            f"{[i.name for i in profile.inputs if i.drives_replay] or 'none'}: {REFIT}")
     if abs(model.card.dt_s - profile.dt_s) > 1e-9:
         raise ModelError(f"{log}: model step {model.card.dt_s} s differs from the profile's "
                          f"{profile.dt_s} s: {REFIT}")
@@ -143,16 +137,15 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
     return None
 
 
-def _inputs_held(log: IngestedLog, model: LoadedModel, held: Mapping[str, object]
-                 ) -> IngestedLog:
-    """The log with each measured input of ``held`` held at its typical value on the
+def _inputs_held(log: IngestedLog, model: LoadedModel) -> IngestedLog:
+    """The log with each measured input it never fed held at its typical value on the
     model's training logs (`flat_signals.held_at`)."""
     frame = log.frame
-    if not held:
+    if not frame.flat_inputs:
         return log
     typical = {i.name: i.typical for i in model.card.inputs}
     return IngestedLog(log.signals, replace(frame, inputs=held_at(
-        frame.inputs, frame.input_names, held, typical)))
+        frame.inputs, frame.input_names, frame.flat_inputs, typical)))
 
 
 @dataclass(frozen=True)
@@ -169,12 +162,7 @@ class _Replayed:
 
 def _replay(log: IngestedLog, profile: Profile, model: LoadedModel) -> _Replayed:
     new_replay_budget()
-    log = _inputs_held(log, model, log.frame.flat_inputs)
-    # What the predictor a moment ahead reads as the state: every input this log fed; the
-    # replay (and every judge after it) holds those it is not driven by.
-    inputs = log.frame.inputs if log.frame.input_names else None
-    log = _inputs_held(log, model, {i.name: "read ahead only" for i in model.card.inputs
-                                    if not i.drives_replay})
+    log = _inputs_held(log, model)
     frame = log.frame
     judging = Judging.of(model, profile).without(not_judged_flat(frame.flat))
     segments = segments_of(log, judging.profile)
@@ -183,7 +171,8 @@ def _replay(log: IngestedLog, profile: Profile, model: LoadedModel) -> _Replayed
                   if s.mode == ROUTINE_MODE]
     matching = match(model, frame, judging.full_scale, judging.window, dms_starts)
     return _Replayed(log, judging, segments, dms_starts, matching, change_residual(
-        model, frame.commands, inputs, matching, [*frame.restarts, *dms_starts]))
+        model, frame.commands, frame.inputs if frame.input_names else None, matching,
+        [*frame.restarts, *dms_starts]))
 
 
 def change_errors_of(log: IngestedLog, profile: Profile, model: LoadedModel

@@ -57,9 +57,7 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
         return "a flag: the last value holds"
     per_step = (rate_hz or 0.0) * profile.dt_s
     if name in profile.input_names:
-        ahead_only = not profile.inputs[profile.input_names.index(name)].drives_replay
-        return (f"a measured input of the model, averaged over each {step}"
-                + (", read by the change test's predictor alone" if ahead_only else ""))
+        return f"a measured input of the model, averaged over each {step}"
     if per_step >= 1.5:
         return f"averaged over each {step} (about {per_step:.0f} samples, anti-aliased)"
     if per_step < 0.9:

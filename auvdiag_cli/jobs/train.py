@@ -24,7 +24,6 @@ from auvdiag_cli.jobs.training_logs import (
     ReadLog,
     median_rates,
     read_and_split,
-    replay_logs,
     scoring_log,
     split_in_time,
     with_inputs_held,
@@ -150,10 +149,9 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if not heldout:
         training[0], tail = split_in_time(training[0])
         heldout, split = [tail], f"the last {HELD_OUT_FRACTION:.0%} of {training_paths[0].name}"
-    replayed, replayed_heldout = replay_logs(training, heldout, profile)
-    fit_network, stages = _network_fit(replayed, options, progress, trainer)
+    fit_network, stages = _network_fit(training, options, progress, trainer)
     try:
-        fitted = fit_candidates(replayed, replayed_heldout, profile.sensor_names, profile.dt_s,
+        fitted = fit_candidates(training, heldout, profile.sensor_names, profile.dt_s,
                                 horizon_candidates(profile, options.horizon_s),
                                 options.predictors,
                                 fit_network, progress)
@@ -314,8 +312,8 @@ def _input_entries(profile: Profile, training: Sequence[ScoringLog]) -> list[dic
     (a DMS, the pattern table's faults) holds it at."""
     actuators = len(profile.commands)
     values = np.concatenate([t.commands[:, actuators:] for t in training])
-    return [{"name": i.name, "unit": i.unit, "typical": round(float(np.median(values[:, k])), 6),
-             "drives_replay": i.drives_replay} for k, i in enumerate(profile.inputs)]
+    return [{"name": i.name, "unit": i.unit, "typical": round(float(np.median(values[:, k])), 6)}
+            for k, i in enumerate(profile.inputs)]
 
 
 def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],

@@ -74,33 +74,9 @@ def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
 
 def scoring_log(path: Path, profile: Profile, progress: Callable[[str], None],
                 typical: Mapping[str, float]) -> ScoringLog:
-    """A log to score a model's replay on, each measured input it never fed, and each the
-    replay does not read, held at the model's ``typical`` value."""
-    log = _held(read_for_training(path, profile, progress), profile, typical)
-    return replace(log, commands=held_at(log.commands, profile.input_names,
-                                         _read_ahead_only(profile), typical))
-
-
-def _read_ahead_only(profile: Profile) -> dict[str, str]:
-    return {i.name: "read ahead only" for i in profile.inputs if not i.drives_replay}
-
-
-def replay_logs(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
-                profile: Profile) -> tuple[list[ScoringLog], list[ScoringLog]]:
-    """The logs as the replay's predictors are fitted and scored on them: each input the
-    replay does not read (`Input.drives_replay`) held at its median over ``training`` (as
-    the model file keeps it, and the diagnosis holds it)."""
-    ahead_only = _read_ahead_only(profile)
-    if not ahead_only:
-        return list(training), list(heldout)
-    typical = typical_inputs([log.commands for log in training], profile.input_names,
-                             [{}] * len(training))
-
-    def held(logs: Sequence[ScoringLog]) -> list[ScoringLog]:
-        return [replace(log, commands=held_at(log.commands, profile.input_names, ahead_only,
-                                              typical)) for log in logs]
-
-    return held(training), held(heldout)
+    """A log to score a model on, each measured input it never fed held at the model's
+    ``typical`` value."""
+    return _held(read_for_training(path, profile, progress), profile, typical)
 
 
 def median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]

@@ -48,16 +48,11 @@ class Command:
 @dataclass(frozen=True)
 class Input:
     """A measured quantity that drives the model beside the commands (a battery voltage, the
-    attitude): replayed as logged, like them; never predicted, never judged, no actuator.
-    ``drives_replay`` False (`replay = false`): read only by the change test's predictor a
-    moment ahead, as part of the measured state; the replay holds it at its typical value
-    (a quantity computed from the motion the replay predicts, such as an autopilot's
-    altitude error, would feed the measurement back into a free-running replay)."""
+    attitude): replayed as logged, like them; never predicted, never judged, no actuator."""
 
     name: str
     unit: str
     description: str
-    drives_replay: bool = True
 
 
 @dataclass(frozen=True)
@@ -218,8 +213,7 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
         for r in top.items("sensors")
     )
     check_weakened(actuators, [s.name for s in sensors])
-    inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""),
-                         r.get("replay", bool, True))
+    inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
                    for r in _rows(top, "inputs"))
     if not commands or not sensors:
         raise ProfileError("key 'commands' and key 'sensors' need at least one entry each")
