@@ -204,6 +204,9 @@ class GroupFit:
     dof: float                 # of the spread's estimate
     within_dof: float          # of σ_w's
     loo_z: np.ndarray          # (logs, members): each normal log judged by the others
+    # The logs' shares differ no more than their own windows' noise says a log's share
+    # would by chance: no offset between them shows (logs of one day or one battery, say).
+    alike: bool = False
 
     def sigma(self, span_s: float | np.ndarray) -> np.ndarray:
         """(…, members): σ(T) of a span of ``span_s`` steady seconds."""
@@ -226,9 +229,12 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     typical = float(np.median([g.steady_s for g in logs]))
     # With few logs, the windows inside them say how much a log's share wanders at least.
     floor = within * math.sqrt(window_s / typical)
-    spread, dof = between_spread(_departures(logs, conditioned, False), floor)
+    departures = _departures(logs, conditioned, False)
+    spread, dof = between_spread(departures, floor)
+    seen, _ = between_spread(departures, np.zeros_like(floor))
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
-                   spread, within, typical, n, dof, within_dof, np.zeros((n, len(group.members))))
+                   spread, within, typical, n, dof, within_dof, np.zeros((n, len(group.members))),
+                   bool(np.sqrt(np.mean(seen ** 2)) <= np.sqrt(np.mean(floor ** 2))))
     loo = []
     for i, log in enumerate(logs):
         others = [g for j, g in enumerate(logs) if j != i]

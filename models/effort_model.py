@@ -199,7 +199,7 @@ def _readable(fit: GroupFit, thresholds: Thresholds | None) -> dict[str, Any]:
             "within_window": fit.within.round(4).tolist(), "conditioned_on_level":
             fit.conditioned, "logs": fit.logs, "typical_steady_s": round(fit.typical_s, 2),
             "threshold_z": None if thresholds is None else round(thresholds.whole_log(fit), 3),
-            "leave_one_out_max_z": round(float(fit.loo_z.max()), 3)}
+            "leave_one_out_max_z": round(float(fit.loo_z.max()), 3), "logs_alike": fit.alike}
 
 
 def learn_effort(groups: Sequence[EffortGroup], logs: Sequence[EffortLog], dt_s: float,

@@ -89,6 +89,9 @@ class EffortCheck:
     matches: tuple[tuple[str, float], ...] = ()
     # How far the onset may lie from onset_s (None: the whole log departs, from its start).
     onset_error_s: float | None = None
+    # The alarm is the whole log's departure from normal logs that differ no more than their
+    # own noise makes them (`GroupFit.alike`): a normal log of another day may stray as far.
+    against_alike_logs: bool = False
 
     @property
     def judged(self) -> bool:
@@ -124,7 +127,14 @@ class EffortCheck:
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
-                + self._since())
+                + self._since() + self._caution())
+
+    def _caution(self) -> str:
+        if not self.against_alike_logs:
+            return ""
+        return ("; caution: the normal logs it is judged against differ no more than their "
+                "own noise makes them (logs of one day, it may be): a normal log of another "
+                "day may stray this far")
 
     def _since(self) -> str:
         """When it began, where it began during the log."""
@@ -339,6 +349,8 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     series: list[EffortSeries] = []
     # (alarm, onset, its error, group) of each group that alarmed
     onsets: list[tuple[float, float, float | None, str]] = []
+    alike = {setup.group.name for setup, fit in zip(model.setups, model.fits, strict=True)
+             if fit is not None and fit.alike}
     for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
         members = setup.group.members
         why = refused if refused is not None else _unread(members, log)
@@ -372,4 +384,5 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                        None if first is None else round(first[0], 3),
                        None if first is None else round(first[1], 3), named, tuple(series),
                        failure, matches,
-                       None if first is None or first[2] is None else round(first[2], 3))
+                       None if first is None or first[2] is None else round(first[2], 3),
+                       first is not None and first[2] is None and first[3] in alike)

@@ -155,6 +155,8 @@ class ActuatorsPart:
     alarm_s: float | None = None
     onset_s: float | None = None
     onset_error_s: float | None = None      # null: the whole log departs, from its start
+    # The alarm is the whole log against normal logs that differ no more than their noise.
+    against_alike_logs: bool = False
     named: tuple[str, ...] = ()
     signatures: tuple[SignaturePart, ...] = ()
     shares: Mapping[str, SharePart] = field(default_factory=dict)

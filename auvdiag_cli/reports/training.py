@@ -11,6 +11,7 @@ from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
+from models.effort import GroupFit
 from models.effort_model import EffortModel
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
@@ -164,8 +165,19 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"others: largest z {float(fit.loo_z.max()):.2f}); changed within a log past z "
             f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s):.2f} "
             f"(a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
-            f"on {fit.within_dof:.0f} degrees of freedom)")
+            f"on {fit.within_dof:.0f} degrees of freedom)" + _alike(fit))
     return lines
+
+
+def _alike(fit: GroupFit) -> str:
+    """A caution where the normal logs agree within their own noise: the spread between
+    logs then stands at what that noise allows, and logs of another day may stray further."""
+    if not fit.alike:
+        return ""
+    return (f"; caution: these {fit.logs} logs differ no more than their own windows' noise "
+            "makes them (no offset between logs shows, as on logs of one day or one "
+            "battery): a normal log of another day may stray further than these thresholds "
+            "allow; train on normal logs of more than one day")
 
 
 def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
