@@ -137,9 +137,12 @@ def crazypad_few(root: Path) -> list[str]:
     pooled = models.effort.between_spread
     lines = ["", "**CrazyPAD E8 with few normal flights**: trained on every choice of k of the "
              f"{len(normal)} normal flights; false alarms on the normal flights left out; the "
-             "cut flights found (motor 3 alone named in every one found unless said), by cut:",
-             "", "| spreads | k | false alarms | " + " | ".join(f"cut {c:g} mm" for c in cuts)
-             + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 4) + "|"]
+             "cut flights found (motor 3 alone named in every one found unless said), by cut; "
+             "choices cautioned: those whose flights differ no more than their own noise "
+             "makes them (`train` says so), and in brackets the false alarms with them:",
+             "", "| spreads | k | false alarms | choices cautioned | "
+             + " | ".join(f"cut {c:g} mm" for c in cuts)
+             + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 5) + "|"]
     for label, spread in (("drawn towards the group's", pooled),
                           ("each member's own", functools.partial(pooled, pool=False))):
         # The yardstick swaps the spread estimate itself, everything else as shipped.
@@ -158,12 +161,21 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
     found: dict[float, int] = defaultdict(int)
     tried: dict[float, int] = defaultdict(int)
     wrong = 0
+    # Choices whose flights differ no more than their own noise (the caution `train` gives),
+    # and the false alarms with them.
+    alike = alike_alarms = 0
+    folds = 0
     for chosen in itertools.combinations(normal, k):
+        folds += 1
         model = _learn(profile, [logs[f] for f in chosen])
+        cautioned = any(f is not None and f.alike for f in model.fits)
+        alike += cautioned
         for f in normal:
             if f not in chosen:
                 judged += 1
-                alarms += bool(_judge(model, profile, logs[f]).suspects)
+                alarm = bool(_judge(model, profile, logs[f]).suspects)
+                alarms += alarm
+                alike_alarms += alarm and cautioned
         for cut, files in by_cut.items():
             for f in files:
                 check = _judge(model, profile, logs[f])
@@ -172,7 +184,8 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
                 wrong += bool(check.suspects) and check.named != ("motor_3",)
     big = [c for c in by_cut if c >= 2.0]
     cells = [_percent(found[c], tried[c]) for c in by_cut]
-    return (f"| {label} | {k} | {_percent(alarms, judged)} | " + " | ".join(cells) + " | "
+    return (f"| {label} | {k} | {_percent(alarms, judged)} | {alike}/{folds} ({alike_alarms}) | "
+            + " | ".join(cells) + " | "
             f"{_percent(sum(found[c] for c in big), sum(tried[c] for c in big))}"
             + (f" ({wrong} named otherwise)" if wrong else "") + " |")
 
