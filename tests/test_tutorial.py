@@ -3,7 +3,7 @@ line of their console blocks in one shell, in order, on the real logs; each outp
 shown must be in what that command printed, and its exit status must be the one the
 line's `# exit N` says (0 if none).
 Two changes only: the install line is skipped (this environment is the install) and the
-training is shortened (`--iterations-scale 0.05`: the tutorial's checks do not depend on it).
+training is shortened (`--iterations-scale 0.02`: the tutorial's checks do not depend on it).
 """
 
 import os
@@ -53,7 +53,7 @@ def _script(steps: list[Step], out: Path) -> str:
         if "pip install" in command:
             command = "true"
         if command.startswith("auvdiag train "):
-            command = command.replace("auvdiag train ", "auvdiag train --iterations-scale 0.05 ",
+            command = command.replace("auvdiag train ", "auvdiag train --iterations-scale 0.02 ",
                                       1)
         lines += [f"{{ {command.split('#')[0]}\n}} > {out}/{number}.out 2>&1",
                   f"echo $? > {out}/{number}.rc"]
