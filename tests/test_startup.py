@@ -106,14 +106,21 @@ def _turning_time(truth: Path) -> float:
     return float(turning["t_s"].iloc[0]) + 1.0
 
 
+@pytest.fixture(scope="module")
+def dive(vehicle, tmp_path_factory) -> Path:
+    """The vehicle's normal dive the starts are cut from (its truth beside it)."""
+    return _simulate("paper-normal", 31, tmp_path_factory.mktemp("dive") / "dive.csv",
+                     vehicle[0])
+
+
 @pytest.mark.parametrize("start", ["moving", "turning", "offset"])
-def test_no_alarm_from_the_start_of_a_log(vehicle, tmp_path, start):
+def test_no_alarm_from_the_start_of_a_log(vehicle, dive, tmp_path, start):
     profile, model_options = vehicle
-    log = _simulate("paper-normal", 31, tmp_path / "dive.csv", profile)
+    log = dive
     if start == "moving":
         log = _starting_late(log, 40.0, tmp_path / "moving.csv")
     elif start == "turning":
-        when = _turning_time(tmp_path / "dive.truth.csv")
+        when = _turning_time(dive.with_suffix(".truth.csv"))
         log = _starting_late(log, when, tmp_path / "turning.csv")
     else:
         log = _with_offset(log, tmp_path / "offset.csv")
