@@ -95,7 +95,7 @@ def lagged(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Path]:
     output = folder / "model"
     result = runner.invoke(app, ["train", *map(str, logs[:3]), "--holdout", str(logs[3]),
                                  "--profile", str(profile), "-o", str(output),
-                                 "--iterations-scale", "0.05", "--hidden", "8"])
+                                 "--iterations-scale", "0.03", "--hidden", "8"])
     assert result.exit_code == 0, result.output
     return profile, output, folder
 
