@@ -69,8 +69,10 @@ def train(
     It also learns how the commands follow the motion (see 'auvdiag relate') and, for the
     profile's groups of actuators that act alike ([[effort]]), each actuator's normal share
     of their effort, judged on later logs against a false-alarm budget of 1 % of normal logs
-    (needs three normal logs with steady operation). Exit status 1 when nothing can be
-    judged (no model is written unless --keep-unskilled)."""
+    (needs three normal logs with steady operation; logs of more than one day, since logs
+    that differ no more than their own noise cannot show how far another day's strays:
+    the training report then says so). Exit status 1 when nothing can be judged (no model
+    is written unless --keep-unskilled)."""
     from auvdiag_cli import api
     from auvdiag_cli.jobs.train import paper_model_error
     from auvdiag_cli.reports.training import training_lines
