@@ -58,6 +58,15 @@ def _ahead(meta: Mapping[str, Any], n_commands: int, n_sensors: int, n_inputs: i
         entry, n_commands, n_sensors, n_inputs)
 
 
+def _change_stride(entry: Mapping[str, Any]) -> int | None:
+    stride = entry.get("stride_steps")
+    if stride is None:
+        return None
+    if int(stride) != stride or stride < 1:
+        raise ValueError(f"change_test stride_steps {stride!r} is not a whole number of steps")
+    return int(stride)
+
+
 def _optional_float(value: object) -> float | None:
     return None if value is None else float(value)  # type: ignore[arg-type]
 
@@ -178,6 +187,9 @@ class ModelCard:
     # The change test's thresholds, statistic -> signal (`engine.change_check`); empty:
     # calibrate has not set them, and the test is not run.
     change_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    # The steps between the windows they were set on (None: windows side by side, as
+    # calibrate set them before it judged a window every step).
+    change_stride: int | None = None
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
@@ -275,6 +287,7 @@ class ModelCard:
                 str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
                 for statistic, values in (meta.get("change_test") or {}).get(
                     "thresholds", {}).items()}),
+            change_stride=_change_stride(meta.get("change_test") or {}),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),

@@ -23,9 +23,13 @@ class TrainedOnPeaks:
 @dataclass(frozen=True)
 class ChangeTraining:
     logs: tuple[TrainedOnPeaks, ...] = ()
+    # The steps between the windows the peaks were measured on (None: windows side by
+    # side, as before the test judged them more often).
+    stride_steps: int | None = None
 
     def to_json(self) -> dict[str, object]:
-        return {"logs": [{"log": t.log, "sha256": t.sha256, "peaks": {
+        return {"stride_steps": self.stride_steps, "logs": [{
+            "log": t.log, "sha256": t.sha256, "peaks": {
             statistic: {name: value if math.isfinite(value) else None
                         for name, value in values.items()}
             for statistic, values in t.peaks.items()}} for t in self.logs]}
@@ -36,8 +40,18 @@ class ChangeTraining:
             str(statistic): {str(name): math.nan if value is None else float(value)
                              for name, value in values.items()}
             for statistic, values in (t.get("peaks") or {}).items()})
-            for t in entry.get("logs", [])))
+            for t in entry.get("logs", [])),
+            None if entry.get("stride_steps") is None else int(entry["stride_steps"]))
 
-    def without(self, digests: frozenset[str] | set[str]) -> tuple[TrainedOnPeaks, ...]:
-        """The logs but those whose content digest is among ``digests``."""
+    def without(self, digests: frozenset[str] | set[str], stride_steps: int
+                ) -> tuple[TrainedOnPeaks, ...]:
+        """The logs but those whose content digest is among ``digests``; none where their
+        peaks were measured on windows ``stride_steps`` apart (`stale`)."""
+        if self.stale(stride_steps):
+            return ()
         return tuple(t for t in self.logs if t.sha256 not in digests)
+
+    def stale(self, stride_steps: int) -> bool:
+        """Whether the peaks were measured on windows other than ``stride_steps`` apart:
+        another statistic, whose largest values set no threshold of this one."""
+        return bool(self.logs) and self.stride_steps != stride_steps

@@ -45,6 +45,11 @@ MIN_AHEAD_SKILL = 0.1
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
+# A window is judged every this many steps, each against the windows before it that do
+# not overlap it: a change is seen as soon as a window's worth of it is in, not only at
+# the next of a fixed row of windows (up to a window later). Model files calibrated
+# before record none and are judged with windows side by side, as their thresholds were set.
+STRIDE_STEPS = 1
 WINDOW, SUM = "window", "sum"
 STATISTICS = (WINDOW, SUM)
 
@@ -118,23 +123,45 @@ def _windowed_means(values: np.ndarray, window: int) -> np.ndarray:
     return means
 
 
-def _standardised(residual: np.ndarray, window: int, reference_min: int
+def _standardised(residual: np.ndarray, window: int, reference_min: int, stride: int
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """z of each whole window (its last step's index, and z per signal: NaN until the
-    earlier windows hold ``reference_min`` steps, and where a window has no mean)."""
-    ends = np.arange(window - 1, residual.shape[0], window)
+    """z of each whole window, one ending every ``stride`` steps (each window's last step's
+    index, and z per signal: NaN until the earlier windows hold ``reference_min`` steps,
+    and where a window has no mean). A window's reference is the windows before it that
+    do not overlap it: those ending a multiple of ``window`` steps earlier."""
+    ends = np.arange(window - 1, residual.shape[0], stride)
     means = _windowed_means(residual, window)[ends]
     finite = np.isfinite(means)
     values = np.where(finite, means, 0.0)
-    # The reference of window b: windows 0 .. b-1.
-    first, second = _running(values)[:-1], _running(values ** 2)[:-1]
-    counts = _running(finite.astype(float))[:-1]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean = first / counts
-        spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
-        z = (means - mean) / spread
-    z[(counts * window < reference_min) | ~(spread > 0) | ~finite] = np.nan
+    per_window = window // stride         # windows ending within one window's span
+    z = np.full(means.shape, np.nan)
+    for phase in range(per_window):
+        rows = slice(phase, None, per_window)
+        # The reference of window b of a phase: windows 0 .. b-1 of that phase.
+        first, second = _running(values[rows])[:-1], _running(values[rows] ** 2)[:-1]
+        counts = _running(finite[rows].astype(float))[:-1]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = first / counts
+            spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
+            z[rows] = (means[rows] - mean) / spread
+        z[rows][(counts * window < reference_min) | ~(spread > 0) | ~finite[rows]] = np.nan
     return ends, z
+
+
+def _sums(z: np.ndarray, one_sided: np.ndarray, per_window: int) -> np.ndarray:
+    """The CUSUM of each phase's windows (every ``per_window``-th row of ``z``), row by
+    row: a window adds to the sum of the window a whole window before it."""
+    sums = np.full(z.shape, np.nan)
+    high = np.zeros((per_window, z.shape[1]))
+    low = np.zeros((per_window, z.shape[1]))
+    for row_index, row in enumerate(z):
+        h, lo = high[row_index % per_window], low[row_index % per_window]
+        known = np.isfinite(row)
+        h[known] = np.maximum(0.0, h[known] + row[known] - DRIFT_ALLOWANCE)
+        lo[known] = np.maximum(0.0, lo[known] - row[known] - DRIFT_ALLOWANCE)
+        lo[one_sided] = 0.0
+        sums[row_index] = np.where(known | (h + lo > 0), np.maximum(h, lo), np.nan)
+    return sums
 
 
 def _carried(ratios: np.ndarray, first: int, at: int) -> np.ndarray:
@@ -173,39 +200,54 @@ def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray
 
 
 def change_statistics(residual: np.ndarray, window: int, reference_min: int,
-                      found: Sequence[Signature] = ()) -> dict[str, np.ndarray]:
+                      found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS
+                      ) -> dict[str, np.ndarray]:
     """Each statistic per step and signal, as of the last whole window (NaN until the
     reference is long enough); after the signals' columns, one per signature in ``found``
-    (`change_signatures`: one-sided, a move against it adds nothing)."""
-    ends, z = _standardised(residual, window, reference_min)
+    (`change_signatures`: one-sided, a move against it adds nothing). A window ends every
+    ``stride`` steps (a divisor of ``window``; None: ``window``, windows side by side)."""
+    stride = _stride(window, stride)
+    ends, z = _standardised(residual, window, reference_min, stride)
     z, one_sided = with_signatures(z, found)
-    sums = np.full(z.shape, np.nan)
-    high = np.zeros(z.shape[1])
-    low = np.zeros(z.shape[1])
-    for block, row in enumerate(z):
-        known = np.isfinite(row)
-        high[known] = np.maximum(0.0, high[known] + row[known] - DRIFT_ALLOWANCE)
-        low[known] = np.maximum(0.0, low[known] - row[known] - DRIFT_ALLOWANCE)
-        low[one_sided] = 0.0
-        sums[block] = np.where(known | (high + low > 0), np.maximum(high, low), np.nan)
+    sums = _sums(z, one_sided, window // stride)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
         out = np.full((residual.shape[0], z.shape[1]), np.nan)
         for block, end in enumerate(ends):
-            out[end:end + window] = per_window[block]
+            out[end:end + stride] = per_window[block]
         return out
 
     return {WINDOW: on_steps(np.where(one_sided, np.maximum(z, 0.0), np.abs(z))),
             SUM: on_steps(sums)}
 
 
+def _stride(window: int, stride: int | None) -> int:
+    if stride is None:
+        return window
+    if stride < 1 or window % stride:
+        raise ValueError(f"a stride of {stride} steps does not divide a window of {window}")
+    return stride
+
+
+def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
+    """The first step of the first window of the run of windows whose sum went beyond the
+    allowance up to the alarm at step ``at``: the windows of the alarm's phase, a whole
+    window apart, back to the last whose sum was 0 (or the first there is)."""
+    end = at - (at - (window - 1)) % stride        # the end of the window judged at ``at``
+    while end - window >= window - 1 and sums[end - window] > 0:
+        end -= window
+    return max(end - window + 1, 0)
+
+
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
-                 actuators: Sequence[Actuator] = ()) -> dict[str, dict[str, float]]:
+                 actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
+                 ) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per signal in a log, and per signature of the
     ``actuators`` over these signals (NaN where it is never judged): what calibrate sets
     the thresholds from."""
     found = signatures(actuators, names)
-    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found)
+    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
+                                   stride)
     every = [*names, *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
                         else float("nan") for i, name in enumerate(every)}
@@ -214,10 +256,12 @@ def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: 
 
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
-                 window: int, dt_s: float, actuators: Sequence[Actuator] = ()) -> ChangeCheck:
+                 window: int, dt_s: float, actuators: Sequence[Actuator] = (),
+                 stride: int | None = STRIDE_STEPS) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
     threshold (``thresholds``: statistic -> signal -> threshold), and the signatures of
-    the ``actuators`` over them that have one."""
+    the ``actuators`` over them that have one; a window judged every ``stride`` steps
+    (None: windows side by side, as models calibrated before judged them)."""
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
@@ -225,7 +269,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
-                                   found)
+                                   found, stride)
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     ratios = {}
@@ -253,9 +297,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # From where the strongest signal's sum last left zero: the first window of the run that
     # went beyond the allowance, even where a later window alone crossed (a failure takes a
     # second or two to stand out of the noise; the windows before carry part of it).
-    rest = np.flatnonzero(~(statistics[SUM][:at, strongest] > 0))
-    start = 0 if not rest.size else int(rest[-1]) + 1
-    first = max(start - window + 1, 0)
+    first = _run_start(statistics[SUM][:, strongest], at, window, _stride(window, stride))
     onset = float(time_s[first])
     # The change began before the alarm, and about when that run began: a noise window that
     # happened to join the run puts it early, a change that grew slowly out of the noise

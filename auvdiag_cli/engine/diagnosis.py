@@ -295,7 +295,8 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
                      "state: it predicts this log with less than the logs its thresholds "
                      "were set on had, and an alarm here is less certain")
     return check_change(residual, names, thresholds, frame.time_s,
-                        judging.window, profile.dt_s, profile.actuators)
+                        judging.window, profile.dt_s, profile.actuators,
+                        model.card.change_stride)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.change_check import STRIDE_STEPS
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -164,8 +165,10 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
     if start.usable:
         model.update_entries(start_state=start)
+    training = model.card.change_training
     evidence = change_evidence(diagnoses, skilled(model, profile), model, profile,
-                               model.card.change_training.without(set(digests)))
+                               training.without(set(digests), STRIDE_STEPS),
+                               len(training.logs) if training.stale(STRIDE_STEPS) else 0)
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
@@ -304,6 +307,11 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
             "only widened by the held-out / in-sample error ratio ("
             + ", ".join(f"{k} x{v:g}" for k, v in widening.items())
             + "); calibrate on normal logs the model has not seen")
+    if change.trained_not_counted:
+        warnings.append(
+            f"the change test's statistics the model keeps for the {change.trained_not_counted}"
+            " log(s) it was trained on were measured before the test judged a window every "
+            "step: not counted here; train the model again to count them")
     for mode in modes:
         if mode.kept_default:
             continue

@@ -10,6 +10,7 @@ import numpy as np
 from auvdiag_cli.engine.change_check import (
     REFERENCE_MIN_S,
     STATISTICS,
+    STRIDE_STEPS,
     SUM,
     WINDOW,
     change_judged,
@@ -82,18 +83,20 @@ class ChangeEvidence:
     peaks: list[dict[str, dict[str, float]]]
     outliers: tuple[Outlier, ...] = ()
     trained_on: tuple[str, ...] = ()     # the logs trained on, last in ``peaks``
+    trained_not_counted: int = 0         # logs trained on whose peaks are of another stride
 
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
                     model: LoadedModel, profile: Profile,
-                    trained: Sequence["TrainedOnPeaks"] = ()) -> ChangeEvidence:
+                    trained: Sequence["TrainedOnPeaks"] = (), trained_not_counted: int = 0
+                    ) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
         [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
            for d in diagnoses),
          *({s: dict(v) for s, v in t.peaks.items()} for t in trained)],
-        trained_on=tuple(t.log for t in trained)))
+        trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted))
 
 
 def _residual(diagnosis: Diagnosis) -> np.ndarray:
@@ -202,4 +205,4 @@ def change_entry(thresholds: ChangeThresholds) -> dict[str, object]:
     return {"thresholds": {s: {n: t for n, (_, t) in v.items()} for s, v in thresholds.items()},
             "largest_normal": {s: {n: peak for n, (peak, _) in v.items()}
                                for s, v in thresholds.items()},
-            "reference_s": REFERENCE_MIN_S}
+            "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS}

@@ -12,7 +12,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.change_check import change_judged
+from auvdiag_cli.engine.change_check import STRIDE_STEPS, change_judged
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.judging import skilled
@@ -34,4 +34,4 @@ def training_change_peaks(model: LoadedModel, profile: Profile, logs: Sequence[P
     progress(f"the change test on the {len(logs)} log(s) trained on (calibrate counts them)")
     return ChangeTraining(tuple(TrainedOnPeaks(path.name, log_digest(path), log_change_peaks(
         *change_errors_of(ingest(path, profile, part=healthy.of(path)), profile, model),
-        judged, model, profile)) for path in logs))
+        judged, model, profile)) for path in logs), STRIDE_STEPS)
