@@ -3,6 +3,8 @@ with a known step, its thresholds set by calibrate from normal logs, and on simu
 whose fault begins mid-log: found after the onset and not before, no alarm on a normal
 dive it was not calibrated on; the part that moves what changed is named."""
 
+import json
+
 import numpy as np
 import pytest
 from helpers import zeroed_column
@@ -65,6 +67,31 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
     assert "changed against the log's own beginning" in check.describe()
 
 
+def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_side():
+    residual = _noise(120.0, seed=1)
+    residual[803:, 0] -= 3.0                  # 0.3 s into a window of the row side by side
+    time_s = np.arange(residual.shape[0]) * DT_S
+    every = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    side = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S,
+                        stride=None)
+    assert side.alarm_s is not None and every.alarm_s is not None
+    assert (side.alarm_s * 10) % 10 == pytest.approx(9.0)       # only at a row's window ends
+    assert 80.3 < every.alarm_s < side.alarm_s and every.alarm_s <= 81.1
+    for check in (every, side):
+        assert check.onset_s == pytest.approx(80.3, abs=check.onset_error_s)
+        assert list(check.flagged) == ["speed"]
+    # The windows side by side are among those judged every step, with the same reference
+    # and sums: where they end, both statistics are theirs.
+    reference = round(REFERENCE_MIN_S / DT_S)
+    ends = np.arange(WINDOW - 1, residual.shape[0], WINDOW)
+    each = change_statistics(residual, WINDOW, reference)
+    row = change_statistics(residual, WINDOW, reference, stride=None)
+    for statistic in (WINDOW_Z, SUM):
+        np.testing.assert_allclose(each[statistic][ends], row[statistic][ends], equal_nan=True)
+    with pytest.raises(ValueError, match="does not divide"):
+        change_statistics(residual, WINDOW, reference, stride=3)
+
+
 def test_a_log_shorter_than_its_reference_is_not_judged():
     residual = _noise(REFERENCE_MIN_S - 5.0)
     check = check_change(residual, ["a", "b"], {WINDOW_Z: {"a": 5.0, "b": 5.0}},
@@ -124,6 +151,11 @@ def calibrated(make_log, tmp_path_factory):
 
 def test_calibrate_sets_a_change_threshold_per_judged_signal(calibrated):
     model, result = calibrated
+    assert model.card.change_stride == 1        # a window judged every step
+    # A model calibrated before judged windows side by side, as its thresholds were set.
+    entry = json.loads(model.card.document_text)["change_test"]
+    del entry["stride_steps"]
+    assert model.with_entries(change_test=entry).card.change_stride is None
     assert set(result.change) == {WINDOW_Z, SUM}
     for statistic, values in result.change.items():
         assert set(values) == {"flow", "yaw_rate"}

@@ -5,15 +5,16 @@ trim, a model better on some logs than others). A failure that starts mid-log is
 sooner against the same log's earlier residuals. The residual judged is the error of the
 model's predictor a moment ahead (`models.ahead`: small and steady on a healthy log, where
 the replay's error swings with every manoeuvre), or the replay's for a model without one.
-For each judged signal, window by window (the profile's `window_samples`, not overlapping),
-the residual averaged over the window is compared with the same averages over everything
-the log showed before it, in units of their spread there:
+For each judged signal, over a window of the profile's `window_samples` ending at every step
+(`STRIDE_STEPS`), the residual averaged over the window is compared with the same averages
+over the windows before it that do not overlap it, in units of their spread there:
 
     z = (mean of this window - mean of the earlier windows) / spread of the earlier windows
 
 Two statistics judge it, each with its own threshold per signal: the window's |z| itself
 ("window": an abrupt change, seen in the window it happens), and a two-sided CUSUM that adds
-up what goes beyond the allowance `DRIFT_ALLOWANCE` window after window ("sum"):
+up what goes beyond the allowance `DRIFT_ALLOWANCE` window after window, each window's sum
+carried on from the window a whole window before it ("sum"):
 
     S+ = max(0, S+ + z - k),  S- = max(0, S- - z - k),  S = max(S+, S-)
 
