@@ -150,19 +150,24 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int, stride:
 
 
 def _sums(z: np.ndarray, one_sided: np.ndarray, per_window: int) -> np.ndarray:
-    """The CUSUM of each phase's windows (every ``per_window``-th row of ``z``), row by
-    row: a window adds to the sum of the window a whole window before it."""
-    sums = np.full(z.shape, np.nan)
-    high = np.zeros((per_window, z.shape[1]))
-    low = np.zeros((per_window, z.shape[1]))
-    for row_index, row in enumerate(z):
-        h, lo = high[row_index % per_window], low[row_index % per_window]
-        known = np.isfinite(row)
-        h[known] = np.maximum(0.0, h[known] + row[known] - DRIFT_ALLOWANCE)
-        lo[known] = np.maximum(0.0, lo[known] - row[known] - DRIFT_ALLOWANCE)
-        lo[one_sided] = 0.0
-        sums[row_index] = np.where(known | (h + lo > 0), np.maximum(h, lo), np.nan)
-    return sums
+    """The CUSUM of each phase's windows (every ``per_window``-th row of ``z``): a window
+    adds to the sum of the window a whole window before it. The phases run side by side,
+    a block of ``per_window`` rows at a time."""
+    rows, signals = z.shape
+    blocks = -(-rows // per_window)
+    padded = np.full((blocks * per_window, signals), np.nan)
+    padded[:rows] = z
+    padded = padded.reshape(blocks, per_window, signals)
+    sums = np.full(padded.shape, np.nan)
+    high = np.zeros((per_window, signals))
+    low = np.zeros((per_window, signals))
+    for block, values in enumerate(padded):
+        known = np.isfinite(values)
+        high = np.where(known, np.maximum(0.0, high + values - DRIFT_ALLOWANCE), high)
+        low = np.where(known, np.maximum(0.0, low - values - DRIFT_ALLOWANCE), low)
+        low[:, one_sided] = 0.0
+        sums[block] = np.where(known | (high + low > 0), np.maximum(high, low), np.nan)
+    return sums.reshape(-1, signals)[:rows]
 
 
 def _carried(ratios: np.ndarray, first: int, at: int) -> np.ndarray:
