@@ -92,6 +92,31 @@ def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_si
         change_statistics(residual, WINDOW, reference, stride=3)
 
 
+def test_noise_lingering_in_the_sum_does_not_date_an_abrupt_change_early():
+    residual = _noise(120.0, seed=1)
+    residual[700:, 0] += 0.4          # a slight drift from 70 s keeps the sum above 0 ...
+    residual[803:, 0] += 3.0          # ... when the change comes at 80.3 s
+    time_s = np.arange(residual.shape[0]) * DT_S
+    sums = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[SUM][:, 0]
+    assert (sums[760:803] > 0).all()
+    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    assert check.alarm_s is not None and 80.3 < check.alarm_s <= 81.2
+    assert check.onset_s == pytest.approx(80.3, abs=0.3) and check.onset_error_s <= 1.0
+
+
+def test_what_crosses_within_a_window_of_the_alarm_is_flagged_with_it():
+    # A failure moves both signals; the second stands out 0.3 s after the first. Windows
+    # side by side would have seen both at their next end; judged every step, the alarm
+    # comes at the first, and the window after it still counts the second.
+    residual = _noise(120.0, seed=1)
+    residual[800:, 0] += 3.0
+    residual[803:, 1] += 3.0
+    time_s = np.arange(residual.shape[0]) * DT_S
+    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    assert check.alarm_s is not None and check.alarm_s < 80.9
+    assert set(check.flagged) == {"speed", "yaw"}
+
+
 def test_a_log_shorter_than_its_reference_is_not_judged():
     residual = _noise(REFERENCE_MIN_S - 5.0)
     check = check_change(residual, ["a", "b"], {WINDOW_Z: {"a": 5.0, "b": 5.0}},

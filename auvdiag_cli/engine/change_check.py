@@ -24,9 +24,11 @@ the profile says which way a part's weakening moves several signals, their signe
 judged as one more signal, one-sided (`change_signatures`). A
 signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
 are set by `auvdiag calibrate` from the largest of each statistic on normal logs, like the
-other judges; a model without them does not run the test. The onset is the start of the
-window where the strongest signal's sum last left zero (whichever statistic crossed), give
-or take the run from there to the alarm.
+other judges; a model without them does not run the test. The onset is found in two
+steps: the run of windows whose sum went beyond the allowance up to the alarm (back to
+where the strongest signal's sum last left zero), then within it the step where that
+signal's residual most likely shifted; the stated error spans from there to the alarm. The
+signals that crossed within a window of the alarm name the part.
 """
 
 from collections.abc import Mapping, Sequence
@@ -65,7 +67,8 @@ class ChangeCheck:
     alarm_s: float | None = None       # the first step over a threshold
     onset_s: float | None = None       # where the run of windows that crossed began
     onset_error_s: float = 0.0         # give or take
-    # Signal -> its statistic over its threshold at the alarm (the larger of the two).
+    # Signal -> its statistic over its threshold within a window from the alarm (the larger
+    # of the two, at its highest there).
     flagged: Mapping[str, float] = field(default_factory=dict)
     # Judged signal -> how much more of the change it carried from the onset to the alarm
     # than before the onset (`_carried`), where ``flagged`` says only where it ended.
@@ -245,6 +248,22 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
     return max(end - window + 1, 0)
 
 
+def _shift_start(residual: np.ndarray, earliest: int, at: int) -> int:
+    """Where, from step ``earliest`` to the alarm at ``at``, the mean of one signal's
+    residual most likely shifted (the step that maximises the squared sum of its
+    departures from the mean before ``earliest``, over the steps after it): the run of
+    windows dates the change to a window at best, and to the noise that lingered in its
+    sum at worst."""
+    before = residual[:earliest]
+    before = before[np.isfinite(before)]
+    if before.size < 2 or at <= earliest:
+        return earliest
+    departures = np.nan_to_num(residual[earliest:at + 1] - before.mean(), nan=0.0)
+    after = np.cumsum(departures[::-1])[::-1]          # sum from each step to the alarm
+    steps = np.arange(after.size, 0, -1)
+    return earliest + int(np.argmax(after * after / steps))
+
+
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
                  actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
                  ) -> dict[str, dict[str, float]]:
@@ -297,20 +316,29 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     if not over.size:
         return check
     at = int(over[0])
-    flagged = {n: round(float(combined[at, k]), 2) for k, n in enumerate(names_judged)
-               if combined[at, k] > 1}
+    # What crossed within a window of the alarm names it: the first step over a threshold
+    # dates the detection, but one window holds what windows side by side would have seen.
+    named_by = min(at + window, len(combined))
+    with np.errstate(invalid="ignore"):
+        reached = np.nanmax(np.where(np.isfinite(combined[at:named_by]), combined[at:named_by],
+                                     -np.inf), axis=0)
+    flagged = {n: round(float(reached[k]), 2) for k, n in enumerate(names_judged)
+               if reached[k] > 1}
     strongest = names_judged.index(max(flagged, key=lambda n: flagged[n]))
     # From where the strongest signal's sum last left zero: the first window of the run that
     # went beyond the allowance, even where a later window alone crossed (a failure takes a
     # second or two to stand out of the noise; the windows before carry part of it).
-    first = _run_start(statistics[SUM][:, strongest], at, window, _stride(window, stride))
+    run = _run_start(statistics[SUM][:, strongest], at, window, _stride(window, stride))
+    # Within that run, where the strongest signal's own residual shifted: the onset.
+    first = run if strongest >= len(judged) else \
+        _shift_start(residual[:, judged[strongest]], run, at)
     onset = float(time_s[first])
-    # The change began before the alarm, and about when that run began: a noise window that
-    # happened to join the run puts it early, a change that grew slowly out of the noise
-    # late. The error spans the run up to the alarm, a window at least.
+    # The run's start alone would date the change to noise that lingered in the sum (with a
+    # window judged every step, some phase's sum nearly always holds some). The error spans
+    # the onset up to the alarm, a window at least.
     error = max(window * dt_s, float(time_s[at]) - onset)
     evidence = {n: round(float(v), 3)
-                for n, v in zip(names_judged, _carried(combined, first, at), strict=True)}
+                for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
                        round(onset, 3), round(error, 3),
                        dict(sorted(flagged.items(), key=lambda item: -item[1])), evidence,
