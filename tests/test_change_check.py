@@ -80,16 +80,36 @@ def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_si
     for check in (every, side):
         assert check.onset_s == pytest.approx(80.3, abs=check.onset_error_s)
         assert list(check.flagged) == ["speed"]
-    # The windows side by side are among those judged every step, with the same reference
-    # and sums: where they end, both statistics are theirs.
+    # A window judged every step is measured against every earlier window that does not
+    # overlap it, of whichever phase: the window means ending up to a window before it.
     reference = round(REFERENCE_MIN_S / DT_S)
-    ends = np.arange(WINDOW - 1, residual.shape[0], WINDOW)
-    each = change_statistics(residual, WINDOW, reference)
-    row = change_statistics(residual, WINDOW, reference, stride=None)
-    for statistic in (WINDOW_Z, SUM):
-        np.testing.assert_allclose(each[statistic][ends], row[statistic][ends], equal_nan=True)
+    z = change_statistics(residual, WINDOW, reference)[WINDOW_Z][:, 1]
+    means = np.convolve(residual[:, 1], np.ones(WINDOW) / WINDOW, mode="valid")  # end i+9
+    for end in (reference + WINDOW - 1, 555, 1000):
+        earlier = means[:end - WINDOW - (WINDOW - 1) + 1]
+        expected = (means[end - (WINDOW - 1)] - earlier.mean()) / earlier.std()
+        assert z[end] == pytest.approx(abs(expected), rel=1e-9)
+    assert np.isnan(z[reference + WINDOW - 2])          # one step short of its reference
     with pytest.raises(ValueError, match="does not divide"):
         change_statistics(residual, WINDOW, reference, stride=3)
+
+
+def test_judged_every_step_a_transient_reads_the_same_wherever_the_recording_started():
+    # A normal transient 1.2 s long at 60 s. Windows side by side see it whole or split in
+    # two depending on where the recording started, so a normal log's verdict could hang on
+    # that; judged every step, its window is found wherever the log begins.
+    residual = np.random.default_rng(2).normal(0.0, 1.0, (1200, 1))
+    residual[600:612, 0] += 2.0
+    reference = round(REFERENCE_MIN_S / DT_S)
+
+    def largest(stride: int | None) -> np.ndarray:
+        return np.array([np.nanmax(change_statistics(residual[late:], WINDOW, reference,
+                                                     stride=stride)[WINDOW_Z])
+                         for late in range(WINDOW)])
+
+    every, side = largest(1), largest(None)
+    assert every.max() - every.min() < 0.1
+    assert side.max() - side.min() > 2.0 and every.min() >= side.max() - 0.3
 
 
 def test_noise_lingering_in_the_sum_does_not_date_an_abrupt_change_early():
@@ -105,16 +125,17 @@ def test_noise_lingering_in_the_sum_does_not_date_an_abrupt_change_early():
 
 
 def test_what_crosses_within_a_window_of_the_alarm_is_flagged_with_it():
-    # A failure moves both signals; the second stands out 0.3 s after the first. Windows
-    # side by side would have seen both at their next end; judged every step, the alarm
-    # comes at the first, and the window after it still counts the second.
+    # A failure moves both signals; the second 0.6 s after the first. At the first step over
+    # a threshold only the first has crossed; the window after it counts the second, while
+    # the first still dates the change.
     residual = _noise(120.0, seed=1)
     residual[800:, 0] += 3.0
-    residual[803:, 1] += 3.0
+    residual[806:, 1] += 3.0
     time_s = np.arange(residual.shape[0]) * DT_S
     check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
-    assert check.alarm_s is not None and check.alarm_s < 80.9
+    assert check.alarm_s is not None and check.alarm_s <= 80.9
     assert set(check.flagged) == {"speed", "yaw"}
+    assert check.onset_s == pytest.approx(80.0, abs=0.2)
 
 
 def test_a_log_shorter_than_its_reference_is_not_judged():

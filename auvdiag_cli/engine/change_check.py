@@ -7,7 +7,7 @@ model's predictor a moment ahead (`models.ahead`: small and steady on a healthy 
 the replay's error swings with every manoeuvre), or the replay's for a model without one.
 For each judged signal, over a window of the profile's `window_samples` ending at every step
 (`STRIDE_STEPS`), the residual averaged over the window is compared with the same averages
-over the windows before it that do not overlap it, in units of their spread there:
+over all the windows before it that do not overlap it, in units of their spread there:
 
     z = (mean of this window - mean of the earlier windows) / spread of the earlier windows
 
@@ -131,24 +131,27 @@ def _standardised(residual: np.ndarray, window: int, reference_min: int, stride:
                   ) -> tuple[np.ndarray, np.ndarray]:
     """z of each whole window, one ending every ``stride`` steps (each window's last step's
     index, and z per signal: NaN until the earlier windows hold ``reference_min`` steps,
-    and where a window has no mean). A window's reference is the windows before it that
-    do not overlap it: those ending a multiple of ``window`` steps earlier."""
+    and where a window has no mean). A window's reference is every window judged before it
+    that does not overlap it: those ending a whole window or more earlier. Pooling the
+    phases keeps the spread as steady as the log allows early on, where each phase's own
+    handful of windows let one phase's spread come out small and its z large."""
     ends = np.arange(window - 1, residual.shape[0], stride)
     means = _windowed_means(residual, window)[ends]
     finite = np.isfinite(means)
     values = np.where(finite, means, 0.0)
-    per_window = window // stride         # windows ending within one window's span
+    lag = window // stride        # windows ending within one window's span
+    # The reference of window b: windows 0 .. b - lag.
+    first, second = (_running(v)[:-lag] for v in (values, values ** 2))
+    counts = _running(finite.astype(float))[:-lag]
     z = np.full(means.shape, np.nan)
-    for phase in range(per_window):
-        rows = slice(phase, None, per_window)
-        # The reference of window b of a phase: windows 0 .. b-1 of that phase.
-        first, second = _running(values[rows])[:-1], _running(values[rows] ** 2)[:-1]
-        counts = _running(finite[rows].astype(float))[:-1]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mean = first / counts
-            spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
-            z[rows] = (means[rows] - mean) / spread
-        z[rows][(counts * window < reference_min) | ~(spread > 0) | ~finite[rows]] = np.nan
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = first / counts
+        spread = np.sqrt(np.maximum(second / counts - mean * mean, 0.0))
+        z[lag - 1:] = (means[lag - 1:] - mean) / spread
+    covered = np.full(means.shape, -np.inf)
+    covered[lag - 1:] = counts * stride + window - stride     # the reference's steps
+    z[(covered < reference_min) | ~finite] = np.nan
+    z[lag - 1:][~(spread > 0)] = np.nan
     return ends, z
 
 
@@ -324,7 +327,9 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                                      -np.inf), axis=0)
     flagged = {n: round(float(reached[k]), 2) for k, n in enumerate(names_judged)
                if reached[k] > 1}
-    strongest = names_judged.index(max(flagged, key=lambda n: flagged[n]))
+    # The signal furthest over its threshold at the alarm dates the change: one that
+    # crossed after it may have moved later (the vehicle's answer).
+    strongest = int(np.nanargmax(combined[at]))
     # From where the strongest signal's sum last left zero: the first window of the run that
     # went beyond the allowance, even where a later window alone crossed (a failure takes a
     # second or two to stand out of the noise; the windows before carry part of it).
