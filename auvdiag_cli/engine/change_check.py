@@ -65,13 +65,13 @@ class ChangeCheck:
     peaks: Mapping[str, Mapping[str, float]]        # statistic -> judged signal -> largest
     judged_from_s: float | None        # when the reference was long enough; None: never
     alarm_s: float | None = None       # the first step over a threshold
-    onset_s: float | None = None       # where the run of windows that crossed began
+    onset_s: float | None = None       # where, in the run that crossed, it most likely began
     onset_error_s: float = 0.0         # give or take
     # Signal -> its statistic over its threshold within a window from the alarm (the larger
     # of the two, at its highest there).
     flagged: Mapping[str, float] = field(default_factory=dict)
-    # Judged signal -> how much more of the change it carried from the onset to the alarm
-    # than before the onset (`_carried`), where ``flagged`` says only where it ended.
+    # Judged signal -> how much more of the change it carried over the run of windows up to
+    # the alarm than before it (`_carried`), where ``flagged`` says only where it ended.
     evidence: Mapping[str, float] = field(default_factory=dict)
     # Each signature judged (`change_signatures`) -> the signals it sums.
     members: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
@@ -177,12 +177,12 @@ def _sums(z: np.ndarray, one_sided: np.ndarray, per_window: int) -> np.ndarray:
 
 
 def _carried(ratios: np.ndarray, first: int, at: int) -> np.ndarray:
-    """Per signal, its ratio to its threshold averaged from step ``first`` (the onset) to
-    ``at`` (the alarm), less its average before the onset, never below 0. The part that
-    failed moves what it moves from the onset on, though some of it stays under its
-    threshold; what else crosses near the alarm is often the vehicle's answer to the
-    failure. Before the onset is each signal's own usual level (a noisy signal sits nearer
-    its threshold), which carries nothing."""
+    """Per signal, its ratio to its threshold averaged from step ``first`` (the start of the
+    run of windows that crossed) to ``at`` (the alarm), less its average before the run,
+    never below 0. The part that failed moves what it moves from the onset on, though some
+    of it stays under its threshold; what else crosses near the alarm is often the
+    vehicle's answer to the failure. Before the run is each signal's own usual level (a
+    noisy signal sits nearer its threshold), which carries nothing."""
     run = np.nan_to_num(ratios[first:at + 1], nan=0.0).mean(axis=0)
     before = ratios[:first]
     known = np.isfinite(before)
@@ -322,9 +322,8 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # What crossed within a window of the alarm names it: the first step over a threshold
     # dates the detection, but one window holds what windows side by side would have seen.
     named_by = min(at + window, len(combined))
-    with np.errstate(invalid="ignore"):
-        reached = np.nanmax(np.where(np.isfinite(combined[at:named_by]), combined[at:named_by],
-                                     -np.inf), axis=0)
+    following = combined[at:named_by]
+    reached = np.where(np.isfinite(following), following, -np.inf).max(axis=0)
     flagged = {n: round(float(reached[k]), 2) for k, n in enumerate(names_judged)
                if reached[k] > 1}
     # The signal furthest over its threshold at the alarm dates the change: one that
