@@ -282,6 +282,18 @@ def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: 
             for statistic, values in statistics.items()}
 
 
+def _flagged(ratios: np.ndarray, names: Sequence[str], at: int, window: int
+             ) -> dict[str, float]:
+    """Each signal over its threshold within a window from the alarm at step ``at``, at
+    its highest there, the furthest over first. The first step over a threshold dates the
+    detection, but one signal often crosses a few steps before the rest of the change: a
+    window holds what windows side by side would have seen at their next end."""
+    following = ratios[at:min(at + window, len(ratios))]
+    reached = np.where(np.isfinite(following), following, -np.inf).max(axis=0)
+    over = {n: round(float(reached[k]), 2) for k, n in enumerate(names) if reached[k] > 1}
+    return dict(sorted(over.items(), key=lambda item: -item[1]))
+
+
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
                  window: int, dt_s: float, actuators: Sequence[Actuator] = (),
@@ -319,13 +331,6 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     if not over.size:
         return check
     at = int(over[0])
-    # What crossed within a window of the alarm names it: the first step over a threshold
-    # dates the detection, but one window holds what windows side by side would have seen.
-    named_by = min(at + window, len(combined))
-    following = combined[at:named_by]
-    reached = np.where(np.isfinite(following), following, -np.inf).max(axis=0)
-    flagged = {n: round(float(reached[k]), 2) for k, n in enumerate(names_judged)
-               if reached[k] > 1}
     # The signal furthest over its threshold at the alarm dates the change: one that
     # crossed after it may have moved later (the vehicle's answer).
     strongest = int(np.nanargmax(combined[at]))
@@ -345,5 +350,4 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
                        round(onset, 3), round(error, 3),
-                       dict(sorted(flagged.items(), key=lambda item: -item[1])), evidence,
-                       members)
+                       _flagged(combined, names_judged, at, window), evidence, members)
