@@ -13,6 +13,7 @@ from auvdiag_cli import api
 from auvdiag_cli.engine.change_check import (
     REFERENCE_MIN_S,
     SUM,
+    ChangeCheck,
     change_statistics,
     check_change,
 )
@@ -32,6 +33,13 @@ def _limits(value: float) -> dict[str, dict[str, float]]:
 
 def _noise(seconds: float, signals: int = 2, seed: int = 0) -> np.ndarray:
     return np.random.default_rng(seed).normal(0.0, 1.0, (round(seconds / DT_S), signals))
+
+
+def _checked(residual: np.ndarray, stride: int | None = 1) -> ChangeCheck:
+    """The test on two signals, "speed" and "yaw", each with the same thresholds."""
+    time_s = np.arange(residual.shape[0]) * DT_S
+    return check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S,
+                        stride=stride)
 
 
 def test_the_statistic_waits_for_its_reference_and_rises_at_a_step():
@@ -56,8 +64,7 @@ def test_a_shift_no_single_window_shows_builds_up_window_after_window():
 def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
     residual = _noise(120.0, seed=1)
     residual[800:, 0] -= 3.0
-    time_s = np.arange(residual.shape[0]) * DT_S
-    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    check = _checked(residual)
     # The first window whose earlier windows hold the reference: judged from its end.
     assert check.judged and check.judged_from_s == pytest.approx(
         REFERENCE_MIN_S + (WINDOW - 1) * DT_S, abs=0.05)
@@ -70,10 +77,7 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
 def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_side():
     residual = _noise(120.0, seed=1)
     residual[803:, 0] -= 3.0                  # 0.3 s into a window of the row side by side
-    time_s = np.arange(residual.shape[0]) * DT_S
-    every = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
-    side = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S,
-                        stride=None)
+    every, side = _checked(residual), _checked(residual, stride=None)
     assert side.alarm_s is not None and every.alarm_s is not None
     assert (side.alarm_s * 10) % 10 == pytest.approx(9.0)       # only at a row's window ends
     assert 80.3 < every.alarm_s < side.alarm_s and every.alarm_s <= 81.1
@@ -116,10 +120,9 @@ def test_noise_lingering_in_the_sum_does_not_date_an_abrupt_change_early():
     residual = _noise(120.0, seed=1)
     residual[700:, 0] += 0.4          # a slight drift from 70 s keeps the sum above 0 ...
     residual[803:, 0] += 3.0          # ... when the change comes at 80.3 s
-    time_s = np.arange(residual.shape[0]) * DT_S
     sums = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[SUM][:, 0]
     assert (sums[760:803] > 0).all()
-    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    check = _checked(residual)
     assert check.alarm_s is not None and 80.3 < check.alarm_s <= 81.2
     assert check.onset_s == pytest.approx(80.3, abs=0.3) and check.onset_error_s <= 1.0
 
@@ -131,8 +134,7 @@ def test_what_crosses_within_a_window_of_the_alarm_is_flagged_with_it():
     residual = _noise(120.0, seed=1)
     residual[800:, 0] += 3.0
     residual[806:, 1] += 3.0
-    time_s = np.arange(residual.shape[0]) * DT_S
-    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    check = _checked(residual)
     assert check.alarm_s is not None and check.alarm_s <= 80.9
     assert set(check.flagged) == {"speed", "yaw"}
     assert check.onset_s == pytest.approx(80.0, abs=0.2)
@@ -164,8 +166,7 @@ def test_what_a_signal_carried_from_the_onset_outweighs_what_crossed_at_the_alar
     residual = _noise(150.0, seed=4)
     residual[800:, 0] += 0.6
     residual[890:, 1] += 4.0
-    time_s = np.arange(residual.shape[0]) * DT_S
-    check = check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S)
+    check = _checked(residual)
     # Judged every step: the window ending 0.6 s after the jump holds six steps of it.
     assert check.alarm_s == pytest.approx(89.5) and list(check.flagged) == ["yaw"]
     assert check.evidence["speed"] > check.evidence["yaw"] > 0.0
