@@ -4,6 +4,7 @@ whose fault begins mid-log: found after the onset and not before, no alarm on a 
 dive it was not calibrated on; the part that moves what changed is named."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,9 +21,11 @@ from auvdiag_cli.engine.change_check import (
 from auvdiag_cli.engine.change_check import (
     WINDOW as WINDOW_Z,
 )
+from auvdiag_cli.engine.diagnosis import check_model_fits
 from auvdiag_cli.engine.isolation import change_suspects
 from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS, MIN_FITTED_THRESHOLDS
 from auvdiag_cli.reports.training import calibration_lines
+from auvdiag_errors import ModelError
 
 DT_S, WINDOW = 0.1, 10
 
@@ -203,6 +206,11 @@ def test_calibrate_sets_a_change_threshold_per_judged_signal(calibrated):
     entry = json.loads(model.card.document_text)["change_test"]
     del entry["stride_steps"]
     assert model.with_entries(change_test=entry).card.change_stride is None
+    # A stride that does not divide the window is refused with one line naming the log.
+    odd = model.with_entries(change_test={**entry, "stride_steps": 7})
+    log = Path("dive.bag")
+    with pytest.raises(ModelError, match=r"dive\.bag: .*stride_steps 7 does not divide"):
+        check_model_fits(odd, api.load_profile(None), log)
     assert set(result.change) == {WINDOW_Z, SUM}
     for statistic, values in result.change.items():
         assert set(values) == {"flow", "yaw_rate"}

@@ -85,6 +85,11 @@ def check_model_fits(model: LoadedModel, profile: Profile, log: Path) -> None:
     if abs(model.card.dt_s - profile.dt_s) > 1e-9:
         raise ModelError(f"{log}: model step {model.card.dt_s} s differs from the profile's "
                          f"{profile.dt_s} s: {REFIT}")
+    window = model.card.window_samples or profile.window_samples
+    stride = model.card.change_stride
+    if stride is not None and window % stride:
+        raise ModelError(f"{log}: model {model.path}: its change test's stride_steps {stride} "
+                         f"does not divide its window of {window} steps: calibrate it again")
 
 
 def diagnose(path: Path, profile: Profile, model: LoadedModel,
