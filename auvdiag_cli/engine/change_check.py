@@ -224,9 +224,11 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
     sums = _sums(z, one_sided, window // stride)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
+        """Each window's value held from its last step until the next window's."""
         out = np.full((residual.shape[0], z.shape[1]), np.nan)
-        for block, end in enumerate(ends):
-            out[end:end + stride] = per_window[block]
+        if ends.size:
+            held = np.repeat(per_window, stride, axis=0)
+            out[ends[0]:] = held[:residual.shape[0] - ends[0]]
         return out
 
     return {WINDOW: on_steps(np.where(one_sided, np.maximum(z, 0.0), np.abs(z))),
