@@ -46,7 +46,7 @@ class ChangeTraining:
     def without(self, digests: frozenset[str] | set[str], stride_steps: int
                 ) -> tuple[TrainedOnPeaks, ...]:
         """The logs but those whose content digest is among ``digests``; none where their
-        peaks were measured on windows ``stride_steps`` apart (`stale`)."""
+        peaks were measured on windows other than ``stride_steps`` apart (`stale`)."""
         if self.stale(stride_steps):
             return ()
         return tuple(t for t in self.logs if t.sha256 not in digests)
