@@ -44,6 +44,7 @@ DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 NORMAL_MISSIONS = ("paper-normal", "mission-ccw", "mission-large-cw", "mission-sprint-ccw",
                    "mission-fast-cw")
 FRACTIONS = (0.5, 0.6, 0.7, 0.8, 0.9)
+CUT_MOTOR = "motor_3"      # the CrazyPAD E8 cuts are on M3
 
 
 def _learn(profile: Profile, logs: list[RelationLog]) -> EffortModel:
@@ -83,11 +84,13 @@ def crazypad(root: Path) -> list[str]:
              f"for a budget of {model.false_alarm_rate:.0%} of normal flights.", ""]
     alarms = 0
     worst = 0.0
+    normal_departure = -np.inf      # motor 3's largest, each normal flight judged by the others
     for f in normal:
         own = _learn(profile, [logs[g] for g in normal if g != f])
         check = _judge(own, profile, logs[f])
         alarms += bool(check.suspects)
         worst = max(worst, max((a.ratio or 0.0) for a in check.actuators))
+        normal_departure = max(normal_departure, _departure(check, CUT_MOTOR))
     lines.append(f"Normal flights, each judged by the other {len(normal) - 1}: "
                  f"{alarms} false alarm(s) of {len(normal)} (largest z at {worst:.0%} of its "
                  "threshold).")
@@ -99,7 +102,7 @@ def crazypad(root: Path) -> list[str]:
             continue
         key = (row["kind"], row["cut_mm"] or "", row["motors"])
         by_class[key].append(_judge(model, profile, logs[row["file"]]))
-    cut_found = cut_total = cut_named = 0
+    cut_found = cut_total = cut_named = separable = 0
     for (kind, cut, motors), checks in sorted(by_class.items(), key=lambda i: (
             i[0][0], float(i[0][1] or 0), i[0][2])):
         found = [c for c in checks if c.suspects]
@@ -112,11 +115,21 @@ def crazypad(root: Path) -> list[str]:
         if kind == "cut" and float(cut) >= 2.0:
             cut_total += len(checks)
             cut_found += len(found)
-            cut_named += sum(c.named == ("motor_3",) for c in found)
+            cut_named += sum(c.named == (CUT_MOTOR,) for c in found)
+            separable += sum(_departure(c, CUT_MOTOR) > normal_departure for c in checks)
     lines += ["", f"Cut of 2 mm or more: found in {_percent(cut_found, cut_total)} of the "
               f"flights, motor 3 alone named in {_percent(cut_named, cut_found)} of those "
-              "found."]
+              f"found. Separable at all: in {_percent(separable, cut_total)} motor 3 carries "
+              f"more of the effort than on any normal flight (+{normal_departure:.1%} at most, "
+              "each judged by the others): what any threshold on its share could find without "
+              "a false alarm."]
     return lines
+
+
+def _departure(check: EffortCheck, motor: str) -> float:
+    """The motor's share less its normal share, over the normal share (NaN: not judged)."""
+    departure = next(a.departure for a in check.actuators if a.name == motor)
+    return float("nan") if departure is None else departure
 
 
 def crazypad_few(root: Path) -> list[str]:
@@ -181,7 +194,7 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
                 check = _judge(model, profile, logs[f])
                 tried[cut] += 1
                 found[cut] += bool(check.suspects)
-                wrong += bool(check.suspects) and check.named != ("motor_3",)
+                wrong += bool(check.suspects) and check.named != (CUT_MOTOR,)
     big = [c for c in by_cut if c >= 2.0]
     cells = [_percent(found[c], tried[c]) for c in by_cut]
     return (f"| {label} | {k} | {_percent(alarms, judged)} | {alike}/{folds} ({alike_alarms}) | "

@@ -65,3 +65,25 @@ def test_three_normal_logs_date_a_weakness_that_begins_mid_log_and_keep_the_budg
                 check.onset_error_s, 2.0)
             assert check.alarm_s is not None and check.alarm_s - 90.0 < 15.0
     assert found >= 4
+
+
+def test_a_rotor_lost_in_the_last_window_is_dated_where_it_was_lost():
+    """Motor 1 at full command from 147 s of 150 s (a propeller lost, the controller asking
+    all it has): after the last start the test tries (a window before the end). The grid of
+    starts has nowhere to peak; the steps date it, within the error stated, and it is seen
+    within seconds. Dated by the grid alone, the onset fell on an earlier start, ~20 s
+    before the loss."""
+    rng = np.random.default_rng(11)
+    model, _ = learn_effort(PROFILE.effort_groups,
+                            [_log(_commands(rng), f"normal-{i}") for i in range(3)],
+                            PROFILE.dt_s)
+    assert model is not None
+    for _ in range(3):
+        commands = _commands(rng)
+        commands[1470:, 0] = 1.0
+        check = _check(model, commands)
+        assert check.named == ("motor_1",)
+        assert check.onset_s is not None and check.onset_error_s is not None
+        # Within its error, a stride of starts (3.1 s: an eighth of a 25 s window).
+        assert abs(check.onset_s - 147.0) <= check.onset_error_s <= 3.2
+        assert check.alarm_s is not None and 147.0 <= check.alarm_s <= 149.9

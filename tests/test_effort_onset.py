@@ -1,28 +1,53 @@
 """Where a weakness began, and how sure: the later starts whose statistic lies within the
-95 % interval of one change point (3.84 in z² below the best one's), a stride at least; when
-the last start tried is among them, the change may lie after it, up to when it was seen."""
+95 % interval of one change point (3.84 in z² below the best one's) and on to the starts
+either side that fall short (the change lies between two starts), a stride either side at
+least; when the last start tried is among them, the change may lie after it, up to when it
+was seen. Within, the steps date it where its mean shifted."""
 
 import numpy as np
 import pytest
 
-from auvdiag_cli.engine.effort_check import _onset_error
+from auvdiag_cli.engine.change_point import likely_span, shift_start
 
 STARTS = np.arange(10.0, 60.0, 2.0)      # s, a stride of 2 s
 STRIDE = 2.0
 
 
-def test_a_sharp_change_point_is_dated_to_a_stride():
+def _span(z: np.ndarray, seen_s: float, starts: np.ndarray = STARTS) -> tuple[float, float]:
+    return likely_span(z, starts, int(np.argmax(z)), STRIDE, seen_s)
+
+
+def test_a_sharp_change_point_is_dated_to_a_stride_either_side():
     z = np.where(STARTS == 30.0, 10.0, 2.0)
-    assert _onset_error(z, STARTS, int(np.argmax(z)), STRIDE, seen_s=33.0) == STRIDE
+    assert _span(z, seen_s=33.0) == (28.0, 32.0)
 
 
-def test_a_flat_top_widens_the_error_to_its_likely_starts():
+def test_a_flat_top_widens_the_span_to_its_likely_starts_and_the_next_ones_out():
     z = 10.0 - 0.02 * np.abs(STARTS - 30.0)          # within 3.84 in z² up to 9.7 s away
-    assert _onset_error(z, STARTS, int(np.argmax(z)), STRIDE, seen_s=45.0) == pytest.approx(8.0)
+    # Likely: 22 to 38 s; the change lies after 20 s (short of it) and before 40 s.
+    assert _span(z, seen_s=45.0) == pytest.approx((20.0, 40.0))
 
 
 def test_a_change_after_the_last_start_reaches_to_when_it_was_seen_never_past_it():
     z = STARTS / 10.0                                 # rising to the last start tried, 58 s
-    best = len(STARTS) - 1
-    assert _onset_error(z, STARTS, best, STRIDE, seen_s=64.0) == pytest.approx(6.0)
-    assert _onset_error(z, STARTS, best, STRIDE, seen_s=58.5) == pytest.approx(STRIDE)
+    # Likely: 56 and 58 s; the change lies after 54 s, the last start that falls short.
+    assert _span(z, seen_s=64.0) == pytest.approx((54.0, 64.0))
+    assert _span(z, seen_s=58.5) == pytest.approx((54.0, 58.5))
+
+
+def test_a_change_after_a_gap_in_steady_time_may_lie_anywhere_in_the_gap():
+    """The starts are a stride apart in steady time: where the group idled from 30 s to 40 s
+    (no start there), a change first seen from 40 s may have begun at any time after 30 s."""
+    starts = np.r_[np.arange(10.0, 31.0, 2.0), np.arange(40.0, 60.0, 2.0)]
+    z = np.where(starts == 40.0, 10.0, 2.0)
+    assert _span(z, seen_s=44.0, starts=starts) == pytest.approx((30.0, 42.0))
+
+
+def test_the_steps_date_a_shift_within_the_span_they_are_given():
+    rng = np.random.default_rng(3)
+    values = rng.normal(0.0, 1.0, 400)
+    values[250:] += 2.0
+    assert abs(shift_start(values, 100, 320) - 250) <= 3
+    # Never before the span's start, nor after the detection.
+    assert shift_start(values, 260, 320) >= 260
+    assert shift_start(values, 100, 100) == 100

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from auvdiag_cli.engine.change_point import shift_start
 from auvdiag_cli.engine.change_signatures import Signature, signatures, with_signatures
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.vehicle.actuators import Actuator
@@ -253,22 +254,6 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
     return max(end - window + 1, 0)
 
 
-def _shift_start(residual: np.ndarray, earliest: int, at: int) -> int:
-    """Where, from step ``earliest`` to the alarm at ``at``, the mean of one signal's
-    residual most likely shifted (the step that maximises the squared sum of its
-    departures from the mean before ``earliest``, over the steps after it): the run of
-    windows dates the change to a window at best, and to the noise that lingered in its
-    sum at worst."""
-    before = residual[:earliest]
-    before = before[np.isfinite(before)]
-    if before.size < 2 or at <= earliest:
-        return earliest
-    departures = np.nan_to_num(residual[earliest:at + 1] - before.mean(), nan=0.0)
-    after = np.cumsum(departures[::-1])[::-1]          # sum from each step to the alarm
-    steps = np.arange(after.size, 0, -1)
-    return earliest + int(np.argmax(after * after / steps))
-
-
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
                  actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
                  ) -> dict[str, dict[str, float]]:
@@ -342,7 +327,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     run = _run_start(statistics[SUM][:, strongest], at, window, _stride(window, stride))
     # Within that run, where the strongest signal's own residual shifted: the onset.
     first = run if strongest >= len(judged) else \
-        _shift_start(residual[:, judged[strongest]], run, at)
+        shift_start(residual[:, judged[strongest]], run, at)
     onset = float(time_s[first])
     # The run's start alone would date the change to noise that lingered in the sum (with a
     # window judged every step, some phase's sum nearly always holds some). The error spans

@@ -16,12 +16,12 @@ mid-log far sooner. The onset is the start that departs most (the change point's
 likeliest place); the detection, the first moment the span from it crosses its
 threshold."""
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from auvdiag_cli.engine.change_point import likely_span, shift_start
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     SPREAD_FLOOR,
@@ -37,9 +37,6 @@ STARTS_PER_WINDOW = 8
 # shorter span would stretch that measure past what was measured.
 WINDOWS_AFTER_START = 1
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
-# The onset's error: the later starts whose statistic comes within this of the best one's
-# (in z²: the 95 % profile-likelihood interval of one change point).
-CHANGE_POINT_CHI2 = 3.84
 
 
 @dataclass(frozen=True)
@@ -259,19 +256,6 @@ def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresh
         round(fit.typical_s / dt_s), setup.window_steps(dt_s))))
 
 
-def _onset_error(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
-                 seen_s: float) -> float:
-    """How far the change point may lie from the best later start: to the earliest and the
-    latest start whose statistic (``z``, one per start) comes within CHANGE_POINT_CHI2 of
-    the best's, a stride at least. Where the last start tried is among them, the change may
-    lie after it, up to ``seen_s``, when it was seen: it began before that."""
-    floor = math.sqrt(max(float(z[best]) ** 2 - CHANGE_POINT_CHI2, 0.0))
-    likely = start_times[z >= floor]
-    latest = seen_s if z[-1] >= floor else float(likely.max())
-    return max(stride_s, float(start_times[best] - likely.min()),
-               min(latest, seen_s) - float(start_times[best]))
-
-
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
                  time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
@@ -312,9 +296,33 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
                @ toward.T)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
-    error = None if best == 0 else _onset_error(z[1:, top], times[np.array(starts)], best - 1,
-                                                stride * dt_s, float(times[alarm]))
-    return per_actuator, (float(times[start]), error), float(times[alarm]), series, figures
+    if best == 0:        # the whole log departs: from its start
+        return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
+    shifted = shift_start(_per_step(effort, level, bins, fit) @ toward[top], start, alarm)
+    onset = _onset(z[1:, top], times, np.array(starts), best - 1, shifted, alarm, stride * dt_s)
+    return per_actuator, onset, float(times[alarm]), series, figures
+
+
+def _per_step(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, fit: GroupFit
+              ) -> np.ndarray:
+    """(steps, members): each steady step's share less its normal share, in units of the
+    windows' noise."""
+    return np.asarray((effort / level[:, None] - fit.means[bins]) / fit.within)
+
+
+def _onset(z: np.ndarray, times: np.ndarray, starts: np.ndarray, best: int, shifted: int,
+           alarm: int, stride_s: float) -> tuple[float, float]:
+    """(onset_s, its error) of a change the later starts found (``z`` per start, ``best``
+    the largest; steady-step indices). The grid of starts places it to a stride between two
+    starts at best (`likely_span`); within, the steps from the best start to the detection
+    date it (``shifted``: `shift_start`). A change after the last start tried — a rotor lost
+    in the log's last window — leaves the grid's statistic with no start to peak at: the
+    steps alone date it, and it lies between there and the detection."""
+    onset, seen = float(times[shifted]), float(times[alarm])
+    if shifted >= starts[-1]:
+        return onset, max(stride_s, seen - onset)
+    earliest, latest = likely_span(z, times[starts], best, stride_s, seen)
+    return onset, max(stride_s, onset - earliest, latest - onset)
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
