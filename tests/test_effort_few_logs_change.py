@@ -69,10 +69,10 @@ def test_three_normal_logs_date_a_weakness_that_begins_mid_log_and_keep_the_budg
 
 def test_a_rotor_lost_in_the_last_window_is_dated_where_it_was_lost():
     """Motor 1 at full command from 147 s of 150 s (a propeller lost, the controller asking
-    all it has): after the last start the test tries (a window before the end). The grid of
-    starts has nowhere to peak; the steps date it, within the error stated, and it is seen
-    within seconds. Dated by the grid alone, the onset fell on an earlier start, ~20 s
-    before the loss."""
+    all it has): after the last start detection tries (a window before the end). Dating
+    tries starts on to the detection, so it is dated where it was lost, within the error
+    stated, and seen within seconds. Dated by the detection's starts alone, the onset fell on
+    an earlier one, ~20 s before the loss, and its error did not reach the loss."""
     rng = np.random.default_rng(11)
     model, _ = learn_effort(PROFILE.effort_groups,
                             [_log(_commands(rng), f"normal-{i}") for i in range(3)],

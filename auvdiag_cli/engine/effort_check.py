@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.engine.change_point import likely_span, shift_start
+from auvdiag_cli.engine.change_point import likely_span
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     SPREAD_FLOOR,
@@ -298,31 +298,26 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
-    shifted = shift_start(_per_step(effort, level, bins, fit) @ toward[top], start, alarm)
-    onset = _onset(z[1:, top], times, np.array(starts), best - 1, shifted, alarm, stride * dt_s)
+    onset = _onset(spans, toward[top], times, window, stride, alarm)
     return per_actuator, onset, float(times[alarm]), series, figures
 
 
-def _per_step(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, fit: GroupFit
-              ) -> np.ndarray:
-    """(steps, members): each steady step's share less its normal share, in units of the
-    windows' noise."""
-    return np.asarray((effort / level[:, None] - fit.means[bins]) / fit.within)
-
-
-def _onset(z: np.ndarray, times: np.ndarray, starts: np.ndarray, best: int, shifted: int,
-           alarm: int, stride_s: float) -> tuple[float, float]:
-    """(onset_s, its error) of a change the later starts found (``z`` per start, ``best``
-    the largest; steady-step indices). The grid of starts places it to a stride between two
-    starts at best (`likely_span`); within, the steps from the best start to the detection
-    date it (``shifted``: `shift_start`). A change after the last start tried — a rotor lost
-    in the log's last window — leaves the grid's statistic with no start to peak at: the
-    steps alone date it, and it lies between there and the detection."""
-    onset, seen = float(times[shifted]), float(times[alarm])
-    if shifted >= starts[-1]:
-        return onset, max(stride_s, seen - onset)
-    earliest, latest = likely_span(z, times[starts], best, stride_s, seen)
-    return onset, max(stride_s, onset - earliest, latest - onset)
+def _onset(spans: _Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
+           alarm: int) -> tuple[float, float]:
+    """(onset_s, its error) of a change within the log, from the later starts on to the
+    detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
+    start: every stride from a window into the log up to the detection is tried (a short
+    span's noise is the windows' scaled to its length), so a rotor lost in the log's last
+    window is dated where it was lost, not at the last start detection tries, which the
+    grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
+    n = spans.level_sum.shape[0] - 1
+    starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
+    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
+    best = int(np.argmax(z))
+    earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
+                                   float(times[alarm]))
+    onset = float(times[starts[best]])
+    return onset, max(stride * spans.dt_s, onset - earliest, latest - onset)
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,

@@ -1,8 +1,9 @@
-"""Where a weakness began, and how sure: the later starts whose statistic lies within the
-95 % interval of one change point (3.84 in z² below the best one's) and on to the starts
-either side that fall short (the change lies between two starts), a stride either side at
-least; when the last start tried is among them, the change may lie after it, up to when it
-was seen. Within, the steps date it where its mean shifted."""
+"""Where a change began, and how sure. A grid of starts (the effort check's later starts):
+the starts whose statistic lies within the 95 % interval of one change point (3.84 in z²
+below the best one's) and on to the starts either side that fall short (the change lies
+between two starts), a stride either side at least; when the last start tried is among
+them, the change may lie after it, up to when it was seen. Steps (the change test's
+residual): where its mean most likely shifted."""
 
 import numpy as np
 import pytest
