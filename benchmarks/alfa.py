@@ -224,6 +224,15 @@ def ceiling(outcomes: list[Outcome]) -> str:
             "median and worst delay).")
 
 
+def budget_expectation(outcomes: list[Outcome]) -> str:
+    """How many false alarms the budget itself allows: each flight's healthy stretch (the
+    whole of a normal flight, a failed one's up to its onset) is one log the thresholds
+    were set to pass but for that share."""
+    return (f"The budget: thresholds set to pass all but {FALSE_ALARM_RATE:.0%} of normal logs "
+            f"expect about {FALSE_ALARM_RATE * len(outcomes):.1f} false alarm(s) in the "
+            f"healthy stretches of {len(outcomes)} flights.")
+
+
 def onset_honesty(outcomes: list[Outcome]) -> str:
     """Whether the true onset lies within what the change test stated of it."""
     stated = [(o.stated_onset, o.onset_s) for o in outcomes
@@ -332,6 +341,7 @@ def main() -> None:
     for variant, found in outcomes.items():
         print(f"**{variant[0].upper()}{variant[1:]}**: " + summary(found)[0] + "\n")
         if variant == WITH:
+            print(budget_expectation(found) + "\n")
             print(ceiling(found) + "\n")
             print(onset_honesty(found) + "\n")
         print("\n".join(table(found)))
