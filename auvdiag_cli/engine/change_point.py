@@ -15,8 +15,8 @@ def shift_start(values: np.ndarray, earliest: int, at: int) -> int:
     """Where, from step ``earliest`` to the detection at ``at``, the mean of ``values`` (one
     per step, NaN where unknown) most likely shifted: the step that maximises the squared
     sum of its departures from the mean before ``earliest``, over the steps after it (a
-    GLR change point for a mean). A test that judges spans — a run of windows, a grid of
-    later starts — dates a change to a span at best; the steps themselves date it within."""
+    GLR change point for a mean). A test that judges a run of windows dates a change to
+    that run at best; the steps themselves date it within."""
     before = values[:earliest]
     before = before[np.isfinite(before)]
     if before.size < 2 or at <= earliest:

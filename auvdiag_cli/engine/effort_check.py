@@ -12,9 +12,9 @@ whole log's steady time from the normal logs' share, and (for a fault that begin
 the log) the departure of the span from each later start to the end from the log's own
 span before that start. The second is blind to the log's own offset from the normal logs
 (its battery, trim, payload), which is in both spans, and so sees a weakness that begins
-mid-log far sooner. The onset is the start that departs most (the change point's
-likeliest place); the detection, the first moment the span from it crosses its
-threshold."""
+mid-log far sooner. The detection is the first moment the span from the start that departs
+most crosses its threshold; the onset, the start that departs most among those tried on
+to the detection (the change point's likeliest place, `_onset`)."""
 
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -33,8 +33,10 @@ from models.effort import (
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 
 STARTS_PER_WINDOW = 8
-# Windows a later start needs after it: the windows' noise is measured on whole windows, and a
-# shorter span would stretch that measure past what was measured.
+# Windows a later start needs after it to detect a change: the windows' noise is measured on
+# whole windows, and a threshold for a shorter span would stretch that measure past what was
+# measured. Dating a change already detected compares starts with one another, and tries
+# shorter spans too (`_onset`).
 WINDOWS_AFTER_START = 1
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 
