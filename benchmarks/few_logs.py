@@ -5,7 +5,10 @@ fewer than five logs fits each signal's g to blocks of them), and to the budget 
 two and the three training logs (five logs: a law of each judge's peaks, the training logs'
 in-sample g widened as `calibrate` does); then false alarms on ten
 normal missions of other seeds, and every fault of the simulator's mission scenarios (each
-actuator dead or at half its thrust, each sensor dead, from 60 s) found and named.
+actuator dead or at half its thrust, each sensor dead, from 60 s) found and named; and each
+actuator weakened to 70 % of its thrust from 60 s (two noise seeds), found and named by the
+whole tool (motion, commands against the motion, change test, effort shares), with the
+detection's delay.
 
 The simulated quadrotor (`arducopter_quad`, DataFlash logs as ArduCopter writes them) and
 BlueROV2 (`bluerov2`, MAVLink .tlog), each flown by its profile's controller.
@@ -14,12 +17,19 @@ Usage: python benchmarks/few_logs.py > few_logs.md
 """
 
 import argparse
+import dataclasses
 import os
 import platform
+import statistics
 import tempfile
 import time
 from datetime import date
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from auvdiag_cli.vehicle.profile import Profile
+    from models.store import LoadedModel
 
 VEHICLES = (("arducopter_quad", "bin"), ("bluerov2", "tlog"))
 TRAINING = ("paper-normal", "mission-ccw", "mission-large-cw")
@@ -28,15 +38,30 @@ NORMAL = ("paper-normal", "mission-ccw", "mission-large-cw", "mission-sprint-ccw
           "mission-fast-cw")
 TRAINING_SEED, CALIBRATION_SEED, NORMAL_SEEDS, FAULT_SEED = 1, 2, (11, 12), 21
 FAULT_FROM_S = 60.0
+# Each actuator weakened this far from FAULT_FROM_S, flown with these seeds.
+WEAKENED, WEAKENED_SEEDS = 0.7, (21, 22)
 
 
-def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int) -> Path:
+def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
+           severity: float | None = None) -> Path:
+    """The scenario flown once (its fault at ``severity`` of its thrust, None: as named)."""
     from auvdiag_cli import api
+    from auvdiag_cli.simulator.scenarios import get_scenario
 
-    path = work / f"{vehicle}-{scenario}-{seed}.{fmt}"
+    path = work / f"{vehicle}-{scenario}-{seed}-{severity}.{fmt}"
     if not path.exists():
-        api.simulate(scenario, api.load_profile(vehicle), path, log_format=fmt, seed=seed)
+        profile = api.load_profile(vehicle)
+        chosen = get_scenario(scenario, profile)
+        if severity is not None and chosen.fault is not None:
+            chosen = dataclasses.replace(chosen, fault=dataclasses.replace(
+                chosen.fault, severity=severity))
+        api.simulate(chosen, profile, path, log_format=fmt, seed=seed)
     return path
+
+
+def _weakened(vehicle: str) -> dict[str, str]:
+    """Scenario -> actuator, for each actuator's weakness from 60 s."""
+    return {name: part for name, part in _faults(vehicle).items() if name.endswith("-weak")}
 
 
 def _faults(vehicle: str) -> dict[str, str]:
@@ -50,8 +75,29 @@ def _faults(vehicle: str) -> dict[str, str]:
             and scenario.fault.onset_s == FAULT_FROM_S}
 
 
+def _found_named(model: "LoadedModel", profile: "Profile", faulty: dict[Path, str]
+                 ) -> tuple[int, int, list[float]]:
+    """How many of the ``faulty`` logs (log -> the failed part) the model finds (a fault
+    detected a second before the onset or later), how many it names, and the delays of
+    those named."""
+    from auvdiag_cli import api
+
+    found = named = 0
+    delays = []
+    for path, part in faulty.items():
+        diagnosis = api.diagnose(path, profile, model)
+        seen = (diagnosis.verdict.value == "fault"
+                and (diagnosis.detected_at_s or 0.0) >= FAULT_FROM_S - 1.0)
+        found += seen
+        if seen and diagnosis.component == part:
+            named += 1
+            delays.append((diagnosis.detected_at_s or 0.0) - FAULT_FROM_S)
+    return found, named, delays
+
+
 def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
-            budgeted: bool, normal: list[Path], faulty: dict[Path, str]) -> tuple[str, ...]:
+            budgeted: bool, normal: list[Path], faulty: dict[Path, str],
+            weakened: dict[Path, str]) -> tuple[str, ...]:
     from auvdiag_cli import api
 
     profile = api.load_profile(vehicle)
@@ -60,17 +106,14 @@ def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
                else api.CalibrateOptions())
     result = api.calibrate(calibration, profile, model, options=options)
     alarms = sum(api.diagnose(p, profile, model).verdict.value == "fault" for p in normal)
-    found = named = 0
-    for path, part in faulty.items():
-        diagnosis = api.diagnose(path, profile, model)
-        seen = (diagnosis.verdict.value == "fault"
-                and (diagnosis.detected_at_s or 0.0) >= FAULT_FROM_S - 1.0)
-        found += seen
-        named += seen and diagnosis.component == part
+    found, named, _ = _found_named(model, profile, faulty)
+    weak_found, weak_named, delays = _found_named(model, profile, weakened)
     shown = ", ".join(f"{name} {mode.thresholds[name]:g} %" for mode in result.modes
                       for name in mode.evidence) or "none judged"
+    delay = (f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "–")
     return (f"`{vehicle}`", label, shown, f"{alarms}/{len(normal)}",
-            f"{found}/{len(faulty)}", f"{named}/{len(faulty)}")
+            f"{found}/{len(faulty)}", f"{named}/{len(faulty)}",
+            f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}", delay)
 
 
 def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
@@ -83,6 +126,8 @@ def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
     calibration = [flown(s, CALIBRATION_SEED) for s in CALIBRATION]
     normal = [flown(s, seed) for seed in NORMAL_SEEDS for s in NORMAL]
     faulty = {flown(name, FAULT_SEED): part for name, part in _faults(vehicle).items()}
+    weakened = {_flown(work, vehicle, fmt, name, seed, WEAKENED): part
+                for name, part in _weakened(vehicle).items() for seed in WEAKENED_SEEDS}
     model = work / f"{vehicle}-model"
     api.train(training, api.load_profile(vehicle), model)
     # The margin rule and the budget on the two new logs; the budget on the training logs
@@ -91,7 +136,7 @@ def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
             ("to a budget of 1 %, 2 logs (g from blocks of them)", calibration, True),
             ("to a budget of 1 %, these and the 3 training logs", [*training, *calibration],
              True))
-    return [_judged(vehicle, model, logs, label, budgeted, normal, faulty)
+    return [_judged(vehicle, model, logs, label, budgeted, normal, faulty, weakened)
             for label, logs, budgeted in ways]
 
 
@@ -108,12 +153,16 @@ def main() -> None:
           f"{len(CALIBRATION)} more (seed {CALIBRATION_SEED}); {len(NORMAL) * len(NORMAL_SEEDS)}"
           f" normal missions of seeds {', '.join(map(str, NORMAL_SEEDS))} and every fault of "
           f"its mission scenarios from {FAULT_FROM_S:.0f} s (seed {FAULT_SEED}: each actuator "
-          "dead or at half its thrust, each sensor dead) diagnosed; found: a fault detected "
+          "dead or at half its thrust, each sensor dead) diagnosed, and each actuator "
+          f"weakened to {WEAKENED:.0%} of its thrust from {FAULT_FROM_S:.0f} s (seeds "
+          f"{', '.join(map(str, WEAKENED_SEEDS))}); found: a fault detected "
           f"{FAULT_FROM_S - 1:.0f} s or later (earlier, a false alarm), named: found and "
-          "that part named.\n")
+          "that part named; the delay: from the weakness's onset to its detection, median / "
+          "worst over those named.\n")
     print("| vehicle | thresholds | g thresholds of the judged signals | normal missions "
-          "alarmed | faults found | the part named |")
-    print("|---|---|---|---|---|---|")
+          f"alarmed | faults found | the part named | weakened to {WEAKENED:.0%}: found | "
+          "named | delay (s) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         print("| " + " | ".join(row) + " |")
 
