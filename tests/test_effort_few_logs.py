@@ -15,21 +15,29 @@ from models.student_t import quantile
 RATE, MEMBERS, LOGS, SIGMA = 0.01, 4, 4, 0.02
 
 
-def _alarms(departure: np.ndarray, pool: bool, seed: int, trials: int = 4000) -> float:
+def _alarms(departure: np.ndarray, pool: bool, seed: int, trials: int = 4000,
+            logs: int = LOGS, shares: bool = False) -> float:
     """The share of new logs with ``departure`` (per member, in σ) that alarm, the spread
-    learnt each time from LOGS normal logs of a group whose members vary alike."""
+    learnt each time from ``logs`` normal logs of a group whose members vary alike
+    (``shares``: as shares do, each log's departures summing to zero)."""
     rng = np.random.default_rng(seed)
-    floor = np.zeros(MEMBERS)
+    members = len(departure)
+    floor = np.zeros(members)
     limits: dict[float, float] = {}       # the quantile of each degrees of freedom, once
     alarmed = 0
+
+    def drawn(size: tuple[int, ...]) -> np.ndarray:
+        values = rng.normal(0.0, SIGMA, size)
+        return values - values.mean(axis=-1, keepdims=True) if shares else values
+
     for _ in range(trials):
-        normal = rng.normal(0.0, SIGMA, (LOGS, MEMBERS))
+        normal = drawn((logs, members))
         spread, dof = between_spread(normal - normal.mean(axis=0), floor, pool)
         if dof not in limits:
-            limits[dof] = quantile(1 - RATE / MEMBERS, dof)
+            limits[dof] = quantile(1 - RATE / members, dof)
         limit = limits[dof]
-        new = rng.normal(0.0, SIGMA, MEMBERS) + departure * SIGMA
-        z = (new - normal.mean(axis=0)) / (spread * np.sqrt(1 + 1 / LOGS))
+        new = drawn((members,)) + departure * SIGMA
+        z = (new - normal.mean(axis=0)) / (spread * np.sqrt(1 + 1 / logs))
         alarmed += bool((z > limit).any())
     return alarmed / trials
 
@@ -39,11 +47,20 @@ def test_pooled_spreads_rest_on_every_members_logs():
                            [0.0, 0.0, -0.01, 0.01]])
     spread, dof = between_spread(departures, np.zeros(4))
     own, own_dof = between_spread(departures, np.zeros(4), pool=False)
-    assert (own_dof, dof) == (2.0, 8.0)
-    group = np.sqrt((departures ** 2).sum() / 6)
+    # Four members' shares average to one: three of them are free in each of three logs
+    # (two degrees of freedom each about their mean).
+    assert (own_dof, dof) == (2.0, 6.0)
+    group = np.sqrt((departures ** 2).sum() / 8)
     assert np.all(np.abs(spread - group) <= np.abs(own - group))     # drawn towards it
     floored, _ = between_spread(departures, np.full(4, 0.05))
     assert np.allclose(floored, 0.05)
+
+
+def test_a_pair_learnt_from_three_logs_keeps_its_budget():
+    # Two shares that average to one move as one: their spreads drawn together rest on no
+    # more than either's own (two degrees of freedom); claimed on twice that, three times
+    # the budget alarmed.
+    assert _alarms(np.zeros(2), pool=True, seed=3, logs=3, shares=True) < 1.5 * RATE
 
 
 def test_four_normal_logs_keep_the_budget_and_judge_six_spreads():
