@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from shared_data import SHARED_DATA
 
-from models.effort import between_spread
+from models.effort import between_spread, summarise, within_and_dof
 from models.student_t import quantile
 
 RATE, MEMBERS, LOGS, SIGMA = 0.01, 4, 4, 0.02
@@ -54,6 +54,26 @@ def test_pooled_spreads_rest_on_every_members_logs():
     assert np.all(np.abs(spread - group) <= np.abs(own - group))     # drawn towards it
     floored, _ = between_spread(departures, np.full(4, 0.05))
     assert np.allclose(floored, 0.05)
+
+
+def test_window_noise_is_drawn_towards_the_groups_on_the_free_shares():
+    rng = np.random.default_rng(5)
+    steps, window = 700, 100            # seven windows a log, too few for long ones
+    logs = []
+    for _ in range(3):
+        effort = 1.0 + rng.normal(0.0, 0.02, (steps, 4)) * np.array([2.0, 1.0, 1.0, 1.0])
+        summary = summarise("log", effort, effort.mean(axis=1), np.zeros(steps, int), 1,
+                            window, 0.1)
+        assert summary is not None and summary.long_var is None
+        logs.append(summary)
+    own_dof = sum(g.windows - 1 for g in logs)
+    own = np.sum([g.within_var * (g.windows - 1) for g in logs], axis=0) / own_dof
+    within, dof = within_and_dof(logs)
+    assert dof == own_dof * 3                       # three of four shares are free
+    group = np.mean(own)
+    # each member's between its own and the group's, a quarter of the way from the group's
+    assert np.allclose(within ** 2 - group, (own - group) / 4)
+    assert within[0] == within.max()               # the noisier member stays the noisiest
 
 
 def test_a_pair_learnt_from_three_logs_keeps_its_budget():
