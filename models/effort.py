@@ -304,25 +304,30 @@ class Thresholds:
 
     false_alarm_rate: float      # per log, the budget over every judged actuator
     actuators: int               # judged actuators (the budget's Bonferroni split)
-    inflation: float             # ≥ 1: how much wider the normal logs scattered than modelled
 
     def whole_log(self, fit: GroupFit) -> float:
         share = WHOLE_LOG_BUDGET * self.false_alarm_rate / self.actuators
-        return self.inflation * quantile(1 - share, fit.dof)
+        return widening(fit) * quantile(1 - share, fit.dof)
 
     def later_start(self, fit: GroupFit, starts: int) -> float:
         """For the departure from one of ``starts`` later window starts to the end: a change
         against the log's own beginning, whose noise is the windows' (σ_w, on its own
-        degrees of freedom; the between-log inflation is not its to carry)."""
+        degrees of freedom; the between-log widening is not its to carry)."""
         share = (1 - WHOLE_LOG_BUDGET) * self.false_alarm_rate / (self.actuators
                                                                   * max(1, starts))
         return quantile(1 - share, fit.within_dof)
 
 
+def widening(fit: GroupFit) -> float:
+    """≥ 1: how much wider the group's normal logs, each judged by the others, scattered
+    than Student's t says (median |z| against its quartile). Each group's own: one group
+    whose logs scatter more says nothing of another's (a vectored ROV's vertical pair
+    widened its horizontal thrusters' thresholds too, and hid weaknesses there)."""
+    return max(1.0, float(np.median(np.abs(fit.loo_z)))
+               / quantile(0.75, max(1.0, fit.logs - 2.0)))
+
+
 def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:
-    """The budget split over the actuators; widened where the normal logs, each judged by
-    the others, scattered more than Student's t says (median |z| against its quartile)."""
-    actuators = sum(len(f.group.members) for f in fits)
-    ratios = [float(np.median(np.abs(f.loo_z))) / quantile(0.75, max(1.0, f.logs - 2.0))
-              for f in fits]
-    return Thresholds(false_alarm_rate, actuators, max(1.0, *ratios))
+    """The budget split over the judged actuators of ``fits``; each group's whole-log
+    threshold widened by its own normal logs' scatter (`widening`)."""
+    return Thresholds(false_alarm_rate, sum(len(f.group.members) for f in fits))

@@ -3,13 +3,23 @@ logs drawn towards its group's keeps the false-alarm budget on new normal logs a
 departure of six spreads that one member's own spread from four logs would hide; on the
 real quadrotor, four normal flights are enough to find a cut propeller and name it."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 from shared_data import SHARED_DATA
 
-from models.effort import between_spread, summarise, within_and_dof
+from models.effort import (
+    EffortGroup,
+    GroupFit,
+    between_spread,
+    fit_group,
+    summarise,
+    thresholds_for,
+    widening,
+    within_and_dof,
+)
 from models.student_t import quantile
 
 RATE, MEMBERS, LOGS, SIGMA = 0.01, 4, 4, 0.02
@@ -74,6 +84,30 @@ def test_window_noise_is_drawn_towards_the_groups_on_the_free_shares():
     # each member's between its own and the group's, a quarter of the way from the group's
     assert np.allclose(within ** 2 - group, (own - group) / 4)
     assert within[0] == within.max()               # the noisier member stays the noisiest
+
+
+def test_one_groups_scatter_widens_only_its_own_threshold():
+    rng = np.random.default_rng(6)
+    steps, window = 700, 100
+
+    def group(name: str, offsets: float) -> GroupFit:
+        logs = []
+        for _ in range(6):
+            effort = (1.0 + rng.normal(0.0, offsets, 2) + rng.normal(0.0, 0.02, (steps, 2)))
+            summary = summarise(name, effort, effort.mean(axis=1), np.zeros(steps, int), 1,
+                                window, 0.1)
+            assert summary is not None
+            logs.append(summary)
+        return fit_group(EffortGroup(name, ("a", "b"), (1.0, 1.0)), logs, 0.5, window * 0.1)
+
+    quiet, scattered = group("quiet", 0.0), group("scattered", 0.05)
+    scattered = replace(scattered, loo_z=3 * scattered.loo_z)   # far wider than t says
+    thresholds = thresholds_for([quiet, scattered], RATE)
+    assert widening(scattered) > 1.5 and widening(quiet) == 1.0
+    share = 0.8 * RATE / 4
+    assert thresholds.whole_log(quiet) == pytest.approx(quantile(1 - share, quiet.dof))
+    assert thresholds.whole_log(scattered) == pytest.approx(
+        widening(scattered) * quantile(1 - share, scattered.dof))
 
 
 def test_a_pair_learnt_from_three_logs_keeps_its_budget():
