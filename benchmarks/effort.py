@@ -19,7 +19,6 @@ Usage: python benchmarks/effort.py [--data DIR] > effort.md
 
 import argparse
 import csv
-import dataclasses
 import functools
 import itertools
 import os
@@ -209,11 +208,7 @@ def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
     from auvdiag_cli.simulator.scenarios import get_scenario
     from auvdiag_cli.simulator.writers import write_log
 
-    scenario = get_scenario(scenario_name, profile)
-    if fraction is not None and scenario.fault is not None:
-        scenario = dataclasses.replace(scenario, fault=dataclasses.replace(
-            scenario.fault, severity=fraction,
-            onset_s=scenario.fault.onset_s if onset_s is None else onset_s))
+    scenario = get_scenario(scenario_name, profile, onset_s, severity=fraction)
     path = work / f"{scenario_name}-{seed}-{fraction}-{onset_s}.tlog"
     if not path.exists():       # the same mission asked for again: simulated once
         write_log(simulate(scenario, profile, seed), profile, path, "tlog")

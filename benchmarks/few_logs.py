@@ -17,7 +17,6 @@ Usage: python benchmarks/few_logs.py > few_logs.md
 """
 
 import argparse
-import dataclasses
 import os
 import platform
 import statistics
@@ -51,11 +50,8 @@ def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
     path = work / f"{vehicle}-{scenario}-{seed}-{severity}.{fmt}"
     if not path.exists():
         profile = api.load_profile(vehicle)
-        chosen = get_scenario(scenario, profile)
-        if severity is not None and chosen.fault is not None:
-            chosen = dataclasses.replace(chosen, fault=dataclasses.replace(
-                chosen.fault, severity=severity))
-        api.simulate(chosen, profile, path, log_format=fmt, seed=seed)
+        api.simulate(get_scenario(scenario, profile, severity=severity), profile, path,
+                     log_format=fmt, seed=seed)
     return path
 
 

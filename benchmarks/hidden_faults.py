@@ -14,7 +14,6 @@ Usage: python benchmarks/hidden_faults.py [--seeds 3] [--jobs 2] > hidden_faults
 """
 
 import argparse
-import dataclasses
 import os
 import platform
 import tempfile
@@ -37,10 +36,7 @@ def _run(job: tuple[str, str, str, int, float | None]) -> dict[str, object]:
 
     vehicle, scenario_name, truth, seed, fraction = job
     profile = api.load_profile(vehicle)
-    scenario = get_scenario(scenario_name, profile)
-    if fraction is not None and scenario.fault is not None:
-        scenario = dataclasses.replace(scenario, fault=dataclasses.replace(
-            scenario.fault, severity=fraction))
+    scenario = get_scenario(scenario_name, profile, severity=fraction)
     with tempfile.TemporaryDirectory() as work:
         log = Path(work) / "dive"
         api.simulate(scenario, profile, log, log_format=VEHICLES[vehicle], seed=seed)

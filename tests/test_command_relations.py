@@ -31,11 +31,7 @@ runner = CliRunner()
 def _dive(target: Path, profile_name: str, scenario: str, seed: int, fmt: str,
           thrust_fraction: float | None = None) -> Path:
     profile = load_profile(Path(profile_name))
-    chosen = get_scenario(scenario, profile)
-    if thrust_fraction is not None:
-        assert chosen.fault is not None
-        chosen = dataclasses.replace(chosen, fault=dataclasses.replace(
-            chosen.fault, severity=thrust_fraction))
+    chosen = get_scenario(scenario, profile, severity=thrust_fraction)
     write_log(simulate(chosen, profile, seed), profile, target, fmt)
     return target
 

@@ -166,16 +166,21 @@ def scenarios_for(profile: Profile) -> dict[str, Scenario]:
     return named
 
 
-def get_scenario(name: str, profile: Profile, fault_at_s: float | None = None) -> Scenario:
-    """Look a scenario up by name; ``fault_at_s`` moves its fault onset."""
+def get_scenario(name: str, profile: Profile, fault_at_s: float | None = None,
+                 severity: float | None = None) -> Scenario:
+    """Look a scenario up by name; ``fault_at_s`` moves its fault onset, ``severity`` sets
+    how much of its thrust a weakened actuator keeps (0.7: 70 %)."""
     known = scenarios_for(profile)
     try:
         scenario = known[name]
     except KeyError:
         raise KeyError(f"unknown scenario {name!r} for {profile.name} (known: "
                        f"{', '.join(known)})") from None
-    if fault_at_s is not None:
-        if scenario.fault is None:
-            raise ValueError(f"scenario {name!r} has no fault to move")
-        scenario = replace(scenario, fault=replace(scenario.fault, onset_s=fault_at_s))
-    return scenario
+    if fault_at_s is None and severity is None:
+        return scenario
+    if scenario.fault is None:
+        raise ValueError(f"scenario {name!r} has no fault to move or weaken")
+    fault = scenario.fault
+    return replace(scenario, fault=replace(
+        fault, onset_s=fault.onset_s if fault_at_s is None else fault_at_s,
+        severity=fault.severity if severity is None else severity))

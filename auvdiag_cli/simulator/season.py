@@ -1,7 +1,6 @@
 """A simulated season for a fleet: each vehicle dives once a week; one of them has a
 thruster that loses a little thrust every week. Test data for the fleet trend."""
 
-import dataclasses
 from collections.abc import Sequence
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -25,16 +24,13 @@ def write_season(folder: Path, profile: Profile, vehicles: Sequence[str], wearin
     """Write ``folder/VEHICLE/week-NN.mcap`` for every vehicle and week; ``wearing``'s
     ``thruster`` keeps 1 − loss_per_week · week of its thrust from the first second of each
     dive, the other vehicles stay healthy. Returns the logs written."""
-    base = get_scenario(WEAK_SCENARIO.format(thruster=thruster.replace("_", "-")), profile, 0.0)
-    if base.fault is None:
-        raise ValueError(f"{base.name} has no fault to weaken")
+    name = WEAK_SCENARIO.format(thruster=thruster.replace("_", "-"))
     logs = []
     for number, vehicle in enumerate(vehicles):
         (folder / vehicle).mkdir(parents=True, exist_ok=True)
         for week in range(weeks):
             kept = thrust_kept(week, loss_per_week) if vehicle == wearing else 1.0
-            scenario = dataclasses.replace(base, fault=dataclasses.replace(base.fault,
-                                                                           severity=kept))
+            scenario = get_scenario(name, profile, 0.0, severity=kept)
             start = SEASON_START + timedelta(weeks=week, hours=number)
             dive = simulate(scenario, profile, seed + 100 * number + week,
                             round(start.timestamp() * 1e9))
