@@ -30,13 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
+from auvdiag_cli.engine.effort_check import EffortCheck, check_effort, rise_range
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.jobs.effort import effort_log
 from auvdiag_cli.jobs.relate import relation_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile
 from models.command_relations import RelationLog
-from models.effort import GroupFit
+from models.effort import GroupFit, smallest_rise
 from models.effort_model import EffortModel, learn_effort
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -151,10 +151,12 @@ def crazypad_few(root: Path) -> list[str]:
              f"{len(normal)} normal flights; false alarms on the normal flights left out; the "
              "cut flights found (motor 3 alone named in every one found unless said), by cut; "
              "choices cautioned: those whose flights differ no more than their own noise "
-             "makes them (`train` says so), and in brackets the false alarms with them:",
-             "", "| spreads | k | false alarms | choices cautioned | "
+             "makes them (`train` says so), and in brackets the false alarms with them; the "
+             "smallest rise of one motor's share that the choice's model judges over a flight "
+             "(`train` says it), median over the choices and their range:",
+             "", "| spreads | k | false alarms | choices cautioned | smallest rise judged | "
              + " | ".join(f"cut {c:g} mm" for c in cuts)
-             + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 5) + "|"]
+             + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 6) + "|"]
     for label, spread in (("drawn towards the group's", pooled),
                           ("each member's own", functools.partial(pooled, pool=False))):
         # The yardstick swaps the spread estimate itself, everything else as shipped.
@@ -177,9 +179,12 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
     # and the false alarms with them.
     alike = alike_alarms = 0
     folds = 0
+    rises = []      # per choice, the smallest rise of one motor's share its model judges
     for chosen in itertools.combinations(normal, k):
         folds += 1
         model = _learn(profile, [logs[f] for f in chosen])
+        rises += [float(np.mean(smallest_rise(f, model.thresholds))) for f in model.fits
+                  if f is not None and model.thresholds is not None]
         cautioned = any(f is not None and f.alike for f in model.fits)
         alike += cautioned
         for f in normal:
@@ -197,6 +202,7 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
     big = [c for c in by_cut if c >= 2.0]
     cells = [_percent(found[c], tried[c]) for c in by_cut]
     return (f"| {label} | {k} | {_percent(alarms, judged)} | {alike}/{folds} ({alike_alarms}) | "
+            f"{np.median(rises):.0%} ({min(rises):.0%}-{max(rises):.0%}) | "
             + " | ".join(cells) + " | "
             f"{_percent(sum(found[c] for c in big), sum(tried[c] for c in big))}"
             + (f" ({wrong} named otherwise)" if wrong else "") + " |")
@@ -213,6 +219,13 @@ def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
     if not path.exists():       # the same mission asked for again: simulated once
         write_log(simulate(scenario, profile, seed), profile, path, "tlog")
     return relation_log(ingest(path, profile), profile)
+
+
+def _rise(model: EffortModel, fit: GroupFit | None) -> str:
+    """The smallest rise of one member's share the group's whole-log test judges."""
+    if fit is None or model.thresholds is None:
+        return ""
+    return f"; judged from a rise of {rise_range(list(smallest_rise(fit, model.thresholds)))}"
 
 
 def _conditions(two_way: bool, fit: GroupFit | None) -> str:
@@ -262,13 +275,14 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                         + f" | {_row_timing(times[timed:])} |")
         late = _late(profile, model, components, work)
     alarms = sum(bool(c.suspects) for c in normal)
-    groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)})"
+    groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}{_rise(model, fit)})"
                        for setup, fit in zip(model.setups, model.fits, strict=True))
     return ["", f"**Simulated {title}** (`{profile_name}`, {len(training)} normal missions to "
             f"learn from; groups {groups}): false alarms on {len(normal)} normal missions of "
             f"other seeds: {alarms}. One actuator weakened from 60 s (- not found; named; in a "
-            "pair: named with the actuator whose command moves with it; onset and detection "
-            "after 60 s, median over those named alone):", "",
+            "pair: named with the actuator whose command moves with it; a group's rise: the "
+            "smallest rise of one member's share its whole-log test judges over a mission; "
+            "onset and detection after 60 s, median over those named alone):", "",
             "| thrust kept | " + " | ".join(components) + " | onset / detected (s) |",
             "|---" * (len(components) + 2) + "|", *rows, "", _timing(times), "", *late]
 

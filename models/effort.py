@@ -327,6 +327,37 @@ def widening(fit: GroupFit) -> float:
                / quantile(0.75, max(1.0, fit.logs - 2.0)))
 
 
+def weakness_directions(members: int) -> np.ndarray:
+    """(members, members): row i, the unit direction in which member i's weakness moves the
+    group's departures: its own share up, the others' down alike (they average to one)."""
+    if members < 2:
+        return np.eye(members)
+    directions = np.eye(members) - 1.0 / members
+    return np.asarray(directions / np.linalg.norm(directions, axis=1, keepdims=True))
+
+
+def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None,
+                  span_s: float | None = None) -> np.ndarray:
+    """Per member, the smallest rise of its share (relative to its normal share) that the
+    whole-log test judges over ``span_s`` steady seconds (None: the normal logs' typical
+    steady time), the others' shares falling alike (one weak member). ``logs``: were the
+    spread, as measured, known
+    from that many normal logs (its degrees of freedom and the new log's share of the
+    uncertainty in the normal shares scale with them): what more normal logs would buy.
+    With three or four logs the Student-t threshold is wide; this says how wide in terms a
+    user can weigh ("a motor carrying 14 % more than its share")."""
+    n = fit.logs if logs is None else logs
+    dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)
+    known = replace(fit, logs=n, dof=dof)
+    sigma = known.sigma(known.typical_s if span_s is None else span_s)
+    members = len(sigma)
+    directions = weakness_directions(members)
+    # Member i's share up by r, the others' down by r / (m - 1): its statistic is linear in r.
+    pattern = (np.eye(members) * members - 1.0) / max(1, members - 1)
+    per_unit = np.einsum("ij,ij->i", pattern / sigma, directions)
+    return np.asarray(thresholds.whole_log(known) / per_unit / fit.means.mean(axis=0))
+
+
 def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:
     """The budget split over the judged actuators of ``fits``; each group's whole-log
     threshold widened by its own normal logs' scatter (`widening`)."""

@@ -21,6 +21,7 @@ from models.effort import (
     Thresholds,
     efforts,
     fit_group,
+    smallest_rise,
     summarise,
     thresholds_for,
 )
@@ -199,6 +200,8 @@ def _readable(fit: GroupFit, thresholds: Thresholds | None) -> dict[str, Any]:
             "within_window": fit.within.round(4).tolist(), "conditioned_on_level":
             fit.conditioned, "logs": fit.logs, "typical_steady_s": round(fit.typical_s, 2),
             "threshold_z": None if thresholds is None else round(thresholds.whole_log(fit), 3),
+            "smallest_rise_judged": None if thresholds is None
+            else np.round(smallest_rise(fit, thresholds), 4).tolist(),
             "leave_one_out_max_z": round(float(fit.loo_z.max()), 3), "logs_alike": fit.alike}
 
 

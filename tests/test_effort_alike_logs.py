@@ -7,35 +7,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from quad_effort import quad_check, quad_commands, quad_model
 from shared_data import SHARED_DATA
 
-from auvdiag_cli.engine.effort_check import check_effort
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
-from models.effort_model import EffortLog, EffortModel, learn_effort
-
-PROFILE = load_profile(Path("arducopter_quad"))
-STEPS = 1200                       # 120 s at 10 Hz
-SHARES = np.array([1.03, 0.97, 1.02, 0.98])
-
-
-def _commands(rng: np.random.Generator, trim: np.ndarray) -> np.ndarray:
-    """Four rotors hovering near half throttle, each carrying its share times ``trim``."""
-    level = 0.5 + 0.03 * np.sin(np.arange(STEPS) / 80.0)
-    return level[:, None] * SHARES * trim * (1 + rng.normal(0, 0.06, (STEPS, 4)))
-
-
-def _model(logs: list[np.ndarray]) -> EffortModel:
-    model, _ = learn_effort(PROFILE.effort_groups, [
-        EffortLog(f"normal-{i}", c, np.ones(STEPS, bool), PROFILE.command_names)
-        for i, c in enumerate(logs)], PROFILE.dt_s)
-    assert model is not None and model.fits[0] is not None
-    return model
-
-
-def _check(model: EffortModel, commands: np.ndarray):  # type: ignore[no-untyped-def]
-    return check_effort(model, PROFILE, commands, np.ones(STEPS, bool),
-                        PROFILE.dt_s * np.arange(STEPS))
+from models.effort_model import EffortModel, learn_effort
 
 
 def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_says_so():
@@ -43,21 +20,21 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     # (their noise sets the spread as often above as below what it allows); this seed's do.
     # Three with trims 3 % apart show theirs (40 draws of 40).
     rng = np.random.default_rng(1)
-    one_day = _model([_commands(rng, np.ones(4)) for _ in range(3)])
-    days = _model([_commands(rng, 1 + rng.normal(0, 0.03, 4)) for _ in range(3)])
+    one_day = quad_model([quad_commands(rng, np.ones(4)) for _ in range(3)])
+    days = quad_model([quad_commands(rng, 1 + rng.normal(0, 0.03, 4)) for _ in range(3)])
     assert one_day.fits[0].alike and not days.fits[0].alike   # type: ignore[union-attr]
     (line,) = effort_lines(one_day)
     assert "caution: these 3 logs differ no more than their own windows' noise" in line
     assert "caution" not in effort_lines(days)[0]
     # A log of another day, its trim 4 % off on motor 1 from start to end: the whole log
     # departs, and the alarm says what it was judged against.
-    other_day = _commands(rng, np.array([1.04, 1.0, 1.0, 1.0]))
-    check = _check(one_day, other_day)
+    other_day = quad_commands(rng, np.array([1.04, 1.0, 1.0, 1.0]))
+    check = quad_check(one_day, other_day)
     assert check.named == ("motor_1",) and check.onset_error_s is None
     assert check.against_alike_logs and "caution: the normal logs it is judged" in (
         check.describe())
     # Judged against logs that show their offsets, no caution (found or not).
-    assert not _check(days, other_day).against_alike_logs
+    assert not quad_check(days, other_day).against_alike_logs
 
 
 @pytest.mark.shared_data("crazypad/labels.csv")

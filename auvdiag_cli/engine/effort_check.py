@@ -5,16 +5,17 @@ which the controller hides from the motion. A share that falls while another ris
 normalisation (the shares of a group average to one), never a fault of its own.
 
 Each test judges, per actuator, the group's departures (each in units of its σ) projected
-on that actuator's signature (`_signatures`): a weak actuator's own share rises while the
-others fall, and the projection gathers both, where its own departure alone would leave
-the others' evidence out. Two tests share the false-alarm budget: the departure over the
-whole log's steady time from the normal logs' share, and (for a fault that begins during
-the log) the departure of the span from each later start to the end from the log's own
-span before that start. The second is blind to the log's own offset from the normal logs
-(its battery, trim, payload), which is in both spans, and so sees a weakness that begins
-mid-log far sooner. The detection is the first moment the span from the start that departs
-most crosses its threshold; the onset, the start that departs most among those tried on
-to the detection (the change point's likeliest place, `_onset`)."""
+on that actuator's signature (`models.effort.weakness_directions`): a weak actuator's own
+share rises while the others fall, and the projection gathers both, where its own
+departure alone would leave the others' evidence out. Two tests share the false-alarm
+budget: the departure over the whole log's steady time from the normal logs' share, and
+(for a fault that begins during the log) the departure of the span from each later start
+to the end from the log's own span before that start. The second is blind to the log's own
+offset from the normal logs (its battery, trim, payload), which is in both spans, and so
+sees a weakness that begins mid-log far sooner. The detection is the first moment the span
+from the start that departs most crosses its threshold; the onset, the start that departs
+most among those tried on to the detection (the change point's likeliest place,
+`_onset`)."""
 
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -22,12 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
+from auvdiag_cli.engine.effort_spans import Spans, cumulative
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
-    SPREAD_FLOOR,
     GroupFit,
     Thresholds,
     expected_share,
+    smallest_rise,
+    weakness_directions,
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
@@ -52,6 +55,8 @@ class ActuatorEffort:
     departure: float | None      # share / normal share − 1 (0.10: carries 10 % more)
     ratio: float | None          # the largest z over its threshold (either test); > 1 alarms
     not_judged: str | None       # why not, or None
+    # The smallest rise of its share the whole-log test judges over this log (`smallest_rise`)
+    judged_from: float | None = None
 
     @property
     def driven_harder(self) -> bool:
@@ -121,7 +126,7 @@ class EffortCheck:
             worst = max(judged, key=lambda a: a.ratio or 0.0)
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
-                    "its threshold)")
+                    f"its threshold){_judged_from(judged)}")
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
@@ -152,13 +157,20 @@ class EffortCheck:
         return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
 
 
-def _signatures(members: int) -> np.ndarray:
-    """(members, members): row i, the unit direction in which member i's weakness moves the
-    group's departures: its own share up, the others' down alike (they average to one)."""
-    if members < 2:
-        return np.eye(members)
-    directions = np.eye(members) - 1.0 / members
-    return np.asarray(directions / np.linalg.norm(directions, axis=1, keepdims=True))
+def _judged_from(actuators: Sequence[ActuatorEffort]) -> str:
+    """What the normal logs let this log's shares show: with few of them, a weakness must
+    be large to stand out."""
+    rises = [a.judged_from for a in actuators if a.judged_from is not None]
+    if not rises:
+        return ""
+    return (f"; against these normal logs, one weak actuator shows over this log once it "
+            f"carries about {rise_range(rises)} more than its share")
+
+
+def rise_range(rises: Sequence[float]) -> str:
+    """"8%", or "8%-10%" where the members differ."""
+    low, high = min(rises), max(rises)
+    return f"{low:.0%}" if round(low, 2) == round(high, 2) else f"{low:.0%}-{high:.0%}"
 
 
 def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, float], ...]:
@@ -176,7 +188,7 @@ def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, f
     z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
                   for a in group])
     length = float(np.linalg.norm(z))
-    matches = _signatures(len(group)) @ z / length if length > 0 else np.zeros(len(group))
+    matches = weakness_directions(len(group)) @ z / length if length > 0 else np.zeros(len(group))
     return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
                                                                      strict=True)),
                         key=lambda item: -item[1]))
@@ -194,52 +206,6 @@ def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, flo
     group = next((a.group for a in actuators if a.name == clear and a.driven_harder), None)
     return tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder and (
         a.group != group or a.name == clear)))
-
-
-def _cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """Running sums with a zero row in front: effort (steps+1, members) and level per bin
-    (steps+1, bins)."""
-    by_bin = np.zeros((len(level), n_bins))
-    by_bin[np.arange(len(level)), bins] = level
-    pad = lambda a: np.vstack([np.zeros((1, a.shape[1])), np.cumsum(a, axis=0)])  # noqa: E731
-    return pad(effort), pad(by_bin)
-
-
-@dataclass(frozen=True)
-class _Spans:
-    """Departures of spans [start, end) of the steady steps, in units of their σ."""
-
-    fit: GroupFit
-    effort_sum: np.ndarray
-    level_sum: np.ndarray
-    dt_s: float
-
-    def _departure(self, start: int, ends: np.ndarray) -> np.ndarray:
-        """(ends, members): the share of [start, end) less its normal share."""
-        effort = self.effort_sum[ends] - self.effort_sum[start]
-        level = self.level_sum[ends] - self.level_sum[start]
-        total = level.sum(axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.asarray((effort - level @ self.fit.means) / total[:, None])
-
-    def z(self, start: int, end: np.ndarray | int) -> np.ndarray:
-        """Against the normal logs: the span's departure in units of its σ."""
-        ends = np.atleast_1d(end)
-        return self._departure(start, ends) / self.fit.sigma((ends - start) * self.dt_s)
-
-    def changed(self, start: int, end: np.ndarray | int) -> np.ndarray:
-        """Against the log's own beginning: how far the departure of [start, end) lies from
-        that of [0, start), in units of σ. The log's own offset from the normal logs (its
-        battery, trim, payload) is in both and cancels; what is left is the windows' noise,
-        σ_w √(W (1/T_after + 1/T_before))."""
-        ends = np.atleast_1d(end)
-        before = self._departure(0, np.array([start]))
-        after_s = (ends - start) * self.dt_s
-        spread = self.fit.within * np.sqrt(self.fit.window_s * (
-            1 / after_s[:, None] + 1 / (start * self.dt_s)))
-        return np.asarray((self._departure(start, ends) - before)
-                          / np.maximum(spread, SPREAD_FLOOR))
 
 
 def later_starts(steps: int, window: int) -> list[int]:
@@ -267,9 +233,9 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
-    spans = _Spans(fit, *_cumulative(effort, level, bins, setup.n_bins), dt_s)
+    spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
-    toward = _signatures(len(setup.group.members))
+    toward = weakness_directions(len(setup.group.members))
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
@@ -304,7 +270,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     return per_actuator, onset, float(times[alarm]), series, figures
 
 
-def _onset(spans: _Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
+def _onset(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
            alarm: int) -> tuple[float, float]:
     """(onset_s, its error) of a change within the log, from the later starts on to the
     detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
@@ -373,11 +339,12 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
         ratio, onset, alarm, group_series, (share, normal, sigma) = _judge_group(
             setup, fit, model.thresholds, log, time_s, model.dt_s)
         series.append(group_series)
+        rise = smallest_rise(fit, model.thresholds, span_s=steady_s)
         actuators += [ActuatorEffort(
             m, component[m], setup.group.name, round(float(share[k]), 4),
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
-            round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None)
-            for k, m in enumerate(members)]
+            round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None,
+            round(float(rise[k]), 4)) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
     matches = signature_matches(actuators)

@@ -145,6 +145,9 @@ class SharePart:
     driven_harder: bool = False
     judged: bool = False
     not_judged: str | None = None
+    # The smallest rise of its share (0.08: 8 % more) that shows over this log against the
+    # normal logs: with few normal logs, a weakness must be large to stand out.
+    smallest_rise_shown: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -1,0 +1,55 @@
+"""Spans of a log's steady steps judged by their share of a group's effort
+(`engine.effort_check`): against the normal logs, or against the log's own span before a
+later start. Running sums make every span's share a difference of two rows."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from models.effort import SPREAD_FLOOR, GroupFit
+
+
+def cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Running sums with a zero row in front: effort (steps+1, members) and level per bin
+    (steps+1, bins)."""
+    by_bin = np.zeros((len(level), n_bins))
+    by_bin[np.arange(len(level)), bins] = level
+    pad = lambda a: np.vstack([np.zeros((1, a.shape[1])), np.cumsum(a, axis=0)])  # noqa: E731
+    return pad(effort), pad(by_bin)
+
+
+@dataclass(frozen=True)
+class Spans:
+    """Departures of spans [start, end) of the steady steps, in units of their σ."""
+
+    fit: GroupFit
+    effort_sum: np.ndarray
+    level_sum: np.ndarray
+    dt_s: float
+
+    def _departure(self, start: int, ends: np.ndarray) -> np.ndarray:
+        """(ends, members): the share of [start, end) less its normal share."""
+        effort = self.effort_sum[ends] - self.effort_sum[start]
+        level = self.level_sum[ends] - self.level_sum[start]
+        total = level.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.asarray((effort - level @ self.fit.means) / total[:, None])
+
+    def z(self, start: int, end: np.ndarray | int) -> np.ndarray:
+        """Against the normal logs: the span's departure in units of its σ."""
+        ends = np.atleast_1d(end)
+        return self._departure(start, ends) / self.fit.sigma((ends - start) * self.dt_s)
+
+    def changed(self, start: int, end: np.ndarray | int) -> np.ndarray:
+        """Against the log's own beginning: how far the departure of [start, end) lies from
+        that of [0, start), in units of σ. The log's own offset from the normal logs (its
+        battery, trim, payload) is in both and cancels; what is left is the windows' noise,
+        σ_w √(W (1/T_after + 1/T_before))."""
+        ends = np.atleast_1d(end)
+        before = self._departure(0, np.array([start]))
+        after_s = (ends - start) * self.dt_s
+        spread = self.fit.within * np.sqrt(self.fit.window_s * (
+            1 / after_s[:, None] + 1 / (start * self.dt_s)))
+        return np.asarray((self._departure(start, ends) - before)
+                          / np.maximum(spread, SPREAD_FLOOR))
