@@ -132,6 +132,7 @@ def test_a_motor_driven_harder_is_named_with_its_onset(flights: Path, model: Pat
 
     text = "".join(page.extract_text() for page in PdfReader(tmp_path / "d.pdf").pages)
     assert "Share of the group's effort" in text and "motor_3 (driven harder)" in text
+    assert "one weak actuator shows over this log from +" in text
     # Named from the effort, not from a row of the pattern table: the report says so, and
     # not that the verdict names no component.
     assert report["case"] is None and "named from the other evidence" in text
@@ -159,6 +160,12 @@ def test_a_normal_flight_is_normal(flights: Path, model: Path):
     actuators = report["actuators"]
     assert actuators["judged"] and not actuators["named"]
     assert all(a["over_threshold"] < 1 for a in actuators["shares"].values())
+    # What these normal flights let it see: a rise of one motor's share larger than any
+    # this flight shows, said in the summary and per motor.
+    rises = [a["smallest_rise_shown"] for a in actuators["shares"].values()]
+    assert all(r > max(a["departure"] for a in actuators["shares"].values()) for r in rises)
+    assert "one weak actuator shows over this log once it carries about" in (
+        actuators["summary"])
 
 
 def test_too_few_normal_logs_or_too_little_steady_time_are_not_judged(flights: Path,

@@ -160,11 +160,16 @@ class EffortCheck:
 def _judged_from(actuators: Sequence[ActuatorEffort]) -> str:
     """What the normal logs let this log's shares show: with few of them, a weakness must
     be large to stand out."""
-    rises = [a.judged_from for a in actuators if a.judged_from is not None]
-    if not rises:
+    by_group: dict[str, list[float]] = {}
+    for a in actuators:
+        if a.judged_from is not None:
+            by_group.setdefault(a.group, []).append(a.judged_from)
+    if not by_group:
         return ""
+    said = [rise_range(rises) + ("" if len(by_group) == 1 else f" ({group})")
+            for group, rises in by_group.items()]
     return (f"; against these normal logs, one weak actuator shows over this log once it "
-            f"carries about {rise_range(rises)} more than its share")
+            f"carries about {' or '.join(said)} more than its share")
 
 
 def rise_range(rises: Sequence[float]) -> str:

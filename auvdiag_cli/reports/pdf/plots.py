@@ -5,6 +5,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from auvdiag_cli.engine.effort_check import rise_range
 from auvdiag_cli.reports.pdf.style import COLOURS, COMMAND_CYCLE, new_page, seconds_label
 from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
@@ -130,6 +131,12 @@ def effort_page(report: Report, series: Series) -> "Figure | None":
                     lw=2.2 if harder else 1.0,
                     label=f"{name} (driven harder)" if harder else name)
         ax.set_ylabel(f"share of {group}")
+        rises = [a.smallest_rise_shown for a in shares.values()
+                 if a.group == group and a.smallest_rise_shown is not None]
+        if rises:
+            ax.text(0.01, 0.97, f"one weak actuator shows over this log from "
+                    f"+{rise_range(rises)}", transform=ax.transAxes, va="top", fontsize=7,
+                    bbox={"facecolor": "white", "edgecolor": "none", "pad": 1.0})
     _figure_legend(figure, axes)
     return figure
 
