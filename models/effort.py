@@ -305,9 +305,10 @@ class Thresholds:
     false_alarm_rate: float      # per log, the budget over every judged actuator
     actuators: int               # judged actuators (the budget's Bonferroni split)
 
-    def whole_log(self, fit: GroupFit) -> float:
+    def whole_log(self, fit: GroupFit, dof: float | None = None) -> float:
+        """``dof``: were the spread known on that many degrees of freedom (None: its own)."""
         share = WHOLE_LOG_BUDGET * self.false_alarm_rate / self.actuators
-        return widening(fit) * quantile(1 - share, fit.dof)
+        return widening(fit) * quantile(1 - share, fit.dof if dof is None else dof)
 
     def later_start(self, fit: GroupFit, starts: int) -> float:
         """For the departure from one of ``starts`` later window starts to the end: a change
@@ -341,21 +342,20 @@ def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None
     """Per member, the smallest rise of its share (relative to its normal share) that the
     whole-log test judges over ``span_s`` steady seconds (None: the normal logs' typical
     steady time), the others' shares falling alike (one weak member). ``logs``: were the
-    spread, as measured, known
-    from that many normal logs (its degrees of freedom and the new log's share of the
-    uncertainty in the normal shares scale with them): what more normal logs would buy.
-    With three or four logs the Student-t threshold is wide; this says how wide in terms a
-    user can weigh ("a motor carrying 14 % more than its share")."""
+    spread, as measured, known from that many normal logs (its degrees of freedom and the
+    new log's share of the uncertainty in the normal shares scale with them): what more
+    normal logs would buy. With three or four logs the Student-t threshold is wide; this
+    says how wide in terms a user can weigh ("a motor carrying 14 % more than its share")."""
     n = fit.logs if logs is None else logs
+    # The normal logs' scatter beyond t (`widening`) stays as measured on the logs there are.
     dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)
-    known = replace(fit, logs=n, dof=dof)
-    sigma = known.sigma(known.typical_s if span_s is None else span_s)
+    sigma = replace(fit, logs=n).sigma(fit.typical_s if span_s is None else span_s)
     members = len(sigma)
     directions = weakness_directions(members)
     # Member i's share up by r, the others' down by r / (m - 1): its statistic is linear in r.
     pattern = (np.eye(members) * members - 1.0) / max(1, members - 1)
     per_unit = np.einsum("ij,ij->i", pattern / sigma, directions)
-    return np.asarray(thresholds.whole_log(known) / per_unit / fit.means.mean(axis=0))
+    return np.asarray(thresholds.whole_log(fit, dof) / per_unit / fit.means.mean(axis=0))
 
 
 def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:
