@@ -373,20 +373,16 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # window judged every step, some phase's sum nearly always holds some). The error spans
     # the onset up to the alarm, a window at least.
     error = max(window * dt_s, float(time_s[at]) - onset)
-    # What each signal carried, whichever way: a way alone sits at 0 half the time, so its
-    # usual level before the run is lower and any wander in the run would count as carried.
-    either = combined if columns == len(judged) else np.hstack([
-        np.fmax(combined[:, :len(judged)], combined[:, len(judged):columns]),
-        combined[:, columns:]])
-    evidence = {n: round(float(v), 3) for n, v in zip(
-        [*signals, *(s.name for s in found)], _carried(either, run, at), strict=True)}
+    evidence, _ = _per_signal(dict(zip(names_judged, _carried(combined, run, at),
+                                       strict=True)))
     flagged, ways = _per_signal(_flagged(combined, names_judged, at, window))
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
-                       round(onset, 3), round(error, 3), flagged, evidence, members, ways)
+                       round(onset, 3), round(error, 3), flagged,
+                       {n: round(float(v), 3) for n, v in evidence.items()}, members, ways)
 
 
 def _per_signal(values: Mapping[str, float]) -> tuple[dict[str, float], dict[str, str]]:
-    """Flagged names judged each way apart, per signal (the larger way's), in the order
+    """Values of names judged each way apart, per signal (the larger way's), in the order
     given, and the way of each ("above" or "below" the prediction)."""
     out: dict[str, float] = {}
     ways: dict[str, str] = {}
