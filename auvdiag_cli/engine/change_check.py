@@ -11,22 +11,15 @@ over all the windows before it that do not overlap it, in units of their spread 
 
     z = (mean of this window - mean of the earlier windows) / spread of the earlier windows
 
-Two statistics judge it, each way apart ("roll above", "roll below" the prediction), each
-with its own threshold per signal and way: the window's z itself ("window": an abrupt
-change, seen in the window it happens), and a CUSUM that adds up what goes beyond the
-allowance `DRIFT_ALLOWANCE` window after window, each window's sum carried on from the
-window a whole window before it ("sum"):
+Two statistics judge it, each with its own threshold per signal: the window's |z| itself
+("window": an abrupt change, seen in the window it happens), and a two-sided CUSUM that adds
+up what goes beyond the allowance `DRIFT_ALLOWANCE` window after window, each window's sum
+carried on from the window a whole window before it ("sum"):
 
-    S_above = max(0, S_above + z - k),  S_below = max(0, S_below - z - k)
+    S+ = max(0, S+ + z - k),  S- = max(0, S- - z - k),  S = max(S+, S-)
 
 so that a shift that lasts (an engine that stopped pushing, a surface that stuck) builds
-up even when no single window stands out, while noise within the allowance does not. A
-failure pushes a signal one way, and the normal tails of the two ways differ: judged
-either way, a signal's threshold is set by whichever way normal flying goes furthest
-(on the ALFA flights, throttle-ups push the forward acceleration far above the
-prediction; nothing normal drops it as an engine cut does). A model calibrated before
-holds one threshold per signal and is judged either way, |z| and max(S_above, S_below),
-as it was calibrated. Where
+up even when no single window stands out, while noise within the allowance does not. Where
 the profile says which way a part's weakening moves several signals, their signed sum is
 judged as one more signal, one-sided (`change_signatures`). A
 signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds

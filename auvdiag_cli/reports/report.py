@@ -125,8 +125,6 @@ class ChangePart:
     onset_error_s: float | None = None
     flagged: Numbers = field(default_factory=dict)
     carried: Numbers = field(default_factory=dict)
-    # Each flagged signal judged each way apart -> the way it went ("above", "below").
-    ways: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, kw_only=True)
