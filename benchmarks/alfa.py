@@ -177,7 +177,7 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     them, largest before the onset, after it, and within each of GOAL_DELAYS_S of it."""
     import numpy as np
 
-    from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics, sided
+    from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics
     from auvdiag_cli.engine.change_signatures import signatures
 
     residual, time_s = diagnosis.histories.change_residual, diagnosis.histories.time_s
@@ -194,7 +194,7 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     for statistic, values in change_statistics(
             residual, profile.window_samples, round(REFERENCE_MIN_S / profile.dt_s),
             found).items():
-        for column, name in enumerate([*sided(names), *(s.name for s in found)]):
+        for column, name in enumerate([*names, *(s.name for s in found)]):
             for part, into in parts:
                 known = values[part, column]
                 if np.isfinite(known).any():

@@ -17,7 +17,6 @@ from auvdiag_cli.engine.change_check import (
     ChangeCheck,
     change_statistics,
     check_change,
-    sided,
 )
 from auvdiag_cli.engine.change_check import (
     WINDOW as WINDOW_Z,
@@ -31,34 +30,25 @@ from auvdiag_errors import ModelError
 DT_S, WINDOW = 0.1, 10
 
 
-def _limits(value: float, each_way: bool = True) -> dict[str, dict[str, float]]:
-    """The same thresholds for "speed" and "yaw", each way apart (or either way, as a
-    model calibrated before the test judged each way apart holds them)."""
-    names = sided(["speed", "yaw"]) if each_way else ["speed", "yaw"]
-    return {WINDOW_Z: dict.fromkeys(names, value), SUM: dict.fromkeys(names, 3 * value)}
-
-
-def _either(values: np.ndarray, signals: int = 2) -> np.ndarray:
-    """A statistic each way apart (above, then below, per signal) as either way: the larger."""
-    return np.fmax(values[:, :signals], values[:, signals:2 * signals])
+def _limits(value: float) -> dict[str, dict[str, float]]:
+    return {WINDOW_Z: {"speed": value, "yaw": value}, SUM: {"speed": 3 * value, "yaw": 3 * value}}
 
 
 def _noise(seconds: float, signals: int = 2, seed: int = 0) -> np.ndarray:
     return np.random.default_rng(seed).normal(0.0, 1.0, (round(seconds / DT_S), signals))
 
 
-def _checked(residual: np.ndarray, stride: int | None = 1, each_way: bool = True
-             ) -> ChangeCheck:
+def _checked(residual: np.ndarray, stride: int | None = 1) -> ChangeCheck:
     """The test on two signals, "speed" and "yaw", each with the same thresholds."""
     time_s = np.arange(residual.shape[0]) * DT_S
-    return check_change(residual, ["speed", "yaw"], _limits(7.0, each_way), time_s, WINDOW,
-                        DT_S, stride=stride)
+    return check_change(residual, ["speed", "yaw"], _limits(7.0), time_s, WINDOW, DT_S,
+                        stride=stride)
 
 
 def test_the_statistic_waits_for_its_reference_and_rises_at_a_step():
     residual = _noise(120.0)
     residual[800:, 1] += 3.0                         # signal 1 shifts at 80 s
-    z = _either(change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[WINDOW_Z])
+    z = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[WINDOW_Z]
     assert np.isnan(z[:round(REFERENCE_MIN_S / DT_S), :]).all()
     assert np.nanmax(z[:800]) < 6.0                  # noise alone
     assert np.nanmax(z[800:810, 1]) > 8.0            # the shift, within a window
@@ -69,7 +59,7 @@ def test_a_shift_no_single_window_shows_builds_up_window_after_window():
     residual = _noise(150.0, seed=4)
     residual[800:, 0] += 0.6              # about two spreads of a window mean, for good
     statistics = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))
-    sums, z = _either(statistics[SUM])[:, 0], _either(statistics[WINDOW_Z])[:, 0]
+    sums, z = statistics[SUM][:, 0], statistics[WINDOW_Z][:, 0]
     assert np.nanmax(sums[:800]) < 5.0 and np.nanmax(z[800:]) < 4.5   # no window stands out
     assert sums[829] < sums[859] < sums[899] and sums[899] > 5.0
 
@@ -83,36 +73,14 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
         REFERENCE_MIN_S + (WINDOW - 1) * DT_S, abs=0.05)
     assert 80.0 <= check.alarm_s <= 81.0
     assert check.onset_s == pytest.approx(80.0, abs=check.onset_error_s)
-    assert list(check.flagged) == ["speed"] and check.ways == {"speed": "below"}
+    assert list(check.flagged) == ["speed"]
     assert "changed against the log's own beginning" in check.describe()
-    assert "speed" in check.describe() and "(below the prediction)" in check.describe()
-    # Judged each way apart: what it reached above and below are thresholds of their own.
-    assert {"speed above", "speed below"} <= set(check.peaks[SUM])
-    assert check.peaks[SUM]["speed below"] > 3 * 7.0 > check.peaks[SUM]["speed above"]
-
-
-def test_each_way_has_its_own_threshold_and_a_model_calibrated_before_judges_either_way():
-    # A drop that the threshold below catches, where the one above is far higher (a signal
-    # whose normal excursions go up): judged each way apart it is found; judged either way
-    # with the higher threshold (a model calibrated before) it is not.
-    residual = _noise(120.0, seed=1)
-    residual[800:, 0] -= 1.2
-    time_s = np.arange(residual.shape[0]) * DT_S
-    limits = {WINDOW_Z: {"speed above": 20.0, "speed below": 6.0},
-              SUM: {"speed above": 60.0, "speed below": 18.0}}
-    check = check_change(residual[:, :1], ["speed"], limits, time_s, WINDOW, DT_S)
-    assert check.alarm_s is not None and check.ways == {"speed": "below"}
-    either = check_change(residual[:, :1], ["speed"], {s: {"speed": v["speed above"]}
-                                                       for s, v in limits.items()},
-                          time_s, WINDOW, DT_S)
-    assert either.judged and either.alarm_s is None and not either.ways
-    assert set(either.peaks[SUM]) == {"speed"}
 
 
 def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_side():
     residual = _noise(120.0, seed=1)
     residual[803:, 0] -= 3.0                  # 0.3 s into a window of the row side by side
-    every, side = _checked(residual), _checked(residual, stride=None, each_way=False)
+    every, side = _checked(residual), _checked(residual, stride=None)
     assert side.alarm_s is not None and every.alarm_s is not None
     assert (side.alarm_s * 10) % 10 == pytest.approx(9.0)       # only at a row's window ends
     assert 80.3 < every.alarm_s < side.alarm_s and every.alarm_s <= 81.1
@@ -122,7 +90,7 @@ def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_si
     # A window judged every step is measured against every earlier window that does not
     # overlap it, of whichever phase: the window means ending up to a window before it.
     reference = round(REFERENCE_MIN_S / DT_S)
-    z = _either(change_statistics(residual, WINDOW, reference)[WINDOW_Z])[:, 1]
+    z = change_statistics(residual, WINDOW, reference)[WINDOW_Z][:, 1]
     means = np.convolve(residual[:, 1], np.ones(WINDOW) / WINDOW, mode="valid")  # end i+9
     for end in (reference + WINDOW - 1, 555, 1000):
         earlier = means[:end - WINDOW - (WINDOW - 1) + 1]
@@ -156,7 +124,7 @@ def test_noise_lingering_in_the_sum_does_not_date_an_abrupt_change_early():
     residual[700:, 0] += 0.4          # a slight drift from 70 s keeps the sum above 0 ...
     residual[803:, 0] += 3.0          # ... when the change comes at 80.3 s
     sums = change_statistics(residual, WINDOW, round(REFERENCE_MIN_S / DT_S))[SUM][:, 0]
-    assert (sums[760:803] > 0).all()                  # speed above
+    assert (sums[760:803] > 0).all()
     check = _checked(residual)
     assert check.alarm_s is not None and 80.3 < check.alarm_s <= 81.2
     assert check.onset_s == pytest.approx(80.3, abs=0.3) and check.onset_error_s <= 1.0
@@ -177,7 +145,7 @@ def test_what_crosses_within_a_window_of_the_alarm_is_flagged_with_it():
 
 def test_a_log_shorter_than_its_reference_is_not_judged():
     residual = _noise(REFERENCE_MIN_S - 5.0)
-    check = check_change(residual, ["a", "b"], {WINDOW_Z: dict.fromkeys(sided(["a", "b"]), 5.0)},
+    check = check_change(residual, ["a", "b"], {WINDOW_Z: {"a": 5.0, "b": 5.0}},
                          np.arange(residual.shape[0]) * DT_S, WINDOW, DT_S)
     assert not check.judged and check.alarm_s is None and "too short" in check.describe()
 
@@ -245,7 +213,7 @@ def test_calibrate_sets_a_change_threshold_per_judged_signal(calibrated):
         check_model_fits(odd, api.load_profile(None), log)
     assert set(result.change) == {WINDOW_Z, SUM}
     for statistic, values in result.change.items():
-        assert set(values) == set(sided(["flow", "yaw_rate"]))
+        assert set(values) == {"flow", "yaw_rate"}
         for name, (largest, threshold) in values.items():
             assert threshold == pytest.approx(
                 max(1.5 * largest, MIN_CHANGE_THRESHOLDS[statistic]), rel=1e-3)
@@ -299,8 +267,7 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     diagnosis = api.diagnose(make_log("mission-thruster-0-weak", 11), profile, model)
     assert diagnosis.not_judged["flow"].startswith("judged only against the log's own")
     check = diagnosis.change_check
-    assert check is not None and all({"flow above", "flow below"} <= set(limits)
-                                     for limits in check.thresholds.values())
+    assert check is not None and all("flow" in limits for limits in check.thresholds.values())
     assert "flow" in diagnosis.coverage.signals_judged and diagnosis.set_aside == ()
     assert (diagnosis.histories.b_series[:, 0] == 0).all()
     # A channel never fed (the flow's cells all 0): set aside, the change test leaves it out.
@@ -308,8 +275,7 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
                            tmp_path / "no_flow.csv")
     flat = api.diagnose(zeroed, base, model)
     assert flat.set_aside == ("flow",) and flat.change_check is not None
-    assert all(set(limits) == {"yaw_rate above", "yaw_rate below"}
-               for limits in flat.change_check.thresholds.values())
+    assert all(list(limits) == ["yaw_rate"] for limits in flat.change_check.thresholds.values())
     assert "flow" not in flat.coverage.signals_judged
 
 

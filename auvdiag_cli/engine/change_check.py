@@ -56,25 +56,6 @@ DRIFT_ALLOWANCE = 1.0
 STRIDE_STEPS = 1
 WINDOW, SUM = "window", "sum"
 STATISTICS = (WINDOW, SUM)
-# Each signal is judged in each direction apart, each with its own thresholds: a failure
-# pushes a signal one way (an engine that stops pushing leaves the forward acceleration
-# below the prediction, never above), and the normal tails of the two ways differ (a
-# throttle-up overshoots above; nothing normal drops the acceleration as a cut does).
-ABOVE, BELOW = " above", " below"
-
-
-def sided(names: Sequence[str]) -> list[str]:
-    """The judged names of ``names`` judged in each direction apart: every one above, then
-    every one below the prediction."""
-    return [*(n + ABOVE for n in names), *(n + BELOW for n in names)]
-
-
-def signal_of(name: str) -> str:
-    """The signal a judged name is of ("accel_x below" -> "accel_x")."""
-    for side in (ABOVE, BELOW):
-        if name.endswith(side):
-            return name[:-len(side)]
-    return name
 
 
 @dataclass(frozen=True)
@@ -95,8 +76,6 @@ class ChangeCheck:
     evidence: Mapping[str, float] = field(default_factory=dict)
     # Each signature judged (`change_signatures`) -> the signals it sums.
     members: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
-    # Each flagged signal judged each way apart -> the way it went ("above", "below").
-    ways: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def changed(self) -> tuple[str, ...]:
@@ -123,9 +102,7 @@ class ChangeCheck:
             return "no change against the log's own beginning" + (
                 "" if worst is None else f" (largest: {worst} at {ratios[worst]:.0%} of its "
                                          "threshold)")
-        which = ", ".join(f"{n} {r:.1f}x its threshold" + (
-            f" ({self.ways[n]} the prediction)" if n in self.ways else "")
-            for n, r in self.flagged.items())
+        which = ", ".join(f"{n} {r:.1f}x its threshold" for n, r in self.flagged.items())
         return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
                 f"(up to {self.onset_error_s:.1f} s either way), detected at "
                 f"{self.alarm_s:.1f} s: {which}")
@@ -236,20 +213,15 @@ def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray
 
 
 def change_statistics(residual: np.ndarray, window: int, reference_min: int,
-                      found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS,
-                      each_way: bool = True) -> dict[str, np.ndarray]:
-    """Each statistic per step and judged column, as of the last whole window (NaN until
-    the reference is long enough): each signal above, then each below the prediction
-    (`sided`; ``each_way`` False: each signal either way, as models calibrated before
-    judged them), then one per signature in ``found`` (`change_signatures`). Every
-    column but a two-way signal's is one-sided: a move against it adds nothing. A window
-    ends every ``stride`` steps (a divisor of ``window``; None: ``window``, windows side
-    by side)."""
+                      found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS
+                      ) -> dict[str, np.ndarray]:
+    """Each statistic per step and signal, as of the last whole window (NaN until the
+    reference is long enough); after the signals' columns, one per signature in ``found``
+    (`change_signatures`: one-sided, a move against it adds nothing). A window ends every
+    ``stride`` steps (a divisor of ``window``; None: ``window``, windows side by side)."""
     stride = _stride(window, stride)
     ends, z = _standardised(residual, window, reference_min, stride)
-    signals = z.shape[1]
-    z, one_sided = with_signatures(np.hstack([z, -z]) if each_way else z, found)
-    one_sided[:2 * signals if each_way else 0] = True
+    z, one_sided = with_signatures(z, found)
     sums = _sums(z, one_sided, window // stride)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
@@ -285,13 +257,13 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
                  actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
                  ) -> dict[str, dict[str, float]]:
-    """Each statistic's largest value per signal and direction in a log (`sided`), and per
-    signature of the ``actuators`` over these signals (NaN where it is never judged): what
-    calibrate sets the thresholds from."""
+    """Each statistic's largest value per signal in a log, and per signature of the
+    ``actuators`` over these signals (NaN where it is never judged): what calibrate sets
+    the thresholds from."""
     found = signatures(actuators, names)
     statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
                                    stride)
-    every = [*sided(names), *(s.name for s in found)]
+    every = [*names, *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
                         else float("nan") for i, name in enumerate(every)}
             for statistic, values in statistics.items()}
@@ -320,15 +292,11 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
-    # Thresholds set each way apart (`sided`), or either way by a calibration before that.
-    each_way = any(n != signal_of(n) for limits in thresholds.values() for n in limits)
-    judged = [i for i, name in enumerate(names) if any(
-        limited(n) for n in (sided([name]) if each_way else [name]))]
+    judged = [i for i, name in enumerate(names) if limited(name)]
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
-    signals = [names[i] for i in judged]
-    names_judged = [*(sided(signals) if each_way else signals), *(s.name for s in found)]
+    names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
-                                   found, stride, each_way)
+                                   found, stride)
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     ratios = {}
@@ -341,7 +309,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     peaks = {s: {n: round(float(np.nanmax(values[:, k])), 3)
                  for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
              for s, values in statistics.items()}
-    members = {s.name: tuple(signals[c] for c in s.signs) for s in found}
+    members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
     check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None,
                         members=members)
@@ -358,31 +326,15 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # second or two to stand out of the noise; the windows before carry part of it).
     run = _run_start(statistics[SUM][:, strongest], at, window, _stride(window, stride))
     # Within that run, where the strongest signal's own residual shifted: the onset.
-    columns = len(names_judged) - len(found)       # the signals' own, each way or either
-    first = run if strongest >= columns else \
-        shift_start(residual[:, judged[strongest % len(judged)]], run, at)
+    first = run if strongest >= len(judged) else \
+        shift_start(residual[:, judged[strongest]], run, at)
     onset = float(time_s[first])
     # The run's start alone would date the change to noise that lingered in the sum (with a
     # window judged every step, some phase's sum nearly always holds some). The error spans
     # the onset up to the alarm, a window at least.
     error = max(window * dt_s, float(time_s[at]) - onset)
-    evidence, _ = _per_signal(dict(zip(names_judged, _carried(combined, run, at),
-                                       strict=True)))
-    flagged, ways = _per_signal(_flagged(combined, names_judged, at, window))
+    evidence = {n: round(float(v), 3)
+                for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
-                       round(onset, 3), round(error, 3), flagged,
-                       {n: round(float(v), 3) for n, v in evidence.items()}, members, ways)
-
-
-def _per_signal(values: Mapping[str, float]) -> tuple[dict[str, float], dict[str, str]]:
-    """Values of names judged each way apart, per signal (the larger way's), in the order
-    given, and the way of each ("above" or "below" the prediction)."""
-    out: dict[str, float] = {}
-    ways: dict[str, str] = {}
-    for name, value in values.items():
-        signal = signal_of(name)
-        if signal not in out or value > out[signal]:
-            out[signal] = value
-            if signal != name:
-                ways[signal] = name[len(signal) + 1:]
-    return out, ways
+                       round(onset, 3), round(error, 3),
+                       _flagged(combined, names_judged, at, window), evidence, members)

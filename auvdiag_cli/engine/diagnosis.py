@@ -13,7 +13,6 @@ from auvdiag_cli.engine.change_check import (
     change_judged,
     change_residual,
     check_change,
-    signal_of,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
@@ -290,8 +289,7 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     judged = [name for name in change_judged(model, skilled(model, profile))
               if name not in judging.set_aside]
     judged += signature_names(profile.actuators, judged)
-    thresholds = {statistic: {name: value for name, value in limits.items()
-                              if signal_of(name) in judged}
+    thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
                   for statistic, limits in model.card.change_thresholds.items()}
     if not any(thresholds.values()):
         return None

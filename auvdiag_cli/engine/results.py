@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
-from auvdiag_cli.engine.change_check import ChangeCheck, signal_of
+from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
 from auvdiag_cli.engine.coverage import Coverage, coverage_of
@@ -123,7 +123,7 @@ class Diagnosis(Observations, Finding):
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
         change = self.change_check
         by_change = set() if change is None or not change.judged else {
-            signal_of(name) for limits in change.thresholds.values() for name in limits}
+            name for limits in change.thresholds.values() for name in limits}
         return coverage_of(self.histories.sensor_names or tuple(self.b),
                            [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check)

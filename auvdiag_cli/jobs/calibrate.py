@@ -310,9 +310,8 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
     if change.trained_not_counted:
         warnings.append(
             f"the change test's statistics the model keeps for the {change.trained_not_counted}"
-            " log(s) it was trained on were measured by an earlier form of the test (before "
-            "it judged a window every step, or each way apart): not counted here; train the "
-            "model again to count them")
+            " log(s) it was trained on were measured before the test judged a window every "
+            "step: not counted here; train the model again to count them")
     for mode in modes:
         if mode.kept_default:
             continue

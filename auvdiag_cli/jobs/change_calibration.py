@@ -1,5 +1,5 @@
 """The change test's thresholds (`engine.change_check`), set by `auvdiag calibrate` from
-each judged signal's largest statistics on the normal logs, each way apart."""
+each judged signal's largest S on the normal logs."""
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -15,8 +15,6 @@ from auvdiag_cli.engine.change_check import (
     WINDOW,
     change_judged,
     change_peaks,
-    sided,
-    signal_of,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.results import Diagnosis
@@ -59,7 +57,7 @@ def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Seq
     window = model.card.window_samples or profile.window_samples
     peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
                          profile.actuators)
-    return {statistic: {name: float("nan") if signal_of(name) in set_aside else value
+    return {statistic: {name: float("nan") if name in set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}
 
@@ -94,7 +92,7 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
                     ) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
     return without_outliers(ChangeEvidence(
-        [*sided(judged), *signature_names(profile.actuators, judged)],
+        [*judged, *signature_names(profile.actuators, judged)],
         [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
            for d in diagnoses),
          *({s: dict(v) for s, v in t.peaks.items()} for t in trained)],
