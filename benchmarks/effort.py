@@ -30,14 +30,19 @@ from pathlib import Path
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import EffortCheck, check_effort, rise_range
+from auvdiag_cli.engine.effort_check import (
+    EffortCheck,
+    check_effort,
+    rise_range,
+    smallest_later_rise,
+)
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.jobs.effort import effort_log
 from auvdiag_cli.jobs.relate import relation_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile
 from models.command_relations import RelationLog
 from models.effort import GroupFit, smallest_rise
-from models.effort_model import EffortModel, learn_effort
+from models.effort_model import EffortModel, GroupSetup, learn_effort
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 NORMAL_MISSIONS = ("paper-normal", "mission-ccw", "mission-large-cw", "mission-sprint-ccw",
@@ -221,11 +226,14 @@ def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
     return relation_log(ingest(path, profile), profile)
 
 
-def _rise(model: EffortModel, fit: GroupFit | None) -> str:
-    """The smallest rise of one member's share the group's whole-log test judges."""
+def _rise(model: EffortModel, setup: GroupSetup, fit: GroupFit | None) -> str:
+    """The smallest rise of one member's share the group's whole-log test judges, and the
+    later-start test where it weakens halfway through a mission."""
     if fit is None or model.thresholds is None:
         return ""
-    return f"; judged from a rise of {rise_range(list(smallest_rise(fit, model.thresholds)))}"
+    later = smallest_later_rise(setup, fit, model.thresholds, model.dt_s)
+    return (f"; judged from a rise of {rise_range(list(smallest_rise(fit, model.thresholds)))}"
+            f", from halfway {rise_range(list(later))}")
 
 
 def _conditions(two_way: bool, fit: GroupFit | None) -> str:
@@ -275,13 +283,15 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                         + f" | {_row_timing(times[timed:])} |")
         late = _late(profile, model, components, work)
     alarms = sum(bool(c.suspects) for c in normal)
-    groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}{_rise(model, fit)})"
+    groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}"
+                       f"{_rise(model, setup, fit)})"
                        for setup, fit in zip(model.setups, model.fits, strict=True))
     return ["", f"**Simulated {title}** (`{profile_name}`, {len(training)} normal missions to "
             f"learn from; groups {groups}): false alarms on {len(normal)} normal missions of "
             f"other seeds: {alarms}. One actuator weakened from 60 s (- not found; named; in a "
             "pair: named with the actuator whose command moves with it; a group's rise: the "
-            "smallest rise of one member's share its whole-log test judges over a mission; "
+            "smallest rise of one member's share its whole-log test judges over a mission, "
+            "and its test against the mission's own beginning where it weakens halfway; "
             "onset and detection after 60 s, median over those named alone):", "",
             "| thrust kept | " + " | ".join(components) + " | onset / detected (s) |",
             "|---" * (len(components) + 2) + "|", *rows, "", _timing(times), "", *late]

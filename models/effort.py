@@ -350,12 +350,18 @@ def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None
     # The normal logs' scatter beyond t (`widening`) stays as measured on the logs there are.
     dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)
     sigma = replace(fit, logs=n).sigma(fit.typical_s if span_s is None else span_s)
+    return rise_judged(thresholds.whole_log(fit, dof), sigma, fit.means.mean(axis=0))
+
+
+def rise_judged(z_threshold: float, sigma: np.ndarray, shares: np.ndarray) -> np.ndarray:
+    """Per member, the rise of its share (relative to ``shares``, its normal one) whose
+    departure, the others' shares falling alike and each in units of its ``sigma``, projects
+    on its weakness's direction to ``z_threshold``."""
     members = len(sigma)
-    directions = weakness_directions(members)
     # Member i's share up by r, the others' down by r / (m - 1): its statistic is linear in r.
     pattern = (np.eye(members) * members - 1.0) / max(1, members - 1)
-    per_unit = np.einsum("ij,ij->i", pattern / sigma, directions)
-    return np.asarray(thresholds.whole_log(fit, dof) / per_unit / fit.means.mean(axis=0))
+    per_unit = np.einsum("ij,ij->i", pattern / sigma, weakness_directions(members))
+    return np.asarray(z_threshold / per_unit / shares)
 
 
 def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:

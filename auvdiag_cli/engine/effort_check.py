@@ -23,12 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
-from auvdiag_cli.engine.effort_spans import Spans, cumulative
+from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
     Thresholds,
     expected_share,
+    rise_judged,
     smallest_rise,
     weakness_directions,
     window_shares,
@@ -227,6 +228,17 @@ def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresh
     (each log's own depends on its length: the number of starts it tries)."""
     return thresholds.later_start(fit, len(later_starts(
         round(fit.typical_s / dt_s), setup.window_steps(dt_s))))
+
+
+def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
+                        dt_s: float) -> np.ndarray:
+    """Per member, the smallest rise of its share that the later-start test judges when a
+    weakness begins halfway through a log of the typical steady time: against the log's own
+    first half, whose offset from the normal logs cancels, so far smaller than what the
+    whole-log test needs with a handful of normal logs."""
+    half_s = fit.typical_s / 2
+    return rise_judged(typical_later_threshold(setup, fit, thresholds, dt_s),
+                       change_spread(fit, half_s, half_s), fit.means.mean(axis=0))
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,

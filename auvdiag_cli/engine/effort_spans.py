@@ -49,7 +49,12 @@ class Spans:
         ends = np.atleast_1d(end)
         before = self._departure(0, np.array([start]))
         after_s = (ends - start) * self.dt_s
-        spread = self.fit.within * np.sqrt(self.fit.window_s * (
-            1 / after_s[:, None] + 1 / (start * self.dt_s)))
         return np.asarray((self._departure(start, ends) - before)
-                          / np.maximum(spread, SPREAD_FLOOR))
+                          / change_spread(self.fit, after_s[:, None], start * self.dt_s))
+
+
+def change_spread(fit: GroupFit, after_s: np.ndarray | float, before_s: float) -> np.ndarray:
+    """σ of the difference between the shares of a span after a start and the span before
+    it, in one log: the windows' noise alone, σ_w √(W (1/T_after + 1/T_before))."""
+    return np.asarray(np.maximum(fit.within * np.sqrt(fit.window_s * (
+        1 / np.asarray(after_s) + 1 / before_s)), SPREAD_FLOOR))

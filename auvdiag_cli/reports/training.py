@@ -5,14 +5,18 @@ paper's vehicle only); the thresholds, which log set each, and what to be wary o
 import math
 from collections.abc import Sequence
 
-from auvdiag_cli.engine.effort_check import rise_range, typical_later_threshold
+from auvdiag_cli.engine.effort_check import (
+    rise_range,
+    smallest_later_rise,
+    typical_later_threshold,
+)
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
 from models.effort import GroupFit, Thresholds, smallest_rise
-from models.effort_model import EffortModel
+from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
 
@@ -165,19 +169,22 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"others: largest z {float(fit.loo_z.max()):.2f}); changed within a log past z "
             f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s):.2f} "
             f"(a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
-            f"on {fit.within_dof:.0f} degrees of freedom)" + _smallest(fit, effort.thresholds)
-            + _alike(fit))
+            f"on {fit.within_dof:.0f} degrees of freedom)"
+            + _smallest(setup, fit, effort.thresholds, effort.dt_s) + _alike(fit))
     return lines
 
 
-def _smallest(fit: GroupFit, thresholds: Thresholds) -> str:
-    """The smallest weakness the whole-log test judges, in terms a user can weigh, and what
-    twice the normal logs would bring it to."""
+def _smallest(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, dt_s: float) -> str:
+    """The smallest weakness each test judges, in terms a user can weigh, and what twice the
+    normal logs would bring the whole log's to."""
     more = 2 * fit.logs
-    return (f"; one weak actuator is judged once it carries "
+    return (f"; one weak actuator is judged once it carries about "
             f"{rise_range(list(smallest_rise(fit, thresholds)))} more than its share over a "
             f"log of {fit.typical_s:.0f} s (with {more} normal logs, about "
-            f"{rise_range(list(smallest_rise(fit, thresholds, more)))})")
+            f"{rise_range(list(smallest_rise(fit, thresholds, more)))}), or, where it weakens "
+            "halfway through such a log, about "
+            f"{rise_range(list(smallest_later_rise(setup, fit, thresholds, dt_s)))} more from "
+            "then on (against the log's own first half)")
 
 
 def _alike(fit: GroupFit) -> str:
