@@ -49,8 +49,9 @@ def test_more_normal_logs_lower_it_and_the_training_report_says_by_how_much():
     (line,) = effort_lines(model)
     assert "one weak actuator is judged once it carries about" in line
     assert "with 6 normal logs, about" in line
-    # Against the log's own first half the offset between logs cancels: a weakness that
-    # begins mid-log is judged from a far smaller rise, and the line says so.
+    # Against the log's own first half the offset between logs cancels: where logs differ
+    # more than a log's own windows do (trims 3 % apart here), a weakness that begins
+    # mid-log is judged from a far smaller rise, and the line says so.
     setup = model.setups[0]
     later = smallest_later_rise(setup, fit, thresholds, model.dt_s)
     assert np.all(later < now / 3)
