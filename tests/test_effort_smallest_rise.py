@@ -35,7 +35,7 @@ def test_the_smallest_rise_said_is_where_the_check_starts_to_judge(seed: int):
     # Every report says it, for this log's own steady time (the typical one here).
     quiet = quad_check(model, quad_commands(rng, normal_share / SHARES))
     assert not quiet.named
-    assert quiet.actuators[0].judged_from == pytest.approx(rise[0], rel=0.05)
+    assert quiet.actuators[0].smallest_rise_shown == pytest.approx(rise[0], rel=0.05)
     assert "one weak actuator shows over this log once it carries about" in quiet.describe()
 
 

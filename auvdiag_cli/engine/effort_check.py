@@ -57,7 +57,7 @@ class ActuatorEffort:
     ratio: float | None          # the largest z over its threshold (either test); > 1 alarms
     not_judged: str | None       # why not, or None
     # The smallest rise of its share the whole-log test judges over this log (`smallest_rise`)
-    judged_from: float | None = None
+    smallest_rise_shown: float | None = None
 
     @property
     def driven_harder(self) -> bool:
@@ -127,7 +127,7 @@ class EffortCheck:
             worst = max(judged, key=lambda a: a.ratio or 0.0)
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
-                    f"its threshold){_judged_from(judged)}")
+                    f"its threshold){_smallest_rise_shown(judged)}")
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
                  for a in suspects]
@@ -158,13 +158,13 @@ class EffortCheck:
         return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
 
 
-def _judged_from(actuators: Sequence[ActuatorEffort]) -> str:
+def _smallest_rise_shown(actuators: Sequence[ActuatorEffort]) -> str:
     """What the normal logs let this log's shares show: with few of them, a weakness must
     be large to stand out."""
     by_group: dict[str, list[float]] = {}
     for a in actuators:
-        if a.judged_from is not None:
-            by_group.setdefault(a.group, []).append(a.judged_from)
+        if a.smallest_rise_shown is not None:
+            by_group.setdefault(a.group, []).append(a.smallest_rise_shown)
     if not by_group:
         return ""
     said = [rise_range(rises) + ("" if len(by_group) == 1 else f" ({group})")
