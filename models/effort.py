@@ -338,10 +338,12 @@ def weakness_directions(members: int) -> np.ndarray:
 
 
 def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None,
-                  span_s: float | None = None) -> np.ndarray:
-    """Per member, the smallest rise of its share (relative to its normal share) that the
-    whole-log test judges over ``span_s`` steady seconds (None: the normal logs' typical
-    steady time), the others' shares falling alike (one weak member). ``logs``: were the
+                  span_s: float | None = None, shares: np.ndarray | None = None
+                  ) -> np.ndarray:
+    """Per member, the smallest rise of its share (relative to its normal share: ``shares``,
+    or the normal logs' mean) that the whole-log test judges over ``span_s`` steady seconds
+    (None: the normal logs' typical steady time), the others' shares falling alike (one
+    weak member). ``logs``: were the
     spread, as measured, known from that many normal logs (its degrees of freedom and the
     new log's share of the uncertainty in the normal shares scale with them): what more
     normal logs would buy. With three or four logs the Student-t threshold is wide; this
@@ -350,7 +352,8 @@ def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None
     # The normal logs' scatter beyond t (`widening`) stays as measured on the logs there are.
     dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)
     sigma = replace(fit, logs=n).sigma(fit.typical_s if span_s is None else span_s)
-    return rise_judged(thresholds.whole_log(fit, dof), sigma, fit.means.mean(axis=0))
+    return rise_judged(thresholds.whole_log(fit, dof), sigma,
+                       fit.means.mean(axis=0) if shares is None else shares)
 
 
 def rise_judged(z_threshold: float, sigma: np.ndarray, shares: np.ndarray) -> np.ndarray:

@@ -355,8 +355,9 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma) = _judge_group(
             setup, fit, model.thresholds, log, time_s, model.dt_s)
+        # Relative to this log's normal shares (its mix of levels or thrust directions).
+        rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
         series.append(group_series)
-        rise = smallest_rise(fit, model.thresholds, span_s=steady_s)
         actuators += [ActuatorEffort(
             m, component[m], setup.group.name, round(float(share[k]), 4),
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
