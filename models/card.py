@@ -67,6 +67,20 @@ def _change_stride(entry: Mapping[str, Any]) -> int | None:
     return int(stride)
 
 
+def _way_scales(entry: Mapping[str, Any]) -> Mapping[str, Mapping[str, tuple[float, float]]]:
+    scales = {}
+    for statistic, values in (entry.get("way_scales") or {}).items():
+        pairs = {}
+        for name, pair in values.items():
+            above, below = (float(v) for v in pair)
+            if not (above > 0 and below > 0):
+                raise ValueError(f"change_test way_scales {statistic} {name} {pair!r} are not "
+                                 "two positive numbers")
+            pairs[str(name)] = (above, below)
+        scales[str(statistic)] = _frozen(pairs)
+    return _frozen(scales)
+
+
 def _optional_float(value: object) -> float | None:
     return None if value is None else float(value)  # type: ignore[arg-type]
 
@@ -190,6 +204,10 @@ class ModelCard:
     # The steps between the windows they were set on (None: windows side by side, as
     # calibrate set them before it judged a window every step).
     change_stride: int | None = None
+    # statistic -> signal -> (above, below): how far normal logs go each way, each way's
+    # statistic divided by its own before they are judged (none: either way alike).
+    change_way_scales: Mapping[str, Mapping[str, tuple[float, float]]] = field(
+        default_factory=dict)
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
@@ -288,6 +306,7 @@ class ModelCard:
                 for statistic, values in (meta.get("change_test") or {}).get(
                     "thresholds", {}).items()}),
             change_stride=_change_stride(meta.get("change_test") or {}),
+            change_way_scales=_way_scales(meta.get("change_test") or {}),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),

@@ -26,9 +26,12 @@ class ChangeTraining:
     # The steps between the windows the peaks were measured on (None: windows side by
     # side, as before the test judged them more often).
     stride_steps: int | None = None
+    # The peaks of each way of a signal apart ("roll above", "roll below"; False: of either
+    # way, as before the test scaled each way by its own).
+    each_way: bool = False
 
     def to_json(self) -> dict[str, object]:
-        return {"stride_steps": self.stride_steps, "logs": [{
+        return {"stride_steps": self.stride_steps, "each_way": self.each_way, "logs": [{
             "log": t.log, "sha256": t.sha256, "peaks": {
             statistic: {name: value if math.isfinite(value) else None
                         for name, value in values.items()}
@@ -41,17 +44,19 @@ class ChangeTraining:
                              for name, value in values.items()}
             for statistic, values in (t.get("peaks") or {}).items()})
             for t in entry.get("logs", [])),
-            None if entry.get("stride_steps") is None else int(entry["stride_steps"]))
+            None if entry.get("stride_steps") is None else int(entry["stride_steps"]),
+            bool(entry.get("each_way", False)))
 
     def without(self, digests: frozenset[str] | set[str], stride_steps: int
                 ) -> tuple[TrainedOnPeaks, ...]:
         """The logs but those whose content digest is among ``digests``; none where their
-        peaks were measured on windows other than ``stride_steps`` apart (`stale`)."""
+        peaks are of another statistic (`stale`)."""
         if self.stale(stride_steps):
             return ()
         return tuple(t for t in self.logs if t.sha256 not in digests)
 
     def stale(self, stride_steps: int) -> bool:
-        """Whether the peaks were measured on windows other than ``stride_steps`` apart:
-        another statistic, whose largest values set no threshold of this one."""
-        return bool(self.logs) and self.stride_steps != stride_steps
+        """Whether the peaks were measured on windows other than ``stride_steps`` apart, or
+        either way rather than each way apart: another statistic, whose largest values set
+        no threshold of this one."""
+        return bool(self.logs) and (self.stride_steps != stride_steps or not self.each_way)

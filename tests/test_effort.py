@@ -409,14 +409,18 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
                           api.load_model(tmp_path / "model", profile),
                           options=api.CalibrateOptions(budget=api.FalseAlarmBudget(0.01)))
     assert again.change_trained_on == tuple(path.name for path in normal[1:])
-    # Peaks kept by a model trained before the test judged a window every step are another
-    # statistic's: not counted, and calibrate says so.
-    document["change_training"].pop("stride_steps")
-    (tmp_path / "model" / "model.json").write_text(json.dumps(document))
-    stale = api.calibrate(calibration_logs, profile, api.load_model(tmp_path / "model", profile))
-    assert stale.change_trained_on == ()
-    assert any("measured before the test judged a window every step" in warning
-               and "for the 3 log(s)" in warning for warning in stale.warnings)
+    # Peaks kept by a model trained before the test judged a window every step, or each way
+    # apart, are another statistic's: not counted, and calibrate says so.
+    assert document["change_training"]["each_way"] is True
+    for earlier in ("stride_steps", "each_way"):
+        value = document["change_training"].pop(earlier)
+        (tmp_path / "model" / "model.json").write_text(json.dumps(document))
+        stale = api.calibrate(calibration_logs, profile,
+                              api.load_model(tmp_path / "model", profile))
+        assert stale.change_trained_on == ()
+        assert any("measured by an earlier form of the test" in warning
+                   and "for the 3 log(s)" in warning for warning in stale.warnings)
+        document["change_training"][earlier] = value
     dead = api.diagnose(flown("mission-motor-3-dead", 7), profile, model)
     assert dead.verdict.value == "fault" and dead.component == "motor_3"
     assert any("no single-component fault explains it" in note

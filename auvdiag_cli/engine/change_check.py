@@ -56,6 +56,23 @@ DRIFT_ALLOWANCE = 1.0
 STRIDE_STEPS = 1
 WINDOW, SUM = "window", "sum"
 STATISTICS = (WINDOW, SUM)
+# statistic -> signal -> (above, below): how far normal logs typically go each way
+# (`jobs.change_calibration.way_scales`); a signal without one is judged either way alike.
+WayScales = Mapping[str, Mapping[str, tuple[float, float]]]
+ABOVE, BELOW = " above", " below"
+
+
+def each_way(names: Sequence[str]) -> list[str]:
+    """The names of ``names`` each way apart: every one above, then every one below."""
+    return [*(n + ABOVE for n in names), *(n + BELOW for n in names)]
+
+
+def signal_of(name: str) -> str:
+    """The signal a name of one way is of ("accel_x below" -> "accel_x")."""
+    for way in (ABOVE, BELOW):
+        if name.endswith(way):
+            return name[:-len(way)]
+    return name
 
 
 @dataclass(frozen=True)
@@ -212,17 +229,18 @@ def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray
     return ahead.residual(commands, matching.measured, inputs, cuts)
 
 
-def change_statistics(residual: np.ndarray, window: int, reference_min: int,
-                      found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS
-                      ) -> dict[str, np.ndarray]:
-    """Each statistic per step and signal, as of the last whole window (NaN until the
-    reference is long enough); after the signals' columns, one per signature in ``found``
-    (`change_signatures`: one-sided, a move against it adds nothing). A window ends every
-    ``stride`` steps (a divisor of ``window``; None: ``window``, windows side by side)."""
+def way_statistics(residual: np.ndarray, window: int, reference_min: int,
+                   found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS
+                   ) -> dict[str, np.ndarray]:
+    """Each statistic per step, as of the last whole window (NaN until the reference is
+    long enough), each way apart: every signal above the prediction (z), then every signal
+    below it (−z), then one column per signature in ``found`` (`change_signatures`); each
+    column one-sided, a move against it adds nothing. A window ends every ``stride`` steps
+    (a divisor of ``window``; None: ``window``, windows side by side)."""
     stride = _stride(window, stride)
     ends, z = _standardised(residual, window, reference_min, stride)
-    z, one_sided = with_signatures(z, found)
-    sums = _sums(z, one_sided, window // stride)
+    z, one_sided = with_signatures(np.hstack([z, -z]), found)
+    sums = _sums(z, np.ones_like(one_sided), window // stride)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
         """Each window's value held from its last step until the next window's."""
@@ -232,8 +250,28 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
             out[ends[0]:] = held[:residual.shape[0] - ends[0]]
         return out
 
-    return {WINDOW: on_steps(np.where(one_sided, np.maximum(z, 0.0), np.abs(z))),
-            SUM: on_steps(sums)}
+    return {WINDOW: on_steps(np.maximum(z, 0.0)), SUM: on_steps(sums)}
+
+
+def change_statistics(residual: np.ndarray, window: int, reference_min: int,
+                      found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS,
+                      scales: WayScales | None = None, names: Sequence[str] = ()
+                      ) -> dict[str, np.ndarray]:
+    """Each statistic per step and signal (`way_statistics`): per signal the larger of its
+    two ways, each divided by its scale (``scales``: statistic -> signal of ``names`` ->
+    (above, below), `way_scales`; a signal without one: |z| and the two-sided CUSUM,
+    max(S_above, S_below)); after the signals' columns, the signatures'."""
+    values = way_statistics(residual, window, reference_min, found, stride)
+    n = residual.shape[1]
+    out = {}
+    for statistic, ways in values.items():
+        above, below = ways[:, :n], ways[:, n:2 * n]
+        scaled = (scales or {}).get(statistic, {})
+        if scaled:
+            pairs = np.array([scaled.get(name, (1.0, 1.0)) for name in names]).reshape(n, 2)
+            above, below = above / pairs[:, 0], below / pairs[:, 1]
+        out[statistic] = np.hstack([np.fmax(above, below), ways[:, 2 * n:]])
+    return out
 
 
 def _stride(window: int, stride: int | None) -> int:
@@ -257,13 +295,14 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
                  actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
                  ) -> dict[str, dict[str, float]]:
-    """Each statistic's largest value per signal in a log, and per signature of the
-    ``actuators`` over these signals (NaN where it is never judged): what calibrate sets
-    the thresholds from."""
+    """Each statistic's largest value per signal and way in a log ("roll above", "roll
+    below": `each_way`), and per signature of the ``actuators`` over these signals (NaN
+    where it is never judged): what calibrate sets the ways' scales and the thresholds
+    from."""
     found = signatures(actuators, names)
-    statistics = change_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
-                                   stride)
-    every = [*names, *(s.name for s in found)]
+    statistics = way_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
+                                stride)
+    every = [*each_way(names), *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
                         else float("nan") for i, name in enumerate(every)}
             for statistic, values in statistics.items()}
@@ -284,11 +323,13 @@ def _flagged(ratios: np.ndarray, names: Sequence[str], at: int, window: int
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
                  window: int, dt_s: float, actuators: Sequence[Actuator] = (),
-                 stride: int | None = STRIDE_STEPS) -> ChangeCheck:
+                 stride: int | None = STRIDE_STEPS, scales: WayScales | None = None
+                 ) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
-    threshold (``thresholds``: statistic -> signal -> threshold), and the signatures of
-    the ``actuators`` over them that have one; a window judged every ``stride`` steps
-    (None: windows side by side, as models calibrated before judged them)."""
+    threshold (``thresholds``: statistic -> signal -> threshold), each way divided by its
+    scale (``scales``, `change_statistics`), and the signatures of the ``actuators`` over
+    them that have one; a window judged every ``stride`` steps (None: windows side by side,
+    as models calibrated before judged them)."""
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
@@ -296,7 +337,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
-                                   found, stride)
+                                   found, stride, scales, [names[i] for i in judged])
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     ratios = {}

@@ -301,7 +301,7 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
                      "were set on had, and an alarm here is less certain")
     return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators,
-                        model.card.change_stride)
+                        model.card.change_stride, model.card.change_way_scales)
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

@@ -173,7 +173,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
     model.update_entries(change_test=change_entry(
-        change := change_thresholds(evidence, margin, fitted)))
+        change := change_thresholds(evidence, margin, fitted), evidence.scales))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -310,8 +310,9 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
     if change.trained_not_counted:
         warnings.append(
             f"the change test's statistics the model keeps for the {change.trained_not_counted}"
-            " log(s) it was trained on were measured before the test judged a window every "
-            "step: not counted here; train the model again to count them")
+            " log(s) it was trained on were measured by an earlier form of the test (before "
+            "it judged a window every step, or each way apart): not counted here; train the "
+            "model again to count them")
     for mode in modes:
         if mode.kept_default:
             continue

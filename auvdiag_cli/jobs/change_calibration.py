@@ -2,19 +2,23 @@
 each judged signal's largest S on the normal logs."""
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from auvdiag_cli.engine.change_check import (
+    ABOVE,
+    BELOW,
     REFERENCE_MIN_S,
     STATISTICS,
     STRIDE_STEPS,
     SUM,
     WINDOW,
+    WayScales,
     change_judged,
     change_peaks,
+    signal_of,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.results import Diagnosis
@@ -44,6 +48,9 @@ MIN_FITTED_THRESHOLDS = {WINDOW: 4.0, SUM: 4.0}
 # with this many logs judged or more, it is left out (`without_outliers`).
 DOMINANCE_WARNING = 2.0
 MIN_LOGS_FOR_OUTLIERS = 5
+# Logs that reach both ways of a signal needed to tell how far normal operation goes each
+# way (`way_scales`); with fewer, the two ways are judged alike.
+MIN_LOGS_FOR_WAYS = 5
 # statistic -> signal -> (its largest value on the normal logs, its threshold)
 ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 
@@ -57,7 +64,7 @@ def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Seq
     window = model.card.window_samples or profile.window_samples
     peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
                          profile.actuators)
-    return {statistic: {name: float("nan") if name in set_aside else value
+    return {statistic: {name: float("nan") if signal_of(name) in set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}
 
@@ -84,6 +91,7 @@ class ChangeEvidence:
     outliers: tuple[Outlier, ...] = ()
     trained_on: tuple[str, ...] = ()     # the logs trained on, last in ``peaks``
     trained_not_counted: int = 0         # logs trained on whose peaks are of another stride
+    scales: WayScales = field(default_factory=dict)   # each way's (`way_scales`)
 
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
@@ -91,12 +99,59 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
                     trained: Sequence["TrainedOnPeaks"] = (), trained_not_counted: int = 0
                     ) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
+    ways = [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
+              for d in diagnoses), *({s: dict(v) for s, v in t.peaks.items()} for t in trained)]
+    scales = way_scales(ways, judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
-        [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
-           for d in diagnoses),
-         *({s: dict(v) for s, v in t.peaks.items()} for t in trained)],
-        trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted))
+        [_either_way(p, judged, scales) for p in ways],
+        trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted,
+        scales=scales))
+
+
+def way_scales(peaks: Sequence[dict[str, dict[str, float]]], signals: Sequence[str]
+               ) -> dict[str, dict[str, tuple[float, float]]]:
+    """Per statistic and signal, how far normal logs typically go each way: the median of
+    the logs' largest values above and below the prediction, as a pair whose geometric mean
+    is 1 (the statistic keeps its units). A failure pushes a signal one way, and normal
+    operation need not go as far both ways: on the ALFA flights throttle-ups push the
+    forward acceleration far above the predictor, while nothing normal drops it as an
+    engine cut does; judged by the larger way as it is, its threshold is set by the way
+    normal flying goes furthest. With fewer than MIN_LOGS_FOR_WAYS logs reaching both
+    ways, none: judged either way alike."""
+    scales: dict[str, dict[str, tuple[float, float]]] = {}
+    for statistic in STATISTICS:
+        for name in signals:
+            above, below = ([p.get(statistic, {}).get(name + way, np.nan) for p in peaks]
+                            for way in (ABOVE, BELOW))
+            pairs = [(a, b) for a, b in zip(above, below, strict=True)
+                     if np.isfinite(a) and np.isfinite(b)]
+            if len(pairs) < MIN_LOGS_FOR_WAYS:
+                continue
+            typical = np.median(np.array(pairs), axis=0)
+            if not (typical > 0).all():
+                continue
+            mean = float(np.sqrt(typical.prod()))
+            scales.setdefault(statistic, {})[name] = (round(float(typical[0]) / mean, 4),
+                                                      round(float(typical[1]) / mean, 4))
+    return scales
+
+
+def _either_way(peaks: dict[str, dict[str, float]], signals: Sequence[str],
+                scales: WayScales) -> dict[str, dict[str, float]]:
+    """One log's largest values per signal, the larger of its ways each divided by its
+    scale (a signal's largest over the log is the larger of its ways' largest), and its
+    signatures' as they are."""
+    out: dict[str, dict[str, float]] = {}
+    for statistic, values in peaks.items():
+        combined = {name: value for name, value in values.items()
+                    if signal_of(name) == name}                       # the signatures
+        for name in signals:
+            above, below = scales.get(statistic, {}).get(name, (1.0, 1.0))
+            combined[name] = float(np.fmax(values.get(name + ABOVE, np.nan) / above,
+                                           values.get(name + BELOW, np.nan) / below))
+        out[statistic] = combined
+    return out
 
 
 def _residual(diagnosis: Diagnosis) -> np.ndarray:
@@ -200,9 +255,11 @@ def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[
         for log, which in dominated.items()]
 
 
-def change_entry(thresholds: ChangeThresholds) -> dict[str, object]:
+def change_entry(thresholds: ChangeThresholds, scales: WayScales) -> dict[str, object]:
     """model.json's `change_test` entry."""
     return {"thresholds": {s: {n: t for n, (_, t) in v.items()} for s, v in thresholds.items()},
             "largest_normal": {s: {n: peak for n, (peak, _) in v.items()}
                                for s, v in thresholds.items()},
+            "way_scales": {s: {n: list(pair) for n, pair in v.items()}
+                           for s, v in scales.items()},
             "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS}
