@@ -15,6 +15,7 @@ from auvdiag_cli.engine.change_check import (
     REFERENCE_MIN_S,
     SUM,
     ChangeCheck,
+    change_peaks,
     change_statistics,
     check_change,
 )
@@ -402,3 +403,51 @@ def test_a_law_fitted_to_enough_logs_sets_the_threshold_below_the_margin_rules_f
     # Logs that all stayed quiet fit a law of no spread: its threshold would be 0.
     quiet = thresholds([{SUM: {"climb": 0.0}, WINDOW_Z: {"climb": 2.0}} for _ in range(8)])
     assert quiet[SUM] == MIN_FITTED_THRESHOLDS[SUM]
+
+
+def _bursts_above(seed: int, seconds: float = 150.0) -> np.ndarray:
+    """A normal log's residual whose excursions go above the prediction: noise, with a
+    burst of +2.5 for 2 s every 30 s (a throttle-up's overshoot, say)."""
+    residual = _noise(seconds, signals=1, seed=seed)
+    for start in range(450, residual.shape[0] - 20, 300):
+        residual[start:start + 20, 0] += 2.5
+    return residual
+
+
+def test_each_way_is_scaled_by_how_far_normal_logs_go_that_way():
+    from auvdiag_cli.jobs.change_calibration import MIN_LOGS_FOR_WAYS, way_scales
+
+    reference = round(REFERENCE_MIN_S / DT_S)
+    normal = [_bursts_above(seed) for seed in range(6)]
+    peaks = [change_peaks(r, ["speed"], WINDOW, DT_S) for r in normal]
+    scales = way_scales(peaks, ["speed"])
+    for statistic in (WINDOW_Z, SUM):
+        above, below = scales[statistic]["speed"]
+        assert above > 1.0 > below and above * below == pytest.approx(1.0, abs=1e-3)
+    assert way_scales(peaks[:MIN_LOGS_FOR_WAYS - 1], ["speed"]) == {}
+
+    def thresholds(with_scales: bool) -> dict[str, dict[str, float]]:
+        """1.2 x the largest of each statistic on the normal logs, as judged."""
+        largest: dict[str, float] = {}
+        for residual in normal:
+            for statistic, values in change_statistics(
+                    residual, WINDOW, reference, scales=scales if with_scales else None,
+                    names=["speed"]).items():
+                largest[statistic] = max(largest.get(statistic, 0.0),
+                                         float(np.nanmax(values)))
+        return {statistic: {"speed": 1.2 * value} for statistic, value in largest.items()}
+
+    # A drop that lasts: judged either way, the thresholds the bursts above set hide it for
+    # long; each way scaled by its own, it is found soon after it began.
+    drop = _noise(150.0, signals=1, seed=9)
+    drop[900:, 0] -= 1.0
+    time_s = np.arange(drop.shape[0]) * DT_S
+    alike = check_change(drop, ["speed"], thresholds(False), time_s, WINDOW, DT_S)
+    apart = check_change(drop, ["speed"], thresholds(True), time_s, WINDOW, DT_S,
+                         scales=scales)
+    assert apart.alarm_s is not None and 90.0 <= apart.alarm_s <= 95.0
+    assert alike.judged and (alike.alarm_s is None or alike.alarm_s > apart.alarm_s + 10.0)
+    # A normal log of the same kind passes both.
+    quiet = _bursts_above(11)
+    assert check_change(quiet, ["speed"], thresholds(True), time_s, WINDOW, DT_S,
+                        scales=scales).alarm_s is None
