@@ -63,6 +63,11 @@ def test_calibrate_sets_the_engine_signatures_thresholds(calibrated):
     _, model = calibrated
     for statistic in (WINDOW, SUM):
         assert model.card.change_thresholds[statistic]["engine weakened"] > 0
+    # Two days' flights tell how far normal flying goes each way: throttle-ups push the
+    # forward acceleration above the predictor further than anything normal drops it, so
+    # its sum below is scaled up against the way above.
+    above, below = model.card.change_way_scales[SUM]["accel_x"]
+    assert above > 1.0 > below and above * below == pytest.approx(1.0, abs=1e-3)
 
 
 @pytest.mark.shared_data("alfa")

@@ -418,7 +418,7 @@ def test_each_way_is_scaled_by_how_far_normal_logs_go_that_way():
     from auvdiag_cli.jobs.change_calibration import MIN_LOGS_FOR_WAYS, way_scales
 
     reference = round(REFERENCE_MIN_S / DT_S)
-    normal = [_bursts_above(seed) for seed in range(6)]
+    normal = [_bursts_above(seed) for seed in range(MIN_LOGS_FOR_WAYS + 1)]
     peaks = [change_peaks(r, ["speed"], WINDOW, DT_S) for r in normal]
     scales = way_scales(peaks, ["speed"])
     for statistic in (WINDOW_Z, SUM):

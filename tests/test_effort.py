@@ -400,13 +400,8 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
                "logs trained on) take the margin rule" in warning
                for warning in calibration.warnings)
     assert calibration.change_trained_on == tuple(path.name for path in normal)
-    # Five logs reach both ways of the signals judged: each way is scaled by its own, and
-    # model.json keeps the scales beside the thresholds (a pair whose product is one).
-    scales = model.card.change_way_scales
-    assert scales and set(scales) <= {"window", "sum"}
-    assert all(set(pairs) <= set(calibration.change.get(statistic, {}))
-               and all(a * b == pytest.approx(1.0, abs=1e-3) for a, b in pairs.values())
-               for statistic, pairs in scales.items())
+    # Five logs are too few to tell how far normal operation goes each way: both ways alike.
+    assert not model.card.change_way_scales
     from auvdiag_cli.reports.training import calibration_lines
 
     assert any("largest on these logs and the 3 trained on -> threshold" in line
