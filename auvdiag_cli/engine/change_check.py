@@ -19,7 +19,11 @@ carried on from the window a whole window before it ("sum"):
     S+ = max(0, S+ + z - k),  S- = max(0, S- - z - k),  S = max(S+, S-)
 
 so that a shift that lasts (an engine that stopped pushing, a surface that stuck) builds
-up even when no single window stands out, while noise within the allowance does not. Where
+up even when no single window stands out, while noise within the allowance does not. Each
+way (z and S+ above the prediction, −z and S− below it) is first divided by how far
+normal logs typically go that way (`WayScales`, set by calibrate): a failure pushes a
+signal one way, and where normal operation goes further the other way, that way no longer
+sets the threshold of both. Where
 the profile says which way a part's weakening moves several signals, their signed sum is
 judged as one more signal, one-sided (`change_signatures`). A
 signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
