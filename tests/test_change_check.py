@@ -74,8 +74,9 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
         REFERENCE_MIN_S + (WINDOW - 1) * DT_S, abs=0.05)
     assert 80.0 <= check.alarm_s <= 81.0
     assert check.onset_s == pytest.approx(80.0, abs=check.onset_error_s)
-    assert list(check.flagged) == ["speed"]
+    assert list(check.flagged) == ["speed"] and check.ways == {"speed": "below"}
     assert "changed against the log's own beginning" in check.describe()
+    assert "(below the prediction)" in check.describe()
 
 
 def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_side():
@@ -141,6 +142,7 @@ def test_what_crosses_within_a_window_of_the_alarm_is_flagged_with_it():
     check = _checked(residual)
     assert check.alarm_s is not None and check.alarm_s <= 80.9
     assert set(check.flagged) == {"speed", "yaw"}
+    assert check.ways == {"speed": "above", "yaw": "above"}
     assert check.onset_s == pytest.approx(80.0, abs=0.2)
 
 

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from auvdiag_cli.engine.change_point import shift_start
+from auvdiag_cli.engine.change_point import shift_start, shift_ways
 from auvdiag_cli.engine.change_signatures import Signature, signatures, with_signatures
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.vehicle.actuators import Actuator
@@ -97,6 +97,9 @@ class ChangeCheck:
     evidence: Mapping[str, float] = field(default_factory=dict)
     # Each signature judged (`change_signatures`) -> the signals it sums.
     members: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    # Each flagged signal -> the way its residual moved from the onset ("above" or "below"
+    # the prediction).
+    ways: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def changed(self) -> tuple[str, ...]:
@@ -123,7 +126,9 @@ class ChangeCheck:
             return "no change against the log's own beginning" + (
                 "" if worst is None else f" (largest: {worst} at {ratios[worst]:.0%} of its "
                                          "threshold)")
-        which = ", ".join(f"{n} {r:.1f}x its threshold" for n, r in self.flagged.items())
+        which = ", ".join(f"{n} {r:.1f}x its threshold" + (
+            f" ({self.ways[n]} the prediction)" if n in self.ways else "")
+            for n, r in self.flagged.items())
         return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
                 f"(up to {self.onset_error_s:.1f} s either way), detected at "
                 f"{self.alarm_s:.1f} s: {which}")
@@ -380,6 +385,8 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     error = max(window * dt_s, float(time_s[at]) - onset)
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
+    flagged = _flagged(combined, names_judged, at, window)
     return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
-                       round(onset, 3), round(error, 3),
-                       _flagged(combined, names_judged, at, window), evidence, members)
+                       round(onset, 3), round(error, 3), flagged, evidence, members,
+                       shift_ways(residual, names, [n for n in flagged if n in names], first, at))
+

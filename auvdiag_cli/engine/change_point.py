@@ -1,8 +1,10 @@
 """Where a change most likely began within a log, and how sure: shared by the change test
 (a signal's residual against the log's own beginning) and the effort check (an actuator's
-share of its group's effort against the log before a later start)."""
+share of its group's effort against the log before a later start); and which way a
+signal's residual moved from there."""
 
 import math
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -44,3 +46,16 @@ def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: flo
     earliest = float(start_times[first - 1]) if first > 0 else at - stride_s
     latest = seen_s if last == len(z) - 1 else float(start_times[last + 1])
     return min(earliest, at - stride_s), min(max(latest, at + stride_s), max(seen_s, at))
+
+
+def shift_ways(residual: np.ndarray, names: Sequence[str], flagged: Sequence[str],
+               onset: int, at: int) -> dict[str, str]:
+    """Which way each flagged signal's residual moved: its mean from the onset to the alarm
+    against its mean before the onset."""
+    ways = {}
+    for name in flagged:
+        column = residual[:, list(names).index(name)]
+        before, after = column[:onset], column[onset:at + 1]
+        if np.isfinite(before).any() and np.isfinite(after).any():
+            ways[name] = "above" if np.nanmean(after) > np.nanmean(before) else "below"
+    return ways

@@ -125,6 +125,8 @@ class ChangePart:
     onset_error_s: float | None = None
     flagged: Numbers = field(default_factory=dict)
     carried: Numbers = field(default_factory=dict)
+    # Each flagged signal -> the way it moved from the onset ("above", "below" the prediction).
+    ways: Mapping[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, kw_only=True)

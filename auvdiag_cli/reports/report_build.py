@@ -200,7 +200,7 @@ def _change_check(check: ChangeCheck | None) -> ChangePart | None:
         thresholds={s: dict(v) for s, v in check.thresholds.items()},
         peaks={s: dict(v) for s, v in check.peaks.items()}, alarm_s=check.alarm_s,
         onset_s=check.onset_s, onset_error_s=check.onset_error_s, flagged=dict(check.flagged),
-        carried=dict(check.evidence))
+        carried=dict(check.evidence), ways=dict(check.ways))
 
 
 def _actuators(check: EffortCheck | None) -> ActuatorsPart | None:
