@@ -71,6 +71,13 @@ def each_way(names: Sequence[str]) -> list[str]:
     return [*(n + ABOVE for n in names), *(n + BELOW for n in names)]
 
 
+def larger_way(above: np.ndarray | float, below: np.ndarray | float,
+               scale: tuple[np.ndarray | float, np.ndarray | float] = (1.0, 1.0)
+               ) -> np.ndarray:
+    """A signal's statistic: the larger of its two ways, each divided by its scale."""
+    return np.asarray(np.fmax(np.asarray(above) / scale[0], np.asarray(below) / scale[1]))
+
+
 def signal_of(name: str) -> str:
     """The signal a name of one way is of ("accel_x below" -> "accel_x")."""
     for way in (ABOVE, BELOW):
@@ -274,12 +281,12 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
     n = residual.shape[1]
     out = {}
     for statistic, ways in values.items():
-        above, below = ways[:, :n], ways[:, n:2 * n]
         scaled = (scales or {}).get(statistic, {})
-        if scaled:
-            pairs = np.array([scaled.get(name, (1.0, 1.0)) for name in names]).reshape(n, 2)
-            above, below = above / pairs[:, 0], below / pairs[:, 1]
-        out[statistic] = np.hstack([np.fmax(above, below), ways[:, 2 * n:]])
+        pairs = np.array([scaled.get(name, (1.0, 1.0)) for name in names]).reshape(-1, 2) \
+            if scaled else np.ones((n, 2))
+        out[statistic] = np.hstack([larger_way(ways[:, :n], ways[:, n:2 * n],
+                                               (pairs[:, 0], pairs[:, 1])),
+                                    ways[:, 2 * n:]])
     return out
 
 

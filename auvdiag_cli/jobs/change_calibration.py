@@ -18,6 +18,7 @@ from auvdiag_cli.engine.change_check import (
     WayScales,
     change_judged,
     change_peaks,
+    larger_way,
     signal_of,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
@@ -93,7 +94,7 @@ class ChangeEvidence:
     peaks: list[dict[str, dict[str, float]]]
     outliers: tuple[Outlier, ...] = ()
     trained_on: tuple[str, ...] = ()     # the logs trained on, last in ``peaks``
-    trained_not_counted: int = 0         # logs trained on whose peaks are of another stride
+    trained_not_counted: int = 0         # logs trained on whose peaks are of another form
     scales: WayScales = field(default_factory=dict)   # each way's (`way_scales`)
 
 
@@ -150,9 +151,9 @@ def _either_way(peaks: dict[str, dict[str, float]], signals: Sequence[str],
         combined = {name: value for name, value in values.items()
                     if signal_of(name) == name}                       # the signatures
         for name in signals:
-            above, below = scales.get(statistic, {}).get(name, (1.0, 1.0))
-            combined[name] = float(np.fmax(values.get(name + ABOVE, np.nan) / above,
-                                           values.get(name + BELOW, np.nan) / below))
+            combined[name] = float(larger_way(
+                values.get(name + ABOVE, np.nan), values.get(name + BELOW, np.nan),
+                scales.get(statistic, {}).get(name, (1.0, 1.0))))
         out[statistic] = combined
     return out
 
