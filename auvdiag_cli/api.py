@@ -119,11 +119,15 @@ def _quiet(_: str) -> None:
     """No progress reports."""
 
 
-def load_profile(profile: str | Path | None = None) -> Profile:
+def load_profile(profile: str | Path | None = None, *, model: Path | None = None) -> Profile:
     """A built-in profile by name (`auvdiag scenarios`' vehicles: twin_burger, bluerov2, …),
-    a profile TOML file, or None for the Twin-Burger of the paper."""
+    a profile TOML file, or None: the profile ``model`` (a model directory) was trained
+    with, as its model.json records it, else the Twin-Burger of the paper."""
     from auvdiag_cli.vehicle.profile import load_profile as read_profile
+    from models.store import trained_profile
 
+    if profile is None and model is not None:
+        profile = trained_profile(model)
     return read_profile(None if profile is None else Path(profile))
 
 

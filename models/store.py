@@ -262,6 +262,25 @@ def _read_weights(directory: Path, version: int) -> dict[str, np.ndarray]:
         return {name: archive[name] for name in archive.files}
 
 
+def trained_profile(directory: Path) -> Path | None:
+    """The profile a model directory was trained with, as its model.json records it: a
+    built-in profile's name, or its file (a ModelFileError where that file is gone); None
+    where it records none or cannot be read (loading the model reports what is wrong)."""
+    try:
+        recorded = json.loads((directory / METADATA_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    where = recorded.get("profile") if isinstance(recorded, dict) else None
+    if not isinstance(where, str) or not where:
+        return None
+    if where.startswith("builtin:"):
+        return Path(where.removeprefix("builtin:"))
+    if not Path(where).is_file():
+        raise ModelFileError(f"{directory}: trained with the profile {where}, which is not "
+                             "there: pass the vehicle's profile with --profile")
+    return Path(where)
+
+
 def load_model(directory: Path | None = None, vehicle: str = "twin-burger") -> LoadedModel:
     """Load a model directory, or when ``directory`` is None the model shipped for
     ``vehicle`` (a profile's ``vehicle.name``)."""

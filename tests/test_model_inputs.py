@@ -6,6 +6,7 @@ without it."""
 
 import csv
 import json
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -170,6 +171,28 @@ def test_a_model_driven_by_an_input_refuses_a_profile_without_it(pitched: dict[s
     assert "driven by the measured inputs ['pitch']" in result.output
     assert "train the model with this profile" in result.output
     assert str(log) in result.output
+
+
+def test_a_model_given_alone_reads_logs_by_the_profile_it_was_trained_with(
+        pitched: dict[str, Path]):
+    folder = pitched["folder"]
+    log = write_pitched_vehicle(folder / "alone.csv", 22, 60.0)
+    given = runner.invoke(app, ["diagnose", str(log), "--model", str(pitched["model"]),
+                                "--profile", str(pitched["with"])])
+    alone = runner.invoke(app, ["diagnose", str(log), "--model", str(pitched["model"])])
+    assert alone.exit_code == given.exit_code != 2, alone.output
+    assert alone.stdout == given.stdout
+    assert "driven also by the measured pitch" in alone.stdout
+    # A copy of the model whose profile file is gone: the user is asked which it is.
+    moved = folder / "moved_model"
+    shutil.copytree(pitched["model"], moved)
+    meta = json.loads((moved / "model.json").read_text())
+    meta["profile"] = str(folder / "gone.toml")
+    (moved / "model.json").write_text(json.dumps(meta))
+    refused = runner.invoke(app, ["diagnose", str(log), "--model", str(moved)])
+    assert refused.exit_code == 2
+    (line,) = refused.output.strip().splitlines()
+    assert str(moved) in line and "gone.toml" in line and "--profile" in line
 
 
 def test_inspect_says_the_input_is_averaged_and_drives_the_model(pitched: dict[str, Path]):

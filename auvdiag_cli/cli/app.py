@@ -34,11 +34,15 @@ app = typer.Typer(
 ModelOption = Annotated[Path | None, typer.Option(
     "--model", help="Model directory (default: the model shipped for the profile's vehicle).",
     file_okay=False)]
+_PROFILES = ("Vehicle profile TOML, or a built-in one by name: "
+             + ", ".join(f"{name} (the default)" if name == "twin_burger" else name
+                         for name in builtin_profiles()) + ".")
 ProfileOption = Annotated[Path | None, typer.Option(
-    "--profile", help="Vehicle profile TOML, or a built-in one by name: "
-                      + ", ".join(f"{name} (the default)" if name == "twin_burger" else name
-                                  for name in builtin_profiles()) + ".",
-    dir_okay=False)]
+    "--profile", help=_PROFILES, dir_okay=False)]
+# Where a model is given, the profile it was trained with is the one its logs are read by.
+ModelProfileOption = Annotated[Path | None, typer.Option(
+    "--profile", help=_PROFILES.replace("(the default)", "(the default without --model)")
+    + " Default with --model: the profile the model was trained with.", dir_okay=False)]
 
 ModelToUpdateOption = Annotated[Path, typer.Option(
     "--model", help="Model directory to update.", file_okay=False, exists=True)]

@@ -13,7 +13,7 @@ from auvdiag_cli.cli.app import (
     EXIT_NORMAL,
     EXIT_UNUSABLE,
     ModelOption,
-    ProfileOption,
+    ModelProfileOption,
     app,
     fail,
     user_errors,
@@ -30,7 +30,7 @@ def diagnose(
                                              ".tlog, DataFlash .bin, PX4 ULog .ulg or CSV "
                                              "with a header row.")],
     model: ModelOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
     json_path: Annotated[str | None, typer.Option(
         "--json", help="Write the JSON report to PATH, or to standard output with '-'. "
                        "Beside a JSON file go its time histories (NAME.series.npz), from "
@@ -69,7 +69,7 @@ def diagnose(
 
     with user_errors(log):
         api.log_format(log)   # a bad path is reported before the model is even loaded
-        vehicle = api.load_profile(profile)
+        vehicle = api.load_profile(profile, model=model)
         try:
             result = api.diagnose(log, vehicle, api.load_model(model, vehicle),
                                   companions=companions or (), mission=mission, truth=truth)
@@ -144,7 +144,7 @@ def audit(
     output: Annotated[Path, typer.Option("--output", "-o", help="Folder for the results.",
                                          file_okay=False)],
     model: ModelOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
     jobs: Annotated[int, typer.Option(
         "--jobs", "-j", help="Logs diagnosed side by side (default: all cores).", min=1)
     ] = os.cpu_count() or 1,
@@ -184,7 +184,7 @@ def audit(
 
     signal.signal(signal.SIGTERM, _terminate_as_interrupt)
     with user_errors(output):
-        vehicle = api.load_profile(profile)
+        vehicle = api.load_profile(profile, model=model)
         result = api.audit(paths, vehicle, api.load_model(model, vehicle), output, jobs=jobs,
                            mcap=mcap, scheduler=scheduler, progress=reporter_for_stderr(),
                            vehicle_from=vehicle_from)

@@ -11,6 +11,7 @@ from auvdiag_cli.cli.app import (
     HealthyOption,
     HoldoutOption,
     HorizonOption,
+    ModelProfileOption,
     ModelToUpdateOption,
     ProfileOption,
     app,
@@ -106,7 +107,7 @@ def score(
     model: ModelToUpdateOption,
     horizon: HorizonOption = None,
     output: CopyOutputOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
 ) -> None:
     """Measure an existing model's skill per signal on normal logs and record it.
 
@@ -117,7 +118,7 @@ def score(
     from auvdiag_cli.reports.training import skill_lines
 
     with user_errors(model):
-        vehicle = api.load_profile(profile)
+        vehicle = api.load_profile(profile, model=model)
         loaded = api.load_model(model, vehicle)
         scores, chosen = api.score(logs, vehicle, loaded,
                                    horizon_s=horizon_option(horizon, vehicle.horizon_s),
@@ -136,7 +137,7 @@ def relate(
     model: ModelToUpdateOption,
     holdout: HoldoutOption = None,
     output: CopyOutputOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
 ) -> None:
     """Learn how the vehicle's commands follow its motion, and where its logs start.
 
@@ -151,7 +152,7 @@ def relate(
     from auvdiag_cli.reports.training import relation_lines, start_lines
 
     with user_errors(model):
-        vehicle = api.load_profile(profile)
+        vehicle = api.load_profile(profile, model=model)
         loaded = api.load_model(model, vehicle)
         relations, start = api.relate(logs, vehicle, loaded, holdout=holdout or (),
                                       progress=report_progress)
@@ -181,7 +182,7 @@ def calibrate(
     margin: Annotated[float, typer.Option(help="Threshold = margin x largest normal g.")
                       ] = 1.5,
     output: CopyOutputOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
     floor_at_profile: Annotated[bool, typer.Option(
         "--floor-at-profile", help="Never set a threshold below the profile's for its mode "
                                    "(for few calibration logs, or signals a DMS hardly moves)."
@@ -220,7 +221,7 @@ def calibrate(
     with user_errors(model):
         budget = (None if false_alarm_rate is None
                   else api.FalseAlarmBudget.parse(false_alarm_rate))
-        vehicle = api.load_profile(profile)
+        vehicle = api.load_profile(profile, model=model)
         loaded = api.load_model(model, vehicle)
         result = api.calibrate(logs, vehicle, loaded, faulty_logs=faulty or (),
                                options=api.CalibrateOptions(margin, budget, floor_at_profile,

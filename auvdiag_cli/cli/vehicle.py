@@ -11,6 +11,7 @@ from auvdiag_cli.cli.app import (
     EXIT_NORMAL,
     EXIT_UNUSABLE,
     ModelOption,
+    ModelProfileOption,
     ProfileOption,
     app,
     fail,
@@ -141,7 +142,7 @@ def init_profile(
 @app.command("derive-table")
 def derive_table(
     model: ModelOption = None,
-    profile: ProfileOption = None,
+    profile: ModelProfileOption = None,
     json_path: Annotated[Path | None, typer.Option(
         "--json", help="Also write the signatures and the table as JSON.", dir_okay=False)
     ] = None,
@@ -163,7 +164,7 @@ def derive_table(
     from auvdiag_cli.reports.derivation import derivation_lines
 
     with user_errors(log or model or "builtin model"):
-        loaded_profile = api.load_profile(profile)
+        loaded_profile = api.load_profile(profile, model=model)
         result = api.derive_table(log, loaded_profile, api.load_model(model, loaded_profile))
     for line in derivation_lines(result, loaded_profile.sensor_names):
         typer.echo(line)

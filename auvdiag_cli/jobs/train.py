@@ -316,6 +316,13 @@ def _input_entries(profile: Profile, training: Sequence[ScoringLog]) -> list[dic
             for k, i in enumerate(profile.inputs)]
 
 
+def _where(profile: Profile) -> str:
+    """Where the profile came from, as commands given only --model find it again: a
+    built-in name, or its file's absolute path."""
+    where = profile.source_path
+    return where if where.startswith("builtin:") else str(Path(where).resolve())
+
+
 def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
               training: Sequence[ScoringLog], heldout: Sequence[ScoringLog],
               result: TrainingResult, stages: Sequence[Any], seed: int) -> dict[str, Any]:
@@ -323,7 +330,7 @@ def _metadata(output: Path, profile: Profile, training_paths: Sequence[Path],
     return {
         "name": output.name,
         "vehicle": profile.name,
-        "profile": profile.source_path,
+        "profile": _where(profile),
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "tool_version": __version__,
         "dt_s": profile.dt_s,
