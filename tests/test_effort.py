@@ -371,9 +371,15 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
 
     profile = api.load_profile("arducopter_quad")
     normal = [flown(name, 5) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
-    api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
+    trained = api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
         iterations_scale=0.05, hidden=8, keep_unskilled=True,
         predictors=("linear", "linear-replay")), progress=lambda _: None)
+    # The commands against the motion cannot tell the rotors apart; train says what can.
+    from auvdiag_cli.reports.training import training_lines
+    lines = training_lines(trained, {}, profile.command_names, profile.sensor_names)
+    assert ("  motor_1 and motor_2 and motor_3 and motor_4 act alike on the vehicle: this "
+            "check names a weakness as either (the effort shares of rotors tell them apart)"
+            in lines), lines
     # The model keeps the change test's largest statistics on the three it was trained on,
     # as strict JSON (a statistic never judged is null, not NaN).
     def no_constants(name: str) -> float:

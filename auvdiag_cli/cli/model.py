@@ -159,7 +159,7 @@ def relate(
         relations_refused = isinstance(relations, api.Refused)
         if not relations_refused or start.refused is None:
             api.save_model(loaded, output or model)
-    for line in [*relation_lines(relations, vehicle.command_names),
+    for line in [*relation_lines(relations, vehicle.command_names, vehicle.effort_groups),
                  *start_lines(start, vehicle.sensor_names)]:
         typer.echo(line)
     if relations_refused and start.refused is not None:

@@ -15,7 +15,7 @@ from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
-from models.effort import GroupFit, Thresholds, smallest_rise
+from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
 from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
@@ -95,7 +95,9 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
-    return lines + relation_lines(result.command_relations, command_names) + start_lines(
+    groups = ([] if isinstance(result.effort, Refused)
+              else [setup.group for setup in result.effort.setups])
+    return lines + relation_lines(result.command_relations, command_names, groups) + start_lines(
         result.start_state, sensor_names) + effort_lines(result.effort) + [
         f"  left out: {note}" for note in result.effort_notes]
 
@@ -105,10 +107,11 @@ def _listed(names: Sequence[str], most: int = 5) -> str:
     return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
 
 
-def relation_lines(relations: CommandRelations | Refused,
-                   command_names: Sequence[str]) -> list[str]:
+def relation_lines(relations: CommandRelations | Refused, command_names: Sequence[str],
+                   effort_groups: Sequence[EffortGroup] = ()) -> list[str]:
     """How the commands follow the motion: learned from which logs, and the extra effort
-    each actuator may show before it is called weakened."""
+    each actuator may show before it is called weakened (and, for actuators this check
+    cannot tell apart, the ``effort_groups`` whose shares can)."""
     if isinstance(relations, Refused):
         return [f"commands not judged against the motion: {relations.reason}"]
     fitted = relations.fitted_on
@@ -131,8 +134,11 @@ def relation_lines(relations: CommandRelations | Refused,
                        "none") + shorter
         lines.append(f"  {name:<14}{allowed}" + ("" if math.isnan(skill) else
                                                  f"   (skill {skill:.2f})"))
-    lines += [f"  {' and '.join(g)} act alike on the vehicle: a weakness is named as either"
-              for g in groups]
+    for g in groups:
+        apart = [e.name for e in effort_groups if set(g) <= set(e.members)]
+        lines.append(f"  {' and '.join(g)} act alike on the vehicle: this check names a "
+                     "weakness as either" + (f" (the effort shares of {apart[0]} tell them "
+                                             "apart)" if apart else ""))
     return lines
 
 
