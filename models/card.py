@@ -213,6 +213,8 @@ class ModelCard:
     ahead: AheadPredictor | None = None
     # The change test's largest statistics on the logs trained on (none: trained before).
     change_training: ChangeTraining = field(default_factory=ChangeTraining)
+    # The UTC days of the normal logs calibrate set the thresholds on (none: not known).
+    calibration_days: tuple[str, ...] = ()
     # model.json as the card writes it back: every entry, the records kept for people
     # (how it was trained and calibrated) among them, as JSON text so that it stays frozen.
     document_text: str = field(default="{}", repr=False, compare=False)
@@ -310,4 +312,5 @@ class ModelCard:
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
+            calibration_days=tuple(str(day) for day in calibration.get("days", [])),
             document_text=json.dumps(meta))

@@ -68,6 +68,19 @@ def test_calibrate_to_a_copy_leaves_the_model_alone(make_log, tmp_path):
     # says both.
     assert "1 calibration log(s): the margin times the largest" in result.output
     assert "every calibration log was recorded on 2026-11-22" in result.output
+    # A report of another day's log says its thresholds have seen one day; of that day, not.
+    assert json.loads((copy / "model.json").read_text())["calibration"]["days"] == [
+        "2026-11-22"]
+    later = tmp_path / "later.mcap"
+    flown = runner.invoke(app, ["simulate", "paper-normal", "-o", str(later), "--format",
+                                "mcap", "--seed", "61", "--start", "2026-11-24T09:00:00Z"])
+    assert flown.exit_code == 0, flown.output
+    for log, said in ((later, True), (make_log("paper-normal", 62), False)):
+        report = runner.invoke(app, ["diagnose", str(log), "--model", str(copy), "-q",
+                                     "--json", "-"])
+        notes = json.loads(report.stdout)["notes"]
+        assert any("set on normal logs of one day (2026-11-22) and this log is of 2026-11-24"
+                   in note for note in notes) == said, notes
     bad = runner.invoke(app, ["calibrate", str(make_log("paper-normal", 61)), "--model",
                               str(model), "--margin", "0.5"])
     assert bad.exit_code == 2 and "margin below 1" in bad.stderr

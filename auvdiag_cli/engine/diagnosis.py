@@ -2,7 +2,6 @@
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -41,13 +40,13 @@ from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
-    EPOCH_CLOCK_NS,
     Diagnosis,
     Finding,
     Observations,
     SegmentResult,
     Verdict,
     dms_runs,
+    utc_day,
 )
 from auvdiag_cli.engine.segments import (
     ROUTINE_MODE,
@@ -134,12 +133,22 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
     a, b = main.signals, other.signals
     if a.start_ns < b.end_ns and b.start_ns < a.end_ns:
         return "it overlaps this log in time (one vehicle cannot fly two dives at once)"
-    if min(a.start_ns, b.start_ns) > EPOCH_CLOCK_NS:
-        day_a = datetime.fromtimestamp(a.start_ns / 1e9, UTC).date()
-        day_b = datetime.fromtimestamp(b.start_ns / 1e9, UTC).date()
-        if day_a != day_b:
-            return f"recorded on {day_b}, this log on {day_a}"
+    day_a, day_b = utc_day(a.start_ns), utc_day(b.start_ns)
+    if day_a and day_b and day_a != day_b:
+        return f"recorded on {day_b}, this log on {day_a}"
     return None
+
+
+def _calibrated_on_another_day(days: Sequence[str], start_ns: int) -> list[str]:
+    """A note where every normal log the thresholds were set on is of one day and this log
+    of another: that day's wind, sea or payload is all they have seen."""
+    day = utc_day(start_ns)
+    if len(days) != 1 or day is None or day == days[0]:
+        return []
+    return [f"the thresholds were set on normal logs of one day ({days[0]}) and this log is "
+            f"of {day}: another day's conditions (wind or current, sea state, payload) may "
+            "move it further than they allow, so an alarm here is less certain; calibrate "
+            "on normal logs of several days"]
 
 
 def _inputs_held(log: IngestedLog, model: LoadedModel) -> IngestedLog:
@@ -209,6 +218,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     if model.skill is None:
         notes.append("the model has no skill scores (trained before they were measured): "
                      "every signal is judged; 'auvdiag score' measures them")
+    notes += _calibrated_on_another_day(model.card.calibration_days, signals.start_ns)
     seen = Observations(
         log=signals.path, format=signals.format, vehicle=profile.name,
         segments=tuple(_segment_results(segments, frame.time_s, matching, b_series,

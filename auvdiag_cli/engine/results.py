@@ -3,6 +3,7 @@ histories the reports draw. Rendering reads these values and never recomputes th
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
+from datetime import UTC, datetime
 from enum import StrEnum
 from pathlib import Path
 
@@ -23,6 +24,14 @@ from auvdiag_cli.engine.substitution import Substitution
 from models.card import ModelIdentity
 
 EPOCH_CLOCK_NS = 10**17     # larger times are Unix time; smaller ones count from boot
+
+
+def utc_day(time_ns: int) -> str | None:
+    """The UTC day (ISO date) of a time on a log's clock; None on a clock since boot."""
+    if time_ns <= EPOCH_CLOCK_NS:
+        return None
+    return datetime.fromtimestamp(time_ns / 1e9, UTC).date().isoformat()
+
 PAPER_ASSUMPTIONS = (
     "The environment is steady: a change in how the vehicle moves comes only from its hardware.",
     "At most one sensor or actuator is defective at a time.",

@@ -52,7 +52,7 @@ from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
 from auvdiag_cli.jobs.operating import read_operating
 from auvdiag_cli.jobs.relate import relation_log, widen_thresholds
-from auvdiag_cli.jobs.thin_evidence import thin_evidence
+from auvdiag_cli.jobs.thin_evidence import thin_evidence, utc_days
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
 from auvdiag_errors import UsageError
@@ -187,7 +187,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
-        fitted, change, evidence.trained_on)
+        fitted, change, evidence.trained_on, utc_days(ingested))
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result

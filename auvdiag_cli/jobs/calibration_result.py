@@ -70,6 +70,7 @@ class CalibrationResult:
     # empty where no log is long enough to judge it.
     change: ChangeThresholds = field(default_factory=dict)
     change_trained_on: tuple[str, ...] = ()   # logs trained on whose peaks it counted too
+    days: tuple[str, ...] = ()     # the UTC days of the normal logs (none: not UTC clocks)
 
 
 
@@ -89,6 +90,7 @@ def calibration_record(result: CalibrationResult, normal_logs: Sequence[Path],
         "margin": result.margin,
         "floor_at_profile": floor_at_profile,
         "normal_logs": [p.name for p in normal_logs],
+        "days": list(result.days),
         "in_sample_logs": result.in_sample_logs,
         "change_test_also_on_logs_trained_on": list(result.change_trained_on),
         "widening": result.widening,

@@ -2,10 +2,9 @@
 may differ: too few of them for the margin rule, or all of one day."""
 
 from collections.abc import Sequence
-from datetime import UTC, datetime
 
 from auvdiag_cli.engine.ingest import IngestedLog
-from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
+from auvdiag_cli.engine.results import utc_day
 from models.false_alarms import MIN_LOGS
 
 
@@ -27,11 +26,17 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
                         "training logs count too: their in-sample g is widened)"
                         + ("" if budgeted else ", or set --false-alarm-rate, which fits each "
                            "signal's g to blocks of these logs"))
-    starts = [log.signals.start_ns for log in logs]
-    days = {datetime.fromtimestamp(start / 1e9, UTC).date() for start in starts}
-    if starts and min(starts) > EPOCH_CLOCK_NS and len(days) == 1:
-        warnings.append(f"every calibration log was recorded on {days.pop()}: the thresholds "
+    days = utc_days(logs)
+    if len(days) == 1:
+        warnings.append(f"every calibration log was recorded on {days[0]}: the thresholds "
                         "have seen one day's conditions (wind or current, sea state, payload), "
                         "and logs of other days may reach past them; calibrate on logs of "
                         "several days")
     return warnings
+
+
+def utc_days(logs: Sequence[IngestedLog]) -> tuple[str, ...]:
+    """The UTC days (ISO dates) the logs were recorded on, where every log's clock is UTC
+    (none where one is a clock since boot: its day is not known)."""
+    days = [utc_day(log.signals.start_ns) for log in logs]
+    return () if None in days else tuple(sorted({day for day in days if day}))
