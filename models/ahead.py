@@ -17,7 +17,12 @@ log, so a failure that changes how the vehicle moves — an engine that stops pu
 surface that sticks — stands out against the log's own beginning within seconds
 (docs/results.md measures both on the ALFA flights). This is the recursive-least-squares
 idea of the fault-detection literature in its simplest form: one fit to the normal logs,
-judged within each log.
+judged within each log. A straight line does not extrapolate: each feature is held within
+the range the fit saw (`AheadPredictor.ranges`), as the controller it stands for saturates.
+On ALFA one flight whose altitude target is 83 m off in its first sample (the autopilot
+taking over) had the fit to the other flights of its day predict a climb of 50 m/s there,
+and that one step set the climb's skill, measured on the logs left out, at 0.00 (0.42 held
+within range): the change test of a model of that day's flights then left the climb out.
 """
 
 from collections.abc import Mapping, Sequence
@@ -28,6 +33,10 @@ import numpy as np
 
 AHEAD_S = 0.5
 CROSS_FOLDS = 5      # groups of logs its skill is measured on, each left out in turn
+# Each feature is held within the range the fit saw, widened by this share of its width
+# each side: a log a little beyond the others is predicted as the line says, one far
+# beyond (a target reset as an autopilot takes over) as the edge of what was seen.
+RANGE_MARGIN = 0.25
 
 
 @dataclass(frozen=True)
@@ -38,6 +47,10 @@ class AheadPredictor:
     weights: np.ndarray       # (features, n_sensors), physical units
     skill: Mapping[str, float]   # per signal on held-out data: 1 - rms error / rms change
     inputs: int = 0           # measured inputs in the state (a model fitted before: none)
+    # (2, features - 1): each feature's lowest and highest over the rows fitted (the constant
+    # aside), widened by RANGE_MARGIN; None: a model fitted before, whose features were never
+    # held.
+    ranges: np.ndarray | None = None
 
     @property
     def lag(self) -> int:
@@ -51,6 +64,8 @@ class AheadPredictor:
         state = _state(sensors, inputs if self.inputs else None)
         rows, features, change = _design(commands, state, sensors.shape[1], self.steps,
                                          self.lag, cuts, each_signal=True)
+        if self.ranges is not None:
+            features[:, :-1] = np.clip(features[:, :-1], self.ranges[0], self.ranges[1])
         out = np.full(sensors.shape, np.nan)
         out[rows + self.steps] = change - features @ self.weights
         return out
@@ -60,7 +75,8 @@ class AheadPredictor:
                 "features": "s(k), s(k)-s(k-lag), c(k), c(k+steps//2), c(k+steps), 1 "
                             "(s: the sensors, then the measured inputs)",
                 "weights": np.round(self.weights, 9).tolist(),
-                "heldout_skill": {n: round(v, 4) for n, v in self.skill.items()}}
+                "heldout_skill": {n: round(v, 4) for n, v in self.skill.items()},
+                **({} if self.ranges is None else {"feature_range": self.ranges.tolist()})}
 
     @classmethod
     def from_json(cls, entry: Mapping[str, Any], n_commands: int, n_sensors: int,
@@ -73,9 +89,15 @@ class AheadPredictor:
             raise ValueError(f"ahead predictor weights of shape {weights.shape} with "
                              f"{inputs} inputs do not fit {n_commands} commands, "
                              f"{n_sensors} signals and {n_inputs} inputs")
+        ranges = None if "feature_range" not in entry else np.asarray(entry["feature_range"],
+                                                                      dtype=float)
+        if ranges is not None and (ranges.shape != (2, len(weights) - 1)
+                                   or not (ranges[0] <= ranges[1]).all()):
+            raise ValueError(f"ahead predictor feature ranges of shape {ranges.shape} do not "
+                             f"fit its {len(weights)} features")
         return cls(int(entry["ahead_s_steps"]), weights,
                    {str(k): float(v) for k, v in entry.get("heldout_skill", {}).items()},
-                   inputs)
+                   inputs, ranges)
 
 
 def _state(sensors: np.ndarray, inputs: np.ndarray | None) -> np.ndarray:
@@ -119,9 +141,10 @@ class AheadLog:
 
 
 def _weights(logs: Sequence[AheadLog], n_sensors: int, steps: int, lag: int
-             ) -> np.ndarray | None:
-    """Least squares, each log with its own constant (`fit_ahead`); None where the logs
-    hold too few complete rows."""
+             ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Least squares, each log with its own constant (`fit_ahead`), and the range each
+    feature is held within (`RANGE_MARGIN`); None where the logs hold too few complete
+    rows."""
     fed = [_fed(log.state) for log in logs]
     parts = [_design(log.commands, np.where(f, log.state, 0.0), n_sensors, steps, lag, log.cuts)
              for log, f in zip(logs, fed, strict=True)]
@@ -139,7 +162,10 @@ def _weights(logs: Sequence[AheadLog], n_sensors: int, steps: int, lag: int
         solved, *_ = np.linalg.lstsq(features[rows], change[rows, signal], rcond=None)
         fed_logs = np.unique(rows_of[rows])
         weights[:, signal] = np.append(solved[:-len(parts)], solved[-len(parts):][fed_logs].mean())
-    return weights
+    seen = features[:, :-len(parts)]
+    low, high = seen.min(axis=0), seen.max(axis=0)
+    margin = RANGE_MARGIN * (high - low)
+    return weights, np.vstack([low - margin, high + margin])
 
 
 def _errors(predictor: AheadPredictor, logs: Sequence[AheadLog]
@@ -167,21 +193,23 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
     own changes there are left out of its fit: they say nothing of how it moves."""
     steps = max(1, round(AHEAD_S / dt_s))
     lag = max(1, steps // 2)
-    weights = _weights(logs, len(names), steps, lag)
-    if weights is None:
+    fitted = _weights(logs, len(names), steps, lag)
+    if fitted is None:
         return None
     n_inputs = 0 if not logs or logs[0].inputs is None else logs[0].inputs.shape[1]
-    errors, held = _errors(AheadPredictor(steps, weights, {}, n_inputs), heldout)
+    errors, held = _errors(AheadPredictor(steps, fitted[0], {}, n_inputs, fitted[1]),
+                           heldout)
     if not heldout and len(logs) > 1:
         for group in np.array_split(np.arange(len(logs)), min(CROSS_FOLDS, len(logs))):
             others = _weights([log for i, log in enumerate(logs) if i not in group],
                               len(names), steps, lag)
             if others is not None:
-                more, sensors = _errors(AheadPredictor(steps, others, {}, n_inputs),
-                                        [logs[i] for i in group])
+                more, sensors = _errors(AheadPredictor(steps, others[0], {}, n_inputs,
+                                                       others[1]), [logs[i] for i in group])
                 errors += more
                 held += sensors
-    return AheadPredictor(steps, weights, _skill(errors, held, steps, names), n_inputs)
+    return AheadPredictor(steps, fitted[0], _skill(errors, held, steps, names), n_inputs,
+                          fitted[1])
 
 
 def _column_means(values: np.ndarray) -> np.ndarray:

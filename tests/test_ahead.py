@@ -158,3 +158,34 @@ def test_without_held_out_logs_its_skill_is_each_logs_from_a_fit_to_the_others()
     strange = [*logs[:3], AheadLog(*_closed_loop(120.0, 5, gain=0.3))]
     odd = fit_ahead(strange, NAMES, DT_S)
     assert odd is not None and odd.skill["rate"] < crossed.skill["rate"] - 0.05
+
+
+def test_a_feature_beyond_anything_fitted_is_held_at_the_edge_of_what_was():
+    # Four logs of the loop pushed by a measured input; in one, the input's first sample is
+    # far off (an autopilot's altitude target before it takes over).
+    logs = [_loop_pushed_by_a_measured_input(120.0, seed) for seed in range(4)]
+    clean = fit_ahead([AheadLog(*log) for log in logs], NAMES, DT_S)
+    commands, sensors, measured = logs[0]
+    jumped = measured.copy()
+    jumped[0] = 1000 * measured.std()
+    odd = fit_ahead([AheadLog(commands, sensors, jumped), *(AheadLog(*log) for log in logs[1:])],
+                    NAMES, DT_S)
+    assert clean is not None and odd is not None and odd.ranges is not None
+    # Predicted by a fit to the other logs, that one step would have set the rate's error
+    # over the whole log left out (skill 0.75 -> 0.42); held within range, it does not.
+    assert odd.skill["rate"] > clean.skill["rate"] - 0.05
+    # The predictor keeps the range through model.json; a model fitted before has none and
+    # extrapolates as it always did.
+    entry = json.loads(json.dumps(clean.to_json()))
+    assert np.shape(entry["feature_range"]) == (2, len(clean.weights) - 1)
+    held = AheadPredictor.from_json(entry, n_commands=1, n_sensors=2, n_inputs=1)
+    before = AheadPredictor.from_json({k: v for k, v in entry.items() if k != "feature_range"},
+                                      n_commands=1, n_sensors=2, n_inputs=1)
+    error, unheld = (p.residual(commands, sensors, jumped)[:, 1] for p in (held, before))
+    # The first prediction reads the jump (from step 2 to 7): held, it errs as any other.
+    spread = np.nanstd(error)
+    assert abs(error[7]) < 2 * spread and abs(unheld[7]) > 5 * spread
+    np.testing.assert_allclose(error[20:], unheld[20:], atol=1e-9)   # within range: alike
+    entry["feature_range"] = entry["feature_range"][::-1]
+    with pytest.raises(ValueError, match="feature ranges"):
+        AheadPredictor.from_json(entry, n_commands=1, n_sensors=2, n_inputs=1)
