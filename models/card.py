@@ -30,6 +30,9 @@ class ModelInput:
     name: str
     unit: str
     typical: float            # its median on the training logs (held there in simulations)
+    # Whether a training log fed it (moved it); one none did, the model never learnt how it
+    # acts, and every diagnosis holds it at ``typical`` (models trained before: fed).
+    fed: bool = True
 
 
 @dataclass(frozen=True)
@@ -273,7 +276,8 @@ class ModelCard:
             dt_s=float(meta["dt_s"]),
             command_names=tuple(str(c) for c in signals["commands"]),
             sensor_names=sensors,
-            inputs=tuple(ModelInput(str(i["name"]), str(i.get("unit", "")), float(i["typical"]))
+            inputs=tuple(ModelInput(str(i["name"]), str(i.get("unit", "")), float(i["typical"]),
+                                    bool(i.get("fed", True)))
                          for i in signals.get("inputs", [])),
             hidden=int(meta["architecture"]["hidden"]),
             drive_width=int(meta["architecture"]["n_commands"]),

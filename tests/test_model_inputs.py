@@ -281,3 +281,40 @@ def test_training_holds_an_input_a_log_never_fed_and_says_so(pitched: dict[str, 
     fed = np.concatenate([np.loadtxt(logs[k], delimiter=",", skiprows=1, usecols=2)
                           for k in (0, 2)])
     assert held == pytest.approx(float(np.median(fed)), abs=0.01) and abs(held) > 0.05
+
+
+def test_an_input_no_training_log_fed_is_held_where_it_was_not_read(pitched: dict[str, Path]):
+    """Trained on logs whose pitch channel read 0 throughout (a sensor not fitted that day),
+    the model never learnt how the pitch acts: a log that feeds it is replayed with it held
+    at the value it had in training, as if the log had never fed it, and the report says so
+    (fed as logged, it had driven an ALFA model of one day's flights into alarms on every
+    flight of the other days)."""
+    from auvdiag_cli import api
+
+    folder = pitched["folder"]
+    logs = [_with_pitch(folder / f"run_{seed}.csv", folder / f"run_{seed}_unfed.csv", 0.0)
+            for seed in range(4)]
+    said: list[str] = []
+    profile = api.load_profile(pitched["with"])
+    api.train(logs, profile, folder / "never_fed", options=api.TrainOptions(
+        iterations_scale=0.05, hidden=8, keep_unskilled=True, predictors=("linear",)),
+        progress=said.append)
+    assert any(line.startswith("pitch: not fed") and "no log fed it: the model cannot learn"
+               in line for line in said), said
+    (entry,) = json.loads((folder / "never_fed" / "model.json").read_text())["signals"]["inputs"]
+    assert entry["fed"] is False and entry["typical"] == 0.0
+    assert json.loads((pitched["model"] / "model.json").read_text())["signals"]["inputs"][0][
+        "fed"] is True
+    model = api.load_model(folder / "never_fed", profile)
+    log = write_pitched_vehicle(folder / "pitch_fed.csv", 23, 90.0)
+    fed = api.diagnose(log, profile, model)
+    unfed = api.diagnose(_with_pitch(log, folder / "pitch_zero.csv", 0.0), profile, model)
+    np.testing.assert_array_equal(fed.histories.matching.modelled,
+                                  unfed.histories.matching.modelled)
+    assert any(note.startswith("pitch: no log the model was trained on fed it") and
+               "held at 0" in note for note in fed.notes), fed.notes
+    # A model that learnt it reads it from the log: the replay moves with it.
+    learnt = api.load_model(pitched["model"], profile)
+    assert not np.array_equal(api.diagnose(log, profile, learnt).histories.matching.modelled,
+                              api.diagnose(folder / "pitch_zero.csv", profile,
+                                           learnt).histories.matching.modelled)

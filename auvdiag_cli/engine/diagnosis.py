@@ -152,14 +152,21 @@ def _calibrated_on_another_day(days: Sequence[str], start_ns: int) -> list[str]:
 
 
 def _inputs_held(log: IngestedLog, model: LoadedModel) -> IngestedLog:
-    """The log with each measured input it never fed held at its typical value on the
-    model's training logs (`flat_signals.held_at`)."""
+    """The log with each measured input it never fed, and each one no log the model was
+    trained on fed (it never learnt how it acts), held at its typical value on the model's
+    training logs (`flat_signals.held_at`)."""
     frame = log.frame
-    if not frame.flat_inputs:
+    unlearnt = [i for i in model.card.inputs
+                if not i.fed and i.name in frame.input_names and i.name not in frame.flat_inputs]
+    if not frame.flat_inputs and not unlearnt:
         return log
     typical = {i.name: i.typical for i in model.card.inputs}
-    return IngestedLog(log.signals, replace(frame, inputs=held_at(
-        frame.inputs, frame.input_names, frame.flat_inputs, typical)))
+    held = held_at(frame.inputs, frame.input_names,
+                   {**frame.flat_inputs, **{i.name: "" for i in unlearnt}}, typical)
+    notes = [f"{i.name}: no log the model was trained on fed it (one value throughout), so "
+             f"it never learnt how it acts: held at {i.typical:g}, as there, not read from this "
+             "log; train on logs that feed it" for i in unlearnt]
+    return IngestedLog(log.signals, replace(frame, inputs=held, notes=[*frame.notes, *notes]))
 
 
 @dataclass(frozen=True)

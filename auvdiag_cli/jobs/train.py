@@ -308,11 +308,14 @@ def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
 
 
 def _input_entries(profile: Profile, training: Sequence[ScoringLog]) -> list[dict[str, Any]]:
-    """Each measured input, with its median on the training logs: what a simulated mission
-    (a DMS, the pattern table's faults) holds it at."""
+    """Each measured input, with its median on the training logs (what a simulated mission,
+    a DMS or the pattern table's faults, holds it at) and whether any of them fed it (moved
+    it): one no log fed, the model never learnt how it acts."""
     actuators = len(profile.commands)
     values = np.concatenate([t.commands[:, actuators:] for t in training])
-    return [{"name": i.name, "unit": i.unit, "typical": round(float(np.median(values[:, k])), 6)}
+    return [{"name": i.name, "unit": i.unit, "typical": round(float(np.median(values[:, k])), 6),
+             "fed": any(np.nanmax(column) > np.nanmin(column) for t in training
+                        if np.isfinite(column := t.commands[:, actuators + k]).any())}
             for k, i in enumerate(profile.inputs)]
 
 
@@ -380,7 +383,8 @@ def score_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
         raise UsageError(f"the model was trained on {', '.join(seen)}: score it on normal logs "
                          "it has not seen")
     typical = {i.name: i.typical for i in model.card.inputs}
-    scoring = [scoring_log(p, profile, progress, typical) for p in logs]
+    unlearnt = [i.name for i in model.card.inputs if not i.fed]
+    scoring = [scoring_log(p, profile, progress, typical, unlearnt) for p in logs]
     scores = [replace(score, predictors=model.predictors) for score in assess(
         model.dynamics, np.asarray(model.normaliser.command_scale),
         np.asarray(model.normaliser.state_scale), scoring, scoring, profile.sensor_names,

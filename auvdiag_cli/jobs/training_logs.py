@@ -44,12 +44,15 @@ def read_for_training(path: Path, profile: Profile, progress: Callable[[str], No
                    relation_log(log, profile), rates, frame.flat_inputs)
 
 
-def _held(log: ReadLog, profile: Profile, typical: Mapping[str, float]) -> ScoringLog:
-    """The log's scoring data, each measured input it never fed held at ``typical``."""
-    if not log.flat_inputs:
+def _held(log: ReadLog, profile: Profile, typical: Mapping[str, float],
+          unlearnt: Sequence[str] = ()) -> ScoringLog:
+    """The log's scoring data, each measured input it never fed, and each ``unlearnt`` one
+    (no log the model was trained on fed it), held at ``typical``."""
+    held = {**log.flat_inputs, **dict.fromkeys(unlearnt, "")}
+    if not held:
         return log.scoring
     return replace(log.scoring, commands=held_at(log.scoring.commands, profile.input_names,
-                                                 log.flat_inputs, typical))
+                                                 held, typical))
 
 
 def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
@@ -64,7 +67,8 @@ def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
         unfed = [r.scoring.name for r in every if name in r.flat_inputs]
         if unfed:
             held_as = (f"held at {typical[name]:g}, its median on the other logs"
-                       if name in typical else "no log fed it")
+                       if name in typical else "no log fed it: the model cannot learn how it "
+                       "acts, and every diagnosis holds it at the one value it had")
             progress(f"{name}: not fed (one value throughout, or not in the log) in "
                      f"{len(unfed)} of {len(every)} logs "
                      f"({', '.join(unfed[:3])}{', ...' if len(unfed) > 3 else ''}): {held_as}")
@@ -73,10 +77,10 @@ def with_inputs_held(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
 
 
 def scoring_log(path: Path, profile: Profile, progress: Callable[[str], None],
-                typical: Mapping[str, float]) -> ScoringLog:
-    """A log to score a model on, each measured input it never fed held at the model's
-    ``typical`` value."""
-    return _held(read_for_training(path, profile, progress), profile, typical)
+                typical: Mapping[str, float], unlearnt: Sequence[str] = ()) -> ScoringLog:
+    """A log to score a model on, each measured input it never fed, and each ``unlearnt``
+    one, held at the model's ``typical`` value."""
+    return _held(read_for_training(path, profile, progress), profile, typical, unlearnt)
 
 
 def median_rates(per_log: Sequence[dict[str, float]], names: Sequence[str]
