@@ -190,7 +190,13 @@ def test_a_sensor_is_suspected_only_where_every_change_is_its_own():
     # yaw and roll rate are the gyro's, the climb the GPS's: no one sensor reads them all.
     spread = change_suspects({"yaw_rate": 1.5, "climb": 1.12, "roll_rate": 1.08}, profile)
     assert spread == ["rudder", "engine", "ailerons"]
-    assert change_suspects({"yaw_rate": 1.5, "roll_rate": 1.4}, profile)[0] == "gyro"
+    assert change_suspects({"pitch_rate": 1.5, "yaw_rate": 1.4}, profile)[0] == "gyro"
+    # The rudder rolls the aircraft too: a stuck rudder's yaw rate and the roll rate it
+    # brings are its own, not a gyro fault on two axes (as a model of one day's ALFA flights
+    # saw a rudder failure: carried yaw rate 0.27, roll rate 0.01).
+    rudder = change_suspects({"yaw_rate": 2.1, "roll_rate": 1.0}, profile,
+                             {"yaw_rate": 0.27, "roll_rate": 0.01})
+    assert rudder[:2] == ["rudder", "gyro"]
 
 
 @pytest.fixture(scope="module")
