@@ -1,5 +1,11 @@
 """The pattern of the shares: one weak actuator matches its own signature (its share up,
-the others' down alike); a load shared by two matches none well, and the report says so."""
+the others' down alike); a load shared by two matches none well, and the report says so;
+a clear match names the actuator where the replay cannot weigh what changed."""
+
+from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+from typing import cast
 
 from auvdiag_cli.engine.effort_check import (
     CLEAR_MATCH,
@@ -8,6 +14,12 @@ from auvdiag_cli.engine.effort_check import (
     _named,
     signature_matches,
 )
+from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
+from auvdiag_cli.engine.isolation import name_by_hypotheses
+from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.results import Finding, Observations, Verdict
+from auvdiag_cli.vehicle.profile import load_profile
+from models.card import ModelIdentity
 
 
 def _group(departures: list[float], *harder: int) -> tuple[ActuatorEffort, ...]:
@@ -52,3 +64,37 @@ def test_one_clear_weakness_is_named_alone_two_are_named_together():
     # The clearest match is not among those driven harder: every one driven harder named.
     elsewhere = _group([0.01, -0.03, 0.06, -0.04], 0)
     assert _named(elsewhere, signature_matches(elsewhere)) == ("motor_1",)
+
+
+def _observed(check: EffortCheck, not_judged: dict[str, str]) -> Observations:
+    identity = ModelIdentity(None, "arducopter_quad", "m", None, None, None, None, None, {},
+                             (), True, None)
+    return Observations(log=Path("quad.bin"), format="dataflash", vehicle="arducopter_quad",
+                        segments=(), segment_source="commands", model=identity,
+                        window_samples=10, decision_window_s=1.0, sensor_units={},
+                        not_judged=not_judged, effort_check=check)
+
+
+def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
+    """The change showed in body rates the replay does not judge: a gyro bias that the
+    hypothesis test finds to explain the judged yaw rate does not outweigh shares that
+    match motor 3 weak alone, begun by the onset; where the replay judges the rates that
+    changed, the hypothesis test names as before."""
+    profile = load_profile(Path("arducopter_quad"))
+    judging = cast(Judging, SimpleNamespace(profile=profile))
+    check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_error_s=3.0)
+    test = HypothesisTest((Hypothesis("gyro", "biased", 0.68),
+                           Hypothesis("motor_3", "weakened", 1.5, 0.75, "rotor")))
+    changed = {"roll_rate": 1, "pitch_rate": 1, "yaw_rate": 1, "climb": 0}
+    finding = Finding(verdict=Verdict.FAULT, b=changed, onset_s=16.0, detected_at_s=17.0)
+    unjudged = {"roll_rate": "no skill", "pitch_rate": "no skill"}
+    named = name_by_hypotheses(_observed(check, unjudged), finding, test, judging)
+    assert named.component == "motor_3"
+    assert "cannot weigh roll_rate, pitch_rate" in named.notes[-1]
+    # Every rate judged: the hypothesis test decides (by more than its margin).
+    assert name_by_hypotheses(_observed(check, {}), finding, test,
+                              judging).component == "gyro"
+    # The shares began after this change: another event, not its cause.
+    late = replace(check, onset_s=25.0, alarm_s=30.0)
+    assert name_by_hypotheses(_observed(late, unjudged), finding, test,
+                              judging).component == "gyro"

@@ -204,14 +204,16 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
                        judging: Judging) -> Finding:
     """No row of the pattern table names the component (or there is no table): the
     hypothesis that explains the log does, when one does; when none does (a vehicle that
-    lost control), the actuator whose effort shares match its weakness alone, begun then."""
+    lost control), or a sensor's does only on the signals the replay judges while the change
+    showed in others, the actuator whose effort shares match its weakness alone, begun
+    then."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
     effort = seen.effort_check
+    alone = None if effort is None else effort.alone_by(finding.onset_s)
     if not best.explains:
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
-        alone = None if effort is None else effort.alone_by(finding.onset_s)
         if alone is None:
             return finding.noted(note)
         return _found(seen, finding, [alone], f"{note}; named by the effort its group carries"
@@ -219,6 +221,15 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
+    unweighed = [n for n, v in finding.b.items() if v and n in seen.not_judged]
+    if alone is not None and not best.is_actuator and unweighed:
+        # The hypotheses are weighed by the replay's g, which leaves out signals it cannot
+        # predict: a sensor's fault "explains" a change there only by not being looked at.
+        return _found(seen, finding, [alone],
+                      f"named by the effort its group carries (its shares match {alone} weak "
+                      f"alone, begun by the onset): the hypothesis test favours "
+                      f"{best.describe()} but cannot weigh {', '.join(unweighed)} (not judged "
+                      "by the replay), where the change showed", judging)
     if (effort is not None and len(effort.named) == 1 and margin is not None
             and margin < DECISIVE_MARGIN):
         # The motion departed, but several single faults explain it about as well; the
