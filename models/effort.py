@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from models.chi_square import largest_spread_factor
 from models.student_t import quantile
 
 LEVEL_BINS = 3                # operating conditions of a one-way group (rotors): the level's
@@ -42,6 +43,9 @@ SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
 LONG_WINDOW = 4               # windows this many times longer measure the slow wander
 WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the rest: later starts
 DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
+# Logs that show no offset between them: their spread is taken at the upper limit of this
+# confidence (`largest_spread_factor`).
+ALIKE_CONFIDENCE = 0.95
 
 
 @dataclass(frozen=True)
@@ -237,9 +241,15 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     departures = _departures(logs, conditioned, False)
     spread, dof = between_spread(departures, floor)
     seen, _ = between_spread(departures, np.zeros_like(floor))
+    alike = bool(np.sqrt(np.mean(seen ** 2)) <= np.sqrt(np.mean(floor ** 2)))
+    if alike:
+        # No offset between these logs shows, so their spread says only that it is small;
+        # logs of another day carry offsets these never sampled. Judge against the largest
+        # spread they do not rule out.
+        spread = spread * largest_spread_factor(dof, ALIKE_CONFIDENCE)
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
                    spread, within, typical, n, dof, within_dof, np.zeros((n, len(group.members))),
-                   bool(np.sqrt(np.mean(seen ** 2)) <= np.sqrt(np.mean(floor ** 2))))
+                   alike)
     loo = []
     for i, log in enumerate(logs):
         others = [g for j, g in enumerate(logs) if j != i]

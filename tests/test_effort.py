@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
 from auvdiag_errors import ProfileError
+from models.chi_square import largest_spread_factor, lower_quantile
 from models.student_t import quantile
 
 pytestmark = pytest.mark.slow    # trains models or simulates fleets
@@ -81,6 +82,14 @@ def test_student_t_quantiles_match_the_tables():
     for p, dof, table in ((0.975, 1, 12.706), (0.975, 5, 2.571), (0.995, 6, 3.707),
                           (0.999, 30, 3.385), (0.975, 1000, 1.962)):
         assert quantile(p, dof) == pytest.approx(table, abs=2e-3)
+
+
+def test_chi_square_lower_quantiles_match_the_tables():
+    for p, dof, table in ((0.05, 2, 0.1026), (0.05, 6, 1.635), (0.01, 1, 0.000157),
+                          (0.025, 10, 3.247), (0.05, 45, 30.612)):
+        assert lower_quantile(p, dof) == pytest.approx(table, rel=2e-3)
+    # A spread estimated on 6 degrees of freedom may be 1.92 times smaller than the truth.
+    assert largest_spread_factor(6, 0.95) == pytest.approx(1.915, abs=2e-3)
 
 
 def test_train_keeps_a_model_that_judges_only_the_effort(model: Path):

@@ -1,7 +1,8 @@
 """Normal logs that differ no more than their own noise makes them (logs of one day, one
 battery): the spread between logs then stands at what that noise allows, and a normal log
-of another day may stray further. The training report and a whole-log alarm judged against
-such logs say so; logs that show offsets between them do not."""
+of another day may stray further. The whole log is judged against the largest spread such
+logs do not rule out; the training report and a whole-log alarm judged against them say
+so; logs that show offsets between them do not."""
 
 from pathlib import Path
 
@@ -12,6 +13,8 @@ from shared_data import SHARED_DATA
 
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
+from models.chi_square import largest_spread_factor
+from models.effort import ALIKE_CONFIDENCE
 from models.effort_model import EffortModel, learn_effort
 
 
@@ -23,6 +26,13 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     one_day = quad_model([quad_commands(rng, np.ones(4)) for _ in range(3)])
     days = quad_model([quad_commands(rng, 1 + rng.normal(0, 0.03, 4)) for _ in range(3)])
     assert one_day.fits[0].alike and not days.fits[0].alike   # type: ignore[union-attr]
+    # The spread of alike logs is where their windows' noise puts it at least, widened to
+    # the upper 95 % limit of a spread estimated on its degrees of freedom.
+    fit = one_day.fits[0]
+    assert fit is not None
+    floor = fit.within * np.sqrt(fit.window_s / fit.typical_s)
+    assert np.allclose(fit.spread, floor * largest_spread_factor(fit.dof, ALIKE_CONFIDENCE))
+    assert 1.5 < largest_spread_factor(fit.dof, ALIKE_CONFIDENCE) < 2.5
     (line,) = effort_lines(one_day)
     assert "caution: these 3 logs differ no more than their own windows' noise" in line
     assert "caution" not in effort_lines(days)[0]
@@ -39,8 +49,9 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
 
 @pytest.mark.shared_data("crazypad/labels.csv")
 def test_three_crazypad_flights_of_one_session_are_said_to_show_no_offset():
-    """E8 normal flights 02-04 agree within their windows' noise (with them alone, the
-    other four normal flights alarm); 00, 03 and 05 show their offsets."""
+    """E8 normal flights 02-04 agree within their windows' noise; 00, 03 and 05 show their
+    offsets."""
+    from auvdiag_cli.engine.effort_check import check_effort
     from auvdiag_cli.engine.ingest import ingest
     from auvdiag_cli.jobs.effort import effort_log
     from auvdiag_cli.jobs.relate import relation_log
@@ -55,5 +66,19 @@ def test_three_crazypad_flights_of_one_session_are_said_to_show_no_offset():
         assert model is not None and model.fits[0] is not None
         return model
 
-    assert fit((2, 3, 4)).fits[0].alike          # type: ignore[union-attr]
+    one_session = fit((2, 3, 4))
+    assert one_session.fits[0].alike             # type: ignore[union-attr]
     assert not fit((0, 3, 5)).fits[0].alike      # type: ignore[union-attr]
+    # Judged against the largest spread they do not rule out, the other four normal flights
+    # pass (against their spread as seen, 00, 01 and 06 alarmed: z 1.3-1.8 times the
+    # threshold), and a cut of 3.5 mm still stands out on motor 3.
+    for n in (0, 1, 5, 6):
+        log = relation_log(ingest(folder / f"E8_log{n:02d}.csv", profile), profile)
+        check = check_effort(one_session, profile, log.commands, log.usable,
+                             profile.dt_s * np.arange(len(log.commands)))
+        assert not check.suspects, n
+    cut = relation_log(ingest(folder.parent / "cut_propeller_M3_3.5mm_3.5mm_40mm"
+                              / "E8_log00.csv", profile), profile)
+    check = check_effort(one_session, profile, cut.commands, cut.usable,
+                         profile.dt_s * np.arange(len(cut.commands)))
+    assert check.named == ("motor_3",) and check.against_alike_logs
