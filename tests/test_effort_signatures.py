@@ -1,12 +1,14 @@
 """The pattern of the shares: one weak actuator matches its own signature (its share up,
 the others' down alike); a load shared by two matches none well, and the report says so;
-a clear match names the actuator where the replay cannot weigh what changed."""
+a clear match names the actuator where the replay cannot weigh what changed, and tells
+apart candidates that move the vehicle alike."""
 
 from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import cast
 
+from auvdiag_cli.engine.active import ActiveDiagnosis
 from auvdiag_cli.engine.effort_check import (
     CLEAR_MATCH,
     ActuatorEffort,
@@ -17,6 +19,7 @@ from auvdiag_cli.engine.effort_check import (
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.isolation import name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.narrowing import _narrow_by_effort
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
 from models.card import ModelIdentity
@@ -98,3 +101,20 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert name_by_hypotheses(_observed(late, unjudged), finding, test,
                               judging).component == "gyro"
+
+
+def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shares():
+    """The table reads b as either of two actuators (a vectored ROV's vertical pair) and
+    nothing else decides: the one whose shares match its weakness alone, begun by the
+    onset, is kept; shares that point elsewhere, or began after, decide nothing."""
+    check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_error_s=3.0)
+    active = ActiveDiagnosis(("motor_3", "motor_4"), ("motor_3", "motor_4"), (),
+                             ("M3", "M4"), False)
+    finding = Finding(verdict=Verdict.FAULT, b={"climb": 1}, onset_s=16.0)
+    kept, noted = _narrow_by_effort(_observed(check, {}), finding, active)
+    assert kept.candidates == ("motor_3",) and kept.recommended_dms == ()
+    assert "its shares match motor_3 weak alone" in noted.notes[-1]
+    elsewhere = replace(active, candidates=("motor_1", "motor_2"))
+    assert _narrow_by_effort(_observed(check, {}), finding, elsewhere)[0] == elsewhere
+    late = replace(check, onset_s=25.0, alarm_s=30.0)
+    assert _narrow_by_effort(_observed(late, {}), finding, active)[0] == active

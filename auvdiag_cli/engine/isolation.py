@@ -1,5 +1,5 @@
 """Naming the component once something is found: the pattern table's row, the hypothesis
-test, the DMS runs (active diagnosis), a weakened thruster, the start and command checks;
+test, the DMS runs (active diagnosis, `narrowing`), a weakened thruster, the start and command checks;
 and Substituting Control for a failed sensor. Each step takes the finding so far and
 returns the next; the observations are read, never changed."""
 
@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
+from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.change_signatures import signature_parts
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
@@ -18,16 +18,13 @@ from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.narrowing import DECISIVE_MARGIN, narrowed
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import substitute
 from auvdiag_cli.vehicle.profile import Profile
-
-# The candidate the hypotheses name must leave this many times less of its threshold than
-# any other candidate.
-DECISIVE_MARGIN = 2.0
 
 
 def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s: float,
@@ -271,77 +268,10 @@ def apply_weakened_thruster(finding: Finding, weak: Hypothesis, profile: Profile
 
 def apply_active_diagnosis(seen: Observations, finding: Finding,
                            runs: Sequence[tuple[DmsRun, int]], judging: Judging) -> Finding:
-    assert finding.onset_s is not None
-    onset_ns = seen.start_ns + round(finding.onset_s * 1e9)
-    active = decide(finding.candidates, onset_ns, runs, judging.profile)
-    if active.conflict:
-        finding = finding.noted("the DMS runs contradict each other (more than one fault?); "
-                                "all candidates kept")
-    if len(active.candidates) > 1:
-        active, finding = _narrow_by_predicted_signatures(finding, active, onset_ns, runs,
-                                                          judging)
-    if len(active.candidates) > 1 and finding.hypotheses is not None:
-        active, finding = _narrow_by_hypotheses(finding, active, finding.hypotheses)
-    finding = replace(finding, active=active, candidates=active.candidates)
-    if len(active.candidates) == 1:
-        return _name_component(seen, finding, active.candidates[0], judging)
+    finding = narrowed(seen, finding, runs, judging)
+    if len(finding.candidates) == 1:
+        return _name_component(seen, finding, finding.candidates[0], judging)
     return finding
-
-
-def _narrow_by_hypotheses(finding: Finding, active: ActiveDiagnosis, test: HypothesisTest
-                          ) -> tuple[ActiveDiagnosis, Finding]:
-    """Among the candidates the DMS runs leave, the one whose failure explains the log when
-    no other candidate's does, by DECISIVE_MARGIN at least (e.g. which thruster died on a
-    plain mission: the table reads both the same)."""
-    best = {c: min((h for h in test.ranked if h.component == c),
-                   key=lambda h: h.peak_g_ratio, default=None) for c in active.candidates}
-    scored = sorted((h for h in best.values() if h is not None), key=lambda h: h.peak_g_ratio)
-    if len(scored) < 2 or not scored[0].explains or scored[1].explains:
-        return active, finding
-    margin = scored[1].peak_g_ratio / max(scored[0].peak_g_ratio, 1e-9)
-    if margin < DECISIVE_MARGIN:
-        return active, finding
-    winner = scored[0]
-    finding = finding.noted(
-        f"the pattern table reads b as {' or '.join(active.candidates)}; replayed from the "
-        f"onset, {winner.describe()} explains the log (g at most {winner.peak_g_ratio:.0%} of "
-        f"its threshold) and {scored[1].describe()} does not ({scored[1].peak_g_ratio:.0%})")
-    if winner.kind == "weakened":
-        finding = replace(finding, degradation=winner)
-    return replace(active, candidates=(winner.component,), recommended_dms=()), finding
-
-
-def _narrow_by_predicted_signatures(finding: Finding, active: ActiveDiagnosis,
-                                    onset_ns: int, runs: Sequence[tuple[DmsRun, int]],
-                                    judging: Judging
-                                    ) -> tuple[ActiveDiagnosis, Finding]:
-    """Where moving or not moving a component cannot separate the candidates (a thruster
-    and the sensor of the motion it drives), the model can: it predicts each candidate's b
-    on every DMS run made wholly with the fault present. A run that stayed quiet (b = 0)
-    clears the candidates whose failure would have shown on it; a run that raised an alarm
-    clears those whose failure would not have. Which bits an alarm raises is left out: near
-    a threshold the model cannot call single bits reliably. Never all are cleared."""
-    kept = list(active.candidates)
-    for run, _ in runs:
-        if run.start_ns < onset_ns or run.name not in judging.profile.dms:
-            continue
-        alarm = any(run.b.values())
-        predicted = {c: any(dms_signature(judging.model, judging.profile, run.name,
-                                          c).values()) for c in kept}
-        agreeing = [c for c in kept if predicted[c] == alarm]
-        if agreeing and len(agreeing) < len(kept):
-            seen = "".join(str(v) for v in run.b.values())
-            dropped = [c for c in kept if c not in agreeing]
-            would = "would have shown on it" if not alarm else "would not have shown on it"
-            finding = finding.noted(f"{run.name} in {run.log} gave b = {seen}: the model says "
-                                    f"a failed {' or '.join(dropped)} {would}")
-            kept = agreeing
-    # The DMSs on which the remaining candidates' failures look different decide next time.
-    recommended = () if len(kept) == 1 else tuple(
-        name for name in judging.profile.dms
-        if len({tuple(dms_signature(judging.model, judging.profile, name, c).values())
-                for c in kept}) > 1)
-    return replace(active, candidates=tuple(kept), recommended_dms=recommended), finding
 
 
 def apply_detection(seen: Observations, finding: Finding, b: Mapping[str, int],
