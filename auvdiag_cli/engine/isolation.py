@@ -1,7 +1,7 @@
 """Naming the component once something is found: the pattern table's row, the hypothesis
-test, the DMS runs (active diagnosis, `narrowing`), a weakened thruster, the start and command checks;
-and Substituting Control for a failed sensor. Each step takes the finding so far and
-returns the next; the observations are read, never changed."""
+test, the DMS runs (active diagnosis, `narrowing`), a weakened thruster, the start and
+command checks; and Substituting Control for a failed sensor. Each step takes the finding
+so far and returns the next; the observations are read, never changed."""
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
