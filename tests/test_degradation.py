@@ -1,8 +1,13 @@
-"""Beyond assumption 3: a thruster at half power is named, not mistaken for a sensor."""
+"""Beyond assumption 3: a thruster at half power is named, not mistaken for a sensor; a
+sensor that explains the log as well as a weak thruster keeps the table's reading."""
 
 
 import pytest
 from helpers import diagnose_json
+
+from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
+from auvdiag_cli.engine.isolation import _outweighs_the_table
+from auvdiag_cli.engine.results import Finding, Verdict
 
 
 @pytest.mark.parametrize("thruster", ["thruster_0", "thruster_1"])
@@ -63,3 +68,17 @@ def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     assert report["case"] is None and report["component"] is None
     assert report["b"] == {"flow": 0, "yaw_rate": 1}
     assert any("fits no row of the pattern table" in note for note in report["notes"])
+
+
+@pytest.mark.parametrize(("sensor_ratio", "thruster_ratio", "overrules"), [
+    (0.36, 0.35, False),    # a dead DVL and a weak thruster explain the log alike
+    (1.5, 0.35, True),      # the table's sensor does not explain it
+    (0.8, 0.3, True),       # the thruster explains it decisively better
+])
+def test_a_weak_thruster_overrules_the_tables_sensor_only_when_it_explains_more(
+        sensor_ratio, thruster_ratio, overrules):
+    weak = Hypothesis("thruster_1", "weakened", thruster_ratio, 0.5, "thruster")
+    test = HypothesisTest(tuple(sorted((weak, Hypothesis("dvl_surge", "dead", sensor_ratio)),
+                                       key=lambda h: h.peak_g_ratio)))
+    finding = Finding(verdict=Verdict.FAULT, b={"surge": 1}, component="dvl_surge")
+    assert _outweighs_the_table(weak, finding, test) is overrules

@@ -43,12 +43,21 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
         own = [(run, seen.start_ns) for run in dms_runs(seen)]
         return apply_active_diagnosis(seen, finding, [*own, *companion_runs], judging)
     if finding.substitution is not None:
-        if weak is not None and weak.explains:
+        if weak is not None and weak.explains and _outweighs_the_table(weak, finding, test):
             return apply_weakened_thruster(finding, weak, judging.profile)
         return finding
     if not finding.candidates:
         return name_by_hypotheses(seen, finding, test, judging)
     return finding
+
+
+def _outweighs_the_table(weak: Hypothesis, finding: Finding, test: HypothesisTest) -> bool:
+    """Whether a weak actuator's replay explains the log decisively better than any fault of
+    the sensor the table names: where both explain it about as well (a dead sensor against
+    a thruster whose weakness moves the same signal), the table's reading stands."""
+    sensor = min((h.peak_g_ratio for h in test.ranked if h.component == finding.component),
+                 default=float("inf"))
+    return sensor >= 1.0 or weak.peak_g_ratio * DECISIVE_MARGIN <= sensor
 
 
 def apply_other_evidence(seen: Observations, finding: Finding, judging: Judging) -> Finding:
