@@ -7,6 +7,9 @@ from typing import Any
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
+from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.results import Observations
+from models.card import ModelIdentity
 
 
 def diagnose_outcome(log: Path, *options: str) -> tuple[int, dict[str, Any] | str]:
@@ -98,3 +101,15 @@ def refit_format(record: bytes, old: tuple[bytes, bytes], new: tuple[bytes, byte
     fmt, columns = new[0] + fmt[len(old[0]):], new[1] + columns[len(old[1]):]
     return (record[:4] + bytes([record[4] - shrink]) + record[5:9] + fmt.ljust(16, b"\0")
             + columns.ljust(64, b"\0"))
+
+
+def observed(effort: EffortCheck | None, not_judged: dict[str, str],
+             vehicle: str = "arducopter_quad") -> Observations:
+    """What a diagnosis of a log of ``vehicle`` saw, where only the effort check and the
+    signals the replay does not judge matter."""
+    identity = ModelIdentity(None, vehicle, "m", None, None, None, None, None, {}, (), True,
+                             None)
+    return Observations(log=Path("flight.bin"), format="dataflash", vehicle=vehicle,
+                        segments=(), segment_source="commands", model=identity,
+                        window_samples=10, decision_window_s=1.0, sensor_units={},
+                        not_judged=not_judged, effort_check=effort)

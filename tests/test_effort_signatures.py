@@ -8,6 +8,8 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import cast
 
+from helpers import observed
+
 from auvdiag_cli.engine.active import ActiveDiagnosis
 from auvdiag_cli.engine.effort_check import (
     CLEAR_MATCH,
@@ -20,9 +22,8 @@ from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.isolation import name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort
-from auvdiag_cli.engine.results import Finding, Observations, Verdict
+from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
-from models.card import ModelIdentity
 
 
 def _group(departures: list[float], *harder: int) -> tuple[ActuatorEffort, ...]:
@@ -69,15 +70,6 @@ def test_one_clear_weakness_is_named_alone_two_are_named_together():
     assert _named(elsewhere, signature_matches(elsewhere)) == ("motor_1",)
 
 
-def _observed(check: EffortCheck, not_judged: dict[str, str]) -> Observations:
-    identity = ModelIdentity(None, "arducopter_quad", "m", None, None, None, None, None, {},
-                             (), True, None)
-    return Observations(log=Path("quad.bin"), format="dataflash", vehicle="arducopter_quad",
-                        segments=(), segment_source="commands", model=identity,
-                        window_samples=10, decision_window_s=1.0, sensor_units={},
-                        not_judged=not_judged, effort_check=check)
-
-
 def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     """The change showed in body rates the replay does not judge: a gyro bias that the
     hypothesis test finds to explain the judged yaw rate does not outweigh shares that
@@ -91,15 +83,15 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     changed = {"roll_rate": 1, "pitch_rate": 1, "yaw_rate": 1, "climb": 0}
     finding = Finding(verdict=Verdict.FAULT, b=changed, onset_s=16.0, detected_at_s=17.0)
     unjudged = {"roll_rate": "no skill", "pitch_rate": "no skill"}
-    named = name_by_hypotheses(_observed(check, unjudged), finding, test, judging)
+    named = name_by_hypotheses(observed(check, unjudged), finding, test, judging)
     assert named.component == "motor_3"
     assert "cannot weigh roll_rate, pitch_rate" in named.notes[-1]
     # Every rate judged: the hypothesis test decides (by more than its margin).
-    assert name_by_hypotheses(_observed(check, {}), finding, test,
+    assert name_by_hypotheses(observed(check, {}), finding, test,
                               judging).component == "gyro"
     # The shares began after this change: another event, not its cause.
     late = replace(check, onset_s=25.0, alarm_s=30.0)
-    assert name_by_hypotheses(_observed(late, unjudged), finding, test,
+    assert name_by_hypotheses(observed(late, unjudged), finding, test,
                               judging).component == "gyro"
 
 
@@ -111,10 +103,10 @@ def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shar
     active = ActiveDiagnosis(("motor_3", "motor_4"), ("motor_3", "motor_4"), (),
                              ("M3", "M4"), False)
     finding = Finding(verdict=Verdict.FAULT, b={"climb": 1}, onset_s=16.0)
-    kept, noted = _narrow_by_effort(_observed(check, {}), finding, active)
+    kept, noted = _narrow_by_effort(observed(check, {}), finding, active)
     assert kept.candidates == ("motor_3",) and kept.recommended_dms == ()
     assert "its shares match motor_3 weak alone" in noted.notes[-1]
     elsewhere = replace(active, candidates=("motor_1", "motor_2"))
-    assert _narrow_by_effort(_observed(check, {}), finding, elsewhere)[0] == elsewhere
+    assert _narrow_by_effort(observed(check, {}), finding, elsewhere)[0] == elsewhere
     late = replace(check, onset_s=25.0, alarm_s=30.0)
-    assert _narrow_by_effort(_observed(late, {}), finding, active)[0] == active
+    assert _narrow_by_effort(observed(late, {}), finding, active)[0] == active

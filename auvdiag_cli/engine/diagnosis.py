@@ -32,6 +32,7 @@ from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import (
     apply_change_alarm,
     apply_other_evidence,
+    beyond_the_replay,
     isolate,
     names_a_mover,
 )
@@ -270,7 +271,7 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
     change = seen.change_check
     if change is not None and change.alarm_s is not None and change.onset_s is not None and (
             detection is None or change.alarm_s < frame.time_s[detection.alarm_index]):
-        if names_a_mover(change, judging.profile):
+        if names_a_mover(change, judging.profile) or beyond_the_replay(change, judging):
             return apply_change_alarm(seen, normal, change, judging, _healthy_replay(
                 judging, frame, change.onset_s, dms_starts))
         # The change came first: its b and times, named as the replay's alarm would be.

@@ -91,6 +91,15 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
     ranked = change_suspects(change.flagged, judging.profile, change.evidence)
+    effort = seen.effort_check
+    alone = None if effort is None else effort.alone_by(change.onset_s)
+    if alone is not None and ranked and ranked[0] in {s.component
+                                                      for s in judging.profile.sensors}:
+        # A weak actuator moves what a sensor measures too; its group's shares say which.
+        return _found(seen, replace(finding, case=None), [alone],
+                      f"{note}; named by the effort its group carries (its shares match "
+                      f"{alone} weak alone, begun by the onset), not {ranked[0]}, whose "
+                      "signals changed", judging)
     if len(ranked) > 1:
         note += (f"; the part that moves most of what changed{_carriers(change)} is named, "
                  "before " + ", ".join(ranked[1:]))
@@ -115,6 +124,16 @@ def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
     part; otherwise the replay's isolation does (pattern table, hypotheses)."""
     return bool(set(change.flagged) & set(change.members)) or any(
         s.moved_by for s in profile.sensors if s.name in change.flagged)
+
+
+def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
+    """Whether every signal that changed is one the replay does not judge and the pattern
+    table has no row for them: the hypothesis test, scored by the replay's g, cannot weigh
+    such a change at all, so the change test's own evidence names the part."""
+    changed = set(change.changed)
+    b = {name: int(name in changed) for name in judging.sensor_names}
+    return bool(changed) and changed <= set(judging.not_judged) and look_up(
+        judging.profile.pattern, b) is None
 
 
 def change_suspects(flagged: Mapping[str, float], profile: Profile,
