@@ -35,6 +35,8 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     assert 1.5 < largest_spread_factor(fit.dof, ALIKE_CONFIDENCE) < 2.5
     (line,) = effort_lines(one_day)
     assert "caution: these 3 logs differ no more than their own windows' noise" in line
+    factor = largest_spread_factor(fit.dof, ALIKE_CONFIDENCE)
+    assert f"the largest spread between logs they do not rule out ({factor:.1f} times" in line
     assert "caution" not in effort_lines(days)[0]
     # A log of another day, its trim 4 % off on motor 1 from start to end: the whole log
     # departs, and the alarm says what it was judged against.

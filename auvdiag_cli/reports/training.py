@@ -14,8 +14,15 @@ from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
+from models.chi_square import largest_spread_factor
 from models.command_relations import CommandRelations
-from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
+from models.effort import (
+    ALIKE_CONFIDENCE,
+    EffortGroup,
+    GroupFit,
+    Thresholds,
+    smallest_rise,
+)
 from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
@@ -200,8 +207,10 @@ def _alike(fit: GroupFit) -> str:
         return ""
     return (f"; caution: these {fit.logs} logs differ no more than their own windows' noise "
             "makes them (no offset between logs shows, as on logs of one day or one "
-            "battery): a normal log of another day may stray further than these thresholds "
-            "allow; train on normal logs of more than one day")
+            "battery): a whole log is judged against the largest spread between logs they "
+            f"do not rule out ({largest_spread_factor(fit.dof, ALIKE_CONFIDENCE):.1f} times "
+            "theirs), and a normal log of another day may stray further still; train on "
+            "normal logs of more than one day")
 
 
 def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
