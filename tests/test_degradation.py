@@ -75,10 +75,13 @@ def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     (1.5, 0.35, True),      # the table's sensor does not explain it
     (0.8, 0.3, True),       # the thruster explains it decisively better
 ])
+@pytest.mark.parametrize("sensor_fault", ["dead", "biased"])
 def test_a_weak_thruster_overrules_the_tables_sensor_only_when_it_explains_more(
-        sensor_ratio, thruster_ratio, overrules):
+        sensor_ratio, thruster_ratio, overrules, sensor_fault):
+    """Only a sensor fault with nothing fitted (dead, stuck) holds the table's reading: a
+    bias fitted to the log absorbs a weak thruster's effect on its one signal."""
     weak = Hypothesis("thruster_1", "weakened", thruster_ratio, 0.5, "thruster")
-    test = HypothesisTest(tuple(sorted((weak, Hypothesis("dvl_surge", "dead", sensor_ratio)),
-                                       key=lambda h: h.peak_g_ratio)))
+    sensor = Hypothesis("dvl_surge", sensor_fault, sensor_ratio)
+    test = HypothesisTest(tuple(sorted((weak, sensor), key=lambda h: h.peak_g_ratio)))
     finding = Finding(verdict=Verdict.FAULT, b={"surge": 1}, component="dvl_surge")
-    assert _outweighs_the_table(weak, finding, test) is overrules
+    assert _outweighs_the_table(weak, finding, test) is (overrules or sensor_fault == "biased")

@@ -52,11 +52,12 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
 
 
 def _outweighs_the_table(weak: Hypothesis, finding: Finding, test: HypothesisTest) -> bool:
-    """Whether a weak actuator's replay explains the log decisively better than any fault of
-    the sensor the table names: where both explain it about as well (a dead sensor against
-    a thruster whose weakness moves the same signal), the table's reading stands."""
-    sensor = min((h.peak_g_ratio for h in test.ranked if h.component == finding.component),
-                 default=float("inf"))
+    """Whether a weak actuator's replay explains the log decisively better than the sensor
+    the table names, dead or stuck: where both explain it about as well (a dead DVL against
+    a thruster whose weakness moves the same signal), the table's reading stands. A bias or
+    a drift is fitted to the log, and absorbs a weak thruster's effect on one signal."""
+    sensor = min((h.peak_g_ratio for h in test.ranked if h.component == finding.component
+                  and h.kind in ("dead", "stuck")), default=float("inf"))
     return sensor >= 1.0 or weak.peak_g_ratio * DECISIVE_MARGIN <= sensor
 
 
