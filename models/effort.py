@@ -43,9 +43,10 @@ SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
 LONG_WINDOW = 4               # windows this many times longer measure the slow wander
 WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the rest: later starts
 DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
-# Logs that show no offset between them: their spread is taken at the upper limit of this
-# confidence (`largest_spread_factor`).
+# Fewer logs than this that show no offset between them: their spread is taken at the upper
+# limit of this confidence (`largest_spread_factor`).
 ALIKE_CONFIDENCE = 0.95
+ALIKE_FEW_LOGS = 5
 
 
 @dataclass(frozen=True)
@@ -216,6 +217,9 @@ class GroupFit:
     # The logs' shares differ no more than their own windows' noise says a log's share
     # would by chance: no offset between them shows (logs of one day or one battery, say).
     alike: bool = False
+    # How many times its spread as seen the whole log is judged against (> 1: alike logs,
+    # few of them: `ALIKE_FEW_LOGS`).
+    widened: float = 1.0
 
     def sigma(self, span_s: float | np.ndarray) -> np.ndarray:
         """(…, members): σ(T) of a span of ``span_s`` steady seconds."""
@@ -242,14 +246,15 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     spread, dof = between_spread(departures, floor)
     seen, _ = between_spread(departures, np.zeros_like(floor))
     alike = bool(np.sqrt(np.mean(seen ** 2)) <= np.sqrt(np.mean(floor ** 2)))
-    if alike:
-        # No offset between these logs shows, so their spread says only that it is small;
-        # logs of another day carry offsets these never sampled. Judge against the largest
-        # spread they do not rule out.
-        spread = spread * largest_spread_factor(dof, ALIKE_CONFIDENCE)
+    # A handful of logs that show no offset between them are what one session gives: their
+    # spread says only that it is small, and logs of another day carry offsets these never
+    # sampled. Judge against the largest spread they do not rule out. Dozens that show none
+    # show that the offsets are small.
+    widened = largest_spread_factor(dof, ALIKE_CONFIDENCE) if alike and n < ALIKE_FEW_LOGS \
+        else 1.0
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
-                   spread, within, typical, n, dof, within_dof, np.zeros((n, len(group.members))),
-                   alike)
+                   spread * widened, within, typical, n, dof, within_dof,
+                   np.zeros((n, len(group.members))), alike, widened)
     loo = []
     for i, log in enumerate(logs):
         others = [g for j, g in enumerate(logs) if j != i]

@@ -26,16 +26,21 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     one_day = quad_model([quad_commands(rng, np.ones(4)) for _ in range(3)])
     days = quad_model([quad_commands(rng, 1 + rng.normal(0, 0.03, 4)) for _ in range(3)])
     assert one_day.fits[0].alike and not days.fits[0].alike   # type: ignore[union-attr]
-    # The spread of alike logs is where their windows' noise puts it at least, widened to
-    # the upper 95 % limit of a spread estimated on its degrees of freedom.
+    # The spread of a handful of alike logs is where their windows' noise puts it at least,
+    # widened to the upper 95 % limit of a spread estimated on its degrees of freedom.
     fit = one_day.fits[0]
     assert fit is not None
     floor = fit.within * np.sqrt(fit.window_s / fit.typical_s)
-    assert np.allclose(fit.spread, floor * largest_spread_factor(fit.dof, ALIKE_CONFIDENCE))
-    assert 1.5 < largest_spread_factor(fit.dof, ALIKE_CONFIDENCE) < 2.5
+    factor = largest_spread_factor(fit.dof, ALIKE_CONFIDENCE)
+    assert fit.widened == factor and 1.5 < factor < 2.5
+    assert np.allclose(fit.spread, floor * factor)
+    assert days.fits[0].widened == 1.0                        # type: ignore[union-attr]
+    # Six alike logs: dozens that show no offset show that the offsets are small.
+    draws = np.random.default_rng(1)
+    six = quad_model([quad_commands(draws, np.ones(4)) for _ in range(6)])
+    assert six.fits[0].alike and six.fits[0].widened == 1.0   # type: ignore[union-attr]
     (line,) = effort_lines(one_day)
     assert "caution: these 3 logs differ no more than their own windows' noise" in line
-    factor = largest_spread_factor(fit.dof, ALIKE_CONFIDENCE)
     assert f"the largest spread between logs they do not rule out ({factor:.1f} times" in line
     assert "caution" not in effort_lines(days)[0]
     # A log of another day, its trim 4 % off on motor 1 from start to end: the whole log

@@ -14,10 +14,8 @@ from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
-from models.chi_square import largest_spread_factor
 from models.command_relations import CommandRelations
 from models.effort import (
-    ALIKE_CONFIDENCE,
     EffortGroup,
     GroupFit,
     Thresholds,
@@ -205,12 +203,14 @@ def _alike(fit: GroupFit) -> str:
     logs then stands at what that noise allows, and logs of another day may stray further."""
     if not fit.alike:
         return ""
+    judged = "" if fit.widened <= 1.0 else (
+        "a whole log is judged against the largest spread between logs they do not rule out "
+        f"({fit.widened:.1f} times theirs), and ")
     return (f"; caution: these {fit.logs} logs differ no more than their own windows' noise "
             "makes them (no offset between logs shows, as on logs of one day or one "
-            "battery): a whole log is judged against the largest spread between logs they "
-            f"do not rule out ({largest_spread_factor(fit.dof, ALIKE_CONFIDENCE):.1f} times "
-            "theirs), and a normal log of another day may stray further still; train on "
-            "normal logs of more than one day")
+            f"battery): {judged}a normal log of another day may stray further"
+            f"{' still' if judged else ' than these thresholds allow'}; train on normal logs "
+            "of more than one day")
 
 
 def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
