@@ -202,7 +202,8 @@ def _readable(fit: GroupFit, thresholds: Thresholds | None) -> dict[str, Any]:
             "threshold_z": None if thresholds is None else round(thresholds.whole_log(fit), 3),
             "smallest_rise_judged": None if thresholds is None
             else np.round(smallest_rise(fit, thresholds), 4).tolist(),
-            "leave_one_out_max_z": round(float(fit.loo_z.max()), 3), "logs_alike": fit.alike}
+            "leave_one_out_max_z": round(float(fit.loo_z.max()), 3), "logs_alike": fit.alike,
+            "spread_widened": round(fit.widened, 4)}
 
 
 def learn_effort(groups: Sequence[EffortGroup], logs: Sequence[EffortLog], dt_s: float,

@@ -34,6 +34,8 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     factor = largest_spread_factor(fit.dof, ALIKE_CONFIDENCE)
     assert fit.widened == factor and 1.5 < factor < 2.5
     assert np.allclose(fit.spread, floor * factor)
+    readable = one_day.to_json()["groups"][0]["normal"]
+    assert readable["logs_alike"] and readable["spread_widened"] == round(factor, 4)
     assert days.fits[0].widened == 1.0                        # type: ignore[union-attr]
     # Six alike logs: dozens that show no offset show that the offsets are small.
     draws = np.random.default_rng(1)
