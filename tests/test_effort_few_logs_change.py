@@ -4,6 +4,7 @@ window of the normal logs, so its threshold rests on those many degrees of freed
 the two that three logs give the spread between logs (which would put it near twice as
 high and hide a change the windows show plainly)."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ import numpy as np
 from auvdiag_cli.engine.effort_check import check_effort, typical_later_threshold
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
+from models.effort import GroupFit, Thresholds
 from models.effort_model import EffortLog, learn_effort
 
 PROFILE = load_profile(Path("arducopter_quad"))
@@ -87,3 +89,31 @@ def test_a_rotor_lost_in_the_last_window_is_dated_where_it_was_lost():
         # Within its error, a stride of starts (3.1 s: an eighth of a 25 s window).
         assert abs(check.onset_s - 147.0) <= check.onset_error_s <= 3.2
         assert check.alarm_s is not None and 147.0 <= check.alarm_s <= 149.9
+
+
+class _TightBetweenLogs(Thresholds):
+    """The whole log judged as against normal logs that agree closely (a vehicle whose
+    missions differ only by their noise): its departure stands far past its threshold."""
+
+    def whole_log(self, fit: GroupFit, dof: float | None = None) -> float:
+        return 0.2 * super().whole_log(fit, dof)
+
+
+def test_a_rotor_lost_midway_moves_the_whole_log_and_is_dated_where_it_was_lost():
+    """Motor 1 driven a quarter harder from 90 s: the whole log's shares depart too, further
+    past their threshold than any later start's change past its own; the change within the
+    log still dates it (the whole log's departure alone had dated it from the log's start,
+    and the rotor's shares could not then be tied to a change seen at 90 s)."""
+    rng = np.random.default_rng(5)
+    model, _ = learn_effort(PROFILE.effort_groups,
+                            [_log(_commands(rng), f"normal-{i}") for i in range(3)],
+                            PROFILE.dt_s)
+    assert model is not None and model.thresholds is not None
+    tight = replace(model, thresholds=_TightBetweenLogs(model.thresholds.false_alarm_rate,
+                                                        model.thresholds.actuators))
+    for _ in range(3):
+        check = _check(tight, _commands(rng, harder=1.25))
+        assert check.named == ("motor_1",)
+        assert check.onset_s is not None and check.onset_error_s is not None
+        assert abs(check.onset_s - WEAK_FROM * PROFILE.dt_s) <= max(check.onset_error_s, 2.0)
+        assert check.alarm_s is not None and 90.0 <= check.alarm_s < 100.0

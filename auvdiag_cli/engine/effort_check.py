@@ -274,6 +274,10 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     if per_actuator[top] <= 1:
         return per_actuator, None, None, series, figures
     best = int(np.argmax(ratios[:, top]))
+    if best == 0 and (ratios[1:, top] > 1).any():
+        # The whole log departs because something changed within it (a rotor lost midway
+        # moves the whole log's shares too): dated where it changed, not from the start.
+        best = 1 + int(np.argmax(ratios[1:, top]))
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
