@@ -18,7 +18,7 @@ from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
-from auvdiag_cli.engine.narrowing import DECISIVE_MARGIN, narrowed
+from auvdiag_cli.engine.narrowing import DECISIVE_MARGIN, narrowed, weak_alone
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
@@ -92,8 +92,7 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
     ranked = change_suspects(change.flagged, judging.profile, change.evidence)
-    effort = seen.effort_check
-    alone = None if effort is None else effort.alone_by(change.onset_s)
+    alone = weak_alone(seen, change.onset_s)
     if alone is not None and ranked and ranked[0] in {s.component
                                                       for s in judging.profile.sensors}:
         # A weak actuator moves what a sensor measures too; its group's shares say which.
@@ -235,7 +234,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     then."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
     effort = seen.effort_check
-    alone = None if effort is None else effort.alone_by(finding.onset_s)
+    alone = weak_alone(seen, finding.onset_s)
     if not best.explains:
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "

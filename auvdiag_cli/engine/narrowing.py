@@ -35,14 +35,20 @@ def narrowed(seen: Observations, finding: Finding, runs: Sequence[tuple[DmsRun, 
     return replace(finding, active=active, candidates=active.candidates)
 
 
+def weak_alone(seen: Observations, time_s: float | None) -> str | None:
+    """The actuator whose group's shares match its weakness alone, begun by ``time_s``
+    (`EffortCheck.alone_by`), or None."""
+    effort = seen.effort_check
+    return None if effort is None else effort.alone_by(time_s)
+
+
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
                       ) -> tuple[ActiveDiagnosis, Finding]:
     """Among the candidates left, the actuator whose group's shares match its weakness
     alone, begun by the onset (`EffortCheck.alone_by`): the controller drives the weak one
     harder, which tells apart actuators that move the vehicle alike (a vectored ROV's two
     vertical thrusters)."""
-    effort = seen.effort_check
-    alone = None if effort is None else effort.alone_by(finding.onset_s)
+    alone = weak_alone(seen, finding.onset_s)
     if alone is None or alone not in active.candidates:
         return active, finding
     finding = finding.noted(

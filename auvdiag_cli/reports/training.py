@@ -15,12 +15,7 @@ from auvdiag_cli.jobs.calibration_result import CalibrationResult
 from auvdiag_cli.jobs.train import TrainingResult
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
-from models.effort import (
-    EffortGroup,
-    GroupFit,
-    Thresholds,
-    smallest_rise,
-)
+from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
 from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
