@@ -58,6 +58,13 @@ class EffortGroup:
     factors: tuple[float, ...]        # |mixing factor| of each: the share it carries by design
     min_level: float | None = None    # steady from this level up; None: learnt
     window_s: float | None = None     # judging window; None: a sixth of a typical log
+    # Projection on the mixer's reach where it misses directions of the group (from the
+    # profile's controller; `models.effort_reach`), row by row; None: every direction.
+    reach: tuple[tuple[float, ...], ...] | None = None
+
+    @property
+    def projection(self) -> np.ndarray | None:
+        return None if self.reach is None else np.asarray(self.reach, float)
 
 
 def efforts(commands: np.ndarray, factors: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -79,6 +86,7 @@ class GroupLog:
     # The same over windows LONG_WINDOW times as long (None: fewer than MIN_WINDOWS of them).
     long_var: np.ndarray | None = None
     long_windows: int = 0
+    within_cov: np.ndarray | None = None   # (members, members): of its windows' shares
 
     @property
     def share(self) -> np.ndarray:
@@ -96,7 +104,9 @@ class GroupLog:
                 "within_var": self.within_var.round(9).tolist(), "windows": self.windows,
                 **({} if self.long_var is None else {
                     "long_var": self.long_var.round(9).tolist(),
-                    "long_windows": self.long_windows})}
+                    "long_windows": self.long_windows}),
+                **({} if self.within_cov is None else {
+                    "within_cov": self.within_cov.round(9).tolist()})}
 
     @classmethod
     def from_json(cls, entry: dict[str, Any]) -> "GroupLog":
@@ -104,7 +114,8 @@ class GroupLog:
                    np.asarray(entry["level"], float), np.asarray(entry["within_var"], float),
                    int(entry["windows"]),
                    None if "long_var" not in entry else np.asarray(entry["long_var"], float),
-                   int(entry.get("long_windows", 0)))
+                   int(entry.get("long_windows", 0)),
+                   None if "within_cov" not in entry else np.asarray(entry["within_cov"], float))
 
 
 def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
@@ -130,16 +141,16 @@ def summarise(name: str, effort: np.ndarray, level: np.ndarray, bins: np.ndarray
     levels = np.bincount(bins, weights=level, minlength=n_bins)
     own = effort.sum(axis=0) / level.sum()
 
-    def variance(steps: int) -> tuple[np.ndarray, int]:
-        shares, _ = window_shares(effort, level, steps)
-        return ((shares - own) ** 2).sum(axis=0) / max(1, len(shares) - 1), len(shares)
+    def covariance(steps: int) -> tuple[np.ndarray, int]:
+        deviations = window_shares(effort, level, steps)[0] - own
+        return deviations.T @ deviations / max(1, len(deviations) - 1), len(deviations)
 
-    within, windows = variance(window_steps)
-    if len(level) < MIN_WINDOWS * LONG_WINDOW * window_steps:
-        return GroupLog(name, len(level) * dt_s, sums, levels, within, windows)
-    long_var, long_windows = variance(LONG_WINDOW * window_steps)
-    return GroupLog(name, len(level) * dt_s, sums, levels, within, windows, long_var,
-                    long_windows)
+    cov, windows = covariance(window_steps)
+    long_var, long_windows = (np.diag(covariance(LONG_WINDOW * window_steps)[0]),
+                              len(level) // (LONG_WINDOW * window_steps)) \
+        if len(level) >= MIN_WINDOWS * LONG_WINDOW * window_steps else (None, 0)
+    return GroupLog(name, len(level) * dt_s, sums, levels, np.diag(cov).copy(), windows,
+                    long_var, long_windows, cov)
 
 
 def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:

@@ -167,6 +167,8 @@ class EffortModel:
                 "factors": list(setup.group.factors), "min_level": round(setup.min_level, 6),
                 "level_edges": setup.edges.round(6).tolist(), "window_s": setup.window_s,
                 "two_way": setup.two_way,
+                **({} if setup.group.reach is None else {
+                    "reach": [list(row) for row in setup.group.reach]}),
                 "logs": [g.to_json() for g in logs]}
             if fit is None:
                 entry["refused"] = why
@@ -184,7 +186,9 @@ class EffortModel:
         for g in entry["groups"]:
             group = EffortGroup(str(g["name"]), tuple(g["members"]),
                                 tuple(float(f) for f in g["factors"]), float(g["min_level"]),
-                                float(g["window_s"]))
+                                float(g["window_s"]),
+                                None if "reach" not in g else tuple(
+                                    tuple(float(v) for v in row) for row in g["reach"]))
             setups.append(GroupSetup(group, float(g["min_level"]),
                                      np.asarray(g["level_edges"], float), float(g["window_s"]),
                                      bool(g["two_way"])))

@@ -17,13 +17,13 @@ from the start that departs most crosses its threshold; the onset, the start tha
 most among those tried on to the detection (the change point's likeliest place,
 `_onset`)."""
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
-from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative
+from auvdiag_cli.engine.effort_spans import Spans, change_spread
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
@@ -35,6 +35,7 @@ from models.effort import (
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
+from models.effort_reach import window_correlation
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -179,12 +180,15 @@ def rise_range(rises: Sequence[float]) -> str:
     return f"{low:.0%}" if round(low, 2) == round(high, 2) else f"{low:.0%}-{high:.0%}"
 
 
-def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, float], ...]:
+def signature_matches(actuators: Sequence[ActuatorEffort],
+                      directions: Mapping[str, np.ndarray] | None = None
+                      ) -> tuple[tuple[str, float], ...]:
     """How well the departures of the strongest suspect's group, in units of their spreads,
     match each member's weakness, best first: the cosine between them and the signature
-    of member i, its own share up and the others' down alike (the shares average to one:
-    e_i - 1/m). One weak actuator matches its own near 1; a load shared between two, or
-    two weak ones, matches none well."""
+    of member i (``directions``: the group's, row by row, over the whole log; by default
+    its own share up and the others' down alike, the shares averaging to one: e_i - 1/m).
+    One weak actuator matches its own near 1; a load shared between two, or two weak ones,
+    matches none well."""
     suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
     if not suspects:
         return ()
@@ -194,7 +198,10 @@ def signature_matches(actuators: Sequence[ActuatorEffort]) -> tuple[tuple[str, f
     z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
                   for a in group])
     length = float(np.linalg.norm(z))
-    matches = weakness_directions(len(group)) @ z / length if length > 0 else np.zeros(len(group))
+    toward = (directions or {}).get(group[0].group)
+    if toward is None or toward.shape != (len(group), len(group)):
+        toward = weakness_directions(len(group))
+    matches = toward @ z / length if length > 0 else np.zeros(len(group))
     return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
                                                                      strict=True)),
                         key=lambda item: -item[1]))
@@ -242,17 +249,18 @@ def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
-                 time_s: np.ndarray, dt_s: float
+                 time_s: np.ndarray, dt_s: float, correlation: np.ndarray | None
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
                             EffortSeries, tuple]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures)."""
+    alarm_s, series, whole-log figures). ``correlation``: of the normal logs' windows'
+    shares (`models.effort_reach.window_correlation`)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
-    spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
+    spans = Spans.of(fit, effort, level, bins, setup.n_bins,
+                     np.nan_to_num(log.group_commands(setup.group)[steady]), dt_s, correlation)
     n = len(level)
-    toward = weakness_directions(len(setup.group.members))
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
@@ -262,13 +270,14 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.
-    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts]) @ toward.T
+    z = np.array([spans.projected(0, n, False)[0]]
+                 + [spans.projected(s, n, True)[0] for s in starts])
     ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
     normal = expected_share(fit.means, level_by_bin)
-    figures = (share, normal, fit.sigma(n * dt_s))
+    figures = (share, normal, fit.sigma(n * dt_s), spans.directions(0, np.array([n]), False)[0])
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
@@ -281,17 +290,16 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
-    running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
-               @ toward.T)[:, top]
+    running = spans.projected(start, np.arange(first, n + 1), start != 0)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
-    onset = _onset(spans, toward[top], times, window, stride, alarm)
+    onset = _onset(spans, top, times, window, stride, alarm)
     return per_actuator, onset, float(times[alarm]), series, figures
 
 
-def _onset(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
+def _onset(spans: Spans, member: int, times: np.ndarray, window: int, stride: int,
            alarm: int) -> tuple[float, float]:
     """(onset_s, its error) of a change within the log, from the later starts on to the
     detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
@@ -301,7 +309,7 @@ def _onset(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, 
     grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
     n = spans.level_sum.shape[0] - 1
     starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
-    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
+    z = np.array([spans.projected(int(s), n, True)[0, member] for s in starts])
     best = int(np.argmax(z))
     earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
                                    float(times[alarm]))
@@ -341,9 +349,11 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     series: list[EffortSeries] = []
     # (alarm, onset, its error, group) of each group that alarmed
     onsets: list[tuple[float, float, float | None, str]] = []
+    directions: dict[str, np.ndarray] = {}     # each judged group's signatures, whole log
     alike = {setup.group.name for setup, fit in zip(model.setups, model.fits, strict=True)
              if fit is not None and fit.alike}
-    for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
+    for setup, fit, refused, normal_logs in zip(model.setups, model.fits, model.refused,
+                                                model.summaries, strict=True):
         members = setup.group.members
         why = refused if refused is not None else _unread(members, log)
         if why is None and fit is not None and model.thresholds is not None:
@@ -357,8 +367,10 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             actuators += [ActuatorEffort(m, component.get(m, m), setup.group.name, None, None,
                                          None, None, None, why) for m in members]
             continue
-        ratio, onset, alarm, group_series, (share, normal, sigma) = _judge_group(
-            setup, fit, model.thresholds, log, time_s, model.dt_s)
+        ratio, onset, alarm, group_series, (share, normal, sigma, toward) = _judge_group(
+            setup, fit, model.thresholds, log, time_s, model.dt_s,
+            window_correlation(normal_logs))
+        directions[setup.group.name] = toward
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
         series.append(group_series)
@@ -369,7 +381,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             round(float(rise[k]), 4)) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
-    matches = signature_matches(actuators)
+    matches = signature_matches(actuators, directions)
     named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.effort_actuators}

@@ -68,6 +68,13 @@ class ControllerSpec:
     pitch_rate: str | None = None
     sway: str | None = None
 
+    @property
+    def held_efforts(self) -> tuple[str, ...]:
+        """The efforts a loop of this controller drives (the others stay at zero)."""
+        held = {"surge": self.speed, "yaw": self.yaw_rate, "heave": self.heave,
+                "roll": self.roll_rate, "pitch": self.pitch_rate, "sway": self.sway}
+        return tuple(effort for effort in EFFORTS if held[effort] is not None)
+
     def gains_for(self, cruise_speed_mps: float | None = None) -> ControllerGains:
         """The gains, with a mission's own cruise speed where it sets one."""
         if cruise_speed_mps is None:

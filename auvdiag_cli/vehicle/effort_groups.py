@@ -1,10 +1,16 @@
 """``[[effort]]`` in a profile: actuators that act alike, whose shares of their effort are
 judged (`models.effort`)."""
 
+from dataclasses import replace
+
+import numpy as np
+
 from auvdiag_cli.vehicle.actuators import SET_POINT
+from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
+from models.effort_reach import reach
 
 
 def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
@@ -44,3 +50,23 @@ def parse_effort_groups(rows: list[TableReader], kinds: dict[str, str]
                                " an effort group holds actuators of one kind, never set points")
         groups.append(group)
     return tuple(groups)
+
+
+def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | None
+               ) -> tuple[EffortGroup, ...]:
+    """The groups, each with the reach of the controller's mix over its members where that
+    misses directions of the group (`models.effort_reach`): the efforts the controller's
+    loops drive, each member's factor on them."""
+    if controller is None:
+        return groups
+    held = controller.held_efforts
+    placed = []
+    for group in groups:
+        if not all(m in controller.mix for m in group.members):
+            placed.append(group)
+            continue
+        rows = np.array([[controller.mix[m].get(e, 0.0) for e in held] for m in group.members])
+        projection = reach(rows)
+        placed.append(group if projection is None else replace(
+            group, reach=tuple(tuple(float(v) for v in row) for row in projection)))
+    return tuple(placed)

@@ -18,7 +18,7 @@ from auvdiag_cli.vehicle.actuators import (
 )
 from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.controller_table import parse_controller
-from auvdiag_cli.vehicle.effort_groups import parse_effort_groups
+from auvdiag_cli.vehicle.effort_groups import parse_effort_groups, with_reach
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
@@ -295,8 +295,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         source_path=source_path,
         idle_after_s=positive(top.sub("operating"), "idle_after_s")
         if "operating" in data else None,
-        effort_groups=parse_effort_groups(_rows(top, "effort"),
-                                          {c.name: c.kind for c in commands + outputs}),
+        effort_groups=with_reach(parse_effort_groups(
+            _rows(top, "effort"), {c.name: c.kind for c in commands + outputs}), controller),
         inputs=inputs,
         outputs=outputs,
         actuators=actuators,

@@ -1,0 +1,92 @@
+"""Where a weak member of an effort group moves the shares, when its mixer cannot drive it
+alone.
+
+A controller makes up for a weak actuator through its mixer: the extra effort it asks for
+lies in the mixer's reach (the span of its columns over the efforts the controller holds).
+Where that reach is every direction of the group (a quadrotor's four rotors, mixed from
+thrust, roll, pitch and yaw), the weak member alone is driven harder and its signature is
+its own share up and the others' down alike (`models.effort.weakness_directions`). Where
+it is not (a vectored ROV's four horizontal thrusters, mixed from surge, sway and yaw: three
+efforts for four thrusters), the lost thrust f·u_k along e_k comes back as P·e_k, P the
+projection on the reach: a weak thruster k raises the command of j by about
+f·u_k·P_jk, and its effort |u_j| by that times the sign of u_j. Under way on the BlueROV2
+that is its own share up and its fore-and-aft partner's down by as much, the other two
+near normal: far from "the others down alike".
+
+The signature of a span is those rises summed over its steps, less each member's share of
+their mean (the shares average to one), in units of each member's spread; it depends on
+which way each thruster pushed, so it is taken from the span's own commands.
+
+The controller's own corrections move the shares along its reach too, so a departure along
+such a signature is noisier than one along the plain signature: the statistic is scaled by
+how much more (`noise_ratio`), measured on the normal logs' windows."""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from models.effort import GroupLog, weakness_directions
+
+REACH_TOLERANCE = 1e-9     # of the largest singular value: a direction the mix cannot drive
+
+
+def reach(mix_rows: np.ndarray) -> np.ndarray | None:
+    """(members, members) projection on the span of the mixer's columns (``mix_rows``:
+    (members, efforts held), each member's factor on each effort); None where that span is
+    every direction (the weak member alone is driven harder)."""
+    if mix_rows.size == 0:
+        return None
+    basis, singular, _ = np.linalg.svd(mix_rows, full_matrices=False)
+    rank = int((singular > REACH_TOLERANCE * max(float(singular.max()), 1e-300)).sum())
+    if rank >= mix_rows.shape[0] or rank == 0:
+        return None
+    kept = basis[:, :rank]
+    return np.asarray(kept @ kept.T)
+
+
+def step_rises(commands: np.ndarray, factors: np.ndarray, projection: np.ndarray
+               ) -> np.ndarray:
+    """(steps, members k, members j): how much member j's effort rises, per unit of the
+    fraction of thrust member k lost, at each step: |u_k| sign(u_k) sign(u_j) P_jk / c_j
+    (c: the mixing factors by magnitude)."""
+    signs = np.where(commands < 0, -1.0, 1.0)
+    pushed = np.abs(commands) * signs                  # u_k itself, with its sign
+    return np.asarray(pushed[:, :, None] * signs[:, None, :] * projection.T[None, :, :]
+                      / factors[None, None, :])
+
+
+def signature_directions(rises: np.ndarray, shares: np.ndarray, sigma: np.ndarray
+                         ) -> np.ndarray:
+    """(spans, members k, members j): unit directions, in units of each member's σ, in
+    which a weakness of member k moves the departures of spans whose summed ``rises``
+    (spans, k, j) and ``shares`` (spans, j) are given. The component along σ, which
+    departures never take (the shares average to one), is left out."""
+    moved = rises - shares[:, None, :] * rises.mean(axis=2, keepdims=True)
+    scaled = moved / sigma[:, None, :]
+    unit_sigma = sigma / np.linalg.norm(sigma, axis=1, keepdims=True)
+    scaled = scaled - np.einsum("skj,sj->sk", scaled, unit_sigma)[:, :, None] \
+        * unit_sigma[:, None, :]
+    norms = np.linalg.norm(scaled, axis=2, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(np.where(norms > 0, scaled / norms, 0.0))
+
+
+def window_correlation(logs: Sequence[GroupLog]) -> np.ndarray | None:
+    """(members, members): the correlation of the windows' shares, pooled over the normal
+    logs; None where a log does not keep its covariance (a model fitted before)."""
+    kept = [(g.within_cov, g.windows - 1) for g in logs if g.within_cov is not None]
+    if not logs or len(kept) < len(logs):
+        return None
+    pooled = np.sum([cov * dof for cov, dof in kept], axis=0)
+    scale = np.sqrt(np.maximum(np.diag(pooled), 1e-300))
+    return np.asarray(pooled / np.outer(scale, scale))
+
+
+def noise_ratio(directions: np.ndarray, correlation: np.ndarray) -> np.ndarray:
+    """(…, members k): the spread of the departures' projection on each member's signature
+    (``directions``: (…, k, j)) over their spread on the plain one, under the windows'
+    ``correlation``: what the plain signature's thresholds assume, carried over."""
+    plain = weakness_directions(correlation.shape[0])
+    along = np.einsum("...kj,ji,...ki->...k", directions, correlation, directions)
+    base = np.einsum("kj,ji,ki->k", plain, correlation, plain)
+    return np.asarray(np.sqrt(np.maximum(along, 1e-300) / np.maximum(base, 1e-300)))

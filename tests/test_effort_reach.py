@@ -1,0 +1,152 @@
+"""A weak member of a group its mixer cannot drive alone (a vectored ROV's four horizontal
+thrusters, mixed from surge, sway and yaw) moves the shares along its mixer's reach: under
+way, its own share up and its fore-and-aft partner's down by as much, the other two near
+normal. The test and the naming use that signature, taken from the profile's controller mix
+and the log's own commands; a group its mixer reaches in every direction keeps the plain
+one (its own share up, the others' down alike)."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from auvdiag_cli.engine.effort_check import check_effort
+from auvdiag_cli.vehicle.profile import load_profile
+from models.effort_model import EffortLog, EffortModel, learn_effort
+from models.effort_reach import (
+    noise_ratio,
+    reach,
+    signature_directions,
+    step_rises,
+    window_correlation,
+)
+
+PROFILE = load_profile(Path("bluerov2"))
+STEPS = 1500                      # 150 s at 10 Hz
+WEAK_FROM = 600
+# The profile's vectored mix over surge, yaw and sway (motors 1-4).
+MIX = np.array([[PROFILE.controller.mix[f"motor_{k}"].get(e, 0.0)   # type: ignore[union-attr]
+                 for e in ("surge", "yaw", "sway")] for k in range(1, 5)])
+
+
+def test_the_reach_of_a_vectored_mix_misses_the_direction_all_four_push_alike():
+    projection = reach(MIX)
+    assert projection is not None
+    np.testing.assert_allclose(projection, np.eye(4) - 0.25, atol=1e-12)
+    # Thrust, roll, pitch and yaw reach every direction of a quadrotor's four rotors.
+    quad = np.array([[-1, -1, 1, 1], [-1, 1, -1, 1], [-1, 1, 1, -1], [-1, -1, -1, -1]], float)
+    assert reach(quad) is None
+
+
+def test_the_profile_gives_the_reach_and_the_model_keeps_it():
+    groups = {g.name: g for g in PROFILE.effort_groups}
+    horizontal = groups["horizontal"].projection
+    assert horizontal is not None and horizontal.shape == (4, 4)
+    assert groups["vertical"].reach is None        # heave and roll: both directions of two
+    assert all(g.reach is None for g in load_profile(Path("arducopter_quad")).effort_groups)
+    model = _model(np.random.default_rng(3))
+    again = EffortModel.from_json(json.loads(json.dumps(model.to_json())))
+    assert again.setups[0].group.reach == model.setups[0].group.reach is not None
+    kept = again.summaries[0][0].within_cov
+    assert kept is not None and kept.shape == (4, 4)
+
+
+def _commands(rng: np.random.Generator, kept: float = 1.0) -> np.ndarray:
+    """Four horizontal and two vertical thrusters under way (surge 0.3, small yaw and sway
+    corrections); from WEAK_FROM thruster 1 gives ``kept`` of its thrust and the controller
+    asks again for the same surge, yaw and sway through its mix."""
+    t = np.arange(STEPS)
+    wrench = np.column_stack([0.3 + 0.02 * np.sin(t / 90.0) + rng.normal(0, 0.01, STEPS),
+                              rng.normal(0, 0.03, STEPS), rng.normal(0, 0.03, STEPS)])
+    horizontal = wrench @ MIX.T * (1 + rng.normal(0, 0.005, 4))     # this log's own trim
+    if kept < 1:
+        thrust = np.diag([kept, 1.0, 1.0, 1.0])
+        allocation = np.linalg.pinv(MIX)
+        again = np.linalg.inv(allocation @ thrust @ MIX)
+        horizontal[WEAK_FROM:] = (wrench[WEAK_FROM:] @ again.T) @ MIX.T
+    horizontal *= 1 + rng.normal(0, 0.03, horizontal.shape)
+    vertical = 0.2 + rng.normal(0, 0.02, (STEPS, 2))
+    return np.column_stack([horizontal, vertical])
+
+
+def _log(commands: np.ndarray, name: str) -> EffortLog:
+    return EffortLog(name, commands, np.ones(len(commands), bool), PROFILE.command_names)
+
+
+def _model(rng: np.random.Generator, groups=PROFILE.effort_groups) -> EffortModel:  # type: ignore[no-untyped-def]
+    model, _ = learn_effort(groups, [_log(_commands(rng), f"normal-{i}") for i in range(6)],
+                            PROFILE.dt_s)
+    assert model is not None and model.thresholds is not None
+    return model
+
+
+def _judge(model: EffortModel, commands: np.ndarray):  # type: ignore[no-untyped-def]
+    return check_effort(model, PROFILE, commands, np.ones(len(commands), bool),
+                        PROFILE.dt_s * np.arange(len(commands)))
+
+
+@pytest.mark.parametrize("seed", [5, 6])
+def test_a_weak_horizontal_thruster_matches_its_signature_through_the_mix(seed):
+    rng = np.random.default_rng(seed)
+    model = _model(rng)
+    plain = _model(np.random.default_rng(seed), tuple(
+        replace(g, reach=None) for g in PROFILE.effort_groups))
+    weak = _commands(rng, kept=0.7)
+    check, before = _judge(model, weak), _judge(plain, weak)
+    # Under way the mix raises thruster 1 and lowers thruster 2 (its fore-and-aft partner)
+    # by about as much: the plain signature, the others down alike, matches it only so well.
+    shares = {a.name: a.departure for a in check.actuators}
+    assert shares["motor_1"] > 0.05 and shares["motor_2"] < -0.05
+    assert check.named == ("thruster_1",)
+    assert check.matches[0][0] == "motor_1" and check.matches[0][1] > 0.95
+    assert before.matches and before.matches[0][1] < 0.9
+    assert check.onset_s is not None and abs(check.onset_s - WEAK_FROM * PROFILE.dt_s) < 10
+
+
+def test_the_budget_holds_along_signatures_the_controllers_own_noise_follows():
+    """The controller's yaw and sway corrections move the shares along the same signatures:
+    scaled by how much noisier they are there, normal logs alarm no more often than along
+    the plain signatures, where unscaled they alarmed more than twice as often."""
+    rng = np.random.default_rng(21)
+    model = _model(rng)
+    setup, summaries = model.setups[0], model.summaries[0]
+    correlation = window_correlation(summaries)
+    assert correlation is not None and setup.group.projection is not None
+    # Thruster 1's signature under way (its share up, thruster 2's down) is noisier than the
+    # plain one: its statistic is scaled down.
+    forward = np.tile(np.array([-0.3, -0.3, 0.3, 0.3]), (100, 1))
+    rises = step_rises(forward, np.ones(4), setup.group.projection).sum(axis=0)[None]
+    toward = signature_directions(rises, np.ones((1, 4)), np.ones((1, 4)))
+    np.testing.assert_allclose(toward[0, 0], [0.5 ** 0.5, -(0.5 ** 0.5), 0, 0], atol=1e-9)
+    assert noise_ratio(toward, correlation)[0, 0] > 1.05
+    # 160 normal logs of four vehicles: 1.6 alarms budgeted; the plain signatures gave 4,
+    # these unscaled 10.
+    alarms = 0
+    for seed in (21, 22, 23, 24):
+        rng = np.random.default_rng(seed)
+        vehicle = _model(rng)
+        alarms += sum(bool(_judge(vehicle, _commands(rng)).suspects) for _ in range(40))
+    assert alarms <= 6
+
+
+def test_a_model_that_does_not_keep_its_windows_covariance_judges_along_the_plain_ones():
+    rng = np.random.default_rng(8)
+    model = _model(rng)
+    entry = model.to_json()
+    for group in entry["groups"]:
+        for log in group["logs"]:
+            del log["within_cov"]
+    older = EffortModel.from_json(entry)
+    plain = _model(np.random.default_rng(8), tuple(
+        replace(g, reach=None) for g in PROFILE.effort_groups))
+    weak = _commands(rng, kept=0.7)
+    assert _judge(older, weak).matches == _judge(plain, weak).matches
+    assert _judge(model, weak).matches != _judge(plain, weak).matches
+
+
+def test_isotropic_noise_scales_no_signature():
+    correlation = (np.eye(4) - 0.25) / 0.75          # independent members, shares sum to one
+    direction = np.array([[0.5 ** 0.5, -(0.5 ** 0.5), 0, 0]] * 4)
+    np.testing.assert_allclose(noise_ratio(direction, correlation), 1.0)
