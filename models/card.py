@@ -6,7 +6,7 @@ before that key existed means. A writer (train, calibrate, relate, score) gives 
 entries as typed values that say their own JSON (``ModelEntry``) and gets a new card."""
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Protocol, runtime_checkable
@@ -211,6 +211,10 @@ class ModelCard:
     # statistic divided by its own before they are judged (none: either way alike).
     change_way_scales: Mapping[str, Mapping[str, tuple[float, float]]] = field(
         default_factory=dict)
+    # input -> statistic -> signal: thresholds for a log that does not feed that input,
+    # where they are higher (`jobs.change_unfed`; none: calibrated before).
+    change_unfed: Mapping[str, Mapping[str, Mapping[str, float]]] = field(
+        default_factory=dict)
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
@@ -242,6 +246,18 @@ class ModelCard:
             plain = value.to_json() if isinstance(value, ModelEntry) else value
             document[key] = json.loads(json.dumps(plain))
         return ModelCard.from_document(document)
+
+    def change_thresholds_without(self, missing: Sequence[str]
+                                  ) -> dict[str, dict[str, float]]:
+        """The change test's thresholds for a log that does not feed the inputs ``missing``:
+        the larger of the fed ones and each missing input's (`change_unfed`)."""
+        result = {statistic: dict(values) for statistic, values in self.change_thresholds.items()}
+        for name in missing:
+            for statistic, values in self.change_unfed.get(name, {}).items():
+                for signal, value in values.items():
+                    if signal in result.get(statistic, {}):
+                        result[statistic][signal] = max(result[statistic][signal], value)
+        return result
 
     @property
     def input_names(self) -> tuple[str, ...]:
@@ -313,6 +329,10 @@ class ModelCard:
                     "thresholds", {}).items()}),
             change_stride=_change_stride(meta.get("change_test") or {}),
             change_way_scales=_way_scales(meta.get("change_test") or {}),
+            change_unfed=_frozen({str(i): _frozen({str(s): _frozen({
+                str(k): float(v) for k, v in values.items()}) for s, values in by.items()})
+                for i, by in (meta.get("change_test") or {}).get(
+                    "unfed_thresholds", {}).items()}),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),

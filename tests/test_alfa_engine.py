@@ -96,3 +96,25 @@ def test_the_days_normal_flights_raise_nothing(calibrated, name):
     # predicted that flight with less than its calibration flights had.
     unfed = [n for n in diagnosis.notes if n.startswith("change test: airspeed not fed")]
     assert len(unfed) == ("no_ground_truth" in name), diagnosis.notes
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_flight_without_its_airspeed_is_judged_by_thresholds_set_without_it(calibrated):
+    """Calibrate replays its normal flights with the airspeed held at its typical value as
+    well: the predictor then errs further on some signals (the climb follows the airspeed),
+    and a flight that logs no airspeed is judged against those thresholds where higher."""
+    profile, model = calibrated
+    unfed = model.card.change_unfed["airspeed"]
+    fed = model.card.change_thresholds
+    raised = [(s, n) for s, values in unfed.items() for n, v in values.items() if v > fed[s][n]]
+    assert raised and len(raised) == sum(len(v) for v in unfed.values())
+    without = model.card.change_thresholds_without(["airspeed"])
+    assert all(without[s][n] == unfed[s][n] for s, n in raised)
+    assert model.card.change_thresholds_without([]) == {s: dict(v) for s, v in fed.items()}
+    diagnosis, _ = _judged(calibrated, "carbonZ_2018-07-18-12-10-11_no_ground_truth")
+    assert any(n.startswith("change test: airspeed not fed in this log: judged against the "
+                            "thresholds calibrate set") for n in diagnosis.notes)
+    check = diagnosis.change_check
+    assert check is not None
+    statistic, name = next((s, n) for s, n in raised if n in check.thresholds.get(s, {}))
+    assert check.thresholds[statistic][name] == pytest.approx(unfed[statistic][name])

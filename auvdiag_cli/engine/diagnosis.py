@@ -307,16 +307,24 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     judged = [name for name in change_judged(model, skilled(model, profile))
               if name not in judging.set_aside]
     judged += signature_names(profile.actuators, judged)
+    missing = sorted(frame.flat_inputs)
+    measured = [name for name in missing if name in model.card.change_unfed]
     thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
-                  for statistic, limits in model.card.change_thresholds.items()}
+                  for statistic, limits in model.card.change_thresholds_without(
+                      measured).items()}
     if not any(thresholds.values()):
         return None
     ahead = model.card.ahead
-    if frame.flat_inputs and ahead is not None and ahead.inputs:
-        notes.append(f"change test: {', '.join(sorted(frame.flat_inputs))} not fed in this "
-                     "log, though its predictor a moment ahead reads it as part of the "
-                     "state: it predicts this log with less than the logs its thresholds "
-                     "were set on had, and an alarm here is less certain")
+    if measured:
+        notes.append(f"change test: {', '.join(measured)} not fed in this log: judged "
+                     "against the thresholds calibrate set on its normal logs replayed "
+                     "without it, where higher")
+    if [name for name in missing if name not in measured] and ahead is not None \
+            and ahead.inputs:
+        notes.append(f"change test: {', '.join(n for n in missing if n not in measured)} not "
+                     "fed in this log, though its predictor a moment ahead reads it as part "
+                     "of the state: it predicts this log with less than the logs its "
+                     "thresholds were set on had, and an alarm here is less certain")
     return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators,
                         model.card.change_stride, model.card.change_way_scales)

@@ -19,7 +19,7 @@ peaks of blocks of them (`Blocks`)."""
 import math
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -324,6 +324,13 @@ def budget_thresholds(judges: Sequence[Judge], effort_actuators: int,
                    if effort_actuators else None)
     return BudgetThresholds(budget, per_log, share, kept, effort_rate, len(log_hours),
                             independent)
+
+
+def refitted(fitted: BudgetThresholds, judges: Sequence[Judge]) -> BudgetThresholds:
+    """The same judges measured otherwise (the change test with an input held), each given
+    the share of the budget ``fitted`` gave each judge."""
+    return replace(fitted, fits=tuple(fit for judge in judges
+                                      if (fit := _judge_fit(judge, fitted.share)) is not None))
 
 
 def _judge_fit(judge: Judge, share: float) -> JudgeFit | None:

@@ -48,6 +48,7 @@ from auvdiag_cli.jobs.change_calibration import (
     change_thresholds,
     dominated_by_one_log,
 )
+from auvdiag_cli.jobs.change_unfed import unfed_thresholds
 from auvdiag_cli.jobs.effort import learn_effort_model, refit_effort
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
 from auvdiag_cli.jobs.operating import read_operating
@@ -172,8 +173,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     fitted = None if budget is None else _apply_budget(
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
-    model.update_entries(change_test=change_entry(
-        change := change_thresholds(evidence, margin, fitted), evidence.scales))
+    change = change_thresholds(evidence, margin, fitted)
+    model.update_entries(change_test=change_entry(change, evidence.scales, unfed_thresholds(
+        ingested, model, profile, margin, fitted, evidence.scales, change, progress)))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},

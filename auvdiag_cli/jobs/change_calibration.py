@@ -1,7 +1,7 @@
 """The change test's thresholds (`engine.change_check`), set by `auvdiag calibrate` from
 each judged signal's largest S on the normal logs."""
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -108,7 +108,7 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
     scales = way_scales(ways, judged)
     return without_outliers(ChangeEvidence(
         [*judged, *signature_names(profile.actuators, judged)],
-        [_either_way(p, judged, scales) for p in ways],
+        [either_way(p, judged, scales) for p in ways],
         trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted,
         scales=scales))
 
@@ -141,7 +141,7 @@ def way_scales(peaks: Sequence[dict[str, dict[str, float]]], signals: Sequence[s
     return scales
 
 
-def _either_way(peaks: dict[str, dict[str, float]], signals: Sequence[str],
+def either_way(peaks: dict[str, dict[str, float]], signals: Sequence[str],
                 scales: WayScales) -> dict[str, dict[str, float]]:
     """One log's largest values per signal, the larger of its ways each divided by its
     scale (a signal's largest over the log is the larger of its ways' largest), and its
@@ -259,9 +259,13 @@ def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[
         for log, which in dominated.items()]
 
 
-def change_entry(thresholds: ChangeThresholds, scales: WayScales) -> dict[str, object]:
-    """model.json's `change_test` entry."""
+def change_entry(thresholds: ChangeThresholds, scales: WayScales,
+                 unfed: Mapping[str, Mapping[str, Mapping[str, float]]] | None = None
+                 ) -> dict[str, object]:
+    """model.json's `change_test` entry (``unfed``: `jobs.change_unfed`)."""
     return {"thresholds": {s: {n: t for n, (_, t) in v.items()} for s, v in thresholds.items()},
+            **({"unfed_thresholds": {i: {s: dict(v) for s, v in by.items()}
+                                     for i, by in unfed.items()}} if unfed else {}),
             "largest_normal": {s: {n: peak for n, (peak, _) in v.items()}
                                for s, v in thresholds.items()},
             "way_scales": {s: {n: list(pair) for n, pair in v.items()}

@@ -1,0 +1,81 @@
+"""The change test's thresholds for a log that does not feed one of the model's inputs
+(a dead airspeed sensor, a topic not recorded), set by `auvdiag calibrate`.
+
+Such a log is replayed with that input held at its typical value, so its predictor errs
+where the input would have told it something: an aircraft's climb, which follows its
+airspeed, departs further from its prediction than on any log that fed it. Judged against
+thresholds set on logs that fed it, a normal flight without airspeed alarmed on its climb
+(ALFA). So calibrate also replays each of its normal logs with each input held at its
+typical value, and sets the change test's thresholds on those the same way (the same share
+of the budget for each judge, or the margin rule); a log without that input is judged by
+the larger of the two."""
+
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+
+from auvdiag_cli.engine.change_check import WayScales, change_judged
+from auvdiag_cli.engine.change_signatures import signature_names
+from auvdiag_cli.engine.diagnosis import change_errors_of
+from auvdiag_cli.engine.ingest import IngestedLog
+from auvdiag_cli.engine.judging import skilled
+from auvdiag_cli.jobs.budget import BudgetThresholds, change_judges, refitted
+from auvdiag_cli.jobs.change_calibration import (
+    ChangeEvidence,
+    ChangeThresholds,
+    change_thresholds,
+    either_way,
+    log_change_peaks,
+    without_outliers,
+)
+from auvdiag_cli.vehicle.profile import Profile
+from models.store import LoadedModel
+
+# input -> statistic -> signal -> threshold
+UnfedThresholds = dict[str, dict[str, dict[str, float]]]
+
+
+def held(log: IngestedLog, name: str) -> IngestedLog:
+    """The log as if it had not fed input ``name`` (the diagnosis then holds it at its
+    typical value)."""
+    frame = log.frame
+    return IngestedLog(log.signals, replace(frame, flat_inputs={
+        **frame.flat_inputs, name: "held at its typical value by calibrate"}))
+
+
+def unfed_thresholds(logs: Sequence[IngestedLog], model: LoadedModel, profile: Profile,
+                     margin: float, fitted: BudgetThresholds | None, scales: WayScales,
+                     fed: ChangeThresholds,
+                     progress: Callable[[str], None] = lambda _: None) -> UnfedThresholds:
+    """Per model input, the change test's thresholds on the normal ``logs`` replayed with it
+    held (only where that raises them above ``fed``, the thresholds with it fed)."""
+    judged = change_judged(model, skilled(model, profile))
+    if not judged or not fed:
+        return {}
+    result: UnfedThresholds = {}
+    for name in model.card.input_names:
+        feeding = [log for log in logs if name in log.frame.input_names
+                   and name not in log.frame.flat_inputs]
+        if not feeding:
+            continue
+        progress(f"the change test with {name} held, on {len(feeding)} normal log(s)")
+        peaks = [log_change_peaks(*change_errors_of(held(log, name), profile, model), judged,
+                                  model, profile) for log in feeding]
+        evidence = without_outliers(ChangeEvidence(
+            [*judged, *signature_names(profile.actuators, judged)],
+            [either_way(p, judged, scales) for p in peaks], scales=scales))
+        budget = None if fitted is None else refitted(
+            fitted, change_judges(evidence.peaks, evidence.judged))
+        raised = _above(change_thresholds(evidence, margin, budget), fed)
+        if raised:
+            result[name] = raised
+    return result
+
+
+def _above(unfed: ChangeThresholds, fed: ChangeThresholds) -> dict[str, dict[str, float]]:
+    """statistic -> signal -> the unfed threshold where it is above the fed one."""
+    raised: dict[str, dict[str, float]] = {}
+    for statistic, values in unfed.items():
+        for signal, (_, threshold) in values.items():
+            if signal in fed.get(statistic, {}) and threshold > fed[statistic][signal][1]:
+                raised.setdefault(statistic, {})[signal] = threshold
+    return raised
