@@ -86,7 +86,6 @@ class GroupLog:
     # The same over windows LONG_WINDOW times as long (None: fewer than MIN_WINDOWS of them).
     long_var: np.ndarray | None = None
     long_windows: int = 0
-    within_cov: np.ndarray | None = None   # (members, members): of its windows' shares
 
     @property
     def share(self) -> np.ndarray:
@@ -104,9 +103,7 @@ class GroupLog:
                 "within_var": self.within_var.round(9).tolist(), "windows": self.windows,
                 **({} if self.long_var is None else {
                     "long_var": self.long_var.round(9).tolist(),
-                    "long_windows": self.long_windows}),
-                **({} if self.within_cov is None else {
-                    "within_cov": self.within_cov.round(9).tolist()})}
+                    "long_windows": self.long_windows})}
 
     @classmethod
     def from_json(cls, entry: dict[str, Any]) -> "GroupLog":
@@ -114,8 +111,7 @@ class GroupLog:
                    np.asarray(entry["level"], float), np.asarray(entry["within_var"], float),
                    int(entry["windows"]),
                    None if "long_var" not in entry else np.asarray(entry["long_var"], float),
-                   int(entry.get("long_windows", 0)),
-                   None if "within_cov" not in entry else np.asarray(entry["within_cov"], float))
+                   int(entry.get("long_windows", 0)))
 
 
 def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
@@ -141,16 +137,16 @@ def summarise(name: str, effort: np.ndarray, level: np.ndarray, bins: np.ndarray
     levels = np.bincount(bins, weights=level, minlength=n_bins)
     own = effort.sum(axis=0) / level.sum()
 
-    def covariance(steps: int) -> tuple[np.ndarray, int]:
-        deviations = window_shares(effort, level, steps)[0] - own
-        return deviations.T @ deviations / max(1, len(deviations) - 1), len(deviations)
+    def variance(steps: int) -> tuple[np.ndarray, int]:
+        shares, _ = window_shares(effort, level, steps)
+        return ((shares - own) ** 2).sum(axis=0) / max(1, len(shares) - 1), len(shares)
 
-    cov, windows = covariance(window_steps)
-    long_var, long_windows = (np.diag(covariance(LONG_WINDOW * window_steps)[0]),
-                              len(level) // (LONG_WINDOW * window_steps)) \
-        if len(level) >= MIN_WINDOWS * LONG_WINDOW * window_steps else (None, 0)
-    return GroupLog(name, len(level) * dt_s, sums, levels, np.diag(cov).copy(), windows,
-                    long_var, long_windows, cov)
+    within, windows = variance(window_steps)
+    if len(level) < MIN_WINDOWS * LONG_WINDOW * window_steps:
+        return GroupLog(name, len(level) * dt_s, sums, levels, within, windows)
+    long_var, long_windows = variance(LONG_WINDOW * window_steps)
+    return GroupLog(name, len(level) * dt_s, sums, levels, within, windows, long_var,
+                    long_windows)
 
 
 def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:

@@ -15,17 +15,13 @@ near normal: far from "the others down alike".
 
 The signature of a span is those rises summed over its steps, less each member's share of
 their mean (the shares average to one), in units of each member's spread; it depends on
-which way each thruster pushed, so it is taken from the span's own commands.
-
-The controller's own corrections move the shares along its reach too, so a departure along
-such a signature is noisier than one along the plain signature: the statistic is scaled by
-how much more (`noise_ratio`), measured on the normal logs' windows."""
-
-from collections.abc import Sequence
+which way each thruster pushed, so it is taken from the span's own commands. It names the
+weak member (`engine.effort_check.signature_matches`); the tests still judge along the
+plain signatures: the controller's own corrections move the shares along the mixer's
+signatures too, and judged along them (scaled by how much noisier they are there, on the
+normal logs' windows) the simulated BlueROV2 found fewer weak thrusters at the budget."""
 
 import numpy as np
-
-from models.effort import GroupLog, weakness_directions
 
 REACH_TOLERANCE = 1e-9     # of the largest singular value: a direction the mix cannot drive
 
@@ -69,24 +65,3 @@ def signature_directions(rises: np.ndarray, shares: np.ndarray, sigma: np.ndarra
     norms = np.linalg.norm(scaled, axis=2, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.asarray(np.where(norms > 0, scaled / norms, 0.0))
-
-
-def window_correlation(logs: Sequence[GroupLog]) -> np.ndarray | None:
-    """(members, members): the correlation of the windows' shares, pooled over the normal
-    logs; None where a log does not keep its covariance (a model fitted before)."""
-    kept = [(g.within_cov, g.windows - 1) for g in logs if g.within_cov is not None]
-    if not logs or len(kept) < len(logs):
-        return None
-    pooled = np.sum([cov * dof for cov, dof in kept], axis=0)
-    scale = np.sqrt(np.maximum(np.diag(pooled), 1e-300))
-    return np.asarray(pooled / np.outer(scale, scale))
-
-
-def noise_ratio(directions: np.ndarray, correlation: np.ndarray) -> np.ndarray:
-    """(…, members k): the spread of the departures' projection on each member's signature
-    (``directions``: (…, k, j)) over their spread on the plain one, under the windows'
-    ``correlation``: what the plain signature's thresholds assume, carried over."""
-    plain = weakness_directions(correlation.shape[0])
-    along = np.einsum("...kj,ji,...ki->...k", directions, correlation, directions)
-    base = np.einsum("kj,ji,ki->k", plain, correlation, plain)
-    return np.asarray(np.sqrt(np.maximum(along, 1e-300) / np.maximum(base, 1e-300)))

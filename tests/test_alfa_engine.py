@@ -103,7 +103,7 @@ def test_a_flight_without_its_airspeed_is_judged_by_thresholds_set_without_it(ca
     """Calibrate replays its normal flights with the airspeed held at its typical value as
     well: the predictor then errs further on some signals (the climb follows the airspeed),
     and a flight that logs no airspeed is judged against those thresholds where higher."""
-    profile, model = calibrated
+    _, model = calibrated
     unfed = model.card.change_unfed["airspeed"]
     fed = model.card.change_thresholds
     raised = [(s, n) for s, values in unfed.items() for n, v in values.items() if v > fed[s][n]]

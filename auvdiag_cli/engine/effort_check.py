@@ -35,7 +35,6 @@ from models.effort import (
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
-from models.effort_reach import window_correlation
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -249,17 +248,16 @@ def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
-                 time_s: np.ndarray, dt_s: float, correlation: np.ndarray | None
+                 time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
                             EffortSeries, tuple]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures). ``correlation``: of the normal logs' windows'
-    shares (`models.effort_reach.window_correlation`)."""
+    alarm_s, series, whole-log figures)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
     spans = Spans.of(fit, effort, level, bins, setup.n_bins,
-                     np.nan_to_num(log.group_commands(setup.group)[steady]), dt_s, correlation)
+                     np.nan_to_num(log.group_commands(setup.group)[steady]), dt_s)
     n = len(level)
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
@@ -277,7 +275,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
     normal = expected_share(fit.means, level_by_bin)
-    figures = (share, normal, fit.sigma(n * dt_s), spans.directions(0, np.array([n]), False)[0])
+    figures = (share, normal, fit.sigma(n * dt_s), spans.signatures(0, n))
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
@@ -352,8 +350,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     directions: dict[str, np.ndarray] = {}     # each judged group's signatures, whole log
     alike = {setup.group.name for setup, fit in zip(model.setups, model.fits, strict=True)
              if fit is not None and fit.alike}
-    for setup, fit, refused, normal_logs in zip(model.setups, model.fits, model.refused,
-                                                model.summaries, strict=True):
+    for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
         members = setup.group.members
         why = refused if refused is not None else _unread(members, log)
         if why is None and fit is not None and model.thresholds is not None:
@@ -368,8 +365,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                                          None, None, None, why) for m in members]
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma, toward) = _judge_group(
-            setup, fit, model.thresholds, log, time_s, model.dt_s,
-            window_correlation(normal_logs))
+            setup, fit, model.thresholds, log, time_s, model.dt_s)
         directions[setup.group.name] = toward
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from models.effort import SPREAD_FLOOR, GroupFit, weakness_directions
-from models.effort_reach import noise_ratio, signature_directions, step_rises
+from models.effort_reach import signature_directions, step_rises
 
 
 def cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
@@ -32,46 +32,38 @@ class Spans:
     # group's mixer misses directions of it; None: each member's weakness moves the shares
     # the same way in every span.
     rise_sum: np.ndarray | None = None
-    correlation: np.ndarray | None = None     # of the normal logs' windows' shares
 
     @classmethod
     def of(cls, fit: GroupFit, effort: np.ndarray, level: np.ndarray, bins: np.ndarray,
-           n_bins: int, commands: np.ndarray, dt_s: float,
-           correlation: np.ndarray | None) -> "Spans":
-        """The spans of these steady steps (``commands``: theirs, signed). A group its mixer
-        cannot drive member by member is judged along its mixer's signatures where the
-        normal logs say how noisy those are (``correlation``), else along the plain ones."""
+           n_bins: int, commands: np.ndarray, dt_s: float) -> "Spans":
+        """The spans of these steady steps (``commands``: theirs, signed)."""
         projection = fit.group.projection
-        rise_sum = None if projection is None or correlation is None else np.concatenate([
+        rise_sum = None if projection is None else np.concatenate([
             np.zeros((1, *projection.shape)), np.cumsum(step_rises(
                 commands, np.asarray(fit.group.factors), projection), axis=0)])
-        return cls(fit, *cumulative(effort, level, bins, n_bins), dt_s, rise_sum, correlation)
+        return cls(fit, *cumulative(effort, level, bins, n_bins), dt_s, rise_sum)
 
-    def directions(self, start: int, ends: np.ndarray, changed: bool) -> np.ndarray:
-        """(ends, members k, members j): the unit direction in which a weakness of member k
-        over [start, end) moves the test's statistic (``changed``: against the log's own
-        beginning, else against the normal logs)."""
+    def signatures(self, start: int, end: int) -> np.ndarray:
+        """(members k, members j): the unit direction in which a weakness of member k over
+        [start, end) moves the departures against the normal logs, in units of their σ:
+        the mixer's (`models.effort_reach`) where it cannot drive the group member by
+        member, else the plain one (`weakness_directions`)."""
         members = self.effort_sum.shape[1]
         if self.rise_sum is None:
-            return np.broadcast_to(weakness_directions(members), (len(ends), members, members))
+            return weakness_directions(members)
+        ends = np.array([end])
         effort = self.effort_sum[ends] - self.effort_sum[start]
         total = (self.level_sum[ends] - self.level_sum[start]).sum(axis=1)
         with np.errstate(invalid="ignore", divide="ignore"):
             shares = effort / total[:, None]
-        sigma = (np.broadcast_to(self.fit.within, shares.shape) if changed
-                 else self.fit.sigma((ends - start) * self.dt_s))
-        return signature_directions(self.rise_sum[ends] - self.rise_sum[start], shares, sigma)
+        return signature_directions(self.rise_sum[ends] - self.rise_sum[start], shares,
+                                    self.fit.sigma((ends - start) * self.dt_s))[0]
 
     def projected(self, start: int, end: np.ndarray | int, changed: bool) -> np.ndarray:
-        """(ends, members): the test's statistic for each member's weakness: the span's
-        departures (`changed` or `z`) projected on that member's signature."""
-        ends = np.atleast_1d(end)
-        z = (self.changed if changed else self.z)(start, ends)
-        toward = self.directions(start, ends, changed)
-        projected = np.einsum("ekj,ej->ek", toward, z)
-        if self.rise_sum is None or self.correlation is None:
-            return np.asarray(projected)
-        return np.asarray(projected / noise_ratio(toward, self.correlation))
+        """(ends, members): each member's statistic: the span's departures (`changed`, else
+        `z`) projected on its plain signature."""
+        z = (self.changed if changed else self.z)(start, np.atleast_1d(end))
+        return np.asarray(z @ weakness_directions(z.shape[1]).T)
 
     def _departure(self, start: int, ends: np.ndarray) -> np.ndarray:
         """(ends, members): the share of [start, end) less its normal share."""
