@@ -23,6 +23,8 @@ normal logs' windows) the simulated BlueROV2 found fewer weak thrusters at the b
 
 import numpy as np
 
+from models.effort import EffortGroup, weakness_directions
+
 REACH_TOLERANCE = 1e-9     # of the largest singular value: a direction the mix cannot drive
 
 
@@ -65,3 +67,16 @@ def signature_directions(rises: np.ndarray, shares: np.ndarray, sigma: np.ndarra
     norms = np.linalg.norm(scaled, axis=2, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.asarray(np.where(norms > 0, scaled / norms, 0.0))
+
+
+def named_signatures(group: EffortGroup, commands: np.ndarray, shares: np.ndarray,
+                     sigma: np.ndarray) -> np.ndarray:
+    """(members k, members j): the signatures a log's departures (its ``shares``, each in
+    units of ``sigma``) are matched with to name its weak member: the mixer's over the
+    log's steady ``commands`` where it cannot drive the group member by member, else the
+    plain ones."""
+    projection = group.projection
+    if projection is None:
+        return weakness_directions(len(group.members))
+    rises = step_rises(commands, np.asarray(group.factors), projection).sum(axis=0)
+    return signature_directions(rises[None], shares[None], sigma[None])[0]

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
-from auvdiag_cli.engine.effort_spans import Spans, change_spread
+from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
@@ -35,6 +35,7 @@ from models.effort import (
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
+from models.effort_reach import named_signatures
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -256,9 +257,9 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
-    spans = Spans.of(fit, effort, level, bins, setup.n_bins,
-                     np.nan_to_num(log.group_commands(setup.group)[steady]), dt_s)
+    spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
+    toward = weakness_directions(len(setup.group.members))
     whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
@@ -268,14 +269,15 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     later_threshold = thresholds.later_start(fit, len(starts))
     candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.
-    z = np.array([spans.projected(0, n, False)[0]]
-                 + [spans.projected(s, n, True)[0] for s in starts])
+    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts]) @ toward.T
     ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
     level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
     normal = expected_share(fit.means, level_by_bin)
-    figures = (share, normal, fit.sigma(n * dt_s), spans.signatures(0, n))
+    sigma = fit.sigma(n * dt_s)
+    figures = (share, normal, sigma, named_signatures(
+        setup.group, np.nan_to_num(log.group_commands(setup.group)[steady]), share, sigma))
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
@@ -288,16 +290,17 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, where the span crossed.
     first = start + (window if start == 0 else stride)
-    running = spans.projected(start, np.arange(first, n + 1), start != 0)[:, top]
+    running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
+               @ toward.T)[:, top]
     crossed = np.flatnonzero(running > threshold)
     alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
-    onset = _onset(spans, top, times, window, stride, alarm)
+    onset = _onset(spans, toward[top], times, window, stride, alarm)
     return per_actuator, onset, float(times[alarm]), series, figures
 
 
-def _onset(spans: Spans, member: int, times: np.ndarray, window: int, stride: int,
+def _onset(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
            alarm: int) -> tuple[float, float]:
     """(onset_s, its error) of a change within the log, from the later starts on to the
     detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
@@ -307,7 +310,7 @@ def _onset(spans: Spans, member: int, times: np.ndarray, window: int, stride: in
     grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
     n = spans.level_sum.shape[0] - 1
     starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
-    z = np.array([spans.projected(int(s), n, True)[0, member] for s in starts])
+    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
     best = int(np.argmax(z))
     earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
                                    float(times[alarm]))

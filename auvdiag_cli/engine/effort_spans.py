@@ -6,8 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from models.effort import SPREAD_FLOOR, GroupFit, weakness_directions
-from models.effort_reach import signature_directions, step_rises
+from models.effort import SPREAD_FLOOR, GroupFit
 
 
 def cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
@@ -28,42 +27,6 @@ class Spans:
     effort_sum: np.ndarray
     level_sum: np.ndarray
     dt_s: float
-    # Running sums of `models.effort_reach.step_rises` (steps+1, members, members) where the
-    # group's mixer misses directions of it; None: each member's weakness moves the shares
-    # the same way in every span.
-    rise_sum: np.ndarray | None = None
-
-    @classmethod
-    def of(cls, fit: GroupFit, effort: np.ndarray, level: np.ndarray, bins: np.ndarray,
-           n_bins: int, commands: np.ndarray, dt_s: float) -> "Spans":
-        """The spans of these steady steps (``commands``: theirs, signed)."""
-        projection = fit.group.projection
-        rise_sum = None if projection is None else np.concatenate([
-            np.zeros((1, *projection.shape)), np.cumsum(step_rises(
-                commands, np.asarray(fit.group.factors), projection), axis=0)])
-        return cls(fit, *cumulative(effort, level, bins, n_bins), dt_s, rise_sum)
-
-    def signatures(self, start: int, end: int) -> np.ndarray:
-        """(members k, members j): the unit direction in which a weakness of member k over
-        [start, end) moves the departures against the normal logs, in units of their σ:
-        the mixer's (`models.effort_reach`) where it cannot drive the group member by
-        member, else the plain one (`weakness_directions`)."""
-        members = self.effort_sum.shape[1]
-        if self.rise_sum is None:
-            return weakness_directions(members)
-        ends = np.array([end])
-        effort = self.effort_sum[ends] - self.effort_sum[start]
-        total = (self.level_sum[ends] - self.level_sum[start]).sum(axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            shares = effort / total[:, None]
-        return signature_directions(self.rise_sum[ends] - self.rise_sum[start], shares,
-                                    self.fit.sigma((ends - start) * self.dt_s))[0]
-
-    def projected(self, start: int, end: np.ndarray | int, changed: bool) -> np.ndarray:
-        """(ends, members): each member's statistic: the span's departures (`changed`, else
-        `z`) projected on its plain signature."""
-        z = (self.changed if changed else self.z)(start, np.atleast_1d(end))
-        return np.asarray(z @ weakness_directions(z.shape[1]).T)
 
     def _departure(self, start: int, ends: np.ndarray) -> np.ndarray:
         """(ends, members): the share of [start, end) less its normal share."""
