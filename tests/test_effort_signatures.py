@@ -21,7 +21,7 @@ from auvdiag_cli.engine.effort_check import (
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.isolation import name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
-from auvdiag_cli.engine.narrowing import _narrow_by_effort
+from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
 
@@ -110,3 +110,39 @@ def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shar
     assert _narrow_by_effort(observed(check, {}), finding, elsewhere)[0] == elsewhere
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert _narrow_by_effort(observed(late, {}), finding, active)[0] == active
+
+
+def test_a_sensor_the_table_reads_but_no_fault_of_its_own_explains_yields_to_the_shares():
+    """A thruster dying as the vehicle dives raises the depth-rate sensor's row alone; no
+    fault of that sensor explains the log, the thruster's weakness comes closer, and its
+    group's shares match it alone from the onset to the detection: it is named. Where a
+    fault of the sensor explains the log, or comes closest (a closed loop answering what a
+    dead sensor misreads moves the shares too), or the shares were seen at another time,
+    the table stands."""
+    check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_s=18.0,
+                    alarm_s=25.0, onset_error_s=1.5)
+    finding = Finding(verdict=Verdict.FAULT, b={"heave": 1}, component="depth_rate_sensor",
+                      candidates=("depth_rate_sensor",), onset_s=15.0, detected_at_s=20.0)
+    closer = HypothesisTest((Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor"),
+                             Hypothesis("depth_rate_sensor", "dead", 1.7)))
+    assert unsupported_table(observed(check, {}), finding, closer) == "motor_3"
+    explained = HypothesisTest((Hypothesis("depth_rate_sensor", "stuck", 0.8),
+                                Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor")))
+    assert unsupported_table(observed(check, {}), finding, explained) is None
+    own_closest = HypothesisTest((Hypothesis("depth_rate_sensor", "dead", 1.2),
+                                  Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor")))
+    assert unsupported_table(observed(check, {}), finding, own_closest) is None
+    # The shares' event (16.5 s to 25 s) overlaps the replay's (15 s to 20 s); one that
+    # began after the detection is another event.
+    late = replace(check, onset_s=24.0, alarm_s=30.0)
+    assert unsupported_table(observed(late, {}), finding, closer) is None
+
+
+def test_a_member_the_clear_match_leaves_out_is_not_described_as_driven_harder():
+    # Motor 4's share fell over the log; it crossed only against the log's own beginning.
+    actuators = _group([-0.02, -0.01, 0.06, -0.05], 2, 3)
+    check = EffortCheck(actuators, 0.01, 20.0, 15.0, _named(actuators, signature_matches(
+        actuators)), (), "a damaged propeller or a weak motor", signature_matches(actuators))
+    assert check.named == ("motor_3",)
+    assert "motor_3 carries 6% more" in check.describe()
+    assert "motor_4" not in check.describe().split(":")[0]

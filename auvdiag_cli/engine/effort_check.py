@@ -103,16 +103,18 @@ class EffortCheck:
     def judged(self) -> bool:
         return any(a.not_judged is None for a in self.actuators)
 
-    def alone_by(self, time_s: float | None) -> str | None:
+    def alone_by(self, time_s: float | None, until_s: float | None = None) -> str | None:
         """The one component named, where the shares match its actuator's weakness clearly
-        (`CLEAR_MATCH`) and ``time_s`` lies between the earliest it may have begun (its
-        onset less the error stated) and when it was seen: the same event as one seen then."""
+        (`CLEAR_MATCH`) and ``time_s`` (or a moment from it to ``until_s``) lies between the
+        earliest it may have begun (its onset less the error stated) and when it was seen:
+        the same event as one seen then."""
         if (time_s is None or len(self.named) != 1 or not self.matches
                 or self.matches[0][1] < CLEAR_MATCH or self.onset_s is None
                 or self.alarm_s is None or self.onset_error_s is None):
             return None
-        return self.named[0] if (self.onset_s - self.onset_error_s <= time_s
-                                 <= self.alarm_s) else None
+        end = time_s if until_s is None else until_s
+        return self.named[0] if (self.onset_s - self.onset_error_s <= end
+                                 and time_s <= self.alarm_s) else None
 
     @property
     def suspects(self) -> tuple[ActuatorEffort, ...]:
@@ -129,9 +131,10 @@ class EffortCheck:
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
                     f"its threshold){_smallest_rise_shown(judged)}")
+        # A member its group's clear match leaves out (`_named`) is not a weakness of its own.
         parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
                  f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
-                 for a in suspects]
+                 for a in suspects if a.component in self.named or not self.named]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
                 + self._since() + self._caution())
 

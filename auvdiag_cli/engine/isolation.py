@@ -18,7 +18,12 @@ from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
-from auvdiag_cli.engine.narrowing import DECISIVE_MARGIN, narrowed, weak_alone
+from auvdiag_cli.engine.narrowing import (
+    DECISIVE_MARGIN,
+    narrowed,
+    unsupported_table,
+    weak_alone,
+)
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
@@ -45,10 +50,28 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
     if finding.substitution is not None:
         if weak is not None and weak.explains and _outweighs_the_table(weak, finding, test):
             return apply_weakened_thruster(finding, weak, judging.profile)
+        alone = unsupported_table(seen, finding, test)
+        if alone is not None:
+            return _instead_of_the_table(finding, alone, test)
         return finding
     if not finding.candidates:
         return name_by_hypotheses(seen, finding, test, judging)
     return finding
+
+
+def _instead_of_the_table(finding: Finding, actuator: str, test: HypothesisTest) -> Finding:
+    """``actuator`` named where the table read a sensor that no fault of its own explains
+    (`narrowing.unsupported_table`)."""
+    table_says = finding.component
+    sensor = min(h.peak_g_ratio for h in test.ranked if h.component == table_says)
+    closest = min((h for h in test.ranked if h.component == actuator),
+                  key=lambda h: h.peak_g_ratio)
+    return replace(finding, component=actuator, candidates=(actuator,),
+                   substitution=None).noted(
+        f"the pattern table reads b as {table_says}, but no fault of it explains the log (the "
+        f"closest leaves g at {sensor:.0%} of its threshold); {closest.describe()} comes "
+        f"closer ({closest.peak_g_ratio:.0%}), and the effort its group carries matches "
+        f"{actuator} weak alone, seen then: {actuator} is named")
 
 
 def _outweighs_the_table(weak: Hypothesis, finding: Finding, test: HypothesisTest) -> bool:

@@ -42,6 +42,25 @@ def weak_alone(seen: Observations, time_s: float | None) -> str | None:
     return None if effort is None else effort.alone_by(time_s)
 
 
+def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest
+                      ) -> str | None:
+    """The actuator to name instead of the sensor the pattern table reads, or None: where
+    none of that sensor's faults explains the log, the hypothesis of one actuator comes
+    closer than any of them, and its group's shares match that actuator weak alone, seen
+    from the replay's onset to its detection (a thruster dying as the vehicle dives raises
+    the depth-rate sensor's row). A sensor's fault in a closed loop moves the shares too
+    (the controller answers what it misreads), but then its own replay comes closest."""
+    sensor = min((h.peak_g_ratio for h in test.ranked if h.component == finding.component),
+                 default=float("inf"))
+    effort = seen.effort_check
+    if sensor < 1.0 or effort is None:
+        return None
+    alone = effort.alone_by(finding.onset_s, finding.detected_at_s)
+    closest = min((h.peak_g_ratio for h in test.ranked if h.component == alone),
+                  default=float("inf"))
+    return alone if closest < sensor else None
+
+
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
                       ) -> tuple[ActiveDiagnosis, Finding]:
     """Among the candidates left, the actuator whose group's shares match its weakness
