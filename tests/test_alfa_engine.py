@@ -10,6 +10,7 @@ from shared_data import SHARED_DATA
 
 from auvdiag_cli import api
 from auvdiag_cli.engine.change_check import SUM, WINDOW
+from auvdiag_cli.reports.training import calibration_lines
 
 ALFA = SHARED_DATA / "alfa"
 DAY = "2018-07-18"
@@ -44,13 +45,13 @@ def calibrated(tmp_path_factory):
     api.train(logs, profile, work / "model", options=api.TrainOptions(
         healthy=parts, keep_unskilled=True, predictors=("linear",)))
     model = api.load_model(work / "model", profile)
-    api.calibrate(logs, profile, model, options=api.CalibrateOptions(
+    result = api.calibrate(logs, profile, model, options=api.CalibrateOptions(
         budget=api.FalseAlarmBudget.parse("0.05"), healthy=parts))
-    return profile, model
+    return profile, model, calibration_lines(result)
 
 
 def _judged(calibrated, name: str):
-    profile, model = calibrated
+    profile, model, _ = calibrated
     (row,) = [r for r in _labels() if r["sequence"] == name]
     diagnosis = api.diagnose(ALFA / name, profile, model)
     onset = None if not row["onset_time_ns"] else (
@@ -60,7 +61,7 @@ def _judged(calibrated, name: str):
 
 @pytest.mark.shared_data("alfa")
 def test_calibrate_sets_the_engine_signatures_thresholds(calibrated):
-    _, model = calibrated
+    _, model, _ = calibrated
     for statistic in (WINDOW, SUM):
         assert model.card.change_thresholds[statistic]["engine weakened"] > 0
     # Two days' flights tell how far normal flying goes each way: throttle-ups push the
@@ -103,11 +104,15 @@ def test_a_flight_without_its_airspeed_is_judged_by_thresholds_set_without_it(ca
     """Calibrate replays its normal flights with the airspeed held at its typical value as
     well: the predictor then errs further on some signals (the climb follows the airspeed),
     and a flight that logs no airspeed is judged against those thresholds where higher."""
-    _, model = calibrated
+    _, model, _ = calibrated
     unfed = model.card.change_unfed["airspeed"]
     fed = model.card.change_thresholds
     raised = [(s, n) for s, values in unfed.items() for n, v in values.items() if v > fed[s][n]]
     assert raised and len(raised) == sum(len(v) for v in unfed.values())
+    # calibrate says what it set for such a log.
+    (said,) = [line for line in calibrated[2] if "change test for a log without airspeed" in line]
+    statistic, name = raised[0]
+    assert f"{statistic} " in said and f"{name} {unfed[statistic][name]:g}" in said
     without = model.card.change_thresholds_without(["airspeed"])
     assert all(without[s][n] == unfed[s][n] for s, n in raised)
     assert model.card.change_thresholds_without([]) == {s: dict(v) for s, v in fed.items()}

@@ -174,8 +174,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         model, profile, budget, per_log, modes, readings, checks, judged,
         [float(log.frame.operating.sum()) * profile.dt_s / 3600 for log in ingested], evidence)
     change = change_thresholds(evidence, margin, fitted)
-    model.update_entries(change_test=change_entry(change, evidence.scales, unfed_thresholds(
-        ingested, model, profile, margin, fitted, evidence.scales, change, progress)))
+    unfed = unfed_thresholds(ingested, model, profile, margin, fitted, evidence.scales, change,
+                             progress)
+    model.update_entries(change_test=change_entry(change, evidence.scales, unfed))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -189,7 +190,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
-        fitted, change, evidence.trained_on, utc_days(ingested))
+        fitted, change, evidence.trained_on, utc_days(ingested), unfed)
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result

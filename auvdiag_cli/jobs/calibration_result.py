@@ -71,6 +71,9 @@ class CalibrationResult:
     change: ChangeThresholds = field(default_factory=dict)
     change_trained_on: tuple[str, ...] = ()   # logs trained on whose peaks it counted too
     days: tuple[str, ...] = ()     # the UTC days of the normal logs (none: not UTC clocks)
+    # input -> statistic -> signal: the change test's thresholds for a log without that
+    # input, where higher (`jobs.change_unfed`).
+    change_unfed: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
 
 
 

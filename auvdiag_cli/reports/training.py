@@ -280,5 +280,11 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
                      f"largest on these logs{also} -> threshold: " + ", ".join(
                          f"{name} {largest:g} -> {threshold:g}"
                          for name, (largest, threshold) in values.items()))
+    for name, by_statistic in result.change_unfed.items():
+        lines.append(f"  change test for a log without {name} (these logs replayed with it "
+                     "held at its typical value), where higher: " + "; ".join(
+                         f"{statistic} " + ", ".join(f"{signal} {value:g}"
+                                                     for signal, value in values.items())
+                         for statistic, values in by_statistic.items()))
     lines += [f"warning: {warning}" for warning in result.warnings]
     return lines
