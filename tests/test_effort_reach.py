@@ -81,19 +81,23 @@ def _model(rng: np.random.Generator, groups=PROFILE.effort_groups) -> EffortMode
     return model
 
 
-def _judge(model: EffortModel, commands: np.ndarray):  # type: ignore[no-untyped-def]
-    return check_effort(model, PROFILE, commands, np.ones(len(commands), bool),
-                        PROFILE.dt_s * np.arange(len(commands)))
+PLAIN = tuple(replace(g, reach=None) for g in PROFILE.effort_groups)
+# The same vehicle with no mixer in its profile: its groups' signatures are the plain ones.
+NO_MIXER = replace(PROFILE, effort_groups=PLAIN)
+
+
+def _judge(model: EffortModel, commands: np.ndarray, profile=PROFILE):  # type: ignore[no-untyped-def]
+    return check_effort(model, profile, commands, np.ones(len(commands), bool),
+                        profile.dt_s * np.arange(len(commands)))
 
 
 @pytest.mark.parametrize("seed", [5, 6])
 def test_a_weak_horizontal_thruster_matches_its_signature_through_the_mix(seed):
     rng = np.random.default_rng(seed)
     model = _model(rng)
-    plain = _model(np.random.default_rng(seed), tuple(
-        replace(g, reach=None) for g in PROFILE.effort_groups))
+    plain = _model(np.random.default_rng(seed), PLAIN)
     weak = _commands(rng, kept=0.7)
-    check, before = _judge(model, weak), _judge(plain, weak)
+    check, before = _judge(model, weak), _judge(plain, weak, NO_MIXER)
     # Under way the mix raises thruster 1 and lowers thruster 2 (its fore-and-aft partner)
     # by about as much: the plain signature, the others down alike, matches it only so well.
     shares = {a.name: a.departure for a in check.actuators}
@@ -114,3 +118,12 @@ def test_a_model_read_back_names_along_the_same_signatures():
     weak = _commands(rng, kept=0.7)
     assert _judge(again, weak).matches == _judge(model, weak).matches
     assert _judge(again, weak).matches[0][1] > 0.95
+
+
+def test_a_model_fitted_before_groups_kept_their_reach_takes_the_profiles():
+    rng = np.random.default_rng(8)
+    older = _model(rng, PLAIN)
+    assert older.setups[0].group.reach is None
+    weak = _commands(rng, kept=0.7)
+    assert _judge(older, weak).matches[0][1] > 0.95              # the profile's mixer
+    assert _judge(older, weak, NO_MIXER).matches[0][1] < 0.9      # a profile without one

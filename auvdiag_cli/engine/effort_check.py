@@ -18,7 +18,7 @@ most among those tried on to the detection (the change point's likeliest place,
 `_onset`)."""
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from models.effort import (
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
-from models.effort_reach import named_signatures
+from models.effort_reach import named_signatures, with_reach_of
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -371,7 +371,8 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                                          None, None, None, why) for m in members]
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma, toward) = _judge_group(
-            setup, fit, model.thresholds, log, time_s, model.dt_s)
+            replace(setup, group=with_reach_of(setup.group, profile.effort_groups)), fit,
+            model.thresholds, log, time_s, model.dt_s)
         directions[setup.group.name] = toward
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
