@@ -110,6 +110,16 @@ def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shar
     assert _narrow_by_effort(observed(check, {}), finding, elsewhere)[0] == elsewhere
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert _narrow_by_effort(observed(late, {}), finding, active)[0] == active
+    # A sensor among the candidates whose own replay comes closer: the controller answering
+    # its misreading moved the shares (a dead gyro spins the vehicle); nothing is decided.
+    with_gyro = replace(active, candidates=("motor_3", "gyro"))
+    closer = replace(finding, hypotheses=HypothesisTest((
+        Hypothesis("gyro", "dead", 1.4), Hypothesis("motor_3", "weakened", 2.0, 0.5, "rotor"))))
+    assert _narrow_by_effort(observed(check, {}), closer, with_gyro)[0] == with_gyro
+    farther = replace(finding, hypotheses=HypothesisTest((
+        Hypothesis("motor_3", "weakened", 1.2, 0.5, "rotor"), Hypothesis("gyro", "dead", 1.4))))
+    assert _narrow_by_effort(observed(check, {}), farther, with_gyro)[0].candidates == (
+        "motor_3",)
 
 
 def test_a_sensor_the_table_reads_but_no_fault_of_its_own_explains_yields_to_the_shares():

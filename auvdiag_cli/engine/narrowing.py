@@ -50,15 +50,18 @@ def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest
     from the replay's onset to its detection (a thruster dying as the vehicle dives raises
     the depth-rate sensor's row). A sensor's fault in a closed loop moves the shares too
     (the controller answers what it misreads), but then its own replay comes closest."""
-    sensor = min((h.peak_g_ratio for h in test.ranked if h.component == finding.component),
-                 default=float("inf"))
+    sensor = _closest(test, finding.component)
     effort = seen.effort_check
     if sensor < 1.0 or effort is None:
         return None
     alone = effort.alone_by(finding.onset_s, finding.detected_at_s)
-    closest = min((h.peak_g_ratio for h in test.ranked if h.component == alone),
-                  default=float("inf"))
-    return alone if closest < sensor else None
+    return alone if alone is not None and _closest(test, alone) < sensor else None
+
+
+def _closest(test: HypothesisTest, component: str | None) -> float:
+    """The largest g / threshold the best of ``component``'s hypotheses leaves."""
+    return min((h.peak_g_ratio for h in test.ranked if h.component == component),
+               default=float("inf"))
 
 
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
@@ -66,9 +69,16 @@ def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagno
     """Among the candidates left, the actuator whose group's shares match its weakness
     alone, begun by the onset (`EffortCheck.alone_by`): the controller drives the weak one
     harder, which tells apart actuators that move the vehicle alike (a vectored ROV's two
-    vertical thrusters)."""
+    vertical thrusters); unless a sensor among them is explained better by its own replay."""
     alone = weak_alone(seen, finding.onset_s)
     if alone is None or alone not in active.candidates:
+        return active, finding
+    test = finding.hypotheses
+    if test is not None and any(
+            _closest(test, c) < _closest(test, alone) for c in active.candidates
+            if any(h.component == c and not h.is_actuator for h in test.ranked)):
+        # A sensor's fault in a closed loop moves the shares too (the controller answers what
+        # it misreads, a dead gyro spinning the vehicle): its own replay then comes closer.
         return active, finding
     finding = finding.noted(
         f"the pattern table reads b as {' or '.join(active.candidates)}; the effort their "
