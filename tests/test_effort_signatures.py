@@ -110,15 +110,27 @@ def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shar
     assert _narrow_by_effort(observed(check, {}), finding, elsewhere)[0] == elsewhere
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert _narrow_by_effort(observed(late, {}), finding, active)[0] == active
-    # A sensor among the candidates whose own replay comes closer: the controller answering
-    # its misreading moved the shares (a dead gyro spins the vehicle); nothing is decided.
+    # A sensor among the candidates whose own replay explains the log, closer: the controller
+    # answering its misreading moved the shares (a dead gyro spins the vehicle); nothing is
+    # decided.
     with_gyro = replace(active, candidates=("motor_3", "gyro"))
     closer = replace(finding, hypotheses=HypothesisTest((
-        Hypothesis("gyro", "dead", 1.4), Hypothesis("motor_3", "weakened", 2.0, 0.5, "rotor"))))
+        Hypothesis("gyro", "dead", 0.7), Hypothesis("motor_3", "weakened", 2.0, 0.5, "rotor"))))
     assert _narrow_by_effort(observed(check, {}), closer, with_gyro)[0] == with_gyro
+    # Closer but explaining nothing either: the shares decide.
+    neither = replace(finding, hypotheses=HypothesisTest((
+        Hypothesis("gyro", "dead", 1.4), Hypothesis("motor_3", "weakened", 2.0, 0.5, "rotor"))))
+    assert _narrow_by_effort(observed(check, {}), neither, with_gyro)[0].candidates == (
+        "motor_3",)
     farther = replace(finding, hypotheses=HypothesisTest((
         Hypothesis("motor_3", "weakened", 1.2, 0.5, "rotor"), Hypothesis("gyro", "dead", 1.4))))
     assert _narrow_by_effort(observed(check, {}), farther, with_gyro)[0].candidates == (
+        "motor_3",)
+    # A bias fitted to the log absorbs a weak rotor's effect on one signal: it does not count.
+    fitted = replace(finding, hypotheses=HypothesisTest((
+        Hypothesis("gyro", "biased", 0.8), Hypothesis("motor_3", "weakened", 0.9, 0.5, "rotor"),
+        Hypothesis("gyro", "dead", 1.4))))
+    assert _narrow_by_effort(observed(check, {}), fitted, with_gyro)[0].candidates == (
         "motor_3",)
 
 

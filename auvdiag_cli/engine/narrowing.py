@@ -58,10 +58,12 @@ def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest
     return alone if alone is not None and _closest(test, alone) < sensor else None
 
 
-def _closest(test: HypothesisTest, component: str | None) -> float:
-    """The largest g / threshold the best of ``component``'s hypotheses leaves."""
-    return min((h.peak_g_ratio for h in test.ranked if h.component == component),
-               default=float("inf"))
+def _closest(test: HypothesisTest, component: str | None,
+             kinds: tuple[str, ...] | None = None) -> float:
+    """The largest g / threshold the best of ``component``'s hypotheses (of ``kinds``: all)
+    leaves."""
+    return min((h.peak_g_ratio for h in test.ranked if h.component == component
+                and (kinds is None or h.kind in kinds)), default=float("inf"))
 
 
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
@@ -69,16 +71,19 @@ def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagno
     """Among the candidates left, the actuator whose group's shares match its weakness
     alone, begun by the onset (`EffortCheck.alone_by`): the controller drives the weak one
     harder, which tells apart actuators that move the vehicle alike (a vectored ROV's two
-    vertical thrusters); unless a sensor among them is explained better by its own replay."""
+    vertical thrusters); unless a sensor among them, dead or stuck, explains the log better."""
     alone = weak_alone(seen, finding.onset_s)
     if alone is None or alone not in active.candidates:
         return active, finding
     test = finding.hypotheses
     if test is not None and any(
-            _closest(test, c) < _closest(test, alone) for c in active.candidates
+            _closest(test, c, ("dead", "stuck")) < min(1.0, _closest(test, alone))
+            for c in active.candidates
             if any(h.component == c and not h.is_actuator for h in test.ranked)):
         # A sensor's fault in a closed loop moves the shares too (the controller answers what
-        # it misreads, a dead gyro spinning the vehicle): its own replay then comes closer.
+        # it misreads, a dead gyro spinning the vehicle): its replay dead or stuck then
+        # explains the log, and comes closer. A fitted bias or drift absorbs a weak
+        # thruster's effect on one signal, and does not count.
         return active, finding
     finding = finding.noted(
         f"the pattern table reads b as {' or '.join(active.candidates)}; the effort their "
