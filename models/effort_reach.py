@@ -21,9 +21,6 @@ plain signatures: the controller's own corrections move the shares along the mix
 signatures too, and judged along them (scaled by how much noisier they are there, on the
 normal logs' windows) the simulated BlueROV2 found fewer weak thrusters at the budget."""
 
-from collections.abc import Sequence
-from dataclasses import replace
-
 import numpy as np
 
 from models.effort import EffortGroup, weakness_directions
@@ -84,13 +81,3 @@ def named_signatures(group: EffortGroup, commands: np.ndarray, shares: np.ndarra
     rises = step_rises(commands, np.asarray(group.factors), projection).sum(axis=0)
     return signature_directions(rises[None], shares[None], sigma[None])[0]
 
-
-def with_reach_of(group: EffortGroup, groups: Sequence[EffortGroup]) -> EffortGroup:
-    """The group with its mixer's reach: a model fitted before groups kept it takes that of
-    the same group among ``groups`` (the profile's; it sets only how the weak member is
-    named)."""
-    if group.reach is not None:
-        return group
-    same = next((g for g in groups if g.name == group.name and g.members == group.members),
-                None)
-    return group if same is None else replace(group, reach=same.reach)

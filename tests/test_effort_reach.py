@@ -119,11 +119,3 @@ def test_a_model_read_back_names_along_the_same_signatures():
     assert _judge(again, weak).matches == _judge(model, weak).matches
     assert _judge(again, weak).matches[0][1] > 0.95
 
-
-def test_a_model_fitted_before_groups_kept_their_reach_takes_the_profiles():
-    rng = np.random.default_rng(8)
-    older = _model(rng, PLAIN)
-    assert older.setups[0].group.reach is None
-    weak = _commands(rng, kept=0.7)
-    assert _judge(older, weak).matches[0][1] > 0.95              # the profile's mixer
-    assert _judge(older, weak, NO_MIXER).matches[0][1] < 0.9      # a profile without one

@@ -18,7 +18,7 @@ most among those tried on to the detection (the change point's likeliest place,
 `_onset`)."""
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -35,7 +35,7 @@ from models.effort import (
     window_shares,
 )
 from models.effort_model import EffortLog, EffortModel, GroupSetup
-from models.effort_reach import named_signatures, with_reach_of
+from models.effort_reach import named_signatures
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -371,8 +371,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                                          None, None, None, why) for m in members]
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma, toward) = _judge_group(
-            replace(setup, group=with_reach_of(setup.group, profile.effort_groups)), fit,
-            model.thresholds, log, time_s, model.dt_s)
+            setup, fit, model.thresholds, log, time_s, model.dt_s)
         directions[setup.group.name] = toward
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
