@@ -42,29 +42,24 @@ def reach(mix_rows: np.ndarray) -> np.ndarray | None:
     return np.asarray(kept @ kept.T)
 
 
-def step_rises(commands: np.ndarray, factors: np.ndarray, projection: np.ndarray
-               ) -> np.ndarray:
-    """(steps, members k, members j): how much member j's effort rises, per unit of the
-    fraction of thrust member k lost, at each step: |u_k| sign(u_k) sign(u_j) P_jk / c_j
-    (c: the mixing factors by magnitude)."""
+def rises(commands: np.ndarray, factors: np.ndarray, projection: np.ndarray) -> np.ndarray:
+    """(members k, members j): how much member j's effort rises over these steps, per unit
+    of the fraction of thrust member k lost: Σ_t u_k sign(u_j) P_jk / c_j (c: the mixing
+    factors by magnitude)."""
     signs = np.where(commands < 0, -1.0, 1.0)
-    pushed = np.abs(commands) * signs                  # u_k itself, with its sign
-    return np.asarray(pushed[:, :, None] * signs[:, None, :] * projection.T[None, :, :]
-                      / factors[None, None, :])
+    return np.asarray(commands.T @ signs * projection.T / factors[None, :])
 
 
 def signature_directions(rises: np.ndarray, shares: np.ndarray, sigma: np.ndarray
                          ) -> np.ndarray:
-    """(spans, members k, members j): unit directions, in units of each member's σ, in
-    which a weakness of member k moves the departures of spans whose summed ``rises``
-    (spans, k, j) and ``shares`` (spans, j) are given. The component along σ, which
-    departures never take (the shares average to one), is left out."""
-    moved = rises - shares[:, None, :] * rises.mean(axis=2, keepdims=True)
-    scaled = moved / sigma[:, None, :]
-    unit_sigma = sigma / np.linalg.norm(sigma, axis=1, keepdims=True)
-    scaled = scaled - np.einsum("skj,sj->sk", scaled, unit_sigma)[:, :, None] \
-        * unit_sigma[:, None, :]
-    norms = np.linalg.norm(scaled, axis=2, keepdims=True)
+    """(members k, members j): unit directions, in units of each member's σ, in which a
+    weakness of member k moves the departures of a span with these ``rises`` and ``shares``.
+    The component along σ, which departures never take (the shares average to one), is
+    left out."""
+    scaled = (rises - shares[None, :] * rises.mean(axis=1, keepdims=True)) / sigma[None, :]
+    unit_sigma = sigma / np.linalg.norm(sigma)
+    scaled = scaled - np.outer(scaled @ unit_sigma, unit_sigma)
+    norms = np.linalg.norm(scaled, axis=1, keepdims=True)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.asarray(np.where(norms > 0, scaled / norms, 0.0))
 
@@ -78,6 +73,5 @@ def named_signatures(group: EffortGroup, commands: np.ndarray, shares: np.ndarra
     projection = group.projection
     if projection is None:
         return weakness_directions(len(group.members))
-    rises = step_rises(commands, np.asarray(group.factors), projection).sum(axis=0)
-    return signature_directions(rises[None], shares[None], sigma[None])[0]
-
+    return signature_directions(rises(commands, np.asarray(group.factors), projection),
+                                shares, sigma)

@@ -15,7 +15,7 @@ import pytest
 from auvdiag_cli.engine.effort_check import check_effort
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort_model import EffortLog, EffortModel, learn_effort
-from models.effort_reach import reach, signature_directions, step_rises
+from models.effort_reach import reach, rises, signature_directions
 
 PROFILE = load_profile(Path("bluerov2"))
 STEPS = 1500                      # 150 s at 10 Hz
@@ -35,10 +35,10 @@ def test_the_reach_of_a_vectored_mix_misses_the_direction_all_four_push_alike():
     # Under way (motors 1 and 2 pushing in reverse), thruster 1's signature: its share up,
     # thruster 2's down as much, the other two unmoved.
     forward = np.tile(np.array([-0.3, -0.3, 0.3, 0.3]), (100, 1))
-    rises = step_rises(forward, np.ones(4), projection).sum(axis=0)[None]
-    toward = signature_directions(rises, np.ones((1, 4)), np.ones((1, 4)))
-    np.testing.assert_allclose(toward[0, 0], [0.5 ** 0.5, -(0.5 ** 0.5), 0, 0], atol=1e-9)
-    np.testing.assert_allclose(toward[0, 3], [0, 0, -(0.5 ** 0.5), 0.5 ** 0.5], atol=1e-9)
+    toward = signature_directions(rises(forward, np.ones(4), projection), np.ones(4),
+                                  np.ones(4))
+    np.testing.assert_allclose(toward[0], [0.5 ** 0.5, -(0.5 ** 0.5), 0, 0], atol=1e-9)
+    np.testing.assert_allclose(toward[3], [0, 0, -(0.5 ** 0.5), 0.5 ** 0.5], atol=1e-9)
 
 
 def test_the_profile_gives_the_reach_and_the_model_keeps_it():

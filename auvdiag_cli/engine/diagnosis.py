@@ -319,9 +319,9 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
         notes.append(f"change test: {', '.join(measured)} not fed in this log: judged "
                      "against the thresholds calibrate set on its normal logs replayed "
                      "without it, where higher")
-    if [name for name in missing if name not in measured] and ahead is not None \
-            and ahead.inputs:
-        notes.append(f"change test: {', '.join(n for n in missing if n not in measured)} not "
+    unmeasured = [name for name in missing if name not in measured]
+    if unmeasured and ahead is not None and ahead.inputs:
+        notes.append(f"change test: {', '.join(unmeasured)} not "
                      "fed in this log, though its predictor a moment ahead reads it as part "
                      "of the state: it predicts this log with less than the logs its "
                      "thresholds were set on had, and an alarm here is less certain")
