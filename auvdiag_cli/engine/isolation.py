@@ -20,6 +20,7 @@ from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import (
     DECISIVE_MARGIN,
+    closest,
     narrowed,
     unsupported_table,
     weak_alone,
@@ -63,14 +64,14 @@ def _instead_of_the_table(finding: Finding, actuator: str, test: HypothesisTest)
     """``actuator`` named where the table read a sensor that no fault of its own explains
     (`narrowing.unsupported_table`)."""
     table_says = finding.component
-    sensor = min(h.peak_g_ratio for h in test.ranked if h.component == table_says)
-    closest = min((h for h in test.ranked if h.component == actuator),
-                  key=lambda h: h.peak_g_ratio)
+    best = min((h for h in test.ranked if h.component == actuator),
+               key=lambda h: h.peak_g_ratio)
     return replace(finding, component=actuator, candidates=(actuator,),
                    substitution=None).noted(
         f"the pattern table reads b as {table_says}, but no fault of it explains the log (the "
-        f"closest leaves g at {sensor:.0%} of its threshold); {closest.describe()} comes "
-        f"closer ({closest.peak_g_ratio:.0%}), and the effort its group carries matches "
+        f"closest leaves g at {closest(test, table_says):.0%} of its threshold); "
+        f"{best.describe()} comes closer ({best.peak_g_ratio:.0%}), and the effort its group "
+        "carries matches "
         f"{actuator} weak alone, seen then: {actuator} is named")
 
 

@@ -50,15 +50,15 @@ def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest
     from the replay's onset to its detection (a thruster dying as the vehicle dives raises
     the depth-rate sensor's row). A sensor's fault in a closed loop moves the shares too
     (the controller answers what it misreads), but then its own replay comes closest."""
-    sensor = _closest(test, finding.component)
+    sensor = closest(test, finding.component)
     effort = seen.effort_check
     if sensor < 1.0 or effort is None:
         return None
     alone = effort.alone_by(finding.onset_s, finding.detected_at_s)
-    return alone if alone is not None and _closest(test, alone) < sensor else None
+    return alone if alone is not None and closest(test, alone) < sensor else None
 
 
-def _closest(test: HypothesisTest, component: str | None,
+def closest(test: HypothesisTest, component: str | None,
              kinds: tuple[str, ...] | None = None) -> float:
     """The largest g / threshold the best of ``component``'s hypotheses (of ``kinds``: all)
     leaves."""
@@ -77,7 +77,7 @@ def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagno
         return active, finding
     test = finding.hypotheses
     if test is not None and any(
-            _closest(test, c, ("dead", "stuck")) < min(1.0, _closest(test, alone))
+            closest(test, c, ("dead", "stuck")) < min(1.0, closest(test, alone))
             for c in active.candidates
             if any(h.component == c and not h.is_actuator for h in test.ranked)):
         # A sensor's fault in a closed loop moves the shares too (the controller answers what
