@@ -136,7 +136,7 @@ def judge_flights(training: list[Flight], judged_flights: list[Flight], name: st
     judges ``judged_flights``, with and without its change test; and what it judges, with
     the skill of each signal (the replay's, and the change test's a moment ahead)."""
     from auvdiag_cli import api
-    from auvdiag_cli.engine.change_check import change_judged
+    from auvdiag_cli.engine.change_columns import change_judged
 
     profile = api.load_profile("arduplane_carbonz")
     healthy = api.read_healthy_parts(_healthy_file(training, work, guard_s))
@@ -152,7 +152,8 @@ def judge_flights(training: list[Flight], judged_flights: list[Flight], name: st
     ahead = model.card.ahead
     if ahead is not None:
         judged += "; the change test " + (", ".join(
-            f"{signal} {ahead.skill[signal]:.2f}" for signal in change_judged(model, replayed))
+            f"{signal} {ahead.skill[signal]:.2f}" if signal in ahead.skill else signal
+            for signal in change_judged(model, replayed))
             or "none") + " (skill a moment ahead)"
     api.calibrate(logs, profile, model, options=api.CalibrateOptions(
         budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
@@ -199,11 +200,11 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     soon: dict[float, dict[tuple[str, str], float]] = {s: {} for s in GOAL_DELAYS_S}
     parts = [(~after, before), (after, later)] + [
         (after & (time_s <= (onset_s or 0.0) + delay), soon[delay]) for delay in GOAL_DELAYS_S]
-    names = list(diagnosis.histories.sensor_names)
+    names = list(diagnosis.histories.change_names or diagnosis.histories.sensor_names)
     found = signatures(profile.actuators, names)
     for statistic, values in change_statistics(
             residual, profile.window_samples, round(REFERENCE_MIN_S / profile.dt_s),
-            found).items():
+            found, names=names, below_only={loop.name for loop in profile.tracking}).items():
         for column, name in enumerate([*names, *(s.name for s in found)]):
             for part, into in parts:
                 known = values[part, column]

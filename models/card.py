@@ -14,6 +14,7 @@ from typing import Any, Protocol, runtime_checkable
 from models.ahead import AheadPredictor
 from models.change_training import ChangeTraining
 from models.fast import NETWORK
+from models.tracking import TrackingFit
 
 
 @runtime_checkable
@@ -174,6 +175,12 @@ def _frozen(mapping: Mapping[str, Any]) -> Mapping[str, Any]:
     return MappingProxyType(dict(mapping))
 
 
+def _limits(table: Mapping[str, Any]) -> Mapping[str, Mapping[str, float]]:
+    """statistic -> signal -> threshold, as model.json keeps the change test's."""
+    return _frozen({str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
+                    for statistic, values in table.items()})
+
+
 @dataclass(frozen=True)
 class ModelCard:
     name: str | None
@@ -222,6 +229,8 @@ class ModelCard:
     change_training: ChangeTraining = field(default_factory=ChangeTraining)
     # The UTC days of the normal logs calibrate set the thresholds on (none: not known).
     calibration_days: tuple[str, ...] = ()
+    # The controller's loops whose gain the change test judges (`models.tracking`).
+    tracking: tuple[TrackingFit, ...] = ()
     # model.json as the card writes it back: every entry, the records kept for people
     # (how it was trained and calibrated) among them, as JSON text so that it stays frozen.
     document_text: str = field(default="{}", repr=False, compare=False)
@@ -287,6 +296,7 @@ class ModelCard:
         chosen = meta.get("predictors", {}).get("per_signal", {})
         calibration = meta.get("calibration") or {}
         budget = calibration.get("false_alarm_budget")
+        change = meta.get("change_test") or {}
         return cls(
             name=meta.get("name"), vehicle=meta.get("vehicle"), created=meta.get("created"),
             dt_s=float(meta["dt_s"]),
@@ -323,18 +333,14 @@ class ModelCard:
             start_state=StartReference.from_json(meta.get("start_state") or {}),
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"),
-            change_thresholds=_frozen({
-                str(statistic): _frozen({str(k): float(v) for k, v in values.items()})
-                for statistic, values in (meta.get("change_test") or {}).get(
-                    "thresholds", {}).items()}),
-            change_stride=_change_stride(meta.get("change_test") or {}),
-            change_way_scales=_way_scales(meta.get("change_test") or {}),
-            change_unfed=_frozen({str(i): _frozen({str(s): _frozen({
-                str(k): float(v) for k, v in values.items()}) for s, values in by.items()})
-                for i, by in (meta.get("change_test") or {}).get(
-                    "unfed_thresholds", {}).items()}),
+            change_thresholds=_limits(change.get("thresholds", {})),
+            change_stride=_change_stride(change),
+            change_way_scales=_way_scales(change),
+            change_unfed=_frozen({str(i): _limits(by) for i, by in change.get(
+                "unfed_thresholds", {}).items()}),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
+            tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
             document_text=json.dumps(meta))

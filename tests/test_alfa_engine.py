@@ -5,6 +5,7 @@ for 5 % of normal flights, judging the third day's flights as a user would."""
 
 import csv
 
+import numpy as np
 import pytest
 from shared_data import SHARED_DATA
 
@@ -123,3 +124,23 @@ def test_a_flight_without_its_airspeed_is_judged_by_thresholds_set_without_it(ca
     assert check is not None
     statistic, name = next((s, n) for s, n in raised if n in check.thresholds.get(s, {}))
     assert check.thresholds[statistic][name] == pytest.approx(unfed[statistic][name])
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_stuck_aileron_slows_the_roll_loop(calibrated):
+    """The profile's roll loop, fitted on the normal flights: the roll rate per radian of
+    roll error. One aileron stuck (the other still moving) leaves the roll following its
+    set point, only slower: the loop's gain falls from the onset and stays low."""
+    profile, model, _ = calibrated
+    (loop,) = model.card.tracking
+    assert 0 <= loop.lag_steps <= 10 and 0.5 < loop.typical < 1.5
+    assert 0 < loop.floor < loop.limit
+    assert model.card.change_thresholds[SUM]["roll_tracking"] > 0
+    diagnosis, onset = _judged(calibrated, "carbonZ_2018-09-11-17-55-30_2_left_aileron_failure")
+    histories = diagnosis.histories
+    gain = histories.change_residual[:, histories.change_names.index("roll_tracking")]
+    time_s = histories.time_s
+    before = gain[(time_s > 20) & (time_s < onset)]
+    after = gain[time_s > onset + loop.window_steps * profile.dt_s]
+    assert abs(np.nanmedian(before)) < 0.15 < -np.nanmedian(after)
+    assert np.nanmax(after) < np.nanpercentile(before, 10)

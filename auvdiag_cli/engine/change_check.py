@@ -35,21 +35,16 @@ signal's residual most likely shifted; the stated error spans from there to the 
 signals that crossed within a window of the alarm name the part.
 """
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from auvdiag_cli.engine.change_point import shift_start, shift_ways
 from auvdiag_cli.engine.change_signatures import Signature, signatures, with_signatures
-from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.vehicle.actuators import Actuator
-from models.store import LoadedModel
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
-# A signal the predictor a moment ahead barely beats "no change" on is left out: its error
-# is the signal's own motion, and every manoeuvre would move it.
-MIN_AHEAD_SKILL = 0.1
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
@@ -107,6 +102,8 @@ class ChangeCheck:
     # Each flagged signal -> the way its residual moved from the onset ("above" or "below"
     # the prediction).
     ways: Mapping[str, str] = field(default_factory=dict)
+    # The loops judged (`models.tracking`): their gain, judged below its usual value only.
+    loops: tuple[str, ...] = ()
 
     @property
     def changed(self) -> tuple[str, ...]:
@@ -134,7 +131,8 @@ class ChangeCheck:
                 "" if worst is None else f" (largest: {worst} at {ratios[worst]:.0%} of its "
                                          "threshold)")
         which = ", ".join(f"{n} {r:.1f}x its threshold" + (
-            f" ({self.ways[n]} the prediction)" if n in self.ways else "")
+            f" ({self.ways[n]} the prediction)" if n in self.ways else
+            " (the loop answers slower than usual)" if n in self.loops else "")
             for n, r in self.flagged.items())
         return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
                 f"(up to {self.onset_error_s:.1f} s either way), detected at "
@@ -224,38 +222,20 @@ def _carried(ratios: np.ndarray, first: int, at: int) -> np.ndarray:
     return np.asarray(np.maximum(run - usual, 0.0))
 
 
-def change_judged(model: LoadedModel, replay_judged: Sequence[str]) -> list[str]:
-    """The signals the test judges: those the predictor a moment ahead predicts better than
-    "no change" on held-out data, or, for a model without one, those the replay judges."""
-    ahead = model.card.ahead
-    if ahead is None:
-        return list(replay_judged)
-    return [name for name in model.card.sensor_names
-            if ahead.skill.get(name, 0.0) >= MIN_AHEAD_SKILL]
-
-
-def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray | None,
-                    matching: Matching, cuts: Sequence[int] = ()) -> np.ndarray:
-    """What the test judges: the error of the model's predictor a moment ahead
-    (`models.ahead`; ``inputs``: the measured inputs, None: the profile has none), or the
-    replay's where the model has none (trained before it)."""
-    ahead = model.card.ahead
-    if ahead is None:
-        return matching.measured - matching.modelled
-    return ahead.residual(commands, matching.measured, inputs, cuts)
-
-
 def way_statistics(residual: np.ndarray, window: int, reference_min: int,
-                   found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS
-                   ) -> dict[str, np.ndarray]:
+                   found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS,
+                   below_only: Sequence[int] = ()) -> dict[str, np.ndarray]:
     """Each statistic per step, as of the last whole window (NaN until the reference is
     long enough), each way apart: every signal above the prediction (z), then every signal
     below it (−z), then one column per signature in ``found`` (`change_signatures`); each
-    column one-sided, a move against it adds nothing. A window ends every ``stride`` steps
-    (a divisor of ``window``; None: ``window``, windows side by side)."""
+    column one-sided, a move against it adds nothing. The columns ``below_only`` are never
+    judged above (a loop's gain: a part that fails makes it smaller, `models.tracking`).
+    A window ends every ``stride`` steps (a divisor of ``window``; None: ``window``,
+    windows side by side)."""
     stride = _stride(window, stride)
     ends, z = _standardised(residual, window, reference_min, stride)
     z, one_sided = with_signatures(np.hstack([z, -z]), found)
+    z[:, list(below_only)] = np.nan
     sums = _sums(z, np.ones_like(one_sided), window // stride)
 
     def on_steps(per_window: np.ndarray) -> np.ndarray:
@@ -271,13 +251,15 @@ def way_statistics(residual: np.ndarray, window: int, reference_min: int,
 
 def change_statistics(residual: np.ndarray, window: int, reference_min: int,
                       found: Sequence[Signature] = (), stride: int | None = STRIDE_STEPS,
-                      scales: WayScales | None = None, names: Sequence[str] = ()
-                      ) -> dict[str, np.ndarray]:
+                      scales: WayScales | None = None, names: Sequence[str] = (),
+                      below_only: Collection[str] = ()) -> dict[str, np.ndarray]:
     """Each statistic per step and signal (`way_statistics`): per signal the larger of its
     two ways, each divided by its scale (``scales``: statistic -> signal of ``names`` ->
     (above, below), `way_scales`; a signal without one: |z| and the two-sided CUSUM,
-    max(S_above, S_below)); after the signals' columns, the signatures'."""
-    values = way_statistics(residual, window, reference_min, found, stride)
+    max(S_above, S_below); one of ``below_only``: below alone); after the signals'
+    columns, the signatures'."""
+    values = way_statistics(residual, window, reference_min, found, stride,
+                            _columns(names, below_only))
     n = residual.shape[1]
     out = {}
     for statistic, ways in values.items():
@@ -288,6 +270,10 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
                                                (pairs[:, 0], pairs[:, 1])),
                                     ways[:, 2 * n:]])
     return out
+
+
+def _columns(names: Sequence[str], below_only: Collection[str]) -> list[int]:
+    return [i for i, name in enumerate(names) if name in below_only]
 
 
 def _stride(window: int, stride: int | None) -> int:
@@ -309,15 +295,15 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
 
 
 def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
-                 actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS
-                 ) -> dict[str, dict[str, float]]:
+                 actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS,
+                 below_only: Collection[str] = ()) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per signal and way in a log ("roll above", "roll
     below": `each_way`), and per signature of the ``actuators`` over these signals (NaN
     where it is never judged): what calibrate sets the ways' scales and the thresholds
     from."""
     found = signatures(actuators, names)
     statistics = way_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
-                                stride)
+                                stride, _columns(names, below_only))
     every = [*each_way(names), *(s.name for s in found)]
     return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
                         else float("nan") for i, name in enumerate(every)}
@@ -336,11 +322,22 @@ def _flagged(ratios: np.ndarray, names: Sequence[str], at: int, window: int
     return dict(sorted(over.items(), key=lambda item: -item[1]))
 
 
+def _ratios(statistics: Mapping[str, np.ndarray], kept: Mapping[str, Mapping[str, float]],
+            names: Sequence[str]) -> np.ndarray:
+    """Each step's statistics over their thresholds, the larger of the two statistics."""
+    ratios = []
+    for statistic in (WINDOW, SUM):
+        limits = np.array([kept[statistic].get(n, np.inf) for n in names])
+        with np.errstate(invalid="ignore"):
+            ratios.append(statistics[statistic] / limits)
+    return np.asarray(np.fmax(*ratios))
+
+
 def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
                  window: int, dt_s: float, actuators: Sequence[Actuator] = (),
-                 stride: int | None = STRIDE_STEPS, scales: WayScales | None = None
-                 ) -> ChangeCheck:
+                 stride: int | None = STRIDE_STEPS, scales: WayScales | None = None,
+                 below_only: Collection[str] = ()) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
     threshold (``thresholds``: statistic -> signal -> threshold), each way divided by its
     scale (``scales``, `change_statistics`), and the signatures of the ``actuators`` over
@@ -353,15 +350,11 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
-                                   found, stride, scales, [names[i] for i in judged])
+                                   found, stride, scales, [names[i] for i in judged],
+                                   below_only)
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
-    ratios = {}
-    for statistic, values in statistics.items():
-        limits = np.array([kept[statistic].get(n, np.inf) for n in names_judged])
-        with np.errstate(invalid="ignore"):
-            ratios[statistic] = values / limits
-    combined = np.fmax(ratios[WINDOW], ratios[SUM])
+    combined = _ratios(statistics, kept, names_judged)
     started = np.flatnonzero(np.isfinite(statistics[WINDOW]).any(axis=1))
     peaks = {s: {n: round(float(np.nanmax(values[:, k])), 3)
                  for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
@@ -369,7 +362,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
     check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None,
-                        members=members)
+                        members=members, loops=tuple(n for n in names_judged if n in below_only))
     with np.errstate(invalid="ignore"):
         over = np.flatnonzero((combined > 1).any(axis=1))
     if not over.size:
@@ -393,7 +386,8 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     flagged = _flagged(combined, names_judged, at, window)
-    return ChangeCheck(kept, peaks, check.judged_from_s, round(float(time_s[at]), 3),
-                       round(onset, 3), round(error, 3), flagged, evidence, members,
-                       shift_ways(residual, names, [n for n in flagged if n in names], first, at))
+    ways = shift_ways(residual, names, [n for n in flagged if n in names
+                                        and n not in check.loops], first, at)
+    return replace(check, alarm_s=round(float(time_s[at]), 3), onset_s=round(onset, 3),
+                   onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways)
 

@@ -7,11 +7,12 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
-from auvdiag_cli.engine.change_check import (
-    ChangeCheck,
+from auvdiag_cli.engine.change_check import ChangeCheck, check_change
+from auvdiag_cli.engine.change_columns import (
     change_judged,
+    change_names,
     change_residual,
-    check_change,
+    loop_names,
 )
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
@@ -237,7 +238,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         sensor_units={s.name: s.unit for s in profile.sensors},
         histories=Histories(frame.time_s, frame.commands, frame.command_names,
                             frame.sensor_names, matching, thresholds, b_series,
-                            change_errors),
+                            change_errors, tuple(change_names(model))),
         start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
@@ -303,7 +304,7 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     """The log against its own beginning, for the signals the test judges
     (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
     profile, model = judging.profile, judging.model
-    names = profile.sensor_names
+    names = change_names(model)
     judged = [name for name in change_judged(model, skilled(model, profile))
               if name not in judging.set_aside]
     judged += signature_names(profile.actuators, judged)
@@ -327,7 +328,8 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
                      "thresholds were set on had, and an alarm here is less certain")
     return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators,
-                        model.card.change_stride, model.card.change_way_scales)
+                        model.card.change_stride, model.card.change_way_scales,
+                        loop_names(model))
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

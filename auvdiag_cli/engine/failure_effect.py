@@ -23,14 +23,15 @@ def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
     start = int(np.searchsorted(histories.time_s, onset))
     stop = len(histories.time_s) if horizon_steps is None else min(
         start + horizon_steps, len(histories.time_s))
-    if stop - start < 2:
+    changed = [name for name in change.changed if name in histories.sensor_names]
+    if stop - start < 2 or not changed:     # a loop's gain alone: no sensor to compare
         return ""
-    columns = [histories.sensor_names.index(name) for name in change.changed]
+    columns = [histories.sensor_names.index(name) for name in changed]
     read = np.flatnonzero(np.isfinite(matching.measured[start:stop, columns]).all(axis=1)
                           & np.isfinite(healthy[start:stop, columns]).all(axis=1))
     last = start + int(read[-1]) if read.size and read[-1] > 0 else None
     gaps, ends = [], []
-    for name, column in zip(change.changed, columns, strict=True):
+    for name, column in zip(changed, columns, strict=True):
         unit = seen.sensor_units.get(name, "")
         before = matching.measured[:start, column] - matching.modelled[:start, column]
         gap = matching.measured[start:, column] - healthy[start:, column]

@@ -22,6 +22,7 @@ class Histories:
     # What the change test judged: the moment-ahead predictor's error where the model has
     # one, else the replay's (`engine.change_check.change_residual`).
     change_residual: np.ndarray | None = None
+    change_names: tuple[str, ...] = ()        # its columns: the sensors, then the loops
 
     @property
     def duration_s(self) -> float | None:

@@ -147,7 +147,14 @@ def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
     """Whether the profile says which parts move what changed (`moved_by`): those name the
     part; otherwise the replay's isolation does (pattern table, hypotheses)."""
     return bool(set(change.flagged) & set(change.members)) or any(
-        s.moved_by for s in profile.sensors if s.name in change.flagged)
+        moved_by for name, moved_by in _movers(profile).items() if name in change.flagged)
+
+
+def _movers(profile: Profile) -> dict[str, tuple[str, ...]]:
+    """Each signal the change test judges -> the parts that move it (`moved_by`): the
+    sensors', then the controller's loops' (a loop's gain is made by its parts)."""
+    return {**{s.name: s.moved_by for s in profile.sensors},
+            **{loop.name: loop.moved_by for loop in profile.tracking}}
 
 
 def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
@@ -176,9 +183,9 @@ def change_suspects(flagged: Mapping[str, float], profile: Profile,
     weights = dict(evidence) if evidence else {n: r - 1.0 for n, r in flagged.items()}
     weight: dict[str, float] = {}
     movers: set[str] = set()
-    for sensor in (s for s in profile.sensors if s.name in weights):
-        for part in sensor.moved_by:
-            weight[part] = weight.get(part, 0.0) + weights[sensor.name]
+    for name, moved_by in _movers(profile).items():
+        for part in moved_by if name in weights else ():
+            weight[part] = weight.get(part, 0.0) + weights[name]
             movers.add(part)
     # A part's signature (`change_signatures`) is evidence for that part alone.
     for name, part in signature_parts(list(weights), profile.actuators).items():

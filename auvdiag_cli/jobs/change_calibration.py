@@ -16,11 +16,11 @@ from auvdiag_cli.engine.change_check import (
     SUM,
     WINDOW,
     WayScales,
-    change_judged,
     change_peaks,
     larger_way,
     signal_of,
 )
+from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
@@ -63,11 +63,11 @@ def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Seq
                      model: LoadedModel, profile: Profile) -> dict[str, dict[str, float]]:
     """Each statistic's largest value per judged signal in one normal log's change
     residual (NaN: too short, or ``set_aside`` in that log: a sensor it never fed)."""
-    names = list(profile.sensor_names)
+    names = change_names(model)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
     peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
-                         profile.actuators)
+                         profile.actuators, below_only=loop_names(model))
     return {statistic: {name: float("nan") if signal_of(name) in set_aside else value
                         for name, value in values.items()}
             for statistic, values in peaks.items()}

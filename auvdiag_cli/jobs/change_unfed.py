@@ -13,7 +13,8 @@ the larger of the two."""
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from auvdiag_cli.engine.change_check import WayScales, change_judged
+from auvdiag_cli.engine.change_check import WayScales
+from auvdiag_cli.engine.change_columns import change_judged
 from auvdiag_cli.engine.change_signatures import signature_names
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import IngestedLog

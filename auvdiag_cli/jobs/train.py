@@ -19,6 +19,7 @@ from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
 from auvdiag_cli.jobs.relate import learn_relations
+from auvdiag_cli.jobs.tracking_fit import tracking_entry
 from auvdiag_cli.jobs.training_change import training_change_peaks
 from auvdiag_cli.jobs.training_logs import (
     ReadLog,
@@ -177,7 +178,8 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
         metadata |= {"command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
-                                                     profile, progress)}
+                                                     profile, progress),
+                     "tracking": tracking_entry(profile, [*training, *heldout])}
         _save(output, fitted, metadata, profile, [*training_paths, *heldout_paths], options,
               progress)
     return result

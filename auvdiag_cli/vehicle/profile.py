@@ -22,8 +22,10 @@ from auvdiag_cli.vehicle.effort_groups import parse_effort_groups, with_reach
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
+from auvdiag_cli.vehicle.tracking_table import parse_tracking
 from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
+from models.tracking import TrackingSpec
 
 MISSION_MODE = "mission"
 ROUTINE_THRESHOLDS = "routine"     # thresholds shared by every DMS without its own table
@@ -128,6 +130,8 @@ class Profile:
     # Actuator outputs read for the effort check only: a model driven by the controller's set
     # points does not read them, yet what each actuator carries is judged ([[outputs]]).
     outputs: tuple[Command, ...] = ()
+    # Loops of the controller whose gain the change test judges ([[tracking]]).
+    tracking: tuple[TrackingSpec, ...] = ()
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -300,6 +304,9 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         inputs=inputs,
         outputs=outputs,
         actuators=actuators,
+        tracking=parse_tracking(_rows(top, "tracking"), [c.name for c in commands], sensor_names,
+                                {a.name for a in actuators}
+                                | {c.component for c in commands + outputs}),
     )
 
 

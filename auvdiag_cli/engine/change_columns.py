@@ -1,0 +1,52 @@
+"""What the change test judges on a log: one column per sensor (the error of the model's
+predictor a moment ahead, or of its replay) and one per loop of the controller whose gain
+the model keeps (`models.tracking`: the gain less its typical value)."""
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from auvdiag_cli.engine.residuals import Matching
+from models.store import LoadedModel
+
+# A signal the predictor a moment ahead barely beats "no change" on is left out: its error
+# is the signal's own motion, and every manoeuvre would move it.
+MIN_AHEAD_SKILL = 0.1
+
+
+def loop_names(model: LoadedModel) -> list[str]:
+    """The loops the model keeps: each judged below its typical gain only (a part that
+    fails makes a loop slower; one that answers faster is no failure of its parts)."""
+    return [loop.name for loop in model.card.tracking]
+
+
+def change_names(model: LoadedModel) -> list[str]:
+    """The columns of `change_residual`: the sensors, then the loops."""
+    return [*model.card.sensor_names, *loop_names(model)]
+
+
+def change_judged(model: LoadedModel, replay_judged: Sequence[str]) -> list[str]:
+    """The signals the test judges: those the predictor a moment ahead predicts better than
+    "no change" on held-out data, or, for a model without one, those the replay judges;
+    then every loop the model keeps."""
+    ahead = model.card.ahead
+    loops = loop_names(model)
+    if ahead is None:
+        return [*replay_judged, *loops]
+    return [*(name for name in model.card.sensor_names
+              if ahead.skill.get(name, 0.0) >= MIN_AHEAD_SKILL), *loops]
+
+
+def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray | None,
+                    matching: Matching, cuts: Sequence[int] = ()) -> np.ndarray:
+    """What the test judges (columns `change_names`): the error of the model's predictor a
+    moment ahead (`models.ahead`; ``inputs``: the measured inputs, None: the profile has
+    none), or the replay's where the model has none (trained before it); then each loop's
+    gain less its typical value."""
+    ahead = model.card.ahead
+    errors = matching.measured - matching.modelled if ahead is None else ahead.residual(
+        commands, matching.measured, inputs, cuts)
+    card = model.card
+    gains = [loop.gain(commands, matching.measured, card.command_names, card.sensor_names,
+                       card.dt_s) for loop in card.tracking]
+    return np.column_stack([errors, *gains]) if gains else errors
