@@ -104,3 +104,32 @@ def _plane_document() -> dict:
     from pathlib import Path
 
     return tomllib.loads(profile_text(Path("arduplane_carbonz"))[0])
+
+
+def test_train_fits_the_plane_profiles_loop_and_says_what_it_fitted():
+    """The profile's roll loop on logs of the plane's signals (the other signals noise): the
+    lag is one at which the error foretells the rate nearly as well as at the best, and
+    `train` says the gain, the lag and the limits it fitted."""
+    from auvdiag_cli.jobs.tracking_fit import tracking_entry
+    from models.skill import ScoringLog
+
+    profile = api.load_profile("arduplane_carbonz")
+    rng = np.random.default_rng(5)
+    logs = []
+    for seed in range(3):
+        commands, sensors = _flight(300, 1.2, seed)
+        drive = rng.normal(0, 0.1, (len(commands), len(profile.drive_names)))
+        drive[:, profile.drive_names.index("roll_sp")] = commands[:, 0]
+        measured = rng.normal(0, 0.1, (len(commands), len(profile.sensor_names)))
+        for column, name in enumerate(SENSORS):
+            measured[:, profile.sensor_names.index(name)] = sensors[:, column]
+        logs.append(ScoringLog(f"flight{seed}", drive, measured))
+    said: list[str] = []
+    (entry,) = tracking_entry(profile, logs, said.append)
+    fit = TrackingFit.from_json(entry)
+    assert fit.name == "roll_tracking" and 1 <= fit.lag_steps <= 3
+    assert fit.typical == pytest.approx(1.2, rel=0.1) and fit.floor < fit.limit
+    assert said == [f"the loop roll_tracking: a gain of {fit.typical:.3g} (the rate per unit "
+                    f"of error {fit.lag_steps * 0.1:.1f} s before), judged over 10 s windows "
+                    f"from an error of {fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left "
+                    "out (saturated)"]

@@ -2,7 +2,7 @@
 logs `train` learns from (`models.tracking`), its lag the one at which the change test finds
 their gains steadiest against their own beginnings: what sets its thresholds."""
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -12,8 +12,10 @@ from models.skill import ScoringLog
 from models.tracking import fit_tracking
 
 
-def tracking_entry(profile: Profile, logs: Sequence[ScoringLog]) -> list[dict[str, object]]:
-    """The fitted loops as model.json keeps them (none where the profile declares none)."""
+def tracking_entry(profile: Profile, logs: Sequence[ScoringLog],
+                   progress: Callable[[str], None] = lambda _: None) -> list[dict[str, object]]:
+    """The fitted loops as model.json keeps them (none where the profile declares none),
+    each said in ``progress``."""
     def unsteadiness(gains: Sequence[np.ndarray]) -> float:
         """The change test's sum below, at its largest in each log, averaged over them."""
         peaks = [way_statistics(gain[:, None], profile.window_samples,
@@ -21,6 +23,14 @@ def tracking_entry(profile: Profile, logs: Sequence[ScoringLog]) -> list[dict[st
                  for gain in gains]
         return float(np.mean([np.nanmax(p) if np.isfinite(p).any() else 0.0 for p in peaks]))
 
-    return [fit.to_json() for fit in fit_tracking(
-        profile.tracking, [(log.commands, log.sensors) for log in logs], profile.drive_names,
-        profile.sensor_names, profile.dt_s, unsteadiness)]
+    fits = fit_tracking(profile.tracking, [(log.commands, log.sensors) for log in logs],
+                        profile.drive_names, profile.sensor_names, profile.dt_s, unsteadiness)
+    for fit in fits:
+        progress(f"the loop {fit.name}: a gain of {fit.typical:.3g} (the rate per unit of "
+                 f"error {fit.lag_steps * profile.dt_s:.1f} s before), judged over "
+                 f"{fit.window_steps * profile.dt_s:.0f} s windows from an error of "
+                 f"{fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left out (saturated)")
+    missing = {spec.name for spec in profile.tracking} - {fit.name for fit in fits}
+    if missing:
+        progress(f"not fitted (the logs never move their error): {', '.join(sorted(missing))}")
+    return [fit.to_json() for fit in fits]

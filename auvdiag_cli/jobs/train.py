@@ -179,7 +179,7 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
                                                      profile, progress),
-                     "tracking": tracking_entry(profile, [*training, *heldout])}
+                     "tracking": tracking_entry(profile, [*training, *heldout], progress)}
         _save(output, fitted, metadata, profile, [*training_paths, *heldout_paths], options,
               progress)
     return result
