@@ -120,6 +120,9 @@ def test_a_closed_loop_draft_of_a_real_ardusub_log(tmp_path):
                                                              pytest.approx(0.0174533))
     assert profile.output_names and all(
         profile.sources["dataflash"].signals[n].topic == "RCOU" for n in profile.output_names)
+    # The attitude loops, whose gain the change test judges, with their rates.
+    assert {(t.set_point, t.measured, t.rate) for t in profile.tracking} == {
+        ("att_desroll", "att_roll", "rate_r"), ("att_despitch", "att_pitch", "rate_p")}
     # Without it, the same log is drafted from its thruster outputs, as before.
     plain = runner.invoke(app, ["init-profile", str(log)])
     assert plain.exit_code == 0 and "[[outputs]]" not in plain.stdout

@@ -2,6 +2,7 @@
 user must check, the tables a profile needs, and where each signal lives in the log."""
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -50,7 +51,8 @@ def entry(source: FieldSource, family: str) -> str:
 
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                  sensors: list[Proposal], operating: FieldSource | None,
-                 time: TimeColumn | None, groups: list[list[str]]) -> str:
+                 time: TimeColumn | None, groups: list[list[str]],
+                 loops: Sequence[tuple[str, str, str]] = ()) -> str:
     lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
              "# Every signal below is in that log and varies there. Lines marked CHECK are",
              "# what the log cannot tell: read them before you train.", "",
@@ -87,6 +89,13 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                   "thrusters apart), add the mixing factors.", "[[effort]]",
                   f'name = "group_{number}"',
                   "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
+    for set_point, measured, rate in loops:
+        lines += ["# A loop of the controller: how much rate its error brings, judged against "
+                  "the log's own", "# beginning (a part that fails makes it slower). CHECK: "
+                  "name the parts that make the rate.", "[[tracking]]",
+                  f'name = "{measured}_loop"', f'set_point = "{set_point}"',
+                  f'measured = "{measured}"', f'rate = "{rate}"',
+                  '# moved_by = ["..."]   # CHECK: the actuators that make the rate', ""]
     names = [p.name for p in sensors]
     lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
               'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",

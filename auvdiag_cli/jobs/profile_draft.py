@@ -45,6 +45,10 @@ ARDUPILOT_SET_POINTS = {
              ("YDes", "Y", DEGREES, "rad/s")),
     "CTUN": (("DCRt", "CRt", -0.01, "m/s"),),
 }
+# The attitude loops whose gain the change test can judge (`[[tracking]]`): set point ->
+# (what was measured beside it, its rate), each (message, field).
+ARDUPILOT_LOOPS = {("ATT", "DesRoll"): (("ATT", "Roll"), ("RATE", "R")),
+                   ("ATT", "DesPitch"): (("ATT", "Pitch"), ("RATE", "P"))}
 
 
 ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
@@ -343,4 +347,13 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                          "(`auvdiag inspect LOG` lists the fields; docs/vehicles.md has a complete "
                          "minimal profile)")
     operating = _operating(path, family, contents)
-    return render_draft(path, name, family, commands, sensors, operating, time, groups)
+    return render_draft(path, name, family, commands, sensors, operating, time, groups,
+                        _loops(commands, sensors))
+
+
+def _loops(commands: list[Proposal], sensors: list[Proposal]) -> list[tuple[str, str, str]]:
+    """(set point, measured, rate) of each ArduPilot attitude loop the draft holds whole."""
+    named = {(p.source.topic, p.source.field): p.name for p in [*commands, *sensors]}
+    return [(named[point], named[measured], named[rate])
+            for point, (measured, rate) in ARDUPILOT_LOOPS.items()
+            if {point, measured, rate} <= set(named)]
