@@ -49,6 +49,27 @@ def entry(source: FieldSource, family: str) -> str:
     return "{ " + ", ".join(parts) + " }"
 
 
+def _groups_and_loops(groups: list[list[str]], loops: Sequence[tuple[str, str, str]]
+                      ) -> list[str]:
+    """The drafted ``[[effort]]`` groups and ``[[tracking]]`` loops, each with what to check."""
+    lines: list[str] = []
+    for number, group in enumerate(groups, 1):
+        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
+                  "levels in this", "# log): each one's share of their effort is judged. "
+                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
+                  "thrusters apart), add the mixing factors.", "[[effort]]",
+                  f'name = "group_{number}"',
+                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
+    for set_point, measured, rate in loops:
+        lines += ["# A loop of the controller: how much rate its error brings, judged against "
+                  "the log's own", "# beginning (a part that fails makes it slower). CHECK: "
+                  "name the parts that make the rate.", "[[tracking]]",
+                  f'name = "{measured}_loop"', f'set_point = "{set_point}"',
+                  f'measured = "{measured}"', f'rate = "{rate}"',
+                  '# moved_by = ["..."]   # CHECK: the actuators that make the rate', ""]
+    return lines
+
+
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                  sensors: list[Proposal], operating: FieldSource | None,
                  time: TimeColumn | None, groups: list[list[str]],
@@ -82,20 +103,7 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                   f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
                   "percentile",
                   f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
-    for number, group in enumerate(groups, 1):
-        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
-                  "levels in this", "# log): each one's share of their effort is judged. "
-                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
-                  "thrusters apart), add the mixing factors.", "[[effort]]",
-                  f'name = "group_{number}"',
-                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
-    for set_point, measured, rate in loops:
-        lines += ["# A loop of the controller: how much rate its error brings, judged against "
-                  "the log's own", "# beginning (a part that fails makes it slower). CHECK: "
-                  "name the parts that make the rate.", "[[tracking]]",
-                  f'name = "{measured}_loop"', f'set_point = "{set_point}"',
-                  f'measured = "{measured}"', f'rate = "{rate}"',
-                  '# moved_by = ["..."]   # CHECK: the actuators that make the rate', ""]
+    lines += _groups_and_loops(groups, loops)
     names = [p.name for p in sensors]
     lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
               'horizon_s = "auto"   # train chooses how long the model predicts unaided', "",
