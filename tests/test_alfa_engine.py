@@ -110,6 +110,9 @@ def test_a_flight_without_its_airspeed_is_judged_by_thresholds_set_without_it(ca
     fed = model.card.change_thresholds
     raised = [(s, n) for s, values in unfed.items() for n, v in values.items() if v > fed[s][n]]
     assert raised and len(raised) == sum(len(v) for v in unfed.values())
+    # The roll loop's gain reads no input: a flight without airspeed is judged on it as any.
+    assert model.card.change_thresholds[SUM]["roll_tracking"] > 0
+    assert all("roll_tracking" not in values for values in unfed.values())
     # calibrate says what it set for such a log.
     (said,) = [line for line in calibrated[2] if "change test for a log without airspeed" in line]
     statistic, name = raised[0]
