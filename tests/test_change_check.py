@@ -288,6 +288,29 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     assert "flow" not in flat.coverage.signals_judged
 
 
+def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(calibrated,
+                                                                              make_log):
+    """Every sensor judged only against the log's own beginning: the replay judges nothing,
+    but the change test does, and its alarm makes the verdict (it was "undetermined": "no
+    signal is judged")."""
+    from dataclasses import replace
+
+    from auvdiag_cli.engine.judging import replay_judged
+
+    model, _ = calibrated
+    base = api.load_profile(None)
+    profile = replace(base, sensors=tuple(replace(s, own_log_only="judged against itself")
+                                          for s in base.sensors))
+    assert replay_judged(model, profile) == []
+    diagnosis = api.diagnose(make_log("mission-thruster-0-weak", 11), profile, model)
+    check = diagnosis.change_check
+    assert check is not None and check.alarm_s is not None
+    assert diagnosis.verdict == "fault" and diagnosis.detected_at_s == check.alarm_s
+    assert not any("no signal is judged" in note for note in diagnosis.notes)
+    normal = api.diagnose(make_log("paper-normal", 12), profile, model)
+    assert normal.verdict == "normal" and normal.change_check is not None
+
+
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     from types import SimpleNamespace
 

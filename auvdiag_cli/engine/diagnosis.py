@@ -263,13 +263,15 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
               ) -> Finding:
     """The finding: from the replay's alarm where it raised one, else from the checks."""
     others = (seen.command_check, seen.start_check, seen.effort_check)
-    if len(judging.not_judged) == len(seen.histories.sensor_names):
+    # Signals judged only against the log's own beginning are judged, by the change test.
+    change = seen.change_check
+    if len(judging.not_judged) == len(seen.histories.sensor_names) and not (
+            change is not None and change.judged):
         normal = normal.noted("no signal is judged: the model cannot predict any of them")
         if any(other is not None and other.judged for other in others):
             return apply_other_evidence(seen, normal, judging)
         return replace(normal, verdict=Verdict.UNDETERMINED, case=None)
     frame = log.frame
-    change = seen.change_check
     if change is not None and change.alarm_s is not None and change.onset_s is not None and (
             detection is None or change.alarm_s < frame.time_s[detection.alarm_index]):
         if names_a_mover(change, judging.profile) or beyond_the_replay(change, judging):
