@@ -9,9 +9,12 @@ Leave one flying day out: for each day, a model is trained with the shipped
 `arduplane_carbonz` profile on the other days' normal flights and on the part of their
 failed flights before the failure (`train --healthy`, the part ending --guard seconds
 before the onset), calibrated on the same logs with `--false-alarm-rate 0.05`, and every
-flight of the day left out is diagnosed as it is (its CSV folder). A failed flight is found
-when the verdict is a fault detected at or after the onset; a detection before the onset, or
-any fault on a flight without failure, is a false alarm. The published figures beside them
+flight of the day left out is diagnosed as it is (its CSV folder): with the profile as
+shipped (every signal judged against the flight's own beginning, by the change test) and,
+beside it, with the replay judging every signal across flights as well (the same model,
+calibrated so). A failed flight is found when the verdict is a fault detected at or after
+the onset; a detection before the onset, or any fault on a flight without failure, is a
+false alarm. The published figures beside them
 are the recursive-least-squares detector of Keipour, Mousaei and Scherer, "Automatic
 real-time anomaly detection for autonomous aerial vehicles", ICRA 2019, on 22 of these
 flights. Then each day's flights alone train and calibrate a model that judges the other
@@ -36,7 +39,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from auvdiag_cli.engine.results import Diagnosis
+    from auvdiag_cli.jobs.train import HorizonScore
     from auvdiag_cli.vehicle.profile import Profile
+    from models.store import LoadedModel
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "alfa"
 FALSE_ALARM_RATE = 0.05
@@ -68,7 +73,6 @@ class Outcome:
     detected_s: float | None     # after the log's start
     onset_s: float | None        # the true onset, after the log's start
     component: str | None
-    seconds: float
     judge: str | None            # which judge's alarm made the verdict
     # The change test's statistics, (statistic, signal) -> largest before the onset (the
     # whole flight without one) and after it.
@@ -127,58 +131,76 @@ def _healthy_file(training: list[Flight], work: Path, guard_s: float) -> Path:
     return path
 
 
-WITH, WITHOUT = "with the change test", "without it (the replay's thresholds alone)"
+SHIPPED = "as shipped (every signal judged against the flight's own beginning)"
+REPLAY = "with the replay beside it (every signal judged across flights as well)"
+
+
+def _every_signal_replayed(profile: "Profile") -> "Profile":
+    """The profile with no signal left to the change test alone: the replay judges them all."""
+    from dataclasses import replace
+    return replace(profile, sensors=tuple(replace(s, own_log_only=None)
+                                          for s in profile.sensors))
+
+
+def _judged_by(model: "LoadedModel", chosen: "HorizonScore") -> str:
+    """What the change test judges, with its skill a moment ahead, and the replay's skill."""
+    from auvdiag_cli.engine.change_columns import change_judged
+
+    replayed = [signal for signal, s in chosen.signals.items() if s.judged]
+    replay = ", ".join(f"{signal} {chosen.signals[signal].skill:.2f}" for signal in replayed)
+    ahead = model.card.ahead
+    if ahead is None:
+        return f"the replay {replay or 'none'}"
+    change = ", ".join(f"{signal} {ahead.skill[signal]:.2f}" if signal in ahead.skill
+                       else signal for signal in change_judged(model, replayed))
+    return f"{change or 'none'} (skill a moment ahead); the replay's skill {replay or 'none'}"
 
 
 def judge_flights(training: list[Flight], judged_flights: list[Flight], name: str, work: Path,
-                  scale: float, guard_s: float) -> tuple[dict[str, list[Outcome]], str]:
-    """A model trained and calibrated on ``training`` (kept as ``work``/model-``name``)
-    judges ``judged_flights``, with and without its change test; and what it judges, with
-    the skill of each signal (the replay's, and the change test's a moment ahead)."""
-    from auvdiag_cli import api
-    from auvdiag_cli.engine.change_columns import change_judged
+                  scale: float, guard_s: float, variants: tuple[str, ...] = (SHIPPED,)
+                  ) -> tuple[dict[str, list[Outcome]], str]:
+    """A model trained on ``training`` (kept as ``work``/model-``name``), calibrated on the
+    same logs once per variant of the profile, judges ``judged_flights``; and what it
+    judges, with the skill of each signal."""
+    from shutil import copytree
 
-    profile = api.load_profile("arduplane_carbonz")
+    from auvdiag_cli import api
+
+    shipped = api.load_profile("arduplane_carbonz")
     healthy = api.read_healthy_parts(_healthy_file(training, work, guard_s))
     model_dir = work / f"model-{name}"
     logs = [f.folder for f in training]
-    result = api.train(logs, profile, model_dir,
+    result = api.train(logs, shipped, model_dir,
                        options=api.TrainOptions(iterations_scale=scale, healthy=healthy,
-                                        keep_unskilled=True))
-    replayed = [signal for signal, s in result.chosen.signals.items() if s.judged]
-    judged = ", ".join(f"{signal} {result.chosen.signals[signal].skill:.2f}"
-                       for signal in replayed) or "none"
-    model = api.load_model(model_dir, profile)
-    ahead = model.card.ahead
-    if ahead is not None:
-        judged += "; the change test " + (", ".join(
-            f"{signal} {ahead.skill[signal]:.2f}" if signal in ahead.skill else signal
-            for signal in change_judged(model, replayed))
-            or "none") + " (skill a moment ahead)"
-    api.calibrate(logs, profile, model, options=api.CalibrateOptions(
-        budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
-    api.save_model(model, model_dir)      # as calibrated, for --keep
-    # The same model without the change test: the judges as they were before it.
-    without = model.with_entries(change_test={})
-    outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
-    for flight in judged_flights:
-        for variant, judged_by in ((WITH, model), (WITHOUT, without)):
-            started = time.perf_counter()
-            diagnosis = api.diagnose(flight.folder, profile, judged_by)
-            onset_s = None if flight.onset_ns is None else (flight.onset_ns
-                                                            - diagnosis.start_ns) / 1e9
-            judge = _judge(diagnosis)
-            change = diagnosis.change_check
-            stated = (change.onset_s, change.onset_error_s) if (
-                judge == "change test" and change is not None
-                and change.onset_s is not None) else None
-            outcomes[variant].append(Outcome(
-                flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
-                diagnosis.component, time.perf_counter() - started, judge,
-                *_change_peaks(diagnosis, onset_s, profile),
-                stated, None if stated is None or change is None
-                else next(iter(change.flagged), None)))
+                                                keep_unskilled=True))
+    judged = _judged_by(api.load_model(model_dir, shipped), result.chosen)
+    outcomes: dict[str, list[Outcome]] = {}
+    for variant in variants:
+        profile = shipped if variant == SHIPPED else _every_signal_replayed(shipped)
+        variant_dir = model_dir if variant == SHIPPED else work / f"model-{name}-replay"
+        if variant_dir != model_dir:
+            copytree(model_dir, variant_dir, dirs_exist_ok=True)
+        model = api.load_model(variant_dir, profile)
+        api.calibrate(logs, profile, model, options=api.CalibrateOptions(
+            budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
+        api.save_model(model, variant_dir)      # as calibrated, for --keep
+        outcomes[variant] = [_outcome(flight, api.diagnose(flight.folder, profile, model),
+                                      profile) for flight in judged_flights]
     return outcomes, judged
+
+
+def _outcome(flight: Flight, diagnosis: "Diagnosis", profile: "Profile") -> Outcome:
+    onset_s = None if flight.onset_ns is None else (flight.onset_ns
+                                                    - diagnosis.start_ns) / 1e9
+    judge = _judge(diagnosis)
+    change = diagnosis.change_check
+    stated = (change.onset_s, change.onset_error_s) if (
+        judge == "change test" and change is not None
+        and change.onset_s is not None) else None
+    return Outcome(flight, str(diagnosis.verdict), diagnosis.detected_at_s, onset_s,
+                   diagnosis.component, judge, *_change_peaks(diagnosis, onset_s, profile),
+                   stated, None if stated is None or change is None
+                   else next(iter(change.flagged), None))
 
 
 def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profile"
@@ -321,20 +343,19 @@ def summary(outcomes: list[Outcome]) -> list[str]:
 
 ONE_DAY = ("**Trained on one day's flights** (the handful a user has after a day of flying: "
            "that day's normal flights and its failed flights' healthy parts, trained and "
-           "calibrated on as above; every flight of the other days judged, with the change "
-           "test):")
+           "calibrated on as above; every flight of the other days judged, as shipped):")
 
 
 def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) -> list[str]:
     """A table row per flying day whose flights alone train and calibrate the model."""
     rows = ["| trained on | flights | found after onset | false alarms | delay median / worst "
-            "(s) | right part named | signals judged (skill) |",
+            "(s) | right part named | the change test judges |",
             "|---|---|---|---|---|---|---|"]
     for day in sorted({f.day for f in every}):
         training = [f for f in every if f.day == day]
         outcomes, judged = judge_flights(training, [f for f in every if f.day != day],
                                          f"only-{day}", work, scale, guard_s)
-        found = outcomes[WITH]
+        found = outcomes[SHIPPED]
         failed = [o for o in found if o.flight.onset_ns is not None]
         delays = [d for o in failed if (d := o.delay_s) is not None]
         rows.append(f"| {day} | {len(training)} | {sum(o.found for o in failed)} of "
@@ -360,7 +381,7 @@ def main() -> None:
           f"Python {platform.python_version()}; data from {args.data} (ALFA, Keipour et al. "
           "2021, doi 10.1184/R1/12707963).\n")
     every = flights(args.data)
-    outcomes: dict[str, list[Outcome]] = {WITH: [], WITHOUT: []}
+    outcomes: dict[str, list[Outcome]] = {SHIPPED: [], REPLAY: []}
     notes = []
     with tempfile.TemporaryDirectory() as scratch:
         work = args.keep or Path(scratch)
@@ -369,16 +390,17 @@ def main() -> None:
             started = time.perf_counter()
             day_outcomes, judged = judge_flights([f for f in every if f.day != day],
                                                  [f for f in every if f.day == day], day,
-                                                 work, args.iterations_scale, args.guard)
+                                                 work, args.iterations_scale, args.guard,
+                                                 (SHIPPED, REPLAY))
             for variant, found in day_outcomes.items():
                 outcomes[variant] += found
-            notes.append(f"- {day} left out ({len(day_outcomes[WITH])} flights): signals judged "
-                         f"(skill) {judged}; {time.perf_counter() - started:.0f} s")
+            notes.append(f"- {day} left out ({len(day_outcomes[SHIPPED])} flights): the "
+                         f"change test judges {judged}; {time.perf_counter() - started:.0f} s")
         one_day = one_day_rows(every, work, args.iterations_scale, args.guard)
     print(f"Beside it, the {PUBLISHED_SUMMARY}.\n")
     for variant, found in outcomes.items():
         print(f"**{variant[0].upper()}{variant[1:]}**: " + summary(found)[0] + "\n")
-        if variant == WITH:
+        if variant == SHIPPED:
             print(budget_expectation(found) + "\n")
             print(ceiling(found) + "\n")
             print(onset_honesty(found) + "\n")
@@ -389,7 +411,7 @@ def main() -> None:
     print("\nPer flight:\n")
     print("| flight | kind | verdict | onset (s) | detected (s) | component | judge |")
     print("|---|---|---|---|---|---|---|")
-    for o in outcomes[WITH]:
+    for o in outcomes[SHIPPED]:
         def when(value: float | None) -> str:
             return "–" if value is None else f"{value:.1f}"
         print(f"| {o.flight.folder.name} | {o.flight.kind} | {o.verdict} | "

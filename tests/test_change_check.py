@@ -265,7 +265,7 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     every judge, the change test too."""
     from dataclasses import replace
 
-    from auvdiag_cli.engine.judging import replay_judged
+    from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
 
     model, _ = calibrated
     base = api.load_profile(None)
@@ -295,7 +295,7 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     signal is judged")."""
     from dataclasses import replace
 
-    from auvdiag_cli.engine.judging import replay_judged
+    from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
 
     model, _ = calibrated
     base = api.load_profile(None)
@@ -309,6 +309,12 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     assert not any("no signal is judged" in note for note in diagnosis.notes)
     normal = api.diagnose(make_log("paper-normal", 12), profile, model)
     assert normal.verdict == "normal" and normal.change_check is not None
+    # Where the change test cannot judge either, the note says why, not "cannot predict".
+    n = len(profile.sensors)
+    assert nothing_judged(Judging.of(model, profile), None) == (
+        f"no signal is judged: {n} of {n} are judged only against the log's own beginning, "
+        "by the change test, and it is not calibrated (run `auvdiag calibrate` on normal logs)")
+    assert nothing_judged(Judging.of(model, base), None).endswith("cannot predict any of them")
 
 
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():

@@ -37,7 +37,7 @@ from auvdiag_cli.engine.isolation import (
     isolate,
     names_a_mover,
 )
-from auvdiag_cli.engine.judging import Judging, skilled
+from auvdiag_cli.engine.judging import Judging, nothing_judged, skilled
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
@@ -267,7 +267,8 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
     change = seen.change_check
     if len(judging.not_judged) == len(seen.histories.sensor_names) and not (
             change is not None and change.judged):
-        normal = normal.noted("no signal is judged: the model cannot predict any of them")
+        normal = normal.noted(nothing_judged(judging, None if change is None
+                                             else change.describe()))
         if any(other is not None and other.judged for other in others):
             return apply_other_evidence(seen, normal, judging)
         return replace(normal, verdict=Verdict.UNDETERMINED, case=None)

@@ -76,6 +76,19 @@ def own_log_only(profile: Profile) -> dict[str, str]:
             for s in profile.sensors if s.own_log_only}
 
 
+def nothing_judged(judging: Judging, change_test: str | None) -> str:
+    """Why no signal is judged, for a log the replay judges nothing in and the change test
+    (``change_test``: how it describes itself, None: calibrate set it no threshold) does
+    not judge."""
+    left = sum(name in judging.not_judged for name in own_log_only(judging.profile))
+    if not left:
+        return "no signal is judged: the model cannot predict any of them"
+    return (f"no signal is judged: {left} of {len(judging.sensor_names)} are judged only "
+            "against the log's own beginning, by the change test, and it is "
+            + ("not calibrated (run `auvdiag calibrate` on normal logs)" if change_test is None
+               else change_test))
+
+
 def replay_judged(model: LoadedModel, profile: Profile) -> list[str]:
     """The signals the replay judges with this model and profile."""
     left_out = not_judged_signals(model) | own_log_only(profile)
