@@ -26,18 +26,18 @@ def parse_controller(reader: TableReader, sensor_names: list[str], command_names
                            "controller needs a speed sensor")
     mix_table = reader.sub("mix")
     mix = {}
-    for command in mix_table.table:
+    for command in mix_table.names():
         if command not in command_names:
             raise ProfileError(f"key '{mix_table.key(command)}' names no command")
         row = mix_table.sub(command)
-        for effort in row.table:
+        for effort in row.names():
             if effort not in EFFORTS:
                 raise ProfileError(f"key '{row.key(effort)}' must be one of {EFFORTS}")
         mix[command] = {effort: row.get(effort, float) for effort in row.table}
     gains_reader = reader.sub("gains") if "gains" in reader.table else TableReader({}, "gains")
     known = {f.name for f in fields(ControllerGains)}
     gains = {}
-    for name in gains_reader.table:
+    for name in gains_reader.names():
         if name not in known:
             raise ProfileError(f"key '{reader.key('gains')}.{name}' is not a gain of "
                                f"{kind} (known: {', '.join(sorted(known))})")

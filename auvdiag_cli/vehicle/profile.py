@@ -234,7 +234,7 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
 
 def _thresholds(table: TableReader, sensor_names: list[str]) -> dict[str, dict[str, float]]:
     thresholds = {mode: {name: positive(table.sub(mode), name) for name in sensor_names}
-                  for mode in table.table}
+                  for mode in table.names()}
     if MISSION_MODE not in thresholds:
         raise ProfileError(f"missing key 'thresholds.{MISSION_MODE}'")
     return thresholds
@@ -268,18 +268,16 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
                   | {a.name for a in actuators})
     pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
-
     dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
-    dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.table}
-
+    dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.names()}
     sources_table = top.sub("sources")
     sources = {family: log_sources(sources_table.sub(family), signal_names, optional)
-               for family in sources_table.table}
+               for family in sources_table.names()}
     navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
         else None
     controller = parse_controller(top.sub("controller"), sensor_names,
                              [c.name for c in commands]) if "controller" in data else None
-    return Profile(
+    profile = Profile(
         name=vehicle.get("name", str),
         description=vehicle.get("description", str, ""),
         dt_s=positive(vehicle, "dt_s"),
@@ -308,6 +306,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
                                 {a.name for a in actuators}
                                 | {c.component for c in commands + outputs}),
     )
+    top.check_all_read()
+    return profile
 
 
 def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
@@ -331,7 +331,7 @@ def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[s
 def _pattern_row(reader: TableReader, sensor_names: list[str], components: set[str]
                  ) -> PatternRow:
     b_reader = reader.sub("b")
-    unknown = [name for name in b_reader.table if name not in sensor_names]
+    unknown = [name for name in b_reader.names() if name not in sensor_names]
     if unknown:
         raise ProfileError(f"key '{b_reader.key(unknown[0])}' names no sensor (b has one bit "
                            f"per sensor: {', '.join(sensor_names)})")

@@ -72,7 +72,7 @@ def _coupling(reader: TableReader, name: str, dofs: list[str]) -> dict[str, floa
     if name not in reader.table:
         return {}
     table = reader.sub(name)
-    for other in table.table:
+    for other in table.names():
         if other not in dofs:
             raise ProfileError(f"key '{table.key(other)}' names no simulated degree of freedom")
     return {other: table.get(other, float) for other in table.table}
@@ -89,7 +89,7 @@ def _dof(reader: TableReader, dofs: list[str]) -> DofPhysics:
 def parse_simulation(reader: TableReader, command_names: list[str],
                      sensor_names: list[str]) -> SimulationSpec:
     dof_table = reader.sub("dofs")
-    dofs = list(dof_table.table)
+    dofs = dof_table.names()
     unknown = [d for d in dofs if d not in DOFS]
     if unknown or not dofs:
         raise ProfileError(f"key '{dof_table.where}' must name some of {', '.join(DOFS)}")

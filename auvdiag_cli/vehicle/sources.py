@@ -30,7 +30,8 @@ def _field(reader: TableReader) -> str:
 
 
 def _field_source(entry: TableReader) -> FieldSource:
-    where = entry.sub("where").table if "where" in entry.table else {}
+    matched = entry.sub("where") if "where" in entry.table else None
+    where = {} if matched is None else {name: matched.table[name] for name in matched.names()}
     return FieldSource(
         _topic(entry), _field(entry), entry.get("scale", float, 1.0),
         entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
@@ -44,7 +45,7 @@ def _value_map(entry: TableReader) -> tuple[tuple[int, float], ...]:
         return ()
     table = entry.sub("values")
     try:
-        return tuple((int(raw), table.get(raw, float)) for raw in table.table)
+        return tuple((int(raw), table.get(raw, float)) for raw in table.names())
     except ValueError:
         raise ProfileError(f"key '{entry.key('values')}' must map integers (as keys) to "
                            "numbers, e.g. { 10 = 1, 11 = 0 }") from None
