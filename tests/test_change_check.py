@@ -265,7 +265,7 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     every judge, the change test too."""
     from dataclasses import replace
 
-    from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
+    from auvdiag_cli.engine.judging import replay_judged
 
     model, _ = calibrated
     base = api.load_profile(None)
@@ -296,6 +296,8 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     from dataclasses import replace
 
     from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
+    from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.text import summary_lines
 
     model, _ = calibrated
     base = api.load_profile(None)
@@ -307,6 +309,12 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     assert check is not None and check.alarm_s is not None
     assert diagnosis.verdict == "fault" and diagnosis.detected_at_s == check.alarm_s
     assert not any("no signal is judged" in note for note in diagnosis.notes)
+    # The report says the reason they share once, and that the replay judges none of them.
+    lines = summary_lines(build_report(diagnosis))
+    said = [line for line in lines if line.endswith("(judged against itself)")]
+    assert said == ["  " + ", ".join(profile.sensor_names) + ": judged only against the "
+                    "log's own beginning (judged against itself)"]
+    assert any(line.endswith("max g / threshold: none judged by the replay") for line in lines)
     normal = api.diagnose(make_log("paper-normal", 12), profile, model)
     assert normal.verdict == "normal" and normal.change_check is not None
     # Where the change test cannot judge either, the note says why, not "cannot predict".

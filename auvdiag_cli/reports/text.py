@@ -1,6 +1,7 @@
 """The short human summary printed on the terminal."""
 
 import textwrap
+from collections.abc import Mapping
 
 from adapters import TopicInfo
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
@@ -31,10 +32,10 @@ def summary_lines(report: Report) -> list[str]:
         lines.append("verdict: " + verdict_title(r))
     if coverage is not None:
         lines.append(f"  coverage: {coverage.engine().describe()}")
-    lines += [f"  {name}: {why}" for name, why in r.not_judged.items()]
+    lines += [f"  {who}: {why}" for who, why in _by_reason(r.not_judged)]
     if r.commands_check is not None:
         lines.append("  commands vs motion: " + r.commands_check.summary)
-        lines += [f"    {name}: {why}" for name, why in r.commands_check.not_judged.items()]
+        lines += [f"    {who}: {why}" for who, why in _by_reason(r.commands_check.not_judged)]
     if r.start_check is not None:
         lines.append("  start: " + r.start_check.summary)
     if r.change_check is not None:
@@ -44,6 +45,8 @@ def summary_lines(report: Report) -> list[str]:
         peaks = ", ".join(f"{name} {_percent(g)}/{segment.thresholds.get(name, 0):.4g} %"
                           + (" (not judged)" if name in r.not_judged else "")
                           for name, g in segment.max_g.items())
+        if all(name in r.not_judged for name in segment.max_g):
+            peaks = "none judged by the replay"
         case = f"  case {segment.case}" if segment.case else ""
         lines.append(f"  segment {segment.name:<8} {segment.start_s:7.1f}-"
                      f"{segment.end_s:7.1f} s  max g / threshold: {peaks}{case}")
@@ -52,6 +55,14 @@ def summary_lines(report: Report) -> list[str]:
     lines.append(f"  model: {r.model.name} ({r.model.path})"
                  + (f", driven also by the measured {', '.join(inputs)}" if inputs else ""))
     return [line for line in lines if line]
+
+
+def _by_reason(reasons: Mapping[str, str]) -> list[tuple[str, str]]:
+    """Signals left out for the same reason, said once: (their names, the reason)."""
+    grouped: dict[str, list[str]] = {}
+    for name, why in reasons.items():
+        grouped.setdefault(why, []).append(name)
+    return [(", ".join(who), why) for why, who in grouped.items()]
 
 
 def _percent(g: float | None) -> str:
