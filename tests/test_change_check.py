@@ -296,6 +296,7 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     from dataclasses import replace
 
     from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
+    from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
     from auvdiag_cli.reports.report_build import build_report
     from auvdiag_cli.reports.text import summary_lines
 
@@ -315,6 +316,13 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     assert said == ["  " + ", ".join(profile.sensor_names) + ": judged only against the "
                     "log's own beginning (judged against itself)"]
     assert any(line.endswith("max g / threshold: none judged by the replay") for line in lines)
+    report = build_report(diagnosis)
+    (left_out,) = [value for label, value in summary_facts(report) if label == "Not judged"]
+    assert left_out.count("judged only against the log's own beginning") == 1
+    series = {"time_s": diagnosis.histories.time_s, "sensor_names": profile.sensor_names,
+              "g_percent": np.zeros((len(diagnosis.histories.time_s), len(profile.sensors))),
+              "thresholds": np.ones((len(diagnosis.histories.time_s), len(profile.sensors)))}
+    assert assumption_remarks(report, series)[0][1].startswith("the replay judges no signal")
     normal = api.diagnose(make_log("paper-normal", 12), profile, model)
     assert normal.verdict == "normal" and normal.change_check is not None
     # Where the change test cannot judge either, the note says why, not "cannot predict".

@@ -2,7 +2,7 @@
 page both phrase a diagnosis with these, from the typed report."""
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from auvdiag_cli.reports.report import (
     DegradationPart,
@@ -16,6 +16,14 @@ from auvdiag_cli.reports.report import (
 def names(components: Sequence[str]) -> str:
     """Components in words, joined by "or"."""
     return " or ".join(c.replace("_", " ") for c in components)
+
+
+def by_reason(reasons: Mapping[str, str]) -> list[tuple[str, str]]:
+    """Signals left out for the same reason, said once: (their names, the reason)."""
+    grouped: dict[str, list[str]] = {}
+    for name, why in reasons.items():
+        grouped.setdefault(why, []).append(name)
+    return [(", ".join(who), why) for why, who in grouped.items()]
 
 
 def seconds(value: float | None) -> str:

@@ -1,7 +1,6 @@
 """The short human summary printed on the terminal."""
 
 import textwrap
-from collections.abc import Mapping
 
 from adapters import TopicInfo
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
@@ -9,6 +8,7 @@ from auvdiag_cli.jobs.inspect import Inspection
 from auvdiag_cli.reports.json_report import utc_text, verdict_title
 from auvdiag_cli.reports.report import ActivePart, ActuatorsPart, Report
 from auvdiag_cli.reports.sentences import (
+    by_reason,
     hypotheses_sentence,
     names,
     substitution_facts,
@@ -32,10 +32,10 @@ def summary_lines(report: Report) -> list[str]:
         lines.append("verdict: " + verdict_title(r))
     if coverage is not None:
         lines.append(f"  coverage: {coverage.engine().describe()}")
-    lines += [f"  {who}: {why}" for who, why in _by_reason(r.not_judged)]
+    lines += [f"  {who}: {why}" for who, why in by_reason(r.not_judged)]
     if r.commands_check is not None:
         lines.append("  commands vs motion: " + r.commands_check.summary)
-        lines += [f"    {who}: {why}" for who, why in _by_reason(r.commands_check.not_judged)]
+        lines += [f"    {who}: {why}" for who, why in by_reason(r.commands_check.not_judged)]
     if r.start_check is not None:
         lines.append("  start: " + r.start_check.summary)
     if r.change_check is not None:
@@ -55,14 +55,6 @@ def summary_lines(report: Report) -> list[str]:
     lines.append(f"  model: {r.model.name} ({r.model.path})"
                  + (f", driven also by the measured {', '.join(inputs)}" if inputs else ""))
     return [line for line in lines if line]
-
-
-def _by_reason(reasons: Mapping[str, str]) -> list[tuple[str, str]]:
-    """Signals left out for the same reason, said once: (their names, the reason)."""
-    grouped: dict[str, list[str]] = {}
-    for name, why in reasons.items():
-        grouped.setdefault(why, []).append(name)
-    return [(", ".join(who), why) for why, who in grouped.items()]
 
 
 def _percent(g: float | None) -> str:

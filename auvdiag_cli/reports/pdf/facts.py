@@ -4,6 +4,7 @@ import numpy as np
 
 from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.sentences import (
+    by_reason,
     degradation_sentence,
     hypotheses_sentence,
     model_sentence,
@@ -36,8 +37,8 @@ def summary_facts(report: Report) -> list[tuple[str, str]]:
     if report.coverage:
         facts.append(("Judged", report.coverage.summary))
     if report.not_judged:
-        facts.append(("Not judged", "; ".join(f"{k}: {v}"
-                                              for k, v in report.not_judged.items())))
+        facts.append(("Not judged", "; ".join(f"{who}: {why}"
+                                              for who, why in by_reason(report.not_judged))))
     if report.commands_check:
         facts.append(("Commands vs motion", report.commands_check.summary))
     if report.actuators and report.actuators.judged:
@@ -71,7 +72,8 @@ def _margin(report: Report, series: Series | None) -> str:
     healthy = time_s < onset if onset is not None else np.ones(time_s.shape, bool)
     judged = np.array([name not in report.not_judged for name in names])
     if not judged.any():
-        return "no signal is judged"
+        return ("the replay judges no signal: see how the log compares with its own beginning"
+                if report.change_check is not None else "no signal is judged")
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = series["g_percent"][healthy] / series["thresholds"][healthy]
     ratio[:, ~judged] = np.nan          # an unjudged signal's g is no margin to an alarm
