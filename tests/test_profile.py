@@ -103,34 +103,6 @@ def test_the_operating_fallback_is_read_as_a_value_map():
 
 
 @pytest.mark.parametrize(("profile_name", "old", "new", "message"), [
-    ("arduplane_carbonz", 'own_log_only = "the ground speed', 'own_log_onyl = "the ground speed',
-     "unknown key 'sensors[6].own_log_onyl' (a typo? 'sensors[6]' takes: component, "
-     "description, full_scale, moved_by, name, own_log_only, truth_column, unit)"),
-    ("arduplane_carbonz", "[[tracking]]", "[[trackin]]",
-     "unknown key 'trackin' (a typo? the profile's tables:"),
-    ("arduplane_carbonz", 'pitch_sp = { topic = "/mavros/nav_info/pitch"',
-     'pitch_sp = { topic = "/mavros/nav_info/pitch", fild = "x"',
-     "unknown key 'sources.ros.signals.pitch_sp.fild'"),
-    ("bluerov2", "[sources.mavlink.signals]",
-     "[sources.mavlink.signals]\nheadng = { message = 'VFR_HUD', field = 'groundspeed' }",
-     "unknown key 'sources.mavlink.signals.headng' (a typo? 'sources.mavlink.signals' "
-     "takes:"),
-])
-def test_a_key_no_part_of_the_profile_reads_is_named(tmp_path, profile_name, old, new,
-                                                     message):
-    """A mistyped key would otherwise be dropped without a word: the setting it meant to
-    make silently not made."""
-    from auvdiag_cli.vehicle.profile import profile_text
-
-    text, _ = profile_text(Path(profile_name))
-    assert old in text
-    path = tmp_path / "p.toml"
-    path.write_text(text.replace(old, new, 1))
-    with pytest.raises(ProfileError, match=re.escape(message)):
-        load_profile(path)
-
-
-@pytest.mark.parametrize(("profile_name", "old", "new", "message"), [
     ("crazyflie", 'name = "motor_2"\ncomponent = "motor_2"\nkind = "rotor"',
      'name = "motor_2"\ncomponent = "motor_2"\nkind = "thruster"',
      "key 'effort[0].actuators' mixes kinds rotor, thruster"),
@@ -145,9 +117,23 @@ def test_a_key_no_part_of_the_profile_reads_is_named(tmp_path, profile_name, old
      "key 'sensors[6].own_log_only' must be a string, got 3"),
     ("bluerov2", 'sway = "sway"\nroll_rate', 'sway = "drift"\nroll_rate',
      "key 'controller.sway' names no sensor"),
+    # A key no part of the profile reads (a typo) would be dropped without a word: the
+    # setting it meant to make silently not made.
+    ("arduplane_carbonz", 'own_log_only = "the ground speed', 'own_log_onyl = "the ground speed',
+     "unknown key 'sensors[6].own_log_onyl' (a typo? 'sensors[6]' takes: component, "
+     "description, full_scale, moved_by, name, own_log_only, truth_column, unit)"),
+    ("arduplane_carbonz", "[[tracking]]", "[[trackin]]",
+     "unknown key 'trackin' (a typo? the profile's tables:"),
+    ("arduplane_carbonz", 'pitch_sp = { topic = "/mavros/nav_info/pitch"',
+     'pitch_sp = { topic = "/mavros/nav_info/pitch", fild = "x"',
+     "unknown key 'sources.ros.signals.pitch_sp.fild'"),
+    ("bluerov2", "[sources.mavlink.signals]",
+     "[sources.mavlink.signals]\nheadng = { message = 'VFR_HUD', field = 'groundspeed' }",
+     "unknown key 'sources.mavlink.signals.headng' (a typo? 'sources.mavlink.signals' "
+     "takes:"),
 ])
-def test_actuator_kinds_and_what_moves_a_sensor_are_checked(tmp_path, profile_name, old, new,
-                                                            message):
+def test_actuator_kinds_what_moves_a_sensor_and_unknown_keys_are_checked(
+        tmp_path, profile_name, old, new, message):
     from auvdiag_cli.vehicle.profile import profile_text
 
     text, _ = profile_text(Path(profile_name))
