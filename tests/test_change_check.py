@@ -236,6 +236,10 @@ def test_a_normal_dive_it_was_not_calibrated_on_raises_no_change(calibrated, mak
     check = diagnosis.change_check
     assert check is not None and check.judged and check.alarm_s is None
     assert diagnosis.verdict == "normal"
+    # It says from when it judged: what came before is its reference, where it sees nothing.
+    assert check.judged_from_s is not None and check.judged_from_s >= REFERENCE_MIN_S
+    assert check.describe().startswith(f"no change after {check.judged_from_s:.1f} s against "
+                                       "the log's own beginning before it")
 
 
 def test_a_thruster_weakening_mid_log_is_found_first_by_the_change_test(calibrated,

@@ -127,9 +127,12 @@ class ChangeCheck:
                     ratios[name] = max(ratios.get(name, 0.0), value / limit)
         if self.alarm_s is None:
             worst = max(ratios, key=lambda n: ratios[n], default=None)
-            return "no change against the log's own beginning" + (
-                "" if worst is None else f" (largest: {worst} at {ratios[worst]:.0%} of its "
-                                         "threshold)")
+            # What came before is its reference: a change there is not seen (a log that
+            # fails within its first seconds), and a short log is judged only briefly.
+            return (f"no change after {self.judged_from_s:.1f} s against the log's own "
+                    "beginning before it" + (
+                        "" if worst is None else f" (largest: {worst} at "
+                                                 f"{ratios[worst]:.0%} of its threshold)"))
         which = ", ".join(f"{n} {r:.1f}x its threshold" + (
             f" ({self.ways[n]} the prediction)" if n in self.ways else
             " (the loop answers slower than usual)" if n in self.loops else "")
