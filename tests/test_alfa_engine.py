@@ -99,6 +99,18 @@ def test_the_days_normal_flight_raises_nothing(calibrated):
 
 
 @pytest.mark.shared_data("alfa")
+def test_the_set_points_are_drawn_in_their_unit(calibrated):
+    from auvdiag_cli.reports.pdf.plots import commands_page
+    from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.series import series_from_diagnosis
+
+    diagnosis, _ = _judged(calibrated, "carbonZ_2018-07-18-15-53-31_2_engine_failure")
+    assert diagnosis.sensor_units["roll_sp"] == "rad"
+    figure = commands_page(build_report(diagnosis), series_from_diagnosis(diagnosis))
+    assert figure.axes[0].get_ylabel() == "command [rad]"
+
+
+@pytest.mark.shared_data("alfa")
 def test_a_flight_too_short_for_its_own_reference_is_undetermined_and_says_why(calibrated):
     """Every signal of this profile is judged against the flight's own beginning only, and
     the change test needs 30 s of it: a 29.5 s sequence is not judged, not called normal."""

@@ -70,7 +70,7 @@ class Observations:
     model: ModelIdentity
     window_samples: int
     decision_window_s: float
-    sensor_units: Mapping[str, str]
+    sensor_units: Mapping[str, str]   # every sensor's, and each command's the profile gives
     start_ns: int = 0
     mission_legs: tuple[MissionLeg, ...] = ()
     histories: Histories = field(default_factory=Histories)

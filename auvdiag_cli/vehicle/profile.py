@@ -33,13 +33,13 @@ ROUTINE_THRESHOLDS = "routine"     # thresholds shared by every DMS without its 
 
 @dataclass(frozen=True)
 class Command:
-    """A command that drives the model or, in ``[[outputs]]``, an actuator output that only
-    the effort check reads."""
+    """A command that drives the model, or (``[[outputs]]``) one only the effort check reads."""
 
     name: str
     component: str
     description: str
     kind: str = "thruster"       # an actuator kind (ACTUATOR_KINDS) or a set point
+    unit: str = ""               # "": normalised (an actuator's full scale is 1)
 
     @property
     def failure(self) -> str:
@@ -195,7 +195,8 @@ def _horizon(matching: TableReader) -> float | None:
 
 def _command(reader: TableReader, kinds: tuple[str, ...]) -> Command:
     return Command(reader.get("name", str), reader.get("component", str),
-                   reader.get("description", str, ""), parse_kind(reader, "thruster", kinds))
+                   reader.get("description", str, ""), parse_kind(reader, "thruster", kinds),
+                   reader.get("unit", str, ""))
 
 
 def _rows(top: TableReader, key: str) -> list[TableReader]:

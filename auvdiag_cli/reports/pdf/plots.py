@@ -97,7 +97,9 @@ def commands_page(report: Report, series: Series) -> "Figure":
     for i, name in enumerate(_names(series, "command_names")):
         ax.plot(t, series["commands"][:, i], lw=0.9, label=name,
                 color=COMMAND_CYCLE[i % len(COMMAND_CYCLE)])
-    ax.set_ylabel("command (normalised, full scale = 1)")
+    units = {report.units.get(name) for name in _names(series, "command_names")}
+    unit = units.pop() if len(units) == 1 else None
+    ax.set_ylabel("command (normalised, full scale = 1)" if unit is None else f"command [{unit}]")
     for segment in report.segments:
         if segment.mode == "routine":
             ax.annotate(segment.name, ((segment.start_s + segment.end_s) / 2, 0.98),
