@@ -321,7 +321,8 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
                     "log's own beginning (judged against itself)"]
     assert any(line.endswith("max g / threshold: none judged by the replay") for line in lines)
     report = build_report(diagnosis)
-    (left_out,) = [value for label, value in summary_facts(report) if label == "Not judged"]
+    (left_out,) = [value for label, value in summary_facts(report)
+                   if label == "Not judged by the replay"]
     assert left_out.count("judged only against the log's own beginning") == 1
     series = {"time_s": diagnosis.histories.time_s, "sensor_names": profile.sensor_names,
               "g_percent": np.zeros((len(diagnosis.histories.time_s), len(profile.sensors))),

@@ -37,8 +37,8 @@ def summary_facts(report: Report) -> list[tuple[str, str]]:
     if report.coverage:
         facts.append(("Judged", report.coverage.summary))
     if report.not_judged:
-        facts.append(("Not judged", "; ".join(f"{who}: {why}"
-                                              for who, why in by_reason(report.not_judged))))
+        facts.append(("Not judged by the replay", "; ".join(
+            f"{who}: {why}" for who, why in by_reason(report.not_judged))))
     if report.commands_check:
         facts.append(("Commands vs motion", report.commands_check.summary))
     if report.actuators and report.actuators.judged:
