@@ -66,6 +66,8 @@ def test_calibrate_sets_the_engine_signatures_thresholds(calibrated):
     _, model, _ = calibrated
     for statistic in (WINDOW, SUM):
         assert model.card.change_thresholds[statistic]["engine weakened"] > 0
+        # The climb, moved by rising and sinking air, is judged only within the signature.
+        assert "climb" not in model.card.change_thresholds[statistic]
     # Two days' flights tell how far normal flying goes each way: throttle-ups push the
     # forward acceleration above the predictor further than anything normal drops it, so
     # its sum below is scaled up against the way above.

@@ -9,7 +9,12 @@ import pytest
 
 from auvdiag_cli import api
 from auvdiag_cli.engine.change_check import SUM, WINDOW, check_change
-from auvdiag_cli.engine.change_signatures import signature_names, signatures
+from auvdiag_cli.engine.change_signatures import (
+    signature_names,
+    signature_only,
+    signatures,
+    thresholded,
+)
 from auvdiag_cli.engine.isolation import change_suspects
 from auvdiag_cli.vehicle.profile import load_profile, profile_text
 from auvdiag_errors import ProfileError
@@ -79,6 +84,9 @@ def test_a_signature_needs_two_judged_members():
      "key 'actuators[3].weakened.pitch' must be 1 or -1"),
     ("pitch = -1, climb", "altitude = -1, climb",
      "actuator 'engine': 'weakened' names 'altitude', which is no sensor"),
+    ('moved_by = ["rudder"]\nown_log_only', 'moved_by = ["rudder"]\nsignature_only = "x"\n'
+     "own_log_only", "key 'sensors[4].signature_only': 'yaw_rate' is in no actuator's "
+     "'weakened', so nothing would judge it"),
 ])
 def test_a_signature_names_sensors_with_a_sign(tmp_path, old, new, message):
     text, _ = profile_text(Path("arduplane_carbonz"))
@@ -88,3 +96,27 @@ def test_a_signature_names_sensors_with_a_sign(tmp_path, old, new, message):
     with pytest.raises(ProfileError, match=re.escape(message)):
         load_profile(path)
 
+
+def test_a_signal_judged_only_within_a_signature_never_alarms_alone():
+    """The climb, moved by rising and sinking air with no failure, is judged only within the
+    engine's signature: a shift of it alone raises nothing, while the four moving together
+    still name the engine."""
+    profile = api.load_profile("arduplane_carbonz")
+    alone = signature_only(profile.sensors)
+    assert alone == {"climb"}
+    names = thresholded(profile.actuators, profile.sensors, ENGINE)
+    assert "climb" not in names and "engine weakened" in names
+    rng = np.random.default_rng(4)
+    residual = rng.normal(0.0, 1.0, (1500, len(ENGINE)))
+    residual[900:, ENGINE.index("climb")] += 3.0          # the climb alone, far off
+    time_s = np.arange(1500) * DT_S
+    judged_alone = check_change(residual, ENGINE, _thresholds([*ENGINE, "engine weakened"]),
+                                time_s, STEPS, DT_S, profile.actuators)
+    assert judged_alone.alarm_s is not None and "climb" in judged_alone.flagged
+    quiet = check_change(residual, ENGINE, _thresholds(names), time_s, STEPS, DT_S,
+                         profile.actuators, within_signatures=alone)
+    assert quiet.alarm_s is None and "climb" in quiet.members["engine weakened"]
+    residual, time_s = _log(-1.0, 0)
+    engine = check_change(residual, ENGINE, _thresholds(names), time_s, STEPS, DT_S,
+                          profile.actuators, within_signatures=alone)
+    assert engine.alarm_s is not None and "engine weakened" in engine.flagged

@@ -340,16 +340,18 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
                  window: int, dt_s: float, actuators: Sequence[Actuator] = (),
                  stride: int | None = STRIDE_STEPS, scales: WayScales | None = None,
-                 below_only: Collection[str] = ()) -> ChangeCheck:
+                 below_only: Collection[str] = (), within_signatures: Collection[str] = ()
+                 ) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
     threshold (``thresholds``: statistic -> signal -> threshold), each way divided by its
     scale (``scales``, `change_statistics`), and the signatures of the ``actuators`` over
-    them that have one; a window judged every ``stride`` steps (None: windows side by side,
-    as models calibrated before judged them)."""
+    them and ``within_signatures`` (judged only there) that have one; a window judged every
+    ``stride`` steps (None: windows side by side, as models calibrated before judged
+    them)."""
     def limited(name: str) -> bool:
         return any(name in limits for limits in thresholds.values())
 
-    judged = [i for i, name in enumerate(names) if limited(name)]
+    judged = [i for i, name in enumerate(names) if limited(name) or name in within_signatures]
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),

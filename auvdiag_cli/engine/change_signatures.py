@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.vehicle.actuators import Actuator
+from auvdiag_cli.vehicle.profile import Sensor
 
 SUFFIX = " weakened"
 MIN_MEMBERS = 2             # one judged signal alone is already judged as itself
@@ -58,6 +59,20 @@ def signature_parts(names: Sequence[str], actuators: Sequence[Actuator]) -> dict
 
 def signature_names(actuators: Sequence[Actuator], judged: Sequence[str]) -> list[str]:
     return [s.name for s in signatures(actuators, judged)]
+
+
+def signature_only(sensors: Sequence[Sensor]) -> frozenset[str]:
+    """The sensors judged only within a part's signature, never alone (`signature_only`)."""
+    return frozenset(s.name for s in sensors if s.signature_only)
+
+
+def thresholded(actuators: Sequence[Actuator], sensors: Sequence[Sensor],
+                judged: Sequence[str]) -> list[str]:
+    """What the test sets thresholds on and alarms by: each of the ``judged`` signals the
+    profile lets stand alone, then the signatures over all of them."""
+    alone = signature_only(sensors)
+    return [*(name for name in judged if name not in alone),
+            *signature_names(actuators, judged)]
 
 
 def with_signatures(z: np.ndarray, found: Sequence[Signature]

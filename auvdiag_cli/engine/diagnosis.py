@@ -14,7 +14,7 @@ from auvdiag_cli.engine.change_columns import (
     change_residual,
     loop_names,
 )
-from auvdiag_cli.engine.change_signatures import signature_names
+from auvdiag_cli.engine.change_signatures import signature_only, thresholded
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -309,9 +309,9 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     (`change_judged`) that calibrate set a threshold for (None: no such threshold)."""
     profile, model = judging.profile, judging.model
     names = change_names(model)
-    judged = [name for name in change_judged(model, skilled(model, profile))
-              if name not in judging.set_aside]
-    judged += signature_names(profile.actuators, judged)
+    in_play = [name for name in change_judged(model, skilled(model, profile))
+               if name not in judging.set_aside]
+    judged = thresholded(profile.actuators, profile.sensors, in_play)
     missing = sorted(frame.flat_inputs)
     measured = [name for name in missing if name in model.card.change_unfed]
     thresholds = {statistic: {name: value for name, value in limits.items() if name in judged}
@@ -333,7 +333,7 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators,
                         model.card.change_stride, model.card.change_way_scales,
-                        loop_names(model))
+                        loop_names(model), signature_only(profile.sensors) & set(in_play))
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

@@ -71,9 +71,12 @@ class Judging:
 
 def own_log_only(profile: Profile) -> dict[str, str]:
     """The signals the profile has judged only against the log's own beginning (the change
-    test), with the reason reports print."""
-    return {s.name: f"judged only against the log's own beginning ({s.own_log_only})"
-            for s in profile.sensors if s.own_log_only}
+    test), with the reason reports print; those judged only within a part's signature
+    there say so."""
+    return {s.name: (f"judged only within a part's signature against the log's own "
+                     f"beginning ({s.signature_only})" if s.signature_only else
+                     f"judged only against the log's own beginning ({s.own_log_only})")
+            for s in profile.sensors if s.own_log_only or s.signature_only}
 
 
 def nothing_judged(judging: Judging, change_test: str | None) -> str:

@@ -131,8 +131,11 @@ class Diagnosis(Observations, Finding):
         beginning), actuators, the start."""
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
         change = self.change_check
-        by_change = set() if change is None or not change.judged else {
+        limited = set() if change is None or not change.judged else {
             name for limits in change.thresholds.values() for name in limits}
+        # A signature judges its members (some judged nowhere else: `signature_only`).
+        by_change = limited | {member for name in limited
+                               for member in (change.members.get(name, ()) if change else ())}
         return coverage_of(self.histories.sensor_names or tuple(self.b),
                            [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check)

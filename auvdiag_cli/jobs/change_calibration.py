@@ -21,7 +21,7 @@ from auvdiag_cli.engine.change_check import (
     signal_of,
 )
 from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
-from auvdiag_cli.engine.change_signatures import signature_names
+from auvdiag_cli.engine.change_signatures import thresholded
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.profile import Profile
@@ -107,7 +107,7 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
               for d in diagnoses), *({s: dict(v) for s, v in t.peaks.items()} for t in trained)]
     scales = way_scales(ways, judged)
     return without_outliers(ChangeEvidence(
-        [*judged, *signature_names(profile.actuators, judged)],
+        thresholded(profile.actuators, profile.sensors, judged),
         [either_way(p, judged, scales) for p in ways],
         trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted,
         scales=scales))

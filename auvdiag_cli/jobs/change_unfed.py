@@ -20,7 +20,7 @@ from dataclasses import replace
 
 from auvdiag_cli.engine.change_check import WayScales
 from auvdiag_cli.engine.change_columns import change_judged, loop_names
-from auvdiag_cli.engine.change_signatures import signature_names
+from auvdiag_cli.engine.change_signatures import thresholded
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import IngestedLog
 from auvdiag_cli.engine.judging import skilled
@@ -71,7 +71,7 @@ def unfed_thresholds(logs: Sequence[IngestedLog], model: LoadedModel, profile: P
                                                     profile, model), judged, model, profile)
                  for log, feeds in zip(logs, feeding, strict=True)]
         evidence = without_outliers(ChangeEvidence(
-            [*judged, *signature_names(profile.actuators, judged)],
+            thresholded(profile.actuators, profile.sensors, judged),
             [either_way(p, judged, scales) for p in peaks], scales=scales))
         budget = None if fitted is None else refitted(
             fitted, change_judges(evidence.peaks, evidence.judged))

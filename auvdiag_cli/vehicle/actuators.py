@@ -4,11 +4,15 @@ surfaces and engines are not commands, yet they are what fails. A profile lists 
 `[[actuators]]` (name, kind, description) and says, per sensor, which of them move the
 quantity it measures (`moved_by`): a relation that changes then names its part."""
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
+
+if TYPE_CHECKING:
+    from auvdiag_cli.vehicle.profile import Sensor
 
 # Each kind, and how its failure is said. A command may also be a controller's set point
 # (SET_POINT): it drives the model, but nothing fails in it.
@@ -78,14 +82,20 @@ def _weakened(reader: TableReader) -> tuple[tuple[str, float], ...]:
     return tuple(signs)
 
 
-def check_weakened(actuators: Iterable[Actuator], sensor_names: Iterable[str]) -> None:
-    """Every signal an actuator's `weakened` names is a sensor."""
-    known = set(sensor_names)
+def check_weakened(actuators: Sequence[Actuator], sensors: Sequence["Sensor"]) -> None:
+    """Every signal an actuator's `weakened` names is a sensor, and every sensor judged only
+    within a signature is in one (else nothing would judge it)."""
+    known = {s.name for s in sensors}
     for actuator in actuators:
         strangers = [name for name, _ in actuator.weakened if name not in known]
         if strangers:
             raise ProfileError(f"actuator {actuator.name!r}: 'weakened' names {strangers[0]!r}, "
                                f"which is no sensor (known: {', '.join(sorted(known))})")
+    in_signatures = {name for actuator in actuators for name, _ in actuator.weakened}
+    for index, sensor in enumerate(sensors):
+        if sensor.signature_only and sensor.name not in in_signatures:
+            raise ProfileError(f"key 'sensors[{index}].signature_only': {sensor.name!r} is in "
+                               "no actuator's 'weakened', so nothing would judge it")
 
 
 def parse_moved_by(reader: TableReader, known: set[str]) -> tuple[str, ...]:

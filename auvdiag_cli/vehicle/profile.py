@@ -67,9 +67,10 @@ class Sensor:
     truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
     # The actuators (or command components) that move what it measures ([[actuators]]).
     moved_by: tuple[str, ...] = ()
-    # Why it is judged only against the log's own beginning (None: by every judge): it answers
-    # the commands differently from log to log (a ground speed, with the day's wind).
+    # Judged only against the log's own beginning (a ground speed, with the day's wind): why.
     own_log_only: str | None = None
+    # Judged only within a part's signature (`weakened`), never alone: why (None: alone too).
+    signature_only: str | None = None
 
 
 @dataclass(frozen=True)
@@ -214,10 +215,9 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
                r.get("truth_column", str, None), parse_moved_by(r, movers),
-               r.get("own_log_only", str, None))
-        for r in top.items("sensors")
-    )
-    check_weakened(actuators, [s.name for s in sensors])
+               r.get("own_log_only", str, None), r.get("signature_only", str, None))
+        for r in top.items("sensors"))
+    check_weakened(actuators, sensors)
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
                    for r in _rows(top, "inputs"))
     if not commands or not sensors:
