@@ -133,7 +133,8 @@ def test_an_unskilled_signal_never_raises_an_alarm(make_log, tmp_path):
                                    str(pdf), "--quiet"])
     assert rendered.exit_code == 0, rendered.output
     first = " ".join(pypdf.PdfReader(pdf).pages[0].extract_text().split())
-    assert "NORMAL" in first and "Not judged: flow: not judged (the model cannot" in first
+    assert "NORMAL" in first
+    assert "Not judged by the replay: flow: not judged (the model cannot" in first
 
 
 def test_commands_reveal_what_an_unjudged_sensor_hides_without_blaming_a_thruster(

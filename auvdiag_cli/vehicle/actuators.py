@@ -6,13 +6,19 @@ quantity it measures (`moved_by`): a relation that changes then names its part."
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
 
-if TYPE_CHECKING:
-    from auvdiag_cli.vehicle.profile import Sensor
+
+class _Sensor(Protocol):
+    """What the checks here read of a profile's sensor."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def signature_only(self) -> str | None: ...
 
 # Each kind, and how its failure is said. A command may also be a controller's set point
 # (SET_POINT): it drives the model, but nothing fails in it.
@@ -82,7 +88,7 @@ def _weakened(reader: TableReader) -> tuple[tuple[str, float], ...]:
     return tuple(signs)
 
 
-def check_weakened(actuators: Sequence[Actuator], sensors: Sequence["Sensor"]) -> None:
+def check_weakened(actuators: Sequence[Actuator], sensors: Sequence[_Sensor]) -> None:
     """Every signal an actuator's `weakened` names is a sensor, and every sensor judged only
     within a signature is in one (else nothing would judge it)."""
     known = {s.name for s in sensors}
