@@ -11,10 +11,10 @@ failed flights before the failure (`train --healthy`, the part ending --guard se
 before the onset), calibrated on the same logs with `--false-alarm-rate 0.05`, and every
 flight of the day left out is diagnosed as it is (its CSV folder): with the profile as
 shipped (every signal judged against the flight's own beginning, by the change test) and,
-beside it, with the replay judging every signal across flights as well (the same model,
-calibrated so). A failed flight is found when the verdict is a fault detected at or after
-the onset; a detection before the onset, or any fault on a flight without failure, is a
-false alarm. The published figures beside them
+beside it, with the replay judging across flights as well each signal the profile marks
+`own_log_only` (the same model, calibrated so). A failed flight is found when the verdict
+is a fault detected at or after the onset; a detection before the onset, or any fault on a
+flight without failure, is a false alarm. The published figures beside them
 are the recursive-least-squares detector of Keipour, Mousaei and Scherer, "Automatic
 real-time anomaly detection for autonomous aerial vehicles", ICRA 2019, on 22 of these
 flights. Then each day's flights alone train and calibrate a model that judges the other
@@ -132,11 +132,12 @@ def _healthy_file(training: list[Flight], work: Path, guard_s: float) -> Path:
 
 
 SHIPPED = "as shipped (every signal judged against the flight's own beginning)"
-REPLAY = "with the replay beside it (every signal judged across flights as well)"
+REPLAY = ("with the replay beside it (each signal the profile marks `own_log_only` judged "
+          "across flights as well)")
 
 
 def _every_signal_replayed(profile: "Profile") -> "Profile":
-    """The profile with no signal left to the change test alone: the replay judges them all."""
+    """The profile with no signal marked `own_log_only`: the replay judges them too."""
     from dataclasses import replace
     return replace(profile, sensors=tuple(replace(s, own_log_only=None)
                                           for s in profile.sensors))
