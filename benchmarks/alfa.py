@@ -136,7 +136,7 @@ REPLAY = ("with the replay beside it (each signal the profile marks `own_log_onl
           "across flights as well)")
 
 
-def _every_signal_replayed(profile: "Profile") -> "Profile":
+def _own_log_only_replayed(profile: "Profile") -> "Profile":
     """The profile with no signal marked `own_log_only`: the replay judges them too."""
     from dataclasses import replace
     return replace(profile, sensors=tuple(replace(s, own_log_only=None)
@@ -177,7 +177,7 @@ def judge_flights(training: list[Flight], judged_flights: list[Flight], name: st
     judged = _judged_by(api.load_model(model_dir, shipped), result.chosen)
     outcomes: dict[str, list[Outcome]] = {}
     for variant in variants:
-        profile = shipped if variant == SHIPPED else _every_signal_replayed(shipped)
+        profile = shipped if variant == SHIPPED else _own_log_only_replayed(shipped)
         variant_dir = model_dir if variant == SHIPPED else work / f"model-{name}-replay"
         if variant_dir != model_dir:
             copytree(model_dir, variant_dir, dirs_exist_ok=True)
