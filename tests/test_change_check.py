@@ -299,6 +299,7 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     signal is judged")."""
     from dataclasses import replace
 
+    from auvdiag_cli.engine.coverage import Coverage
     from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
     from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
     from auvdiag_cli.reports.report_build import build_report
@@ -330,6 +331,13 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     assert assumption_remarks(report, series)[0][1].startswith("the replay judges no signal")
     normal = api.diagnose(make_log("paper-normal", 12), profile, model)
     assert normal.verdict == "normal" and normal.change_check is not None
+    # Its NORMAL says from when it judged: what came before is the change test's reference.
+    coverage = normal.coverage
+    since = normal.change_check.judged_from_s
+    assert since is not None and coverage.judged_from_s == since and not coverage.complete
+    assert f"2 of 2 signals judged from {since:.1f} s and" in coverage.counts()
+    assert Coverage.from_dict(coverage.to_dict()) == coverage
+    assert api.diagnose(make_log("paper-normal", 12), base, model).coverage.judged_from_s is None
     # Where the change test cannot judge either, the note says why, not "cannot predict".
     n = len(profile.sensors)
     assert nothing_judged(Judging.of(model, profile), None) == (

@@ -49,7 +49,7 @@ def test_a_normal_on_part_of_the_vehicle_says_so_everywhere_a_dive_is_reported(
                         "signals": {"judged": ["yaw_rate"], "not_judged": ["flow"]},
                         "actuators": {"judged": [],
                                       "not_judged": ["thruster_0", "thruster_1"]},
-                        "start_judged": True}
+                        "start_judged": True, "judged_from_s": None}
     first = " ".join(pypdf.PdfReader(tmp_path / "d.pdf").pages[0].extract_text().split())
     assert f"NORMAL on {PARTIAL}" in first and f"Judged: {PARTIAL}" in first
     # The healthy margin is over the judged signal only: the covered flow's g is not one.

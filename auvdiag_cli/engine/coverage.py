@@ -29,11 +29,14 @@ class Coverage:
     actuators: tuple[str, ...]
     actuators_judged: tuple[str, ...]
     start_judged: bool
+    # Where only the change test judges the signals: from when (what came before is its
+    # reference, where it sees nothing). None: from the start.
+    judged_from_s: float | None = None
 
     @property
     def complete(self) -> bool:
-        """Every signal and every actuator of the profile was judged."""
-        return (len(self.signals_judged) == len(self.signals)
+        """Every signal and every actuator of the profile was judged, over the whole log."""
+        return (self.judged_from_s is None and len(self.signals_judged) == len(self.signals)
                 and len(self.actuators_judged) == len(self.actuators))
 
     @property
@@ -48,9 +51,12 @@ class Coverage:
         """"1 of 6 signals and 0 of 4 actuators judged" (no actuators: the signals only,
         as for a model driven by set points)."""
         signals = _count(self.signals_judged, self.signals, "signal")
+        since = "" if self.judged_from_s is None else f" from {self.judged_from_s:.1f} s"
         if not self.actuators:
-            return f"{signals} judged"
-        return f"{signals} and {_count(self.actuators_judged, self.actuators, 'actuator')} judged"
+            return f"{signals} judged{since}"
+        actuators = _count(self.actuators_judged, self.actuators, "actuator")
+        return (f"{signals} and {actuators} judged" if not since
+                else f"{signals} judged{since} and {actuators} judged")
 
     def describe(self) -> str:
         """The counts with the names left out, and the start."""
@@ -65,7 +71,7 @@ class Coverage:
                             "not_judged": list(self.signals_not_judged)},
                 "actuators": {"judged": list(self.actuators_judged),
                               "not_judged": list(self.actuators_not_judged)},
-                "start_judged": self.start_judged}
+                "start_judged": self.start_judged, "judged_from_s": self.judged_from_s}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Coverage":
@@ -73,12 +79,14 @@ class Coverage:
         signals, actuators = data["signals"], data["actuators"]
         return cls((*signals["judged"], *signals["not_judged"]), tuple(signals["judged"]),
                    (*actuators["judged"], *actuators["not_judged"]),
-                   tuple(actuators["judged"]), bool(data.get("start_judged", False)))
+                   tuple(actuators["judged"]), bool(data.get("start_judged", False)),
+                   data.get("judged_from_s"))
 
 
 def coverage_of(signals: Sequence[str], not_judged: Sequence[str], actuators: Sequence[str],
                 command_check: CommandCheck | None, effort_check: EffortCheck | None,
-                start_check: StartCheck | None) -> Coverage:
+                start_check: StartCheck | None, judged_from_s: float | None = None
+                ) -> Coverage:
     """An actuator counts as judged when its commands were judged against the motion
     somewhere in the log, or its share of its group's effort was."""
     by_commands = {name for name, peak in (command_check.peak_ratio.items()
@@ -88,4 +96,4 @@ def coverage_of(signals: Sequence[str], not_judged: Sequence[str], actuators: Se
     return Coverage(tuple(signals), tuple(s for s in signals if s not in not_judged),
                     tuple(actuators),
                     tuple(a for a in actuators if a in by_commands | by_effort),
-                    start_check is not None and start_check.judged)
+                    start_check is not None and start_check.judged, judged_from_s)

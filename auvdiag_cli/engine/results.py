@@ -136,9 +136,13 @@ class Diagnosis(Observations, Finding):
         # A signature judges its members (some judged nowhere else: `signature_only`).
         by_change = limited | {member for name in limited
                                for member in (change.members.get(name, ()) if change else ())}
-        return coverage_of(self.histories.sensor_names or tuple(self.b),
-                           [n for n in self.not_judged if n not in by_change],
-                           actuators, self.command_check, self.effort_check, self.start_check)
+        signals = self.histories.sensor_names or tuple(self.b)
+        # Where the change test alone judges the signals, it does so from a time on.
+        alone = change is not None and bool(by_change) and all(
+            n in self.not_judged for n in signals)
+        return coverage_of(signals, [n for n in self.not_judged if n not in by_change],
+                           actuators, self.command_check, self.effort_check, self.start_check,
+                           change.judged_from_s if alone and change is not None else None)
 
 
 def dms_runs(diagnosis: Observations) -> list[DmsRun]:

@@ -40,12 +40,13 @@ class CoveragePart:
     signals: JudgedPart = field(default_factory=JudgedPart)
     actuators: JudgedPart = field(default_factory=JudgedPart)
     start_judged: bool = False
+    judged_from_s: float | None = None
 
     def engine(self) -> Coverage:
         """The engine's coverage, which says it in words."""
         return Coverage((*self.signals.judged, *self.signals.not_judged), self.signals.judged,
                         (*self.actuators.judged, *self.actuators.not_judged),
-                        self.actuators.judged, self.start_judged)
+                        self.actuators.judged, self.start_judged, self.judged_from_s)
 
 
 @dataclass(frozen=True, kw_only=True)

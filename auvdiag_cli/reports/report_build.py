@@ -85,7 +85,7 @@ def build_report(diagnosis: Diagnosis) -> Report:
                                not_judged=tuple(coverage.signals_not_judged)),
             actuators=JudgedPart(judged=tuple(coverage.actuators_judged),
                                  not_judged=tuple(coverage.actuators_not_judged)),
-            start_judged=coverage.start_judged),
+            start_judged=coverage.start_judged, judged_from_s=coverage.judged_from_s),
         segments=tuple(_segment(r) for r in d.segments), segment_source=d.segment_source,
         degradation=None if d.degradation is None else DegradationPart(
             component=d.degradation.component, thrust_fraction=d.degradation.thrust_fraction,
