@@ -131,18 +131,19 @@ class Diagnosis(Observations, Finding):
         beginning), actuators, the start."""
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
         change = self.change_check
-        limited = set() if change is None or not change.judged else {
-            name for limits in change.thresholds.values() for name in limits}
-        # A signature judges its members (some judged nowhere else: `signature_only`).
-        by_change = limited | {member for name in limited
-                               for member in (change.members.get(name, ()) if change else ())}
         signals = self.histories.sensor_names or tuple(self.b)
-        # Where the change test alone judges the signals, it does so from a time on.
-        alone = change is not None and bool(by_change) and all(
-            n in self.not_judged for n in signals)
+        by_change: set[str] = set()
+        since = None
+        if change is not None and change.judged:
+            limited = {name for limits in change.thresholds.values() for name in limits}
+            # A signature judges its members (some judged nowhere else: `signature_only`).
+            by_change = limited | {m for name in limited for m in change.members.get(name, ())}
+            # Where the change test alone judges the signals, it does so from a time on.
+            if by_change and all(n in self.not_judged for n in signals):
+                since = change.judged_from_s
         return coverage_of(signals, [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check,
-                           change.judged_from_s if alone and change is not None else None)
+                           since)
 
 
 def dms_runs(diagnosis: Observations) -> list[DmsRun]:
