@@ -71,7 +71,7 @@ def test_the_fleet_shows_what_was_judged_and_can_fail_on_it(make_log, half_model
     common = ["audit", str(fleet.parent), "--model", str(half_model), "-o", str(out), "-j", "1"]
     result = runner.invoke(app, common)
     assert result.exit_code == 0, result.output
-    assert "2 normal (2 on part of the vehicle)" in result.stdout
+    assert "2 normal (2 judged in part)" in result.stdout
     table = pd.read_csv(out / "audit.csv")
     assert table["signals_judged"].tolist() == ["1/2", "1/2"]
     assert table["actuators_judged"].tolist() == ["0/2", "0/2"]
@@ -81,7 +81,7 @@ def test_the_fleet_shows_what_was_judged_and_can_fail_on_it(make_log, half_model
     assert runner.invoke(app, [*common, "--fail-on", "partial"]).exit_code == 1
     fleet_text = " ".join(" ".join(page.extract_text().split())
                           for page in pypdf.PdfReader(out / "audit.pdf").pages)
-    assert "2 normal on part of the vehicle" in fleet_text
+    assert "2 normal judged in part" in fleet_text
     assert ("signals: judged in every log 1 of 2 (yaw_rate); never: flow" in fleet_text)
     assert "actuators: judged in every log 0 of 2; never: thruster_0, thruster_1" in fleet_text
     trend = runner.invoke(app, ["trend", str(out)])

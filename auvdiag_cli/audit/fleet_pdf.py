@@ -33,7 +33,7 @@ TEXT_ABOVE_CHARTS = 0.4    # of the page: a summary this short shares its page w
 
 
 def _verdict(row: AuditRecord) -> str:
-    """The verdict, with "partial" for a NORMAL over less than the whole vehicle."""
+    """The verdict, with "partial" for a NORMAL over less than the whole vehicle or log."""
     if row.error:
         return "error"
     if row.partly_judged:
@@ -44,8 +44,7 @@ def _verdict(row: AuditRecord) -> str:
 def summary_lines(rows: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str]],
                   companions: int, interrupted: bool) -> list[Line]:
     counts = Counter(_verdict(r) for r in rows)
-    partly = f" and {counts['partial']} normal on part of the vehicle" if counts["partial"] \
-        else ""
+    partly = f" and {counts['partial']} normal judged in part" if counts["partial"] else ""
     lines = [Line(f"{len(rows)} logs: {counts['normal']} normal{partly}, {counts['fault']} "
                   f"with a fault, {counts['undetermined']} undetermined, {counts['error']} not "
                   "analysable", size=14, bold=True)]

@@ -47,7 +47,7 @@ class AuditResult:
 
     def summary(self, output: Path) -> str:
         """The line an audit ends with: what it found and where the results are."""
-        partly = f" ({self.partly_judged} on part of the vehicle)" if self.partly_judged else ""
+        partly = f" ({self.partly_judged} judged in part)" if self.partly_judged else ""
         return (f"{len(self.records)} logs: {self.count('normal')} normal{partly}, "
                 f"{self.count('fault')} fault, {self.count('undetermined')} undetermined, "
                 f"{self.errors} not analysable, {self.damaged} partial (damaged); "
@@ -60,7 +60,8 @@ class AuditResult:
 
     @property
     def partly_judged(self) -> int:
-        """NORMAL verdicts over less than every signal and actuator of the profile."""
+        """NORMAL verdicts over less than every signal and actuator of the profile, or judged
+        only from partway into the log."""
         return sum(1 for r in self.records if r.partly_judged)
 
     @property

@@ -60,7 +60,8 @@ class AuditRecord:
 
     @property
     def partly_judged(self) -> bool:
-        """A NORMAL over less than every signal and actuator of the profile."""
+        """A NORMAL over less than every signal and actuator of the profile, or judged only
+        from partway into the log."""
         return self.analysed and self.verdict == "normal" and self.coverage is not None \
             and not self.coverage.complete
 
