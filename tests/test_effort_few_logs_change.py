@@ -117,3 +117,39 @@ def test_a_rotor_lost_midway_moves_the_whole_log_and_is_dated_where_it_was_lost(
         assert check.onset_s is not None and check.onset_error_s is not None
         assert abs(check.onset_s - WEAK_FROM * PROFILE.dt_s) <= max(check.onset_error_s, 2.0)
         assert check.alarm_s is not None and 90.0 <= check.alarm_s < 100.0
+
+
+def test_a_rotor_weakened_in_a_flights_last_seconds_is_not_seen_before_it_weakened(
+        tmp_path: Path):
+    """The simulated quadrotor, learnt from three normal missions, with motor 1 keeping 30 %
+    of its thrust from 3 s before its log ends: the departure from the start that dates it
+    passes its threshold on the first short spans after that start as well (a few steps,
+    20 s before the weakness), falls back, and crosses for good only once the rotor weakened.
+    The detection is where it crossed for good (taken at the first crossing, it came 20 s
+    before the weakness and dragged the onset there)."""
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.effort import effort_log
+    from auvdiag_cli.jobs.relate import relation_log
+    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli.simulator.scenarios import get_scenario
+    from auvdiag_cli.simulator.writers import write_log
+
+    def flown(name: str, seed: int, weak_from_s: float | None = None):  # type: ignore[no-untyped-def]
+        scenario = get_scenario(name, PROFILE, weak_from_s,
+                                severity=None if weak_from_s is None else 0.3)
+        path = tmp_path / f"{name}-{seed}-{weak_from_s}.tlog"
+        write_log(simulate(scenario, PROFILE, seed), PROFILE, path, "tlog")
+        return relation_log(ingest(path, PROFILE), PROFILE)
+
+    normal = [flown(name, 1) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
+    model, why = learn_effort(PROFILE.effort_groups,
+                              [effort_log(log, PROFILE) for log in normal], PROFILE.dt_s)
+    assert model is not None, why
+    end_s = len(flown("mission-motor-1-weak", 201, 1e6).commands) * PROFILE.dt_s
+    weak_from_s = end_s - 3.0
+    log = flown("mission-motor-1-weak", 201, weak_from_s)
+    check = check_effort(model, PROFILE, log.commands, log.usable,
+                         PROFILE.dt_s * np.arange(len(log.commands)))
+    assert check.named == ("motor_1",)
+    assert check.alarm_s is not None and weak_from_s <= check.alarm_s <= weak_from_s + 5.0
+    assert check.onset_s is not None and abs(check.onset_s - weak_from_s) <= 3.0

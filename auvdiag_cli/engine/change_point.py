@@ -29,6 +29,15 @@ def shift_start(values: np.ndarray, earliest: int, at: int) -> int:
     return earliest + int(np.argmax(after * after / steps))
 
 
+def stayed_over(running: np.ndarray, threshold: float) -> int:
+    """The index from which ``running`` stays above ``threshold`` to its end (its last
+    index where it ends at or below it)."""
+    below = np.flatnonzero(running <= threshold)
+    if not below.size:
+        return 0
+    return min(int(below[-1]) + 1, len(running) - 1)
+
+
 def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
                 seen_s: float) -> tuple[float, float]:
     """(earliest, latest): where a change point may lie, from a statistic ``z`` per start

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.engine.change_point import likely_span
+from auvdiag_cli.engine.change_point import likely_span, stayed_over
 from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
@@ -291,12 +291,15 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         # moves the whole log's shares too): dated where it changed, not from the start.
         best = 1 + int(np.argmax(ratios[1:, top]))
     start, threshold = candidates[best]
-    # When it was seen: the first end, a stride on from the start, where the span crossed.
+    # When it was seen: the first end, a stride on from the start, from which the span's
+    # departure stayed past its threshold to the log's end. An earlier crossing that fell
+    # back was the noise of a short span looked at end after end, not this departure: taken
+    # for the detection, it dated a rotor weakened in a log's last seconds 20 s before it
+    # weakened.
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
-    crossed = np.flatnonzero(running > threshold)
-    alarm = first + (int(crossed[0]) if crossed.size else len(running) - 1) - 1
+    alarm = first + stayed_over(running, threshold) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
     onset = _onset(spans, toward[top], times, window, stride, alarm)
