@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.engine.change_point import likely_span, stayed_over
-from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative
+from auvdiag_cli.engine.change_point import stayed_over
+from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative, date_change
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
@@ -302,26 +302,8 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     alarm = first + stayed_over(running, threshold) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
-    onset = _onset(spans, toward[top], times, window, stride, alarm)
+    onset = date_change(spans, toward[top], times, window, stride, alarm)
     return per_actuator, onset, float(times[alarm]), series, figures
-
-
-def _onset(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
-           alarm: int) -> tuple[float, float]:
-    """(onset_s, its error) of a change within the log, from the later starts on to the
-    detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
-    start: every stride from a window into the log up to the detection is tried (a short
-    span's noise is the windows' scaled to its length), so a rotor lost in the log's last
-    window is dated where it was lost, not at the last start detection tries, which the
-    grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
-    n = spans.level_sum.shape[0] - 1
-    starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
-    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
-    best = int(np.argmax(z))
-    earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
-                                   float(times[alarm]))
-    onset = float(times[starts[best]])
-    return onset, max(stride * spans.dt_s, onset - earliest, latest - onset)
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,

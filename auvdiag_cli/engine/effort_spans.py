@@ -1,11 +1,13 @@
 """Spans of a log's steady steps judged by their share of a group's effort
 (`engine.effort_check`): against the normal logs, or against the log's own span before a
-later start. Running sums make every span's share a difference of two rows."""
+later start. Running sums make every span's share a difference of two rows; and where, from
+them, a change within the log began."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
+from auvdiag_cli.engine.change_point import likely_span
 from models.effort import SPREAD_FLOOR, GroupFit
 
 
@@ -58,3 +60,28 @@ def change_spread(fit: GroupFit, after_s: np.ndarray | float, before_s: float) -
     it, in one log: the windows' noise alone, σ_w √(W (1/T_after + 1/T_before))."""
     return np.asarray(np.maximum(fit.within * np.sqrt(fit.window_s * (
         1 / np.asarray(after_s) + 1 / before_s)), SPREAD_FLOOR))
+
+
+def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
+           alarm: int) -> tuple[float, float]:
+    """(onset_s, its error) of a change within the log, from the later starts on to the
+    detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
+    start: every stride from a window into the log up to the detection is tried (a short
+    span's noise is the windows' scaled to its length), so a rotor lost in the log's last
+    window is dated where it was lost, not at the last start detection tries, which the
+    grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
+    n = spans.level_sum.shape[0] - 1
+    starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
+    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
+    best = int(np.argmax(z))
+    earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
+                                   float(times[alarm]))
+    error = max(stride * spans.dt_s, float(times[starts[best]]) - earliest,
+                latest - float(times[starts[best]]))
+    # Within a stride either side of the best start, every step: the grid dates a change
+    # to a stride at best, the steps themselves date it within (the error stays the
+    # grid's: the steps' own statistic, a step's noise apart, claims far more than it knows).
+    steps = np.arange(max(window, int(starts[best]) - stride + 1),
+                      min(int(starts[best]) + stride, alarm, n - 1) + 1)
+    fine = np.array([spans.changed(int(s), n)[0] for s in steps]) @ direction
+    return float(times[steps[int(np.argmax(fine))]]), error
