@@ -12,10 +12,10 @@ budget: the departure over the whole log's steady time from the normal logs' sha
 (for a fault that begins during the log) the departure of the span from each later start
 to the end from the log's own span before that start. The second is blind to the log's own
 offset from the normal logs (its battery, trim, payload), which is in both spans, and so
-sees a weakness that begins mid-log far sooner. The detection is the first moment the span
-from the start that departs most crosses its threshold; the onset, the start that departs
-most among those tried on to the detection (the change point's likeliest place,
-`_onset`)."""
+sees a weakness that begins mid-log far sooner. The detection is the moment from which the
+span from the start that departs most stays past its threshold; the onset, the step that
+departs most near the start that departs most among those tried on to the detection (the
+change point's likeliest place, `effort_spans.date_change`)."""
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -41,7 +41,7 @@ STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
 # whole windows, and a threshold for a shorter span would stretch that measure past what was
 # measured. Dating a change already detected compares starts with one another, and tries
-# shorter spans too (`_onset`).
+# shorter spans too (`effort_spans.date_change`).
 WINDOWS_AFTER_START = 1
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 
