@@ -29,13 +29,13 @@ def shift_start(values: np.ndarray, earliest: int, at: int) -> int:
     return earliest + int(np.argmax(after * after / steps))
 
 
-def stayed_over(running: np.ndarray, threshold: float) -> int:
-    """The index from which ``running`` stays above ``threshold`` to its end (its last
-    index where it ends at or below it)."""
-    below = np.flatnonzero(running <= threshold)
-    if not below.size:
-        return 0
-    return min(int(below[-1]) + 1, len(running) - 1)
+def held_over(running: np.ndarray, threshold: float, hold: int) -> int:
+    """The first index from which ``running`` stays above ``threshold`` for ``hold`` steps
+    (or to its end, where fewer are left); its last index where none does."""
+    short = np.concatenate([[0], np.cumsum(running <= threshold)])   # steps not above, so far
+    start = np.arange(len(running))
+    held = np.flatnonzero(short[np.minimum(start + hold, len(running))] == short[start])
+    return int(held[0]) if held.size else len(running) - 1
 
 
 def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.engine.change_point import stayed_over
+from auvdiag_cli.engine.change_point import held_over
 from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative, date_change
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
@@ -292,14 +292,13 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         best = 1 + int(np.argmax(ratios[1:, top]))
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, from which the span's
-    # departure stayed past its threshold to the log's end. An earlier crossing that fell
-    # back was the noise of a short span looked at end after end, not this departure: taken
-    # for the detection, it dated a rotor weakened in a log's last seconds 20 s before it
-    # weakened.
+    # departure stays past its threshold for a stride (or to the log's end). A crossing that
+    # falls back sooner is the noise of a short span looked at end after end: taken for the
+    # detection, it dated a rotor weakened in a log's last seconds 20 s before it weakened.
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
-    alarm = first + stayed_over(running, threshold) - 1
+    alarm = first + held_over(running, threshold, stride) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
     onset = date_change(spans, toward[top], times, window, stride, alarm)
