@@ -43,6 +43,12 @@ STARTS_PER_WINDOW = 8
 # measured. Dating a change already detected compares starts with one another, and tries
 # shorter spans too (`effort_spans.date_change`).
 WINDOWS_AFTER_START = 1
+# A crossing counts as seen once it holds for this share of a stride: one that falls back
+# sooner is the noise of the short spans just after a start, looked at end after end (taken
+# for the detection, it saw a simulated rotor weakened in a flight's last 3 s 20 s before it
+# weakened). Held for a whole stride, marginal true crossings of the simulated BlueROV2 were
+# seen up to 12 s later.
+HELD_SHARE_OF_STRIDE = 0.25
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 
 
@@ -292,13 +298,11 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         best = 1 + int(np.argmax(ratios[1:, top]))
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, from which the span's
-    # departure stays past its threshold for a stride (or to the log's end). A crossing that
-    # falls back sooner is the noise of a short span looked at end after end: taken for the
-    # detection, it dated a rotor weakened in a log's last seconds 20 s before it weakened.
+    # departure stays past its threshold for a part of a stride (or to the log's end).
     first = start + (window if start == 0 else stride)
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
-    alarm = first + held_over(running, threshold, stride) - 1
+    alarm = first + held_over(running, threshold, max(1, round(stride * HELD_SHARE_OF_STRIDE))) - 1
     if best == 0:        # the whole log departs: from its start
         return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
     onset = date_change(spans, toward[top], times, window, stride, alarm)
