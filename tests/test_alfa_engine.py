@@ -63,11 +63,14 @@ def _judged(calibrated, name: str):
 
 @pytest.mark.shared_data("alfa")
 def test_calibrate_sets_the_engine_signatures_thresholds(calibrated):
-    _, model, _ = calibrated
+    _, model, said = calibrated
     for statistic in (WINDOW, SUM):
         assert model.card.change_thresholds[statistic]["engine weakened"] > 0
-        # The climb, moved by rising and sinking air, is judged only within the signature.
+        # The climb, moved by rising and sinking air, is judged only within the signature,
+        # and calibrate says so where it lists the thresholds it set.
         assert "climb" not in model.card.change_thresholds[statistic]
+    assert ("  change test: climb judged only within engine weakened, no threshold of its own "
+            "(rising and sinking air moves it with no failure)") in said
     # Two days' flights tell how far normal flying goes each way: throttle-ups push the
     # forward acceleration above the predictor further than anything normal drops it, so
     # its sum below is scaled up against the way above.

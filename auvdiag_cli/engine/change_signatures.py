@@ -66,6 +66,16 @@ def signature_only(sensors: Sequence[Sensor]) -> frozenset[str]:
     return frozenset(s.name for s in sensors if s.signature_only)
 
 
+def judged_within(actuators: Sequence[Actuator], sensors: Sequence[Sensor],
+                  judged: Sequence[str]) -> dict[str, tuple[tuple[str, ...], str]]:
+    """Each of the ``judged`` sensors judged only within signatures -> (those signatures,
+    the profile's reason)."""
+    found = signatures(actuators, list(judged))
+    return {s.name: (tuple(f.name for f in found if judged.index(s.name) in f.signs),
+                     s.signature_only)
+            for s in sensors if s.signature_only and s.name in judged}
+
+
 def thresholded(actuators: Sequence[Actuator], sensors: Sequence[Sensor],
                 judged: Sequence[str]) -> list[str]:
     """What the test sets thresholds on and alarms by: each of the ``judged`` signals the

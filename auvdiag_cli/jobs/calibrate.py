@@ -17,6 +17,8 @@ import numpy as np
 
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.change_check import STRIDE_STEPS
+from auvdiag_cli.engine.change_columns import change_judged
+from auvdiag_cli.engine.change_signatures import judged_within
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
@@ -190,7 +192,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
-        fitted, change, evidence.trained_on, utc_days(ingested), unfed)
+        fitted, change, evidence.trained_on, utc_days(ingested), unfed,
+        judged_within(profile.actuators, profile.sensors,
+                      change_judged(model, skilled(model, profile))))
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result

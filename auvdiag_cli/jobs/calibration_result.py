@@ -74,6 +74,8 @@ class CalibrationResult:
     # input -> statistic -> signal: the change test's thresholds for a log without that
     # input, where higher (`jobs.change_unfed`).
     change_unfed: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
+    # sensor -> (the signatures it is judged within, why never alone): no threshold of its own.
+    change_within: dict[str, tuple[tuple[str, ...], str]] = field(default_factory=dict)
 
 
 

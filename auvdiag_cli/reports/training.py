@@ -280,6 +280,9 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
                      f"largest on these logs{also} -> threshold: " + ", ".join(
                          f"{name} {largest:g} -> {threshold:g}"
                          for name, (largest, threshold) in values.items()))
+    lines += [f"  change test: {name} judged only within {' and '.join(within) or 'no signature'}"
+              f", no threshold of its own ({why})"
+              for name, (within, why) in result.change_within.items()]
     for name, by_statistic in result.change_unfed.items():
         lines.append(f"  change test for a log without {name} (these logs replayed with it "
                      "held at its typical value), where higher: " + "; ".join(
