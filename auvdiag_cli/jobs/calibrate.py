@@ -160,9 +160,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
-    readings = [None if e.matching is None else start_reading(e.commands, e.matching.measured,
-                                                              profile.dt_s)
-                for e in (d.histories for d in diagnoses)]
+    readings = _start_readings(diagnoses, profile.dt_s)
     checks = [d.command_check for d in diagnoses]
     raised = widen_thresholds(model, checks, margin)
     start, starts_raised = raise_thresholds(model.card.start_state, readings, margin)
@@ -198,6 +196,13 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result
+
+
+def _start_readings(diagnoses: Sequence[Diagnosis], dt_s: float
+                    ) -> list[StartReading | None]:
+    """Each log's start as the start check reads it (None: not matched)."""
+    return [None if h.matching is None else start_reading(h.commands, h.matching.measured, dt_s)
+            for h in (d.histories for d in diagnoses)]
 
 
 def _g_per_log(model: LoadedModel, profile: Profile, logs: Sequence[Path],
