@@ -62,14 +62,15 @@ def change_spread(fit: GroupFit, after_s: np.ndarray | float, before_s: float) -
         1 / np.asarray(after_s) + 1 / before_s)), SPREAD_FLOOR))
 
 
-def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int, stride: int,
-           alarm: int) -> tuple[float, float]:
+def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: int,
+                stride: int, alarm: int) -> tuple[float, float]:
     """(onset_s, its error) of a change within the log, from the later starts on to the
     detection at steady step ``alarm``. Dating, unlike detecting, needs no window after a
     start: every stride from a window into the log up to the detection is tried (a short
     span's noise is the windows' scaled to its length), so a rotor lost in the log's last
     window is dated where it was lost, not at the last start detection tries, which the
-    grid's statistic then peaked short of (`likely_span` gives the span of likely starts)."""
+    grid's statistic then peaked short of (`likely_span` gives the span of likely starts);
+    then every step within a stride of the best start."""
     n = spans.level_sum.shape[0] - 1
     starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
     z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
