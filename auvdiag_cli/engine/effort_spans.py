@@ -73,7 +73,7 @@ def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: 
     then every step within a stride of the best start."""
     n = spans.level_sum.shape[0] - 1
     starts = np.arange(window, min(alarm, n - stride) + 1, stride)   # the first: a later start
-    z = np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction
+    z = _changed_to_end(spans, starts, direction)
     best = int(np.argmax(z))
     earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
                                    float(times[alarm]))
@@ -84,5 +84,11 @@ def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: 
     # grid's: the steps' own statistic, a step's noise apart, claims far more than it knows).
     steps = np.arange(max(window, int(starts[best]) - stride + 1),
                       min(int(starts[best]) + stride, alarm, n - 1) + 1)
-    fine = np.array([spans.changed(int(s), n)[0] for s in steps]) @ direction
+    fine = _changed_to_end(spans, steps, direction)
     return float(times[steps[int(np.argmax(fine))]]), error
+
+
+def _changed_to_end(spans: Spans, starts: np.ndarray, direction: np.ndarray) -> np.ndarray:
+    """Per start, the change from there to the log's end, projected on ``direction``."""
+    n = spans.level_sum.shape[0] - 1
+    return np.asarray(np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction)
