@@ -71,6 +71,12 @@ def test_calibrate_sets_the_engine_signatures_thresholds(calibrated):
         assert "climb" not in model.card.change_thresholds[statistic]
     assert ("  change test: climb judged only within engine weakened, no threshold of its own "
             "(rising and sinking air moves it with no failure)") in said
+    # Signals the replay leaves to the change test keep the profile's thresholds for that
+    # reason, not for want of skill.
+    assert ("    roll, pitch, roll_rate, pitch_rate, yaw_rate, accel_x: skipped, judged only "
+            "against the log's own beginning (replayed from the set points, it drifts with "
+            "every manoeuvre); the profile's thresholds stay (15 %)") in said
+    assert not any("cannot predict" in line for line in said)
     # Two days' flights tell how far normal flying goes each way: throttle-ups push the
     # forward acceleration above the predictor further than anything normal drops it, so
     # its sum below is scaled up against the way above.

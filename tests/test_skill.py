@@ -52,6 +52,21 @@ def test_the_longest_horizon_that_judges_the_most_signals_with_a_margin_is_chose
                            _horizon(4.0, depth=0.6, yaw=0.34)]).horizon_s == 4.0
 
 
+def test_the_skill_table_says_which_signals_only_the_change_test_judges():
+    from auvdiag_cli.reports.training import OWN_LOG_ONLY, skill_lines
+
+    score = _horizon(None, roll=0.8, climb=0.1)
+    rows = skill_lines([score], score, own_log_only={"roll"})
+    # Skilled as it is, the replay does not judge roll: the profile leaves it to the
+    # change test, and the table says so rather than "yes".
+    assert rows[-3].split()[0] == "roll" and rows[-3].endswith(OWN_LOG_ONLY)
+    assert rows[-2].split()[0] == "climb" and rows[-2].endswith("NO: not judged (the model "
+                                                                 "cannot predict it)")
+    assert rows[-1].startswith(f"  {OWN_LOG_ONLY}: the profile judges it only against")
+    plain = skill_lines([score], score)
+    assert plain[-2].endswith("yes") and not any(OWN_LOG_ONLY in row for row in plain)
+
+
 def _noise_log(path: Path, seed: int, seconds: float = 240.0) -> Path:
     """A Twin-Burger CSV log whose sensors are noise unrelated to its commands."""
     rng = np.random.default_rng(seed)

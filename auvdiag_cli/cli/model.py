@@ -75,6 +75,7 @@ def train(
     the training report then says so). Exit status 1 when nothing can be judged (no model
     is written unless --keep-unskilled)."""
     from auvdiag_cli import api
+    from auvdiag_cli.engine.judging import own_log_only
     from auvdiag_cli.jobs.train import paper_model_error
     from auvdiag_cli.reports.training import training_lines
     from models.fast import PREDICTOR_KINDS
@@ -91,7 +92,7 @@ def train(
             tuple(predictor or PREDICTOR_KINDS), healthy_parts(healthy))
         result = api.train(logs, vehicle, output, options=options, progress=report_progress)
     for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
-                               vehicle.sensor_names):
+                               vehicle.sensor_names, own_log_only(vehicle)):
         typer.echo(line)
     if not result.judges_anything:
         typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "
@@ -115,6 +116,7 @@ def score(
     skill and prediction horizon found replace those in model.json, and signals without
     skill are no longer judged. Exit status 1 when no signal has skill."""
     from auvdiag_cli import api
+    from auvdiag_cli.engine.judging import own_log_only
     from auvdiag_cli.reports.training import skill_lines
 
     with user_errors(model):
@@ -124,7 +126,7 @@ def score(
                                    horizon_s=horizon_option(horizon, vehicle.horizon_s),
                                    progress=report_progress)
         api.save_model(loaded, output or model)
-    for line in skill_lines(scores, chosen):
+    for line in skill_lines(scores, chosen, own_log_only(vehicle)):
         typer.echo(line)
     typer.echo(f"skill written to {(output or model) / 'model.json'}")
     if not chosen.judged:

@@ -38,7 +38,7 @@ class Judging:
                    profile.window_samples if card.window_samples is None
                    else card.window_samples,
                    round(profile.decision_window_s / profile.dt_s), judged,
-                   not_judged_signals(model) | own_log_only(profile), model)
+                   replay_left_out(model, profile), model)
 
     def without(self, reasons: dict[str, str]) -> "Judging":
         """This judging with ``reasons``' signals set aside by every judge (a log's own
@@ -92,9 +92,15 @@ def nothing_judged(judging: Judging, change_test: str | None) -> str:
                else change_test))
 
 
+def replay_left_out(model: LoadedModel, profile: Profile) -> dict[str, str]:
+    """The signals the replay does not judge with this model and profile, each with why:
+    no skill, or judged only against the log's own beginning."""
+    return not_judged_signals(model) | own_log_only(profile)
+
+
 def replay_judged(model: LoadedModel, profile: Profile) -> list[str]:
     """The signals the replay judges with this model and profile."""
-    left_out = not_judged_signals(model) | own_log_only(profile)
+    left_out = replay_left_out(model, profile)
     return [name for name in profile.sensor_names if name not in left_out]
 
 

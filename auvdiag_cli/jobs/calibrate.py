@@ -9,7 +9,7 @@ Faulty logs, when given, are diagnosed with the new thresholds to show the detec
 The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -22,7 +22,7 @@ from auvdiag_cli.engine.change_signatures import judged_within
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.judging import replay_judged, skilled
+from auvdiag_cli.engine.judging import replay_left_out, skilled
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
 from auvdiag_cli.jobs.budget import (
@@ -155,8 +155,9 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
     in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
                                                       diagnoses)
-    judged = replay_judged(model, profile)
-    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, judged)
+    left_out = replay_left_out(model, profile)
+    judged = [name for name in profile.sensor_names if name not in left_out]
+    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, left_out)
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
@@ -224,9 +225,11 @@ def _g_per_log(model: LoadedModel, profile: Profile, logs: Sequence[Path],
 
 def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
                   profile: Profile, margin: float, floor_at_profile: bool,
-                  judged: Sequence[str]) -> list[ModeCalibration]:
+                  left_out: Mapping[str, str]) -> list[ModeCalibration]:
     """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs, for
-    the ``judged`` signals (the others raise no alarm: their profile thresholds stay)."""
+    the signals the replay judges (those ``left_out`` raise no alarm: their profile
+    thresholds stay)."""
+    judged = [name for name in profile.sensor_names if name not in left_out]
     modes = []
     for mode in sorted({mode for g in per_log for mode in g}):
         parts = [(label, g[mode]) for label, g in zip(labels, per_log, strict=True)
@@ -244,7 +247,7 @@ def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]
             {name: round(max(margin * value, floor.get(name, 0.0)), 2) if name in judged
              else default[name] for name, value in peaks.items()}, keep,
             {name: _evidence(parts, i) for i, name in enumerate(profile.sensor_names)
-             if name in judged}, tuple(n for n in profile.sensor_names if n not in judged)))
+             if name in judged}, {n: left_out[n] for n in profile.sensor_names if n in left_out}))
     return modes
 
 

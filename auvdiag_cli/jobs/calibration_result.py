@@ -38,7 +38,8 @@ class ModeCalibration:
     thresholds: dict[str, float]
     kept_default: bool
     evidence: dict[str, SignalEvidence]     # the judged signals only
-    skipped: tuple[str, ...] = ()           # not judged: the profile's thresholds kept
+    # Not judged by the replay, each with why: the profile's thresholds kept.
+    skipped: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

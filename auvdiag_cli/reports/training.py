@@ -3,7 +3,7 @@ signal against the naive predictors and the horizon chosen (the paper's figures 
 paper's vehicle only); the thresholds, which log set each, and what to be wary of."""
 
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 from auvdiag_cli.engine.effort_check import (
     rise_range,
@@ -11,8 +11,9 @@ from auvdiag_cli.engine.effort_check import (
     typical_later_threshold,
 )
 from auvdiag_cli.jobs.budget import BudgetThresholds
-from auvdiag_cli.jobs.calibration_result import CalibrationResult
+from auvdiag_cli.jobs.calibration_result import CalibrationResult, ModeCalibration
 from auvdiag_cli.jobs.train import TrainingResult
+from auvdiag_cli.reports.sentences import by_reason
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
 from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
@@ -34,14 +35,20 @@ def _ratio(value: float) -> str:
     return f"{value:7.2f}" if not value < -99 else f"{'< -99':>7}"
 
 
-def _verdict(s: SignalSkill) -> str:
+def _verdict(s: SignalSkill, own_log_only: bool) -> str:
+    if own_log_only:
+        return OWN_LOG_ONLY
     if not s.enough_data:
         return (f"NO: too little held-out data to measure it ({s.samples} samples, needs "
                 f"{MIN_SCORED_SAMPLES})")
     return "yes" if s.judged else "NO: not judged (the model cannot predict it)"
 
 
-def _skill_rows(score: HorizonScore) -> list[str]:
+# The judged column of a signal the profile judges only against the log's own beginning.
+OWN_LOG_ONLY = "change test only"
+
+
+def _skill_rows(score: HorizonScore, own_log_only: Collection[str]) -> list[str]:
     baselines = list(next(iter(score.signals.values())).baseline_rms)
     rows = [f"  {'signal':<14}{'predictor':<19}{'skill':>7}{'vs linear':>10}{'model':>10}"
             + "".join(f"{name:>10}" for name in baselines) + "   judged"]
@@ -49,7 +56,11 @@ def _skill_rows(score: HorizonScore) -> list[str]:
         rows.append(f"  {name:<14}{score.predictors.get(name, NETWORK):<19}{_ratio(s.skill)}"
                     f"   {_ratio(s.versus_linear)} {_number(s.model_rms)}"
                     + "".join(f" {_number(s.baseline_rms[b])}" for b in baselines)
-                    + f"   {_verdict(s)}")
+                    + f"   {_verdict(s, name in own_log_only)}")
+    if any(name in own_log_only for name in score.signals):
+        rows.append(f"  {OWN_LOG_ONLY}: the profile judges it only against the log's own "
+                    "beginning (the change test, with the predictor a moment ahead), never by "
+                    "this replay, whatever its skill here")
     return rows
 
 
@@ -70,7 +81,10 @@ def predictor_lines(result: TrainingResult) -> list[str]:
     return lines + [f"  left out: {note}" for note in result.predictor_notes]
 
 
-def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[str]:
+def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore,
+                own_log_only: Collection[str] = ()) -> list[str]:
+    """The horizon chosen and each signal's skill there (``own_log_only``: the signals the
+    profile judges only against the log's own beginning)."""
     tried = ", ".join(f"{horizon_text(s.horizon_s)} {len(s.judged)}/{len(s.signals)}"
                       for s in scores)
     lines = [f"prediction horizon: {horizon_text(chosen.horizon_s)}"
@@ -79,11 +93,12 @@ def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore) -> list[st
                  f"(the last value holds, the training mean), judged from {MIN_SKILL:.2f}; "
                  "vs linear: the same against a least-squares linear model. rms in the "
                  "signals' units:")
-    return lines + _skill_rows(chosen)
+    return lines + _skill_rows(chosen, own_log_only)
 
 
 def training_lines(result: TrainingResult, paper_rms: dict[str, float],
-                   command_names: Sequence[str], sensor_names: Sequence[str]) -> list[str]:
+                   command_names: Sequence[str], sensor_names: Sequence[str],
+                   own_log_only: Collection[str] = ()) -> list[str]:
     chosen = result.chosen
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
@@ -91,7 +106,7 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     if result.input_names:
         lines.append("driven by the commands and the measured inputs "
                      f"{', '.join(result.input_names)} (replayed as logged)")
-    lines += skill_lines(result.scores, chosen) + predictor_lines(result)
+    lines += skill_lines(result.scores, chosen, own_log_only) + predictor_lines(result)
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
@@ -236,6 +251,16 @@ def budget_lines(budget: BudgetThresholds, hours: float) -> list[str]:
     return lines
 
 
+def _kept(mode: ModeCalibration, names: Sequence[str]) -> str:
+    """The profile's thresholds a mode keeps for signals the replay does not judge."""
+    values = sorted({mode.thresholds[name] for name in names})
+    if len(names) == 1:
+        return f"the profile's threshold {values[0]:g} % stays"
+    return "the profile's thresholds stay (" + (f"{values[0]:g} %" if len(values) == 1 else
+                                               ", ".join(f"{n} {mode.thresholds[n]:g} %"
+                                                         for n in names)) + ")"
+
+
 def calibration_lines(result: CalibrationResult) -> list[str]:
     lines = ([f"calibrated on {result.normal_hours:.2f} h of normal data, margin "
               f"{result.margin:g}; false alarms on those logs: 0 (rate < "
@@ -256,8 +281,8 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
                       else f", {ratio:.2f}x the next log's {evidence.next_peak:g} %")
             lines.append(f"    {name:<12} max g {mode.max_g[name]:g} % -> threshold "
                          f"{mode.thresholds[name]:g} %  (set by {evidence.set_by}{beside})")
-        lines += [f"    {name:<12} skipped: not judged (the model cannot predict it); the "
-                  f"profile's threshold {mode.thresholds[name]:g} % stays" for name in mode.skipped]
+        lines += [f"    {who}: skipped, {why}; {_kept(mode, who.split(', '))}"
+                  for who, why in by_reason(mode.skipped)]
     for check in result.faulty:
         named = check.component or " or ".join(check.candidates) or "no component named"
         lines.append(f"  faulty {check.log}: {check.verdict.upper()} ({named}); the largest g "
