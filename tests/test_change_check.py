@@ -517,3 +517,49 @@ def test_each_way_is_scaled_by_how_far_normal_logs_go_that_way():
     quiet = _bursts_above(11)
     assert check_change(quiet, ["speed"], thresholds(True), time_s, WINDOW, DT_S,
                         scales=scales).alarm_s is None
+
+
+def test_a_signal_left_to_the_change_test_that_it_cannot_predict_says_why_it_is_not_judged(
+        calibrated, make_log):
+    """Where the predictor a moment ahead barely beats "no change" on a signal the profile
+    judges only against the log's own beginning, nothing judges it: the report says so and
+    why, not that the change test judges it."""
+    from dataclasses import replace
+
+    from auvdiag_cli.audit.record import AuditRecord
+    from auvdiag_cli.audit.table import table_row
+    from auvdiag_cli.engine.change_columns import MIN_AHEAD_SKILL
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.text import summary_lines
+    from models.ahead import AheadLog, fit_ahead
+
+    model, _ = calibrated
+    base = api.load_profile(None)
+    profile = replace(base, sensors=tuple(replace(s, own_log_only="judged against itself")
+                                          for s in base.sensors))
+    frames = [ingest(make_log("paper-normal", seed), base).frame for seed in (21, 22, 23)]
+    ahead = fit_ahead([AheadLog(f.commands, f.sensors) for f in frames], base.sensor_names,
+                      base.dt_s)
+    assert ahead is not None and ahead.skill["flow"] >= MIN_AHEAD_SKILL
+    unskilled = model.with_entries(ahead_predictor={
+        **ahead.to_json(), "heldout_skill": {**ahead.skill, "flow": 0.04}})
+    diagnosis = api.diagnose(make_log("paper-normal", 12), profile, unskilled)
+    assert diagnosis.change_check is not None and diagnosis.change_check.judged
+    assert diagnosis.coverage.signals_not_judged == ("flow",)
+    assert diagnosis.not_judged["flow"] == (
+        "not judged (its predictor a moment ahead barely beats no change: skill 0.04, judged "
+        "from 0.1; the profile judges it only against the log's own beginning)")
+    assert diagnosis.not_judged["yaw_rate"] == ("judged only against the log's own "
+                                                "beginning (judged against itself)")
+    report = build_report(diagnosis)
+    assert "  flow: " + diagnosis.not_judged["flow"] in summary_lines(report)
+    # The audit's table says what nothing judged, not what the replay left to the test.
+    row = table_row(AuditRecord.from_report(report.to_json()))
+    assert (row["not_judged"], row["signals_judged"]) == ("flow", "1/2")
+    # Where it does judge every such signal, each keeps the profile's reason.
+    judged = api.diagnose(make_log("paper-normal", 12), profile, model.with_entries(
+        ahead_predictor=ahead.to_json()))
+    assert judged.coverage.signals_not_judged == ()
+    assert set(judged.not_judged.values()) == {"judged only against the log's own beginning "
+                                               "(judged against itself)"}

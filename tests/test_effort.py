@@ -385,7 +385,7 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
         predictors=("linear", "linear-replay")), progress=lambda _: None)
     # The commands against the motion cannot tell the rotors apart; train says what can.
     from auvdiag_cli.reports.training import training_lines
-    lines = training_lines(trained, {}, profile.command_names, profile.sensor_names)
+    lines = training_lines(trained, {}, profile)
     assert ("  motor_1 and motor_2 and motor_3 and motor_4 act alike on the vehicle: this "
             "check names a weakness as either (the effort shares of rotors tell them apart)"
             in lines), lines

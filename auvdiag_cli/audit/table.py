@@ -29,7 +29,9 @@ def table_row(record: AuditRecord) -> dict[str, object]:
         "fleet_vehicle": record.fleet_vehicle, "start_time_utc": record.start_time_utc,
         "duration_s": record.duration_s, "not_operating_s": record.not_operating_s,
         "verdict": record.verdict or ("error" if record.error else None),
-        "completeness": record.completeness, "not_judged": ";".join(record.not_judged),
+        "completeness": record.completeness, "not_judged": ";".join(
+            record.not_judged if record.coverage is None
+            else record.coverage.signals_not_judged),
         **_coverage_columns(record.coverage),
         "component": record.component, "candidates": ";".join(record.candidates),
         "case": record.case, "onset_s": record.onset_s, "detected_at_s": record.detected_at_s,

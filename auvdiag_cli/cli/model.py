@@ -75,7 +75,6 @@ def train(
     the training report then says so). Exit status 1 when nothing can be judged (no model
     is written unless --keep-unskilled)."""
     from auvdiag_cli import api
-    from auvdiag_cli.engine.judging import own_log_only
     from auvdiag_cli.jobs.train import paper_model_error
     from auvdiag_cli.reports.training import training_lines
     from models.fast import PREDICTOR_KINDS
@@ -91,8 +90,7 @@ def train(
             horizon_option(horizon, vehicle.horizon_s), keep_unskilled,
             tuple(predictor or PREDICTOR_KINDS), healthy_parts(healthy))
         result = api.train(logs, vehicle, output, options=options, progress=report_progress)
-    for line in training_lines(result, paper_model_error(vehicle), vehicle.command_names,
-                               vehicle.sensor_names, own_log_only(vehicle)):
+    for line in training_lines(result, paper_model_error(vehicle), vehicle):
         typer.echo(line)
     if not result.judges_anything:
         typer.echo("auvdiag: no signal has skill, or enough held-out data to show it, and no "

@@ -12,6 +12,7 @@ from auvdiag_cli.engine.change_columns import (
     change_judged,
     change_names,
     change_residual,
+    left_by_the_change_test,
     loop_names,
 )
 from auvdiag_cli.engine.change_signatures import signature_only, thresholded
@@ -228,6 +229,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         notes.append("the model has no skill scores (trained before they were measured): "
                      "every signal is judged; 'auvdiag score' measures them")
     notes += _calibrated_on_another_day(model.card.calibration_days, signals.start_ns)
+    change_check = _check_change(change_errors, judging, frame, notes)
     seen = Observations(
         log=signals.path, format=signals.format, vehicle=profile.name,
         segments=tuple(_segment_results(segments, frame.time_s, matching, b_series,
@@ -243,14 +245,15 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
-        not_judged=not_judged, set_aside=tuple(sorted(judging.set_aside)),
+        not_judged={**not_judged, **left_by_the_change_test(change_check, judging)},
+        set_aside=tuple(sorted(judging.set_aside)),
         command_check=_check_commands(log, segments, judging, notes),
         start_check=check_start(model.card.start_state, frame.commands, frame.sensors,
                                 frame.time_s, frame.sensor_names, frame.dt_s, outing(
                                     [*(c.kind for c in profile.commands),
                                      *(a.kind for a in profile.actuators)])),
         effort_check=_check_effort(log, segments, judging, notes),
-        change_check=_check_change(change_errors, judging, frame, notes),
+        change_check=change_check,
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))

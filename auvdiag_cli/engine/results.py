@@ -11,6 +11,7 @@ import numpy as np
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
 from auvdiag_cli.engine.change_check import ChangeCheck
+from auvdiag_cli.engine.change_columns import judged_by
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.completeness import Completeness
 from auvdiag_cli.engine.coverage import Coverage, coverage_of
@@ -132,15 +133,10 @@ class Diagnosis(Observations, Finding):
         actuators = [c for c in self.histories.command_names if c not in self.set_points]
         change = self.change_check
         signals = self.histories.sensor_names or tuple(self.b)
-        by_change: set[str] = set()
-        since = None
-        if change is not None and change.judged:
-            limited = {name for limits in change.thresholds.values() for name in limits}
-            # A signature judges its members (some judged nowhere else: `signature_only`).
-            by_change = limited | {m for name in limited for m in change.members.get(name, ())}
-            # Where the change test alone judges the signals, it does so from a time on.
-            if by_change and all(n in self.not_judged for n in signals):
-                since = change.judged_from_s
+        by_change = judged_by(change)
+        # Where the change test alone judges the signals, it does so from a time on.
+        since = (change.judged_from_s if change is not None and by_change
+                 and all(n in self.not_judged for n in signals) else None)
         return coverage_of(signals, [n for n in self.not_judged if n not in by_change],
                            actuators, self.command_check, self.effort_check, self.start_check,
                            since)

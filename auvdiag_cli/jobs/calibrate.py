@@ -9,7 +9,7 @@ Faulty logs, when given, are diagnosed with the new thresholds to show the detec
 The effort shares (`models.effort`) are refitted with the normal logs added.
 """
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -22,7 +22,7 @@ from auvdiag_cli.engine.change_signatures import judged_within
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.judging import replay_left_out, skilled
+from auvdiag_cli.engine.judging import replay_judged, replay_left_out, skilled
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.engine.start_check import StartReading, raise_thresholds, start_reading
 from auvdiag_cli.jobs.budget import (
@@ -155,9 +155,8 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
     in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
                                                       diagnoses)
-    left_out = replay_left_out(model, profile)
-    judged = [name for name in profile.sensor_names if name not in left_out]
-    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, left_out)
+    judged = replay_judged(model, profile)
+    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, model)
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
@@ -225,10 +224,11 @@ def _g_per_log(model: LoadedModel, profile: Profile, logs: Sequence[Path],
 
 def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
                   profile: Profile, margin: float, floor_at_profile: bool,
-                  left_out: Mapping[str, str]) -> list[ModeCalibration]:
+                  model: LoadedModel) -> list[ModeCalibration]:
     """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs, for
-    the signals the replay judges (those ``left_out`` raise no alarm: their profile
-    thresholds stay)."""
+    the signals the replay judges with the ``model`` (those it leaves out raise no alarm:
+    their profile thresholds stay)."""
+    left_out = replay_left_out(model, profile)
     judged = [name for name in profile.sensor_names if name not in left_out]
     modes = []
     for mode in sorted({mode for g in per_log for mode in g}):

@@ -10,10 +10,12 @@ from auvdiag_cli.engine.effort_check import (
     smallest_later_rise,
     typical_later_threshold,
 )
+from auvdiag_cli.engine.judging import own_log_only
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibration_result import CalibrationResult, ModeCalibration
 from auvdiag_cli.jobs.train import TrainingResult
 from auvdiag_cli.reports.sentences import by_reason
+from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
 from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
@@ -96,9 +98,8 @@ def skill_lines(scores: Sequence[HorizonScore], chosen: HorizonScore,
     return lines + _skill_rows(chosen, own_log_only)
 
 
-def training_lines(result: TrainingResult, paper_rms: dict[str, float],
-                   command_names: Sequence[str], sensor_names: Sequence[str],
-                   own_log_only: Collection[str] = ()) -> list[str]:
+def training_lines(result: TrainingResult, paper_rms: dict[str, float], profile: Profile
+                   ) -> list[str]:
     chosen = result.chosen
     lines = [f"model {'written to ' + str(result.output) if result.written else 'NOT written'}"
              f" ({result.training_logs} training log(s), {result.operating_hours:.2f} h of "
@@ -106,14 +107,15 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float],
     if result.input_names:
         lines.append("driven by the commands and the measured inputs "
                      f"{', '.join(result.input_names)} (replayed as logged)")
-    lines += skill_lines(result.scores, chosen, own_log_only) + predictor_lines(result)
+    lines += skill_lines(result.scores, chosen, own_log_only(profile)) + predictor_lines(result)
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
     groups = ([] if isinstance(result.effort, Refused)
               else [setup.group for setup in result.effort.setups])
-    return lines + relation_lines(result.command_relations, command_names, groups) + start_lines(
-        result.start_state, sensor_names) + effort_lines(result.effort) + [
+    return lines + relation_lines(result.command_relations, profile.command_names,
+                                  groups) + start_lines(
+        result.start_state, profile.sensor_names) + effort_lines(result.effort) + [
         f"  left out: {note}" for note in result.effort_notes]
 
 
