@@ -189,3 +189,27 @@ def test_a_feature_beyond_anything_fitted_is_held_at_the_edge_of_what_was():
     entry["feature_range"] = entry["feature_range"][::-1]
     with pytest.raises(ValueError, match="feature ranges"):
         AheadPredictor.from_json(entry, n_commands=1, n_sensors=2, n_inputs=1)
+
+
+def test_a_handful_of_short_logs_shrinks_what_they_cannot_pin_down(monkeypatch):
+    """Three 20 s logs of the loop beside six channels that wander on their own: plain least
+    squares follows what those logs happened to hold and predicts the logs left out worse
+    than "no change"; shrunk as far as predicts them best, each channel's weights stay near
+    "no change" and the loop keeps its skill."""
+    import models.ahead as ahead_module
+
+    names = [*NAMES, *(f"wander_{i}" for i in range(6))]
+    logs = []
+    for seed in range(3):
+        commands, state = _closed_loop(20.0, seed)
+        wander = np.cumsum(np.random.default_rng(100 + seed).normal(0, 0.05, (len(state), 6)),
+                           axis=0)
+        logs.append(AheadLog(commands, np.hstack([state, wander])))
+    shrunk = fit_ahead(logs, names, DT_S)
+    monkeypatch.setattr(ahead_module, "SHRINKAGE", (0.0,))
+    plain = fit_ahead(logs, names, DT_S)
+    assert shrunk is not None and plain is not None
+    assert min(plain.skill[n] for n in names[2:]) < -0.2
+    assert min(shrunk.skill[n] for n in names[2:]) > -0.05
+    assert all(shrunk.skill[n] >= plain.skill[n] for n in names)
+    assert shrunk.skill["attitude"] > 0.9 and shrunk.skill["rate"] > 0.7
