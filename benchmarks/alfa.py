@@ -344,7 +344,9 @@ def summary(outcomes: list[Outcome]) -> list[str]:
 
 ONE_DAY = ("**Trained on one day's flights** (the handful a user has after a day of flying: "
            "that day's normal flights and its failed flights' healthy parts, trained and "
-           "calibrated on as above; every flight of the other days judged, as shipped):")
+           "calibrated on as above; or, for a day with three normal flights or more, those "
+           "alone; every flight of the other days judged, as shipped):")
+MIN_NORMAL_FLIGHTS = 3
 
 
 def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) -> list[str]:
@@ -352,14 +354,21 @@ def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) 
     rows = ["| trained on | flights | found after onset | false alarms | delay median / worst "
             "(s) | right part named | the change test judges |",
             "|---|---|---|---|---|---|---|"]
-    for day in sorted({f.day for f in every}):
-        training = [f for f in every if f.day == day]
+    days = sorted({f.day for f in every})
+    # And each day with a few normal flights, those alone: what a user has who kept no
+    # failed flight's healthy part.
+    choices = [(day, day, [f for f in every if f.day == day]) for day in days] + [
+        (f"{day}, its {len(normal)} normal flights only", f"normal-{day}", normal)
+        for day in days if len(normal := [f for f in every if f.day == day
+                                          and f.onset_ns is None]) >= MIN_NORMAL_FLIGHTS]
+    for label, name, training in choices:
+        day = training[0].day
         outcomes, judged = judge_flights(training, [f for f in every if f.day != day],
-                                         f"only-{day}", work, scale, guard_s)
+                                         f"only-{name}", work, scale, guard_s)
         found = outcomes[SHIPPED]
         failed = [o for o in found if o.flight.onset_ns is not None]
         delays = [d for o in failed if (d := o.delay_s) is not None]
-        rows.append(f"| {day} | {len(training)} | {sum(o.found for o in failed)} of "
+        rows.append(f"| {label} | {len(training)} | {sum(o.found for o in failed)} of "
                     f"{len(failed)} | {sum(o.alarmed and not o.found for o in found)} of "
                     f"{len(found)} | {_seconds(delays)} | "
                     f"{sum(o.named_right for o in found)} | {judged} |")

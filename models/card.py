@@ -222,6 +222,9 @@ class ModelCard:
     # where they are higher (`jobs.change_unfed`; none: calibrated before).
     change_unfed: Mapping[str, Mapping[str, Mapping[str, float]]] = field(
         default_factory=dict)
+    # signal -> how long calibrate's normal logs let the change test judge it, all
+    # together, where too little to set it thresholds (it has none).
+    change_too_brief: Mapping[str, float] = field(default_factory=dict)
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
@@ -338,6 +341,8 @@ class ModelCard:
             change_way_scales=_way_scales(change),
             change_unfed=_frozen({str(i): _limits(by) for i, by in change.get(
                 "unfed_thresholds", {}).items()}),
+            change_too_brief={str(n): float(v) for n, v in (
+                change.get("judged_too_briefly_s") or {}).items()},
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),

@@ -18,6 +18,9 @@ class TrainedOnPeaks:
     log: str
     sha256: str
     peaks: Peaks
+    # signal (or signature) -> how long the test judged it on the log (s); None: kept
+    # before the model recorded it.
+    judged_s: Mapping[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -35,14 +38,18 @@ class ChangeTraining:
             "log": t.log, "sha256": t.sha256, "peaks": {
             statistic: {name: value if math.isfinite(value) else None
                         for name, value in values.items()}
-            for statistic, values in t.peaks.items()}} for t in self.logs]}
+            for statistic, values in t.peaks.items()},
+            **({} if t.judged_s is None else {"judged_s": dict(t.judged_s)})}
+            for t in self.logs]}
 
     @classmethod
     def from_json(cls, entry: Mapping[str, Any]) -> "ChangeTraining":
         return cls(tuple(TrainedOnPeaks(str(t["log"]), str(t["sha256"]), {
             str(statistic): {str(name): math.nan if value is None else float(value)
                              for name, value in values.items()}
-            for statistic, values in (t.get("peaks") or {}).items()})
+            for statistic, values in (t.get("peaks") or {}).items()},
+            None if t.get("judged_s") is None else {
+                str(name): float(value) for name, value in t["judged_s"].items()})
             for t in entry.get("logs", [])),
             None if entry.get("stride_steps") is None else int(entry["stride_steps"]),
             bool(entry.get("each_way", False)))

@@ -185,3 +185,26 @@ def test_a_stuck_aileron_slows_the_roll_loop(calibrated):
     after = gain[time_s > onset + loop.window_steps * profile.dt_s]
     assert abs(np.nanmedian(before)) < 0.15 < -np.nanmedian(after)
     assert np.nanmax(after) < np.nanpercentile(before, 10)
+
+
+@pytest.mark.shared_data("alfa")
+def test_three_short_normal_flights_leave_the_roll_loop_unjudged_and_say_so(tmp_path):
+    """A day's three normal flights (33, 43 and 67 s) let the change test judge the roll
+    loop's gain for 15.6 s in all: too little to set its thresholds, which at the floors had
+    it alarm before anything failed on flights of other days. Calibrate says so, and the
+    predictor a moment ahead, shrunk to what three flights pin down, still predicts every
+    signal better than "no change"."""
+    flights = [ALFA / row["sequence"] for row in _labels()
+               if _day(row) == "2018-09-11" and not row["onset_time_ns"]]
+    assert len(flights) == 3
+    profile = api.load_profile("arduplane_carbonz")
+    api.train(flights, profile, tmp_path / "model", options=api.TrainOptions(
+        keep_unskilled=True, predictors=("linear",)))
+    model = api.load_model(tmp_path / "model", profile)
+    assert model.card.ahead is not None and min(model.card.ahead.skill.values()) > 0.1
+    result = api.calibrate(flights, profile, model, options=api.CalibrateOptions(
+        budget=api.FalseAlarmBudget.parse("0.05")))
+    assert set(result.change_too_little) == {"roll_tracking"}
+    assert all("roll_tracking" not in limits for limits in result.change.values())
+    assert any(line.startswith("  change test: no thresholds (not judged) where these logs")
+               and line.endswith("roll_tracking 15.6 s") for line in calibration_lines(result))

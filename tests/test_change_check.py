@@ -15,7 +15,6 @@ from auvdiag_cli.engine.change_check import (
     REFERENCE_MIN_S,
     SUM,
     ChangeCheck,
-    change_peaks,
     change_statistics,
     check_change,
 )
@@ -344,6 +343,13 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
         f"no signal is judged: {n} of {n} are judged only against the log's own beginning, "
         "by the change test, and it is not calibrated (run `auvdiag calibrate` on normal logs)")
     assert nothing_judged(Judging.of(model, base), None).endswith("cannot predict any of them")
+    # Calibrated on logs that let it judge too briefly: it says that, not "not calibrated".
+    brief = model.with_entries(change_test={"thresholds": {}, "judged_too_briefly_s": {
+        "flow": 12.5, "yaw_rate": 20.0}})
+    assert brief.card.change_too_brief == {"flow": 12.5, "yaw_rate": 20.0}
+    assert nothing_judged(Judging.of(brief, profile), None).endswith(
+        "by the change test, and calibrate's normal logs let it judge them too briefly to set "
+        "its thresholds (20.0 s in all at most; calibrate on more or longer normal logs)")
 
 
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
@@ -481,11 +487,11 @@ def _bursts_above(seed: int, seconds: float = 150.0) -> np.ndarray:
 
 
 def test_each_way_is_scaled_by_how_far_normal_logs_go_that_way():
-    from auvdiag_cli.jobs.change_calibration import MIN_LOGS_FOR_WAYS, way_scales
+    from auvdiag_cli.jobs.change_calibration import MIN_LOGS_FOR_WAYS, change_peaks, way_scales
 
     reference = round(REFERENCE_MIN_S / DT_S)
     normal = [_bursts_above(seed) for seed in range(MIN_LOGS_FOR_WAYS + 1)]
-    peaks = [change_peaks(r, ["speed"], WINDOW, DT_S) for r in normal]
+    peaks = [change_peaks(r, ["speed"], WINDOW, DT_S)[0] for r in normal]
     scales = way_scales(peaks, ["speed"])
     for statistic in (WINDOW_Z, SUM):
         above, below = scales[statistic]["speed"]
@@ -563,3 +569,28 @@ def test_a_signal_left_to_the_change_test_that_it_cannot_predict_says_why_it_is_
     assert judged.coverage.signals_not_judged == ()
     assert set(judged.not_judged.values()) == {"judged only against the log's own beginning "
                                                "(judged against itself)"}
+
+
+def test_a_signal_the_normal_logs_judge_too_briefly_gets_no_threshold():
+    """Seconds of a statistic say nothing of how far it goes when nothing fails: a signal
+    the normal logs let the test judge for less than MIN_JUDGED_S all together gets no
+    threshold and no share of the budget; the logs' seconds add up; a log trained on before
+    the model recorded its seconds leaves the total unknown, and the signal kept."""
+    from auvdiag_cli.engine.change_check import MIN_JUDGED_S
+    from auvdiag_cli.jobs.budget import change_judges
+    from auvdiag_cli.jobs.change_calibration import ChangeEvidence, change_thresholds, enough_judged
+
+    def peaks(value: float) -> dict[str, dict[str, float]]:
+        return {WINDOW_Z: {"roll": value, "loop": value}, SUM: {"roll": value, "loop": value}}
+
+    evidence = ChangeEvidence(["roll", "loop"], [peaks(2.0), peaks(3.0)])
+    brief = MIN_JUDGED_S / 3
+    seconds = [{"roll": 2 * brief, "loop": brief}, {"roll": 2 * brief, "loop": 0.0}]
+    kept = enough_judged(evidence, seconds)
+    assert kept.too_little == {"loop": round(brief, 1)}
+    assert set(change_thresholds(kept, 1.5, None)[SUM]) == {"roll"}
+    assert {j.name for j in change_judges(kept.peaks, kept.judged)} == {"roll"}
+    three = ChangeEvidence(["roll", "loop"], [peaks(2.0), peaks(3.0), peaks(1.0)])
+    unknown = enough_judged(three, [*seconds, None])
+    assert unknown.too_little == {} and set(change_thresholds(unknown, 1.5, None)[SUM]) == {
+        "roll", "loop"}

@@ -399,6 +399,8 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     kept = document["change_training"]["logs"]
     assert [entry["log"] for entry in kept] == [path.name for path in normal]
     assert all(entry["peaks"]["sum"] for entry in kept)
+    # And how long it judged each signal there, which calibrate adds up.
+    assert all(min(entry["judged_s"].values()) > 30.0 for entry in kept)
     model = api.load_model(tmp_path / "model", profile)
     # Two more normal flights set the thresholds, from blocks of them (too few for a law
     # of their peaks).

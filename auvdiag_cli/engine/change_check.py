@@ -45,6 +45,10 @@ from auvdiag_cli.engine.change_signatures import Signature, signatures, with_sig
 from auvdiag_cli.vehicle.actuators import Actuator
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
+# A signal the normal logs let the test judge for less than this, all together, gets no
+# threshold from calibrate (`jobs.change_calibration.enough_judged`): as long as the
+# reference every log is judged against.
+MIN_JUDGED_S = REFERENCE_MIN_S
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
@@ -262,7 +266,7 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
     max(S_above, S_below); one of ``below_only``: below alone); after the signals'
     columns, the signatures'."""
     values = way_statistics(residual, window, reference_min, found, stride,
-                            _columns(names, below_only))
+                            below_only_columns(names, below_only))
     n = residual.shape[1]
     out = {}
     for statistic, ways in values.items():
@@ -275,7 +279,8 @@ def change_statistics(residual: np.ndarray, window: int, reference_min: int,
     return out
 
 
-def _columns(names: Sequence[str], below_only: Collection[str]) -> list[int]:
+def below_only_columns(names: Sequence[str], below_only: Collection[str]) -> list[int]:
+    """The columns of ``names`` judged below their usual value only (a loop's gain)."""
     return [i for i, name in enumerate(names) if name in below_only]
 
 
@@ -295,22 +300,6 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
     while end - window >= window - 1 and sums[end - window] > 0:
         end -= window
     return max(end - window + 1, 0)
-
-
-def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
-                 actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS,
-                 below_only: Collection[str] = ()) -> dict[str, dict[str, float]]:
-    """Each statistic's largest value per signal and way in a log ("roll above", "roll
-    below": `each_way`), and per signature of the ``actuators`` over these signals (NaN
-    where it is never judged): what calibrate sets the ways' scales and the thresholds
-    from."""
-    found = signatures(actuators, names)
-    statistics = way_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
-                                stride, _columns(names, below_only))
-    every = [*each_way(names), *(s.name for s in found)]
-    return {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
-                        else float("nan") for i, name in enumerate(every)}
-            for statistic, values in statistics.items()}
 
 
 def _flagged(ratios: np.ndarray, names: Sequence[str], at: int, window: int

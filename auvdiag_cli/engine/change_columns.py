@@ -7,7 +7,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from auvdiag_cli.engine.change_check import ChangeCheck
+from auvdiag_cli.engine.change_check import MIN_JUDGED_S, ChangeCheck
 from auvdiag_cli.engine.judging import Judging, not_judged_signals, own_log_only
 from auvdiag_cli.engine.residuals import Matching
 from models.store import LoadedModel
@@ -65,6 +65,10 @@ def left_by_the_change_test(change: ChangeCheck | None, judging: Judging) -> dic
 
 
 def _why_not(model: LoadedModel, name: str) -> str:
+    if name in model.card.change_too_brief:
+        return (f"calibrate's normal logs let the change test judge it for "
+                f"{model.card.change_too_brief[name]:.1f} s in all, too little to set its "
+                f"thresholds (needs {MIN_JUDGED_S:.0f} s)")
     ahead = model.card.ahead
     if ahead is None:       # the test judges the replay's error, where the model has skill
         return ("the model cannot predict it" if name in not_judged_signals(model)

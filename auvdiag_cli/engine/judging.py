@@ -86,10 +86,14 @@ def nothing_judged(judging: Judging, change_test: str | None) -> str:
     left = sum(name in judging.not_judged for name in own_log_only(judging.profile))
     if not left:
         return "no signal is judged: the model cannot predict any of them"
+    brief = judging.model.card.change_too_brief
     return (f"no signal is judged: {left} of {len(judging.sensor_names)} are judged only "
-            "against the log's own beginning, by the change test, and it is "
-            + ("not calibrated (run `auvdiag calibrate` on normal logs)" if change_test is None
-               else change_test))
+            "against the log's own beginning, by the change test, and " + (
+                "it is " + change_test if change_test is not None else
+                "calibrate's normal logs let it judge them too briefly to set its thresholds "
+                f"({max(brief.values()):.1f} s in all at most; calibrate on more or longer "
+                "normal logs)" if brief and judging.model.card.calibrated else
+                "it is not calibrated (run `auvdiag calibrate` on normal logs)"))
 
 
 def replay_left_out(model: LoadedModel, profile: Profile) -> dict[str, str]:

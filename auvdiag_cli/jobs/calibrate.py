@@ -176,7 +176,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     change = change_thresholds(evidence, margin, fitted)
     unfed = unfed_thresholds(ingested, model, profile, margin, fitted, evidence.scales, change,
                              progress)
-    model.update_entries(change_test=change_entry(change, evidence.scales, unfed))
+    model.update_entries(change_test=change_entry(change, evidence, unfed))
     if fitted is not None:
         modes = _with_budget(modes, fitted, profile, floor_at_profile)
     thresholds = {**{m: dict(v) for m, v in profile.thresholds.items()},
@@ -184,15 +184,15 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     model.update_entries(thresholds=thresholds)
     effort, effort_notes = _refit_effort(model, profile, ingested,
                                          None if fitted is None else fitted.effort_rate)
-    checks_faulty = [_check_faulty(path, profile, model) for path in faulty_logs]
     result = CalibrationResult(
-        margin, modes, thresholds, hours, 3.0 / hours, checks_faulty,
+        margin, modes, thresholds, hours, 3.0 / hours,
+        [_check_faulty(path, profile, model) for path in faulty_logs],
         [p.name for p in in_sample], widening,
         _warnings(modes, in_sample, ingested, widening, evidence, budget is not None),
         raised, [profile.sensor_names[i] for i in starts_raised], effort, tuple(effort_notes),
         fitted, change, evidence.trained_on, utc_days(ingested), unfed,
         judged_within(profile.actuators, profile.sensors,
-                      change_judged(model, skilled(model, profile))))
+                      change_judged(model, skilled(model, profile))), evidence.too_little)
     model.update_entries(calibration=calibration_record(result, normal_logs,
                                                             floor_at_profile))
     return result

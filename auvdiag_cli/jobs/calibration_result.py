@@ -1,7 +1,7 @@
 """What `calibrate` found (`CalibrationResult`), and model.json's `calibration` entry that
 records it for people."""
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -77,6 +77,9 @@ class CalibrationResult:
     change_unfed: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)
     # sensor -> (the signatures it is judged within, why never alone): no threshold of its own.
     change_within: dict[str, tuple[tuple[str, ...], str]] = field(default_factory=dict)
+    # signal -> how long the normal logs let the change test judge it, all together, where
+    # too little to set its thresholds (it gets none).
+    change_too_little: Mapping[str, float] = field(default_factory=dict)
 
 
 

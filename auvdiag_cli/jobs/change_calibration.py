@@ -1,7 +1,7 @@
 """The change test's thresholds (`engine.change_check`), set by `auvdiag calibrate` from
 each judged signal's largest S on the normal logs."""
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
@@ -10,20 +10,24 @@ import numpy as np
 from auvdiag_cli.engine.change_check import (
     ABOVE,
     BELOW,
+    MIN_JUDGED_S,
     REFERENCE_MIN_S,
     STATISTICS,
     STRIDE_STEPS,
     SUM,
     WINDOW,
     WayScales,
-    change_peaks,
+    below_only_columns,
+    each_way,
     larger_way,
     signal_of,
+    way_statistics,
 )
 from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
-from auvdiag_cli.engine.change_signatures import thresholded
+from auvdiag_cli.engine.change_signatures import signatures, thresholded
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
+from auvdiag_cli.vehicle.actuators import Actuator
 from auvdiag_cli.vehicle.profile import Profile
 from models.store import LoadedModel
 
@@ -59,18 +63,43 @@ MIN_LOGS_FOR_WAYS = 8
 ChangeThresholds = dict[str, dict[str, tuple[float, float]]]
 
 
+def change_peaks(residual: np.ndarray, names: Sequence[str], window: int, dt_s: float,
+                 actuators: Sequence[Actuator] = (), stride: int | None = STRIDE_STEPS,
+                 below_only: Collection[str] = ()
+                 ) -> tuple[dict[str, dict[str, float]], dict[str, float]]:
+    """Each statistic's largest value per signal and way in a log ("roll above", "roll
+    below": `each_way`), and per signature of the ``actuators`` over these signals (NaN
+    where it is never judged): what calibrate sets the ways' scales and the thresholds
+    from; and how long the test judged each signal and signature there (s)."""
+    found = signatures(actuators, names)
+    statistics = way_statistics(residual, window, round(REFERENCE_MIN_S / dt_s), found,
+                                stride, below_only_columns(names, below_only))
+    every = [*each_way(names), *(s.name for s in found)]
+    peaks = {statistic: {name: float(np.nanmax(values[:, i])) if np.isfinite(values[:, i]).any()
+                         else float("nan") for i, name in enumerate(every)}
+             for statistic, values in statistics.items()}
+    seconds = np.isfinite(statistics[WINDOW]).sum(axis=0) * dt_s
+    judged: dict[str, float] = {}
+    for i, name in enumerate(every):      # both ways of a signal are judged alike
+        judged[signal_of(name)] = max(judged.get(signal_of(name), 0.0), float(seconds[i]))
+    return peaks, {name: round(value, 3) for name, value in judged.items()}
+
+
 def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Sequence[str],
-                     model: LoadedModel, profile: Profile) -> dict[str, dict[str, float]]:
+                     model: LoadedModel, profile: Profile
+                     ) -> tuple[dict[str, dict[str, float]], dict[str, float]]:
     """Each statistic's largest value per judged signal in one normal log's change
-    residual (NaN: too short, or ``set_aside`` in that log: a sensor it never fed)."""
+    residual (NaN: too short, or ``set_aside`` in that log: a sensor it never fed), and how
+    long the test judged each there (`change_peaks`)."""
     names = change_names(model)
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
-    peaks = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
-                         profile.actuators, below_only=loop_names(model))
-    return {statistic: {name: float("nan") if signal_of(name) in set_aside else value
-                        for name, value in values.items()}
-            for statistic, values in peaks.items()}
+    peaks, seconds = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
+                                  profile.actuators, below_only=loop_names(model))
+    return ({statistic: {name: float("nan") if signal_of(name) in set_aside else value
+                         for name, value in values.items()}
+             for statistic, values in peaks.items()},
+            {name: 0.0 if name in set_aside else value for name, value in seconds.items()})
 
 
 @dataclass(frozen=True)
@@ -96,6 +125,9 @@ class ChangeEvidence:
     trained_on: tuple[str, ...] = ()     # the logs trained on, last in ``peaks``
     trained_not_counted: int = 0         # logs trained on whose peaks are of another form
     scales: WayScales = field(default_factory=dict)   # each way's (`way_scales`)
+    # signal -> how long the normal logs let the test judge it, all together, where that
+    # is too little to set its thresholds (`enough_judged`)
+    too_little: Mapping[str, float] = field(default_factory=dict)
 
 
 def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str],
@@ -103,14 +135,37 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
                     trained: Sequence["TrainedOnPeaks"] = (), trained_not_counted: int = 0
                     ) -> ChangeEvidence:
     judged = change_judged(model, replay_judged)
-    ways = [*(log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
-              for d in diagnoses), *({s: dict(v) for s, v in t.peaks.items()} for t in trained)]
+    logs = [log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
+            for d in diagnoses]
+    ways = [*(peaks for peaks, _ in logs), *({s: dict(v) for s, v in t.peaks.items()}
+                                             for t in trained)]
     scales = way_scales(ways, judged)
-    return without_outliers(ChangeEvidence(
+    return without_outliers(enough_judged(ChangeEvidence(
         thresholded(profile.actuators, profile.sensors, judged),
         [either_way(p, judged, scales) for p in ways],
         trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted,
-        scales=scales))
+        scales=scales), [*(seconds for _, seconds in logs), *(t.judged_s for t in trained)]))
+
+
+def enough_judged(evidence: ChangeEvidence, seconds: Sequence[Mapping[str, float] | None]
+                  ) -> ChangeEvidence:
+    """The evidence without the signals (and signatures) that the normal logs, all
+    together, let the test judge for less than MIN_JUDGED_S (``seconds``: per log, how long
+    it judged each; None: a log trained on before the model recorded it, which leaves the
+    total unknown and the signal kept): their values NaN, so that they get no threshold
+    and take no share of the budget, and each named in ``too_little`` with its total. A
+    threshold must rest on how far the statistic goes when nothing fails, and seconds of it
+    say nothing of that: on three ALFA flights of one day, the roll loop's gain, judged
+    15.6 s in all, had its thresholds at the floors and alarmed in 5 of 14 flights of the
+    other days before anything failed."""
+    too_little = {}
+    for name in evidence.judged:
+        if all(s is not None for s in seconds) and (
+                total := sum(s.get(name, 0.0) for s in seconds if s is not None)) < MIN_JUDGED_S:
+            too_little[name] = round(total, 1)
+    peaks = [{statistic: {n: float("nan") if n in too_little else v for n, v in values.items()}
+              for statistic, values in p.items()} for p in evidence.peaks]
+    return replace(evidence, peaks=peaks, too_little=too_little)
 
 
 def way_scales(peaks: Sequence[dict[str, dict[str, float]]], signals: Sequence[str]
@@ -259,11 +314,16 @@ def dominated_by_one_log(evidence: ChangeEvidence, logs: Sequence[str]) -> list[
         for log, which in dominated.items()]
 
 
-def change_entry(thresholds: ChangeThresholds, scales: WayScales,
+def change_entry(thresholds: ChangeThresholds, evidence: ChangeEvidence,
                  unfed: Mapping[str, Mapping[str, Mapping[str, float]]] | None = None
                  ) -> dict[str, object]:
-    """model.json's `change_test` entry (``unfed``: `jobs.change_unfed`)."""
+    """model.json's `change_test` entry: the thresholds, the evidence's way scales and the
+    signals it judged too briefly to set any (`enough_judged`); ``unfed``:
+    `jobs.change_unfed`."""
+    scales = evidence.scales
     return {"thresholds": {s: {n: t for n, (_, t) in v.items()} for s, v in thresholds.items()},
+            **({"judged_too_briefly_s": dict(evidence.too_little)}
+               if evidence.too_little else {}),
             **({"unfed_thresholds": {i: {s: dict(v) for s, v in by.items()}
                                      for i, by in unfed.items()}} if unfed else {}),
             "largest_normal": {s: {n: peak for n, (peak, _) in v.items()}

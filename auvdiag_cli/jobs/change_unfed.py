@@ -30,6 +30,7 @@ from auvdiag_cli.jobs.change_calibration import (
     ChangeThresholds,
     change_thresholds,
     either_way,
+    enough_judged,
     log_change_peaks,
     without_outliers,
 )
@@ -70,9 +71,10 @@ def unfed_thresholds(logs: Sequence[IngestedLog], model: LoadedModel, profile: P
         peaks = [log_change_peaks(*change_errors_of(held(log, name) if feeds else log,
                                                     profile, model), judged, model, profile)
                  for log, feeds in zip(logs, feeding, strict=True)]
-        evidence = without_outliers(ChangeEvidence(
+        evidence = without_outliers(enough_judged(ChangeEvidence(
             thresholded(profile.actuators, profile.sensors, judged),
-            [either_way(p, judged, scales) for p in peaks], scales=scales))
+            [either_way(p, judged, scales) for p, _ in peaks], scales=scales),
+            [seconds for _, seconds in peaks]))
         budget = None if fitted is None else refitted(
             fitted, change_judges(evidence.peaks, evidence.judged))
         raised = _above(change_thresholds(evidence, margin, budget), fed)

@@ -33,6 +33,6 @@ def training_change_peaks(model: LoadedModel, profile: Profile, logs: Sequence[P
     if not judged:
         return ChangeTraining()
     progress(f"the change test on the {len(logs)} log(s) trained on (calibrate counts them)")
-    return ChangeTraining(tuple(TrainedOnPeaks(path.name, log_digest(path), log_change_peaks(
+    return ChangeTraining(tuple(TrainedOnPeaks(path.name, log_digest(path), *log_change_peaks(
         *change_errors_of(ingest(path, profile, part=healthy.of(path)), profile, model),
         judged, model, profile)) for path in logs), STRIDE_STEPS, each_way=True)

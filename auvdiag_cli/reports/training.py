@@ -5,6 +5,7 @@ paper's vehicle only); the thresholds, which log set each, and what to be wary o
 import math
 from collections.abc import Collection, Sequence
 
+from auvdiag_cli.engine.change_check import MIN_JUDGED_S
 from auvdiag_cli.engine.effort_check import (
     rise_range,
     smallest_later_rise,
@@ -300,6 +301,16 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
     if result.effort is not None:
         lines += effort_lines(result.effort)
         lines += [f"  left out: {note}" for note in result.effort_notes]
+    lines += change_lines(result)
+    lines += [f"warning: {warning}" for warning in result.warnings]
+    return lines
+
+
+def change_lines(result: CalibrationResult) -> list[str]:
+    """What calibrate set for the change test: each statistic's thresholds, the signals
+    judged only within signatures or too briefly to set any, and those for a log without
+    an input."""
+    lines = []
     also = (f" and the {len(result.change_trained_on)} trained on"
             if result.change_trained_on else "")
     for statistic, values in result.change.items():
@@ -310,11 +321,16 @@ def calibration_lines(result: CalibrationResult) -> list[str]:
     lines += [f"  change test: {name} judged only within {' and '.join(within) or 'no signature'}"
               f", no threshold of its own ({why})"
               for name, (within, why) in result.change_within.items()]
+    if result.change_too_little:
+        lines.append("  change test: no thresholds (not judged) where these logs let it judge "
+                     f"too briefly to set them (needs {MIN_JUDGED_S:.0f} s, all logs together; "
+                     "add normal logs, or longer ones): " + ", ".join(
+                         f"{name} {seconds:g} s" for name, seconds in
+                         result.change_too_little.items()))
     for name, by_statistic in result.change_unfed.items():
         lines.append(f"  change test for a log without {name} (these logs replayed with it "
                      "held at its typical value), where higher: " + "; ".join(
                          f"{statistic} " + ", ".join(f"{signal} {value:g}"
                                                      for signal, value in values.items())
                          for statistic, values in by_statistic.items()))
-    lines += [f"warning: {warning}" for warning in result.warnings]
     return lines
