@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from models.skill import SKILL_MARGIN
+
 AHEAD_S = 0.5
 CROSS_FOLDS = 5      # groups of logs its skill is measured on, each left out in turn
 # Each feature is held within the range the fit saw, widened by this share of its width
@@ -38,7 +40,8 @@ CROSS_FOLDS = 5      # groups of logs its skill is measured on, each left out in
 # beyond (a target reset as an autopilot takes over) as the edge of what was seen.
 RANGE_MARGIN = 0.25
 # How far each signal's weights may be shrunk towards "no change" (`_solve`): the one that
-# predicts the logs left out best is kept; 0 (plain least squares) wins with many logs.
+# predicts the logs left out best is kept where it beats plain least squares clearly
+# (`_shrinkage`); with many logs plain least squares stays.
 SHRINKAGE = (0.0, 0.001, 0.01, 0.1, 1.0)
 
 
@@ -247,10 +250,21 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
             errors[k] += more
         held += sensors
     skills = [_skill(e, held, steps, names) for e in errors]
-    chosen = [int(np.argmax([s.get(name, -np.inf) for s in skills])) for name in names]
+    chosen = [_shrinkage(name, skills) for name in names]
     weights = np.column_stack([fitted[0][k][:, i] for i, k in enumerate(chosen)])
     return AheadPredictor(steps, weights, {n: skills[k][n] for n, k in zip(
         names, chosen, strict=True) if n in skills[k]}, n_inputs, fitted[1])
+
+
+def _shrinkage(name: str, skills: Sequence[Mapping[str, float]]) -> int:
+    """The index of the shrinkage a signal keeps: the one whose weights predict the logs
+    left out best, where it beats plain least squares (the first) by more than
+    SKILL_MARGIN, as a predictor must beat a simpler one; else plain least squares. Shrunk
+    weights a hair better on the logs left out moved what the test found on ALFA's flights
+    of many days (skill within 0.01 of plain, the delay median 2.2 s against 2.3 s)."""
+    values = [s.get(name, -np.inf) for s in skills]
+    best = int(np.argmax(values))
+    return best if values[best] > values[0] + SKILL_MARGIN else 0
 
 
 def _column_means(values: np.ndarray) -> np.ndarray:
