@@ -10,11 +10,8 @@ import numpy as np
 from auvdiag_cli.engine.change_check import MIN_JUDGED_S, ChangeCheck
 from auvdiag_cli.engine.judging import Judging, not_judged_signals, own_log_only
 from auvdiag_cli.engine.residuals import Matching
+from models.ahead import MIN_AHEAD_SKILL
 from models.store import LoadedModel
-
-# A signal the predictor a moment ahead barely beats "no change" on is left out: its error
-# is the signal's own motion, and every manoeuvre would move it.
-MIN_AHEAD_SKILL = 0.1
 
 
 def loop_names(model: LoadedModel) -> list[str]:
