@@ -184,7 +184,7 @@ def _solve(features: np.ndarray, change: np.ndarray, constants: int,
     free. A handful of short logs hold too little of how the signals move to pin every
     weight down: a fit left free follows what they happened to hold, and predicts other
     logs worse than "no change" (on three normal ALFA flights, the forward acceleration's
-    skill -0.79; shrunk, 0.09)."""
+    skill -0.79; shrunk, 0.22)."""
     scale = features[:, :-constants].std(axis=0)
     scale = np.append(np.where(scale > 0, scale, 1.0), np.ones(constants))
     standard = features / scale
@@ -212,15 +212,16 @@ def _errors(predictor: AheadPredictor, logs: Sequence[AheadLog]
 
 def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
               heldout: Sequence[AheadLog] = ()) -> AheadPredictor | None:
-    """Least squares on the normal logs, each signal's weights shrunk as much as predicts
-    logs left out best (`SHRINKAGE`, `_solve`); None where the logs hold too few complete
-    rows to fit it. Its skill is measured on ``heldout`` where given, else on each log from
-    a fit to the others (the logs in up to CROSS_FOLDS groups, each left out in turn): a
-    least-squares fit of a few dozen weights to thousands of rows needs no logs kept from
-    it, and a skill measured on one or two held-out logs swings with what they happened to
-    hold (on ALFA, the forward acceleration's 0.08 one fold, 0.25 on the day left out). The
-    shrinkage is chosen on the same logs left out: of a handful of settings, the best one's
-    skill there is a little better than a log never seen would show.
+    """Least squares on the normal logs; a signal that fit cannot judge has its weights
+    shrunk as far as predicts the logs left out best (`_shrinkage`, `_solve`). None where
+    the logs hold too few complete rows to fit it. Its skill is measured on ``heldout``
+    where given, else on each log from a fit to the others (the logs in up to CROSS_FOLDS
+    groups, each left out in turn): a least-squares fit of a few dozen weights to
+    thousands of rows needs no logs kept from it, and a skill measured on one or two
+    held-out logs swings with what they happened to hold (on ALFA, the forward
+    acceleration's 0.08 one fold, 0.25 on the day left out). The shrinkage is chosen on the
+    same logs left out: of a handful of settings, the best one's skill there is a little
+    better than a log never seen would show.
 
     Each log has its own constant in the fit: a log's trim, payload or wind offsets the
     changes a little, and one constant for all would bend every weight towards those
