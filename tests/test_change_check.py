@@ -21,8 +21,8 @@ from auvdiag_cli.engine.change_check import (
 from auvdiag_cli.engine.change_check import (
     WINDOW as WINDOW_Z,
 )
+from auvdiag_cli.engine.change_suspects import change_suspects
 from auvdiag_cli.engine.diagnosis import check_model_fits
-from auvdiag_cli.engine.isolation import change_suspects
 from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS, MIN_FITTED_THRESHOLDS
 from auvdiag_cli.reports.training import calibration_lines
 from auvdiag_errors import ModelError

@@ -15,7 +15,7 @@ from auvdiag_cli.engine.change_signatures import (
     signatures,
     thresholded,
 )
-from auvdiag_cli.engine.isolation import change_suspects
+from auvdiag_cli.engine.change_suspects import change_suspects
 from auvdiag_cli.vehicle.profile import load_profile, profile_text
 from auvdiag_errors import ProfileError
 

@@ -74,7 +74,7 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     """The change showed in body rates the replay does not judge: a gyro bias that the
     hypothesis test finds to explain the judged yaw rate does not outweigh shares that
     match motor 3 weak alone, begun by the onset; where the replay judges the rates that
-    changed, the hypothesis test names as before."""
+    changed, a dead gyro explaining them is named as before, a bias fitted to them not."""
     profile = load_profile(Path("arducopter_quad"))
     judging = cast(Judging, SimpleNamespace(profile=profile))
     check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_error_s=3.0)
@@ -86,9 +86,16 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     named = name_by_hypotheses(observed(check, unjudged), finding, test, judging)
     assert named.component == "motor_3"
     assert "cannot weigh roll_rate, pitch_rate" in named.notes[-1]
-    # Every rate judged: the hypothesis test decides (by more than its margin).
-    assert name_by_hypotheses(observed(check, {}), finding, test,
+    # Every rate judged: a sensor's fault not fitted to the log (dead) that explains it is
+    # decided by the hypothesis test (by more than its margin) ...
+    dead = HypothesisTest((Hypothesis("gyro", "dead", 0.68), *test.ranked[1:]))
+    assert name_by_hypotheses(observed(check, {}), finding, dead,
                               judging).component == "gyro"
+    # ... a bias fitted to the log after the onset absorbs the weak rotor's effect there,
+    # and does not outweigh the shares (a rotor that died seconds before the log ended).
+    fitted = name_by_hypotheses(observed(check, {}), finding, test, judging)
+    assert fitted.component == "motor_3"
+    assert "gyro biased but fits it to the log after the onset" in fitted.notes[-1]
     # The shares began after this change: another event, not its cause.
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert name_by_hypotheses(observed(late, unjudged), finding, test,

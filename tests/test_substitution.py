@@ -2,6 +2,9 @@
 simulator's ground truth."""
 
 import json
+from pathlib import Path
+from types import SimpleNamespace
+from typing import cast
 
 import numpy as np
 import pytest
@@ -9,8 +12,11 @@ from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
+from auvdiag_cli.engine.isolation import _stand_in
+from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.engine.substitution import dead_reckon
 from auvdiag_cli.simulator.truth_files import truth_paths
+from auvdiag_cli.vehicle.profile import load_profile
 
 
 def test_dead_reckoning_straight_and_turning():
@@ -79,3 +85,26 @@ def test_mission_plan_given_explicitly(make_log, tmp_path):
     broken.write_text('{"missions": [{"waypoints": []}]}')
     bad = runner.invoke(app, ["diagnose", str(log), "--mission", str(broken)])
     assert bad.exit_code == 2 and "unreadable mission plan" in bad.stderr
+
+
+def test_the_substitute_is_a_signal_the_model_predicts():
+    """A failed gyro's substitute: the signal whose bit rose among those the replay judges,
+    else the first judged; none where the replay judges none of them (a quadrotor's roll
+    and pitch rates, which its model cannot predict, are no stand-in)."""
+    profile = load_profile(Path("arducopter_quad"))
+    gyro = [s for s in profile.sensors if s.component == "gyro"]
+    assert [s.name for s in gyro] == ["roll_rate", "pitch_rate", "yaw_rate"]
+    unpredicted = {"roll_rate": "no skill", "pitch_rate": "no skill"}
+
+    def stand_in(raised: str | None, not_judged: dict[str, str]) -> str | None:
+        finding = Finding(verdict=Verdict.FAULT, b={s.name: int(s.name == raised)
+                                                     for s in profile.sensors})
+        seen = cast(Observations, SimpleNamespace(not_judged=not_judged))
+        chosen = _stand_in(seen, finding, gyro)
+        return None if chosen is None else chosen.name
+
+    assert stand_in("yaw_rate", unpredicted) == "yaw_rate"
+    assert stand_in("roll_rate", unpredicted) == "yaw_rate"     # its own bit, unjudged
+    assert stand_in("pitch_rate", {}) == "pitch_rate"
+    assert stand_in(None, {}) == "roll_rate"
+    assert stand_in("yaw_rate", {**unpredicted, "yaw_rate": "no skill"}) is None

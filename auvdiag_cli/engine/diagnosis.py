@@ -16,6 +16,7 @@ from auvdiag_cli.engine.change_columns import (
     loop_names,
 )
 from auvdiag_cli.engine.change_signatures import signature_only, thresholded
+from auvdiag_cli.engine.change_suspects import beyond_the_replay, names_a_mover
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
 from auvdiag_cli.engine.detection import (
@@ -31,13 +32,7 @@ from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.isolation import (
-    apply_change_alarm,
-    apply_other_evidence,
-    beyond_the_replay,
-    isolate,
-    names_a_mover,
-)
+from auvdiag_cli.engine.isolation import apply_change_alarm, apply_other_evidence, isolate
 from auvdiag_cli.engine.judging import Judging, nothing_judged, skilled
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame

@@ -38,6 +38,9 @@ from models.store import LoadedModel
 
 THRUST_FRACTIONS = (0.0, 0.25, 0.5, 0.75)
 SENSOR_FAULTS = ("dead", "stuck", "biased", "drifting")
+# Faults whose reading is fitted to the log after the onset (an offset, a rate): fitted
+# there, they absorb whatever else moved that signal, a weak actuator's effect included.
+FITTED_TO_THE_LOG = ("biased", "drifting")
 STUCK_FROM_SAMPLES = 5       # a stuck part's value: the median of the samples before onset
 TRIM, WHERE_IT_WAS, LOW_LIMIT, HIGH_LIMIT = ("at its trim", "where it was",
                                              "hard over at its least command",
@@ -60,6 +63,11 @@ class Hypothesis:
     @property
     def is_actuator(self) -> bool:
         return self.part is not None
+
+    @property
+    def fitted(self) -> bool:
+        """A sensor fault fitted to the log after the onset (`FITTED_TO_THE_LOG`)."""
+        return not self.is_actuator and self.kind in FITTED_TO_THE_LOG
 
     def describe(self) -> str:
         name = self.component.replace("_", " ")

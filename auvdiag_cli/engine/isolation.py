@@ -10,7 +10,7 @@ import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.change_check import ChangeCheck
-from auvdiag_cli.engine.change_signatures import signature_parts
+from auvdiag_cli.engine.change_suspects import change_suspects
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
@@ -30,7 +30,7 @@ from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import substitute
-from auvdiag_cli.vehicle.profile import Profile
+from auvdiag_cli.vehicle.profile import Profile, Sensor
 
 
 def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s: float,
@@ -143,64 +143,6 @@ def _carriers(change: ChangeCheck, most: int = 3) -> str:
         f"{n} {v:.2f}" for v, n in carried[:most]) + ")"
 
 
-def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
-    """Whether the profile says which parts move what changed (`moved_by`): those name the
-    part; otherwise the replay's isolation does (pattern table, hypotheses)."""
-    return bool(set(change.flagged) & set(change.members)) or any(
-        moved_by for name, moved_by in _movers(profile).items() if name in change.flagged)
-
-
-def _movers(profile: Profile) -> dict[str, tuple[str, ...]]:
-    """Each signal the change test judges -> the parts that move it (`moved_by`): the
-    sensors', then the controller's loops' (a loop's gain is made by its parts)."""
-    return {**{s.name: s.moved_by for s in profile.sensors},
-            **{loop.name: loop.moved_by for loop in profile.tracking}}
-
-
-def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
-    """Whether every signal that changed is one the replay does not judge and the pattern
-    table has no row for them: the hypothesis test, scored by the replay's g, cannot weigh
-    such a change at all, so the change test's own evidence names the part."""
-    changed = set(change.changed)
-    b = {name: int(name in changed) for name in judging.sensor_names}
-    return bool(changed) and changed <= set(judging.not_judged) and look_up(
-        judging.profile.pattern, b) is None
-
-
-def change_suspects(flagged: Mapping[str, float], profile: Profile,
-                    evidence: Mapping[str, float] | None = None) -> list[str]:
-    """The parts that could explain the signals that changed, likeliest first: each signal
-    counts for the parts that move what it measures, and a part moving several of them
-    gathers their weight. A signal counts by how much of the change it carried from the
-    onset to the alarm (``evidence``, `ChangeCheck.evidence`: every judged signal, over
-    its threshold at the alarm or not), else by how far it went past its threshold at the
-    alarm (``flagged``); a signal barely over is weak evidence, so a part that moved one
-    signal far outweighs one that nudged several. A sensor is a suspect only where every
-    signal that crossed is its own: a sensor's fault shows in its own readings, while a
-    part that moves the vehicle changes what other sensors measure too. On a tie the part
-    that moves comes first: a vehicle that stops following its set points the same way has
-    first changed in what moves it."""
-    weights = dict(evidence) if evidence else {n: r - 1.0 for n, r in flagged.items()}
-    weight: dict[str, float] = {}
-    movers: set[str] = set()
-    for name, moved_by in _movers(profile).items():
-        for part in moved_by if name in weights else ():
-            weight[part] = weight.get(part, 0.0) + weights[name]
-            movers.add(part)
-    # A part's signature (`change_signatures`) is evidence for that part alone.
-    for name, part in signature_parts(list(weights), profile.actuators).items():
-        weight[part] = weight.get(part, 0.0) + weights[name]
-        movers.add(part)
-    # A signature that crossed is several signals moving together: no one sensor's fault.
-    own = set() if signature_parts(list(flagged), profile.actuators) else {
-        s.component for s in profile.sensors if s.name in flagged}
-    if len(own) == 1:
-        (component,) = own
-        weight[component] = weight.get(component, 0.0) + sum(
-            weights.get(name, 0.0) for name in flagged)
-    return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
-
-
 def _found(seen: Observations, finding: Finding, candidates: Sequence[str], note: str,
            judging: Judging) -> Finding:
     """A fault with these candidates: one of them is named."""
@@ -278,14 +220,20 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
     unweighed = [n for n, v in finding.b.items() if v and n in seen.not_judged]
-    if alone is not None and not best.is_actuator and unweighed:
+    if alone is not None and not best.is_actuator and (unweighed or best.fitted):
         # The hypotheses are weighed by the replay's g, which leaves out signals it cannot
         # predict: a sensor's fault "explains" a change there only by not being looked at.
+        # A bias or a drift fitted to the log after the onset absorbs what a weak actuator
+        # did to the signal (a rotor that died seconds before the log ends), while a sensor's
+        # fault moves a group's shares in pairs, never as one member's weakness alone.
+        why = (f"cannot weigh {', '.join(unweighed)} (not judged by the replay), where the "
+               "change showed" if unweighed else
+               "fits it to the log after the onset, where it absorbs what a weak actuator "
+               "does to the signal")
         return _found(seen, finding, [alone],
                       f"named by the effort its group carries (its shares match {alone} weak "
                       f"alone, begun by the onset): the hypothesis test favours "
-                      f"{best.describe()} but cannot weigh {', '.join(unweighed)} (not judged "
-                      "by the replay), where the change showed", judging)
+                      f"{best.describe()} but {why}", judging)
     if (effort is not None and len(effort.named) == 1 and margin is not None
             and margin < DECISIVE_MARGIN):
         # The motion departed, but several single faults explain it about as well; the
@@ -354,6 +302,15 @@ def apply_detection(seen: Observations, finding: Finding, b: Mapping[str, int],
     return finding
 
 
+def _stand_in(seen: Observations, finding: Finding, sensors: Sequence[Sensor]
+              ) -> Sensor | None:
+    """The failed component's signal the model stands in for: one whose bit is raised,
+    else the first the replay judges; none where the model predicts none of them (a
+    substitute no better than a guess)."""
+    judged = [s for s in sensors if s.name not in seen.not_judged]
+    return next((s for s in judged if finding.b.get(s.name)), judged[0] if judged else None)
+
+
 def _predicted_on_dms(seen: Observations, finding: Finding, b: Mapping[str, int],
                       alarm_s: float, judging: Judging
                       ) -> tuple[list[str], Finding]:
@@ -384,9 +341,14 @@ def _name_component(seen: Observations, finding: Finding, component: str, judgin
                     ) -> Finding:
     """The verdict names one component; a failed sensor gets Substituting Control."""
     finding = replace(finding, component=component)
-    sensor = next((s for s in judging.profile.sensors if s.component == component), None)
+    sensors = [s for s in judging.profile.sensors if s.component == component]
+    sensor = _stand_in(seen, finding, sensors)
     histories = seen.histories
     matching = histories.matching
+    if sensors and sensor is None:
+        return finding.noted(f"no substitute for {component}: the replay judges none of "
+                             f"its signals ({', '.join(s.name for s in sensors)}), and the "
+                             "model's reading of them is no better than a guess")
     if sensor is None or finding.onset_s is None or matching is None:
         return finding
     substitution = substitute(
