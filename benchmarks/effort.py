@@ -244,8 +244,11 @@ def _conditions(two_way: bool, fit: GroupFit | None) -> str:
 
 
 FAULT_FROM_S = 60.0     # the weak scenarios' fault begins here
-# A weakness that begins late: this much thrust kept from this long before the mission's end.
+NEVER_S = 1e6           # a fault from here: the mission flown without it
+# A weakness that begins late: this much thrust kept from this long before the mission's end;
+# and an actuator that stops a few seconds before the log ends, as in a crash.
 LATE_FRACTION, LATE_BEFORE_END_S = 0.7, (10.0, 20.0)
+STOPPED_BEFORE_END_S = (1.5, 3.0, 5.0)
 # Per actuator named alone: its onset and detection after the fault began, and the error
 # it stated of the onset (None: it found the whole log departing).
 Timing = tuple[float, float, float | None]
@@ -282,7 +285,8 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                 cells.append(mark)
             rows.append(f"| {fraction:.0%} | " + " | ".join(cells)
                         + f" | {_row_timing(times[timed:])} |")
-        late = [*_late(profile, model, components, work),
+        late = [*_late(profile, model, components, work, LATE_FRACTION, LATE_BEFORE_END_S),
+                *_late(profile, model, components, work, 0.0, STOPPED_BEFORE_END_S),
                 _seeds(profile, model, components, work)]
     alarms = sum(bool(c.suspects) for c in normal)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}"
@@ -299,23 +303,25 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
             "|---" * (len(components) + 2) + "|", *rows, "", _timing(times), "", *late]
 
 
-def _late(profile: Profile, model: EffortModel, components: list[str], work: Path
-          ) -> list[str]:
-    """Each actuator weakened LATE_BEFORE_END_S before the mission's end: named alone, the
-    true onset within the error stated, the detection after it."""
+def _late(profile: Profile, model: EffortModel, components: list[str], work: Path,
+          fraction: float, befores_end_s: tuple[float, ...]) -> list[str]:
+    """Each actuator keeping ``fraction`` of its thrust from each of ``befores_end_s``
+    before the end of the mission (flown without it): named alone, the true onset within
+    the error stated, the detection after it (never before)."""
     lines = []
-    for before_end in LATE_BEFORE_END_S:
+    for before_end in befores_end_s:
         named = held = 0
         delays, errors = [], []
         end_s = 0.0
         for component in components:
             name = f"mission-{component.replace('_', '-')}-weak"
-            end_s = len(_simulated(profile, name, 201, work, LATE_FRACTION).commands) * (
+            end_s = len(_simulated(profile, name, 201, work, fraction, NEVER_S).commands) * (
                 profile.dt_s)
             onset_s = end_s - before_end
-            check = _judge(model, profile, _simulated(profile, name, 201, work, LATE_FRACTION,
+            check = _judge(model, profile, _simulated(profile, name, 201, work, fraction,
                                                       onset_s))
-            if set(check.named) != {component} or check.alarm_s is None:
+            if set(check.named) != {component} or check.alarm_s is None or (
+                    check.alarm_s < onset_s):
                 continue
             named += 1
             delays.append(check.alarm_s - onset_s)
@@ -325,9 +331,11 @@ def _late(profile: Profile, model: EffortModel, components: list[str], work: Pat
         timing = (f"; the true onset within the error stated in {held} of {named} (stated "
                   f"error median {np.median(errors):.1f} s), detected {np.median(delays):.1f} s "
                   f"after it (median; worst {max(delays):.1f} s)" if delays and errors else "")
-        lines.append(f"- Weakened to {LATE_FRACTION:.0%} {before_end:.0f} s before the "
-                     f"mission's end ({end_s:.0f} s): named alone in {named} of "
-                     f"{len(components)}{timing}.")
+        what = (f"Stopped {before_end:g} s before the mission's end (as in a crash)"
+                if fraction == 0 else
+                f"Weakened to {fraction:.0%} {before_end:g} s before the mission's end")
+        lines.append(f"- {what} ({end_s:.0f} s): named alone, seen after it began, in "
+                     f"{named} of {len(components)}{timing}.")
     return lines
 
 

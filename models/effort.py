@@ -61,6 +61,10 @@ class EffortGroup:
     # Projection on the mixer's reach where it misses directions of the group (from the
     # profile's controller; `models.effort_reach`), row by row; None: every direction.
     reach: tuple[tuple[float, ...], ...] | None = None
+    # Row k: how the controller's balance of the tilting moments moves each member's effort
+    # where member k falls short of what it is asked (its roll and pitch factors against
+    # k's, from the profile's mix: a quadrotor's diagonal partner eased); None: not known.
+    balance: tuple[tuple[float, ...], ...] | None = None
 
     @property
     def projection(self) -> np.ndarray | None:

@@ -64,14 +64,41 @@ def signature_directions(rises: np.ndarray, shares: np.ndarray, sigma: np.ndarra
         return np.asarray(np.where(norms > 0, scaled / norms, 0.0))
 
 
+def balance(tilt_rows: np.ndarray) -> np.ndarray | None:
+    """(members k, members j): how the controller's balance of the tilting moments moves
+    member j's effort where member k falls short (``tilt_rows``: each member's roll and pitch
+    factors): j's lever against k's, so that the member across from k (a quadrotor's
+    diagonal partner) is eased as k is pushed; None where the members tilt nothing."""
+    table = tilt_rows @ tilt_rows.T
+    return None if not np.any(table) else np.asarray(table, float)
+
+
+# Where a weak member's signature may lie between its plain one and the tilt balance's:
+# as many directions between the two as this (a rotor that still gives most of what it is
+# asked for moves the shares along the first; one that has stopped, pushed to its limit
+# while the member across is eased to keep the vehicle level, along the second).
+BALANCE_STEPS = 11
+
+
 def named_signatures(group: EffortGroup, commands: np.ndarray, shares: np.ndarray,
                      sigma: np.ndarray) -> np.ndarray:
-    """(members k, members j): the signatures a log's departures (its ``shares``, each in
-    units of ``sigma``) are matched with to name its weak member: the mixer's over the
-    log's steady ``commands`` where it cannot drive the group member by member, else the
-    plain ones."""
+    """(members k, candidates, members j): the signatures a log's departures (its
+    ``shares``, each in units of ``sigma``) are matched with to name its weak member, the
+    best of each member's candidates counting: the mixer's over the log's steady
+    ``commands`` where it cannot drive the group member by member; else the plain ones,
+    and where the profile's mix gives the tilt balance (`balance`), the directions from
+    each plain one to the balance's."""
     projection = group.projection
-    if projection is None:
-        return weakness_directions(len(group.members))
-    return signature_directions(rises(commands, np.asarray(group.factors), projection),
-                                shares, sigma)
+    if projection is not None:
+        return signature_directions(rises(commands, np.asarray(group.factors), projection),
+                                    shares, sigma)[:, None, :]
+    plain = weakness_directions(len(group.members))
+    if group.balance is None:
+        return plain[:, None, :]
+    tilts = np.asarray(group.balance, float)
+    tilts = tilts - tilts.mean(axis=1, keepdims=True)
+    norms = np.linalg.norm(tilts, axis=1, keepdims=True)
+    tilts = np.where(norms > 0, tilts / np.where(norms > 0, norms, 1.0), plain)
+    steps = np.linspace(0.0, 1.0, BALANCE_STEPS)[None, :, None]
+    between = (1 - steps) * plain[:, None, :] + steps * tilts[:, None, :]
+    return np.asarray(between / np.linalg.norm(between, axis=2, keepdims=True))

@@ -8,6 +8,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import cast
 
+import numpy as np
 from helpers import observed
 
 from auvdiag_cli.engine.active import ActiveDiagnosis
@@ -24,6 +25,7 @@ from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
+from models.effort_reach import named_signatures
 
 
 def _group(departures: list[float], *harder: int) -> tuple[ActuatorEffort, ...]:
@@ -175,3 +177,40 @@ def test_a_member_the_clear_match_leaves_out_is_not_described_as_driven_harder()
     assert check.named == ("motor_3",)
     assert "motor_3 carries 6% more" in check.describe()
     assert "motor_4" not in check.describe().split(":")[0]
+
+
+def test_a_change_within_the_log_is_matched_by_the_departure_that_alarmed():
+    """A rotor lost in a log's last seconds barely moves the whole log's shares, whose
+    pattern is then the log's own offset from the normal logs; the change that alarmed
+    (from its start to the end, against the log before it) carries the rotor's: the match
+    is made on it, and names motor 1 alone."""
+    whole = _group([0.003, 0.006, -0.012, 0.003], 0)
+    assert signature_matches(whole)[0][0] != "motor_1"
+    changed = {"rotors": np.array([4.0, -1.5, -1.2, -1.3])}
+    matches = signature_matches(whole, None, changed)
+    assert matches[0][0] == "motor_1" and matches[0][1] > 0.95
+    assert _named(whole, matches) == ("motor_1",)
+
+
+def test_a_rotor_that_stopped_matches_its_signature_with_the_tilt_balance():
+    """A quad X whose rotor stopped: the controller pushes it to its limit and eases its
+    diagonal partner to keep the vehicle level, the other two near normal. That pattern is
+    0.82 from the plain signature (about the naming threshold); the profile's mix gives
+    the tilt balance, whose direction names motor 1 alone, its partner matching least."""
+    profile = load_profile(Path("arducopter_quad"))
+    (group,) = profile.effort_groups
+    assert group.balance is not None and group.reach is None
+    stopped = _group([0.04, -0.04, 0.0, 0.0], 0)
+    z = np.array([4.0, -4.0, 0.0, 0.0])
+    plain = dict(signature_matches(stopped, None, {"rotors": z}))
+    assert 0.8 < plain["motor_1"] < 0.83
+    toward = named_signatures(group, np.ones((10, 4)), np.ones(4), np.ones(4))
+    balanced = signature_matches(stopped, {"rotors": toward}, {"rotors": z})
+    assert balanced[0] == ("motor_1", 1.0) and balanced[-1][0] == "motor_2"
+    # A rotor that still gives most of what it is asked for keeps its plain match.
+    weak = _group([0.06, -0.02, -0.02, -0.02], 0)
+    assert signature_matches(weak, {"rotors": toward})[0] == ("motor_1", 1.0)
+    # Groups without a mix that reaches every direction keep their own signatures.
+    assert load_profile(Path("crazyflie")).effort_groups[0].balance is None
+    assert all(g.balance is None for g in load_profile(Path("bluerov2")).effort_groups
+               if g.reach is not None)

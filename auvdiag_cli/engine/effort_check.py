@@ -190,27 +190,34 @@ def rise_range(rises: Sequence[float]) -> str:
 
 
 def signature_matches(actuators: Sequence[ActuatorEffort],
-                      directions: Mapping[str, np.ndarray] | None = None
+                      directions: Mapping[str, np.ndarray] | None = None,
+                      departures: Mapping[str, np.ndarray] | None = None
                       ) -> tuple[tuple[str, float], ...]:
     """How well the departures of the strongest suspect's group, in units of their spreads,
     match each member's weakness, best first: the cosine between them and the signature
-    of member i (``directions``: the group's, row by row, over the whole log; by default
-    its own share up and the others' down alike, the shares averaging to one: e_i - 1/m).
-    One weak actuator matches its own near 1; a load shared between two, or two weak ones,
-    matches none well."""
+    of member i, the best of its candidates (``directions``: the group's, (members,
+    candidates, members), over the whole log, `models.effort_reach.named_signatures`; by
+    default its own share up and the others' down alike, the shares averaging to one:
+    e_i - 1/m).
+    ``departures``: a group's departure that alarmed where a change within the log did
+    (from its start to the end, against the log before it), else the whole log's. One weak
+    actuator matches its own near 1; a load shared between two, or two weak ones, matches
+    none well."""
     suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
     if not suspects:
         return ()
     group = [a for a in actuators if a.group == suspects[0].group and a.spread]
     if len(group) < 2:
         return ()
-    z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
-                  for a in group])
+    z = (departures or {}).get(group[0].group)
+    if z is None or len(z) != len(group):
+        z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
+                      for a in group])
     length = float(np.linalg.norm(z))
     toward = (directions or {}).get(group[0].group)
-    if toward is None or toward.shape != (len(group), len(group)):
-        toward = weakness_directions(len(group))
-    matches = toward @ z / length if length > 0 else np.zeros(len(group))
+    if toward is None or toward.shape[::2] != (len(group), len(group)):
+        toward = weakness_directions(len(group))[:, None, :]
+    matches = (toward @ z).max(axis=1) / length if length > 0 else np.zeros(len(group))
     return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
                                                                      strict=True)),
                         key=lambda item: -item[1]))
@@ -260,37 +267,37 @@ def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
                  time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
-                            EffortSeries, tuple]:
+                            EffortSeries, tuple, np.ndarray | None]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures)."""
+    alarm_s, series, whole-log figures, the departures (σ) that named the change, if not
+    the whole log's)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
     spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
     toward = weakness_directions(len(setup.group.members))
-    whole_threshold = thresholds.whole_log(fit)
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
     # and WINDOWS_AFTER_START after it, and the threshold allows for every start tried.
     stride = max(1, window // STARTS_PER_WINDOW)
     starts = later_starts(n, window)
     later_threshold = thresholds.later_start(fit, len(starts))
-    candidates = [(0, whole_threshold)] + [(s, later_threshold) for s in starts]
+    candidates = [(0, thresholds.whole_log(fit))] + [(s, later_threshold) for s in starts]
     # The whole log against the normal logs; each later start against the log before it.
-    z = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts]) @ toward.T
+    departures = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts])
+    z = departures @ toward.T
     ratios = z / np.array([t for _, t in candidates])[:, None]
     per_actuator = ratios.max(axis=0)
-    level_by_bin = np.bincount(bins, weights=level, minlength=setup.n_bins)
     share = effort.sum(axis=0) / level.sum()
-    normal = expected_share(fit.means, level_by_bin)
+    normal = expected_share(fit.means, np.bincount(bins, weights=level, minlength=setup.n_bins))
     sigma = fit.sigma(n * dt_s)
     figures = (share, normal, sigma, named_signatures(
         setup.group, np.nan_to_num(log.group_commands(setup.group)[steady]), share, sigma))
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
-        return per_actuator, None, None, series, figures
+        return per_actuator, None, None, series, figures, None
     best = int(np.argmax(ratios[:, top]))
     if best == 0 and (ratios[1:, top] > 1).any():
         # The whole log departs because something changed within it (a rotor lost midway
@@ -298,15 +305,22 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         best = 1 + int(np.argmax(ratios[1:, top]))
     start, threshold = candidates[best]
     # When it was seen: the first end, a stride on from the start, from which the span's
-    # departure stays past its threshold for a part of a stride (or to the log's end).
+    # departure stays past its threshold for a part of a stride (or to the log's end); a
+    # change within the log no sooner than it may have begun, dated on the whole log.
     first = start + (window if start == 0 else stride)
+    if best != 0:
+        onset_s, error_s = date_change(spans, toward[top], times, window, stride, n - 1)
+        first = min(n, max(first, int(np.searchsorted(times, onset_s - error_s)) + 1))
     running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
                @ toward.T)[:, top]
     alarm = first + held_over(running, threshold, max(1, round(stride * HELD_SHARE_OF_STRIDE))) - 1
     if best == 0:        # the whole log departs: from its start
-        return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures
+        return (per_actuator, (float(times[0]), None), float(times[alarm]), series, figures,
+                None)
     onset = date_change(spans, toward[top], times, window, stride, alarm)
-    return per_actuator, onset, float(times[alarm]), series, figures
+    # The whole log within its threshold barely shows the change (a rotor lost at its end).
+    changed = departures[best] if ratios[0, top] <= 1 else None
+    return per_actuator, onset, float(times[alarm]), series, figures, changed
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
@@ -339,9 +353,9 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     component = {c.name: c.component for c in profile.effort_actuators}
     actuators: list[ActuatorEffort] = []
     series: list[EffortSeries] = []
-    # (alarm, onset, its error, group) of each group that alarmed
-    onsets: list[tuple[float, float, float | None, str]] = []
+    onsets: list[tuple[float, float, float | None, str]] = []   # alarm, onset, error, group
     directions: dict[str, np.ndarray] = {}     # each judged group's signatures, whole log
+    changed: dict[str, np.ndarray] = {}        # a group's departures where a change alarmed
     alike = {setup.group.name for setup, fit in zip(model.setups, model.fits, strict=True)
              if fit is not None and fit.alike}
     for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
@@ -358,9 +372,11 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             actuators += [ActuatorEffort(m, component.get(m, m), setup.group.name, None, None,
                                          None, None, None, why) for m in members]
             continue
-        ratio, onset, alarm, group_series, (share, normal, sigma, toward) = _judge_group(
-            setup, fit, model.thresholds, log, time_s, model.dt_s)
+        ratio, onset, alarm, group_series, (share, normal, sigma, toward), departure = \
+            _judge_group(setup, fit, model.thresholds, log, time_s, model.dt_s)
         directions[setup.group.name] = toward
+        if departure is not None:
+            changed[setup.group.name] = departure
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
         series.append(group_series)
@@ -371,7 +387,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             round(float(rise[k]), 4)) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
-    matches = signature_matches(actuators, directions)
+    matches = signature_matches(actuators, directions, changed)
     named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.effort_actuators}

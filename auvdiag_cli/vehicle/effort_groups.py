@@ -10,7 +10,7 @@ from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
 from models.effort import EffortGroup
-from models.effort_reach import reach
+from models.effort_reach import balance, reach
 
 
 def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
@@ -52,11 +52,15 @@ def parse_effort_groups(rows: list[TableReader], kinds: dict[str, str]
     return tuple(groups)
 
 
+TILTS = ("roll", "pitch")     # the moments a group's members balance by where they sit
+
+
 def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | None
                ) -> tuple[EffortGroup, ...]:
     """The groups, each with the reach of the controller's mix over its members where that
     misses directions of the group (`models.effort_reach`): the efforts the controller's
-    loops drive, each member's factor on them."""
+    loops drive, each member's factor on them; where it reaches every direction, the balance
+    of the tilting moments (`models.effort_reach.balance`)."""
     if controller is None:
         return groups
     held = controller.held_efforts
@@ -67,6 +71,14 @@ def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | Non
             continue
         rows = np.array([[controller.mix[m].get(e, 0.0) for e in held] for m in group.members])
         projection = reach(rows)
-        placed.append(group if projection is None else replace(
-            group, reach=tuple(tuple(float(v) for v in row) for row in projection)))
+        if projection is not None:
+            placed.append(replace(group, reach=_table(projection)))
+            continue
+        tilts = balance(np.array([[controller.mix[m].get(e, 0.0) for e in TILTS]
+                                  for m in group.members]))
+        placed.append(group if tilts is None else replace(group, balance=_table(tilts)))
     return tuple(placed)
+
+
+def _table(rows: np.ndarray) -> tuple[tuple[float, ...], ...]:
+    return tuple(tuple(float(v) for v in row) for row in rows)
