@@ -98,6 +98,17 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     fitted = name_by_hypotheses(observed(check, {}), finding, test, judging)
     assert fitted.component == "motor_3"
     assert "gyro biased but fits it to the log after the onset" in fitted.notes[-1]
+    # A pair's shares move as one member's weakness whatever moved them (a misread rate
+    # the controller answers too): there the fitted bias keeps its name.
+    pair = tuple(ActuatorEffort(f"motor_{i}", f"motor_{i}", "pair", 1.0 + d, 1.0, 0.01, d,
+                                2.0 if d > 0 else 0.5, None)
+                 for i, d in ((3, 0.05), (4, -0.05)))
+    paired = EffortCheck(pair, 0.01, 17.0, 15.0, ("motor_3",), (),
+                         "a damaged propeller or a weak motor", signature_matches(pair),
+                         onset_error_s=3.0)
+    assert paired.alone_by(16.0) == "motor_3"
+    assert name_by_hypotheses(observed(paired, {}), finding, test,
+                              judging).component == "gyro"
     # The shares began after this change: another event, not its cause.
     late = replace(check, onset_s=25.0, alarm_s=30.0)
     assert name_by_hypotheses(observed(late, unjudged), finding, test,

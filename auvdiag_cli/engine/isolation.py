@@ -220,12 +220,14 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
     unweighed = [n for n, v in finding.b.items() if v and n in seen.not_judged]
-    if alone is not None and not best.is_actuator and (unweighed or best.fitted):
+    # A bias or a drift fitted to the log after the onset absorbs what a weak actuator did
+    # to the signal (a rotor that died seconds before the log ends), while a sensor's fault
+    # moves a group of three or more in pairs, never as one member's weakness alone (a
+    # pair's shares move as one member's whatever moved them).
+    absorbed = best.fitted and effort is not None and len(effort.matches) > 2
+    if alone is not None and not best.is_actuator and (unweighed or absorbed):
         # The hypotheses are weighed by the replay's g, which leaves out signals it cannot
         # predict: a sensor's fault "explains" a change there only by not being looked at.
-        # A bias or a drift fitted to the log after the onset absorbs what a weak actuator
-        # did to the signal (a rotor that died seconds before the log ends), while a sensor's
-        # fault moves a group's shares in pairs, never as one member's weakness alone.
         why = (f"cannot weigh {', '.join(unweighed)} (not judged by the replay), where the "
                "change showed" if unweighed else
                "fits it to the log after the onset, where it absorbs what a weak actuator "
