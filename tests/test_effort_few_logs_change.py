@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from auvdiag_cli.engine.effort_check import check_effort, typical_later_threshold
+from auvdiag_cli.engine.effort_check import check_effort
+from auvdiag_cli.engine.effort_spans import typical_later_threshold
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort import GroupFit, Thresholds
@@ -158,3 +159,20 @@ def test_a_rotor_weakened_in_a_flights_last_seconds_is_not_seen_before_it_weaken
     assert check.named == ("motor_1",)
     assert check.alarm_s is not None and weak_from_s <= check.alarm_s <= weak_from_s + 5.0
     assert check.onset_s is not None and abs(check.onset_s - weak_from_s) <= 3.0
+
+
+def test_a_rotor_lost_at_the_end_of_a_log_with_its_own_offset_is_named_by_the_change():
+    """The log carries an offset of its own (motors 3 and 4 trimmed apart, a load between
+    them), and motor 1 is lost in its last 3 s: the whole log's shares barely show the
+    loss and match no one member's weakness; the change that alarmed does, and names it."""
+    rng = np.random.default_rng(11)
+    model, _ = learn_effort(PROFILE.effort_groups,
+                            [_log(_commands(rng), f"normal-{i}") for i in range(3)],
+                            PROFILE.dt_s)
+    assert model is not None
+    commands = _commands(rng) * np.array([1.0, 1.0, 1.03, 0.97])
+    commands[1470:, 0] = 1.0
+    check = _check(model, commands)
+    assert check.named == ("motor_1",)
+    assert check.matches[0][0] == "motor_1" and check.matches[0][1] >= 0.8
+    assert check.alarm_s is not None and check.alarm_s >= 147.0

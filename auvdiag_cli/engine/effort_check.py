@@ -23,13 +23,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import held_over
-from auvdiag_cli.engine.effort_spans import Spans, change_spread, cumulative, date_change
+from auvdiag_cli.engine.effort_spans import (
+    STARTS_PER_WINDOW,
+    Spans,
+    cumulative,
+    date_change,
+    later_starts,
+)
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
     Thresholds,
     expected_share,
-    rise_judged,
     smallest_rise,
     weakness_directions,
     window_shares,
@@ -37,12 +42,6 @@ from models.effort import (
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
 
-STARTS_PER_WINDOW = 8
-# Windows a later start needs after it to detect a change: the windows' noise is measured on
-# whole windows, and a threshold for a shorter span would stretch that measure past what was
-# measured. Dating a change already detected compares starts with one another, and tries
-# shorter spans too (`effort_spans.date_change`).
-WINDOWS_AFTER_START = 1
 # A crossing counts as seen once it holds for this share of a stride: one that falls back
 # sooner is the noise of the short spans just after a start, looked at end after end (taken
 # for the detection, it saw a simulated rotor weakened in a flight's last 3 s 20 s before it
@@ -199,8 +198,8 @@ def signature_matches(actuators: Sequence[ActuatorEffort],
     candidates, members), over the whole log, `models.effort_reach.named_signatures`; by
     default its own share up and the others' down alike, the shares averaging to one:
     e_i - 1/m).
-    ``departures``: a group's departure that alarmed where a change within the log did
-    (from its start to the end, against the log before it), else the whole log's. One weak
+    ``departures``: a group's departures to match instead of the whole log's (those of a
+    change within the log that alarmed, from its start to the end). One weak
     actuator matches its own near 1; a load shared between two, or two weak ones, matches
     none well."""
     suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
@@ -223,6 +222,13 @@ def signature_matches(actuators: Sequence[ActuatorEffort],
                         key=lambda item: -item[1]))
 
 
+def _clear_suspect(actuators: Sequence[ActuatorEffort],
+                   matches: Sequence[tuple[str, float]]) -> bool:
+    """Whether the best match is clear and of an actuator driven harder."""
+    return bool(matches) and matches[0][1] >= CLEAR_MATCH and any(
+        a.name == matches[0][0] and a.driven_harder for a in actuators)
+
+
 def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, float]]
            ) -> tuple[str, ...]:
     """The components of the actuators driven harder; in the strongest suspect's group,
@@ -237,40 +243,12 @@ def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, flo
         a.group != group or a.name == clear)))
 
 
-def later_starts(steps: int, window: int) -> list[int]:
-    """The later starts a log of ``steps`` steady steps is tried from (every
-    STARTS_PER_WINDOW-th of a window, each with a window of the log before it and
-    WINDOWS_AFTER_START after it)."""
-    return list(range(window, steps - WINDOWS_AFTER_START * window + 1,
-                      max(1, window // STARTS_PER_WINDOW)))
-
-
-def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
-                            dt_s: float) -> float:
-    """The later-start test's threshold for a log of the normal logs' typical steady time
-    (each log's own depends on its length: the number of starts it tries)."""
-    return thresholds.later_start(fit, len(later_starts(
-        round(fit.typical_s / dt_s), setup.window_steps(dt_s))))
-
-
-def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
-                        dt_s: float) -> np.ndarray:
-    """Per member, the smallest rise of its share that the later-start test judges when a
-    weakness begins halfway through a log of the typical steady time: against the log's own
-    first half, whose offset from the normal logs cancels, so far smaller than what the
-    whole-log test needs with a handful of normal logs."""
-    half_s = fit.typical_s / 2
-    return rise_judged(typical_later_threshold(setup, fit, thresholds, dt_s),
-                       change_spread(fit, half_s, half_s), fit.means.mean(axis=0))
-
-
 def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
                  time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
                             EffortSeries, tuple, np.ndarray | None]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures, the departures (σ) that named the change, if not
-    the whole log's)."""
+    alarm_s, series, whole-log figures, the departures (σ) of a change that alarmed)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
@@ -318,9 +296,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         return (per_actuator, (float(times[0]), None), float(times[alarm]), series, figures,
                 None)
     onset = date_change(spans, toward[top], times, window, stride, alarm)
-    # The whole log within its threshold barely shows the change (a rotor lost at its end).
-    changed = departures[best] if ratios[0, top] <= 1 else None
-    return per_actuator, onset, float(times[alarm]), series, figures, changed
+    return per_actuator, onset, float(times[alarm]), series, figures, departures[best]
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
@@ -387,7 +363,10 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             round(float(rise[k]), 4)) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
-    matches = signature_matches(actuators, directions, changed)
+    matches = signature_matches(actuators, directions)
+    # A rotor lost at the log's end barely moves the whole log: the change names it.
+    if changed and not _clear_suspect(actuators, matches):
+        matches = signature_matches(actuators, directions, changed)
     named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.effort_actuators}

@@ -8,7 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
-from models.effort import SPREAD_FLOOR, GroupFit
+from models.effort import SPREAD_FLOOR, GroupFit, Thresholds, rise_judged
+from models.effort_model import GroupSetup
+
+STARTS_PER_WINDOW = 8
+# Windows a later start needs after it to detect a change: the windows' noise is measured on
+# whole windows, and a threshold for a shorter span would stretch that measure past what was
+# measured. Dating a change already detected compares starts with one another, and tries
+# shorter spans too (`date_change`).
+WINDOWS_AFTER_START = 1
 
 
 def cumulative(effort: np.ndarray, level: np.ndarray, bins: np.ndarray, n_bins: int
@@ -92,3 +100,30 @@ def _changed_to_end(spans: Spans, starts: np.ndarray, direction: np.ndarray) -> 
     """Per start, the change from there to the log's end, projected on ``direction``."""
     n = spans.level_sum.shape[0] - 1
     return np.asarray(np.array([spans.changed(int(s), n)[0] for s in starts]) @ direction)
+
+
+def later_starts(steps: int, window: int) -> list[int]:
+    """The later starts a log of ``steps`` steady steps is tried from (every
+    STARTS_PER_WINDOW-th of a window, each with a window of the log before it and
+    WINDOWS_AFTER_START after it)."""
+    return list(range(window, steps - WINDOWS_AFTER_START * window + 1,
+                      max(1, window // STARTS_PER_WINDOW)))
+
+
+def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
+                            dt_s: float) -> float:
+    """The later-start test's threshold for a log of the normal logs' typical steady time
+    (each log's own depends on its length: the number of starts it tries)."""
+    return thresholds.later_start(fit, len(later_starts(
+        round(fit.typical_s / dt_s), setup.window_steps(dt_s))))
+
+
+def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds,
+                        dt_s: float) -> np.ndarray:
+    """Per member, the smallest rise of its share that the later-start test judges when a
+    weakness begins halfway through a log of the typical steady time: against the log's own
+    first half, whose offset from the normal logs cancels, so far smaller than what the
+    whole-log test needs with a handful of normal logs."""
+    half_s = fit.typical_s / 2
+    return rise_judged(typical_later_threshold(setup, fit, thresholds, dt_s),
+                       change_spread(fit, half_s, half_s), fit.means.mean(axis=0))
