@@ -50,6 +50,9 @@ def test_the_profile_gives_the_reach_and_the_model_keeps_it():
     model = _model(np.random.default_rng(3))
     again = EffortModel.from_json(json.loads(json.dumps(model.to_json())))
     assert again.setups[0].group.reach == model.setups[0].group.reach is not None
+    # the tilt balance of a group the mix reaches every way (the vertical pair's roll)
+    assert [s.group.balance for s in again.setups] == [s.group.balance for s in model.setups]
+    assert any(s.group.balance is not None for s in model.setups)
 
 
 def _commands(rng: np.random.Generator, kept: float = 1.0) -> np.ndarray:
