@@ -194,14 +194,13 @@ def signature_matches(actuators: Sequence[ActuatorEffort],
                       ) -> tuple[tuple[str, float], ...]:
     """How well the departures of the strongest suspect's group, in units of their spreads,
     match each member's weakness, best first: the cosine between them and the signature
-    of member i, the best of its candidates (``directions``: the group's, (members,
-    candidates, members), over the whole log, `models.effort_reach.named_signatures`; by
+    of member i, the best of its candidates. ``directions``: the group's, (members,
+    candidates, members), over the whole log (`models.effort_reach.named_signatures`); by
     default its own share up and the others' down alike, the shares averaging to one:
-    e_i - 1/m).
-    ``departures``: a group's departures to match instead of the whole log's (those of a
-    change within the log that alarmed, from its start to the end). One weak
-    actuator matches its own near 1; a load shared between two, or two weak ones, matches
-    none well."""
+    e_i - 1/m. ``departures``: a group's to match instead of the whole log's (those of a
+    change within the log that alarmed, from its start to the end). One weak actuator
+    matches its own near 1; a load shared between two, or two weak ones, matches none
+    well."""
     suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
     if not suspects:
         return ()
