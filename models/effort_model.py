@@ -19,6 +19,7 @@ from models.effort import (
     GroupFit,
     GroupLog,
     Thresholds,
+    as_table,
     efforts,
     fit_group,
     smallest_rise,
@@ -188,19 +189,14 @@ class EffortModel:
         for g in entry["groups"]:
             group = EffortGroup(str(g["name"]), tuple(g["members"]),
                                 tuple(float(f) for f in g["factors"]), float(g["min_level"]),
-                                float(g["window_s"]), _rows(g.get("reach")),
-                                _rows(g.get("balance")))
+                                float(g["window_s"]), as_table(g.get("reach")),
+                                as_table(g.get("balance")))
             setups.append(GroupSetup(group, float(g["min_level"]),
                                      np.asarray(g["level_edges"], float), float(g["window_s"]),
                                      bool(g["two_way"])))
             summaries.append([GroupLog.from_json(s) for s in g["logs"]])
         return cls.fitted(setups, summaries, float(entry["dt_s"]),
                           float(entry["false_alarm_rate"]))
-
-
-def _rows(entry: Any) -> tuple[tuple[float, ...], ...] | None:
-    """A square table of the model file (a group's reach or balance), or None."""
-    return None if entry is None else tuple(tuple(float(v) for v in row) for row in entry)
 
 
 def _readable(fit: GroupFit, thresholds: Thresholds | None) -> dict[str, Any]:

@@ -9,7 +9,7 @@ from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
-from models.effort import EffortGroup
+from models.effort import EffortGroup, as_table
 from models.effort_reach import balance, reach
 
 
@@ -72,13 +72,10 @@ def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | Non
         rows = np.array([[controller.mix[m].get(e, 0.0) for e in held] for m in group.members])
         projection = reach(rows)
         if projection is not None:
-            placed.append(replace(group, reach=_table(projection)))
+            placed.append(replace(group, reach=as_table(projection)))
             continue
         tilts = balance(np.array([[controller.mix[m].get(e, 0.0) for e in TILTS]
                                   for m in group.members]))
-        placed.append(group if tilts is None else replace(group, balance=_table(tilts)))
+        placed.append(group if tilts is None else replace(group, balance=as_table(tilts)))
     return tuple(placed)
 
-
-def _table(rows: np.ndarray) -> tuple[tuple[float, ...], ...]:
-    return tuple(tuple(float(v) for v in row) for row in rows)
