@@ -71,12 +71,6 @@ class EffortGroup:
         return None if self.reach is None else np.asarray(self.reach, float)
 
 
-def as_table(rows: Any) -> tuple[tuple[float, ...], ...] | None:
-    """Rows of numbers (an array, or a model file's lists) as a group keeps a square table
-    (its reach, its balance); None stays None."""
-    return None if rows is None else tuple(tuple(float(v) for v in row) for row in rows)
-
-
 def efforts(commands: np.ndarray, factors: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
     """(effort per step and actuator, the group's level per step) of the group's commands."""
     effort = np.abs(commands) / np.asarray(factors, float)

@@ -19,13 +19,13 @@ from models.effort import (
     GroupFit,
     GroupLog,
     Thresholds,
-    as_table,
     efforts,
     fit_group,
     smallest_rise,
     summarise,
     thresholds_for,
 )
+from models.effort_reach import as_table
 
 FORMAT_VERSION = 1
 MIN_WINDOW_S, MAX_WINDOW_S = 2.0, 30.0

@@ -21,11 +21,19 @@ plain signatures: the controller's own corrections move the shares along the mix
 signatures too, and judged along them (scaled by how much noisier they are there, on the
 normal logs' windows) the simulated BlueROV2 found fewer weak thrusters at the budget."""
 
+from typing import Any
+
 import numpy as np
 
 from models.effort import EffortGroup, weakness_directions
 
 REACH_TOLERANCE = 1e-9     # of the largest singular value: a direction the mix cannot drive
+
+
+def as_table(rows: Any) -> tuple[tuple[float, ...], ...] | None:
+    """Rows of numbers (an array, or a model file's lists) as a group keeps a square table
+    (its reach, its balance); None stays None."""
+    return None if rows is None else tuple(tuple(float(v) for v in row) for row in rows)
 
 
 def reach(mix_rows: np.ndarray) -> np.ndarray | None:

@@ -9,8 +9,8 @@ from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
-from models.effort import EffortGroup, as_table
-from models.effort_reach import balance, reach
+from models.effort import EffortGroup
+from models.effort_reach import as_table, balance, reach
 
 
 def parse_effort_group(reader: TableReader, names: list[str]) -> EffortGroup:
