@@ -143,17 +143,25 @@ def _own_log_only_replayed(profile: "Profile") -> "Profile":
                                           for s in profile.sensors))
 
 
-def _judged_by(model: "LoadedModel", chosen: "HorizonScore") -> str:
-    """What the change test judges, with its skill a moment ahead, and the replay's skill."""
+def _judged_by(model: "LoadedModel", chosen: "HorizonScore", profile: "Profile") -> str:
+    """What the change test judges once calibrated (a signal with a threshold of its own, or
+    within a part's signature that has one), with its skill a moment ahead, and the
+    replay's skill."""
     from auvdiag_cli.engine.change_columns import change_judged
+    from auvdiag_cli.engine.change_signatures import judged_within
 
     replayed = [signal for signal, s in chosen.signals.items() if s.judged]
     replay = ", ".join(f"{signal} {chosen.signals[signal].skill:.2f}" for signal in replayed)
     ahead = model.card.ahead
     if ahead is None:
         return f"the replay {replay or 'none'}"
+    limited = {name for limits in model.card.change_thresholds.values() for name in limits}
+    candidates = change_judged(model, replayed)
+    within = judged_within(profile.actuators, profile.sensors, candidates)
+    judged = [signal for signal in candidates if signal in limited
+              or any(s in limited for s in within.get(signal, ((), ""))[0])]
     change = ", ".join(f"{signal} {ahead.skill[signal]:.2f}" if signal in ahead.skill
-                       else signal for signal in change_judged(model, replayed))
+                       else signal for signal in judged)
     return f"{change or 'none'} (skill a moment ahead); the replay's skill {replay or 'none'}"
 
 
@@ -174,7 +182,7 @@ def judge_flights(training: list[Flight], judged_flights: list[Flight], name: st
     result = api.train(logs, shipped, model_dir,
                        options=api.TrainOptions(iterations_scale=scale, healthy=healthy,
                                                 keep_unskilled=True))
-    judged = _judged_by(api.load_model(model_dir, shipped), result.chosen)
+    judged = ""
     outcomes: dict[str, list[Outcome]] = {}
     for variant in variants:
         profile = shipped if variant == SHIPPED else _own_log_only_replayed(shipped)
@@ -185,6 +193,8 @@ def judge_flights(training: list[Flight], judged_flights: list[Flight], name: st
         api.calibrate(logs, profile, model, options=api.CalibrateOptions(
             budget=api.FalseAlarmBudget.parse(str(FALSE_ALARM_RATE)), healthy=healthy))
         api.save_model(model, variant_dir)      # as calibrated, for --keep
+        if variant == SHIPPED:
+            judged = _judged_by(model, result.chosen, profile)
         outcomes[variant] = [_outcome(flight, api.diagnose(flight.folder, profile, model),
                                       profile) for flight in judged_flights]
     return outcomes, judged
