@@ -50,6 +50,9 @@ def test_logs_of_one_day_are_said_to_show_no_offset_and_an_alarm_against_them_sa
     other_day = quad_commands(rng, np.array([1.04, 1.0, 1.0, 1.0]))
     check = quad_check(one_day, other_day)
     assert check.named == ("motor_1",) and check.onset_error_s is None
+    # No change within it: its share is said against normal logs only.
+    assert all(a.since_onset is None for a in check.actuators)
+    assert "more of the effort than on normal logs" in check.describe()
     assert check.against_alike_logs and "caution: the normal logs it is judged" in (
         check.describe())
     # Judged against logs that show their offsets, no caution (found or not).

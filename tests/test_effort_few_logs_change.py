@@ -91,6 +91,16 @@ def test_a_rotor_lost_in_the_last_window_is_dated_where_it_was_lost():
         # Within its error, a stride of starts (3.1 s: an eighth of a 25 s window).
         assert abs(check.onset_s - 147.0) <= check.onset_error_s <= 3.2
         assert check.alarm_s is not None and 147.0 <= check.alarm_s <= 149.9
+        # Its share over the whole log barely moved; since the change, by half or more
+        # (asked all it has where it carried about half): the report says both.
+        motor_1 = check.actuators[0]
+        assert motor_1.departure is not None and motor_1.departure < 0.06
+        assert motor_1.since_onset is not None and motor_1.since_onset > 0.4
+        assert all(a.since_onset is not None and a.since_onset < 0.1
+                   for a in check.actuators[1:])
+        assert (f"motor_1 carries {motor_1.since_onset:.0%} more of the effort since the "
+                f"change than before it in this log (over the whole log, "
+                f"{motor_1.departure:.0%} more than on normal logs") in check.describe()
 
 
 class _TightBetweenLogs(Thresholds):

@@ -29,6 +29,7 @@ from auvdiag_cli.engine.effort_spans import (
     cumulative,
     date_change,
     later_starts,
+    rise_since,
 )
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
@@ -64,6 +65,10 @@ class ActuatorEffort:
     not_judged: str | None       # why not, or None
     # The smallest rise of its share the whole-log test judges over this log (`smallest_rise`)
     smallest_rise_shown: float | None = None
+    # Where its group changed within the log: its share from the onset on against its
+    # share before it, less one (a rotor lost in a flight's last seconds barely moves the
+    # whole log's share); None otherwise.
+    since_onset: float | None = None
 
     @property
     def driven_harder(self) -> bool:
@@ -137,9 +142,7 @@ class EffortCheck:
                     f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
                     f"its threshold){_smallest_rise_shown(judged)}")
         # A member its group's clear match leaves out (`_named`) is not a weakness of its own.
-        parts = [f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on "
-                 f"normal logs ({a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f})"
-                 for a in suspects if a.component in self.named or not self.named]
+        parts = [_carries(a) for a in suspects if a.component in self.named or not self.named]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
                 + self._since() + self._caution())
 
@@ -165,6 +168,19 @@ class EffortCheck:
             return (f"; the shares match no one actuator's weakness well (closest {best}, "
                     f"{match:.2f}): more than one, or a load between them")
         return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
+
+
+def _carries(actuator: ActuatorEffort) -> str:
+    """How much more of the effort a suspect carries: than on normal logs over the whole log;
+    where its group changed within the log, first since then against before."""
+    a = actuator
+    figures = f"{a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f}"
+    if a.since_onset is None:
+        return (f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on normal "
+                f"logs ({figures})")
+    return (f"{a.name} carries {a.since_onset:.0%} more of the effort since the change than "
+            f"before it in this log (over the whole log, {a.departure or 0.0:.0%} more than on "
+            f"normal logs: {figures})")
 
 
 def _smallest_rise_shown(actuators: Sequence[ActuatorEffort]) -> str:
@@ -354,12 +370,15 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             changed[setup.group.name] = departure
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
+        since = None if onset is None or onset[1] is None else \
+            rise_since(setup, log, time_s, onset[0])
         series.append(group_series)
         actuators += [ActuatorEffort(
             m, component[m], setup.group.name, round(float(share[k]), 4),
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
             round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None,
-            round(float(rise[k]), 4)) for k, m in enumerate(members)]
+            round(float(rise[k]), 4), None if since is None else round(float(since[k]), 4))
+            for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
     matches = signature_matches(actuators, directions)

@@ -9,7 +9,7 @@ import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
 from models.effort import SPREAD_FLOOR, GroupFit, Thresholds, rise_judged
-from models.effort_model import GroupSetup
+from models.effort_model import EffortLog, GroupSetup
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on
@@ -127,3 +127,16 @@ def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds
     half_s = fit.typical_s / 2
     return rise_judged(typical_later_threshold(setup, fit, thresholds, dt_s),
                        change_spread(fit, half_s, half_s), fit.means.mean(axis=0))
+
+
+def rise_since(setup: GroupSetup, log: EffortLog, time_s: np.ndarray, onset_s: float
+                ) -> np.ndarray | None:
+    """Per member, its share of the group's steady effort from ``onset_s`` on against its
+    share before it, less one (None where either part holds no steady effort)."""
+    steady, effort, level, _ = setup.steady_steps(log)
+    at = int(np.searchsorted(time_s[steady], onset_s))
+    before, after = level[:at].sum(), level[at:].sum()
+    if not (before > 0 and after > 0):
+        return None
+    return np.asarray((effort[at:].sum(axis=0) / after) / (effort[:at].sum(axis=0) / before)
+                      - 1.0)

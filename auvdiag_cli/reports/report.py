@@ -151,6 +151,9 @@ class SharePart:
     # The smallest rise of its share (0.08: 8 % more) that shows over this log against the
     # normal logs: with few normal logs, a weakness must be large to stand out.
     smallest_rise_shown: float | None = None
+    # Where its group changed within the log: its share since the onset against before it,
+    # less one (0.6: 60 % more); null otherwise.
+    since_onset: float | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

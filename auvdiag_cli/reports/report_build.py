@@ -218,5 +218,6 @@ def _actuators(check: EffortCheck | None) -> ActuatorsPart | None:
             group=a.group, component=a.component, share=a.share, normal_share=a.normal_share,
             spread=a.spread, departure=a.departure, over_threshold=a.ratio,
             driven_harder=a.driven_harder, judged=a.not_judged is None,
-            not_judged=a.not_judged, smallest_rise_shown=a.smallest_rise_shown)
+            not_judged=a.not_judged, smallest_rise_shown=a.smallest_rise_shown,
+            since_onset=a.since_onset)
         for a in check.actuators})
