@@ -3,7 +3,6 @@ recovers a known linear closed loop, its error stays at the noise on a normal lo
 when the loop changes, it never predicts across a cut, and it travels through model.json."""
 
 import json
-from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -14,28 +13,18 @@ DT_S = 0.1
 NAMES = ["attitude", "rate"]
 
 
-def _flown(seconds: float, seed: int, step: Callable[[np.ndarray, float, np.random.Generator],
-                                                   tuple[float, float]],
-           reach: float = 1.0, hold: int = 50) -> tuple[np.ndarray, np.ndarray]:
-    """Two signals stepped by ``step`` (the state, the set point, the noise) after a set
-    point within ±``reach`` held ``hold`` steps at a time: set point, signals (measured)."""
-    rng = np.random.default_rng(seed)
-    steps = round(seconds / DT_S)
-    set_point = np.repeat(rng.uniform(-reach, reach, steps // hold + 1), hold)[:steps, None]
-    state = np.zeros((steps, 2))
-    for k in range(steps - 1):
-        state[k + 1] = step(state[k], set_point[k, 0], rng)
-    return set_point, state + rng.normal(0, 0.002, state.shape)
-
-
 def _closed_loop(seconds: float, seed: int, gain: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """A second-order loop following a set point; ``gain`` scales what its actuator
     achieves (1: healthy)."""
-    def step(x: np.ndarray, wanted: float, rng: np.random.Generator) -> tuple[float, float]:
-        push = gain * (4.0 * (wanted - x[0]) - 2.5 * x[1])
-        return x[0] + DT_S * x[1], x[1] + DT_S * push + rng.normal(0, 0.01)
-
-    return _flown(seconds, seed, step)
+    rng = np.random.default_rng(seed)
+    steps = round(seconds / DT_S)
+    set_point = np.repeat(rng.uniform(-1, 1, steps // 50 + 1), 50)[:steps, None]
+    state = np.zeros((steps, 2))
+    for k in range(steps - 1):
+        attitude, rate = state[k]
+        push = gain * (4.0 * (set_point[k, 0] - attitude) - 2.5 * rate)
+        state[k + 1] = attitude + DT_S * rate, rate + DT_S * push + rng.normal(0, 0.01)
+    return set_point, state + rng.normal(0, 0.002, state.shape)
 
 
 def _fitted() -> AheadPredictor:
@@ -97,11 +86,15 @@ def test_the_predictor_travels_through_model_json_as_numbers():
 def _banked(seconds: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """A roll following its set point, and a climb that sinks in a bank either way (the
     load factor: the lift a bank of φ needs grows with φ²): set point, (roll, climb)."""
-    def step(x: np.ndarray, wanted: float, rng: np.random.Generator) -> tuple[float, float]:
-        return (x[0] + DT_S * 1.5 * (wanted - x[0]),
-                x[1] + DT_S * (-4.0 * x[0] ** 2 - 1.0 * x[1]) + rng.normal(0, 0.005))
-
-    return _flown(seconds, seed, step, reach=0.7, hold=60)
+    rng = np.random.default_rng(seed)
+    steps = round(seconds / DT_S)
+    set_point = np.repeat(rng.uniform(-0.7, 0.7, steps // 60 + 1), 60)[:steps, None]
+    state = np.zeros((steps, 2))
+    for k in range(steps - 1):
+        roll, climb = state[k]
+        state[k + 1] = (roll + DT_S * 1.5 * (set_point[k, 0] - roll),
+                        climb + DT_S * (-4.0 * roll ** 2 - 1.0 * climb) + rng.normal(0, 0.005))
+    return set_point, state + rng.normal(0, 0.002, state.shape)
 
 
 def test_a_tilt_angles_square_predicts_what_a_bank_does_either_way():
