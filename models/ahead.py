@@ -8,8 +8,7 @@ ahead from its measured state: per signal, least squares on
     x(k+h) - x(k) = [s(k), s(k) - s(k-l), c(k), c(k+h/2), c(k+h), 1] @ W
 
 (s: the measured state, every sensor and the profile's measured inputs, and its recent change
-over l = h/2 steps; c: the commands or set points over the interval; h = `AHEAD_S`; each
-with the squares of the tilt angles the profile names, `Squared`: a bank's load factor). A
+over l = h/2 steps; c: the commands or set points over the interval; h = `AHEAD_S`). A
 measured input joins the state, not the commands: its value a moment ahead would carry a
 failure's own effect into the prediction (an aircraft's airspeed falls when its engine
 stops), where its present value tells how the controller is about to act (an autopilot
@@ -47,40 +46,6 @@ SHRINKAGE = (0.0, 0.001, 0.01, 0.1, 1.0)
 
 
 @dataclass(frozen=True)
-class Squared:
-    """The columns of the state and of the commands whose squares join them as features: the
-    tilt angles (a roll, its set point). An aircraft banked by φ needs 1/cos φ ≈ 1 + φ²/2 of
-    its weight in lift: it pitches up, slows and sinks in a turn as a straight line in the
-    angle cannot say, and does so both ways. On ALFA's flights (leave one day out) the roll's
-    square lifted the skill of the pitch from 0.48 to 0.57, of the pitch rate from 0.36 to
-    0.45, of the climb and the forward acceleration by 0.03."""
-
-    state: tuple[int, ...] = ()
-    commands: tuple[int, ...] = ()
-
-    def extend(self, commands: np.ndarray, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The commands and the state, each with its squared columns after it."""
-        return (np.hstack([commands, commands[:, list(self.commands)] ** 2]),
-                np.hstack([state, state[:, list(self.state)] ** 2]))
-
-    def to_json(self) -> dict[str, list[int]]:
-        return {"state": list(self.state), "commands": list(self.commands)}
-
-    @classmethod
-    def from_json(cls, entry: Mapping[str, Any] | None, n_commands: int, n_state: int
-                  ) -> "Squared":
-        """Raises ValueError where a column is not one of the model's."""
-        entry = entry or {}
-        state = tuple(int(i) for i in entry.get("state", ()))
-        commands = tuple(int(i) for i in entry.get("commands", ()))
-        if not all(0 <= i < n_state for i in state) or not all(
-                0 <= i < n_commands for i in commands):
-            raise ValueError(f"ahead predictor squared columns {entry!r} do not fit "
-                             f"{n_commands} commands and a state of {n_state}")
-        return cls(state, commands)
-
-
-@dataclass(frozen=True)
 class AheadPredictor:
     """Each signal predicted ``steps`` ahead (`fit_ahead`)."""
 
@@ -92,7 +57,6 @@ class AheadPredictor:
     # aside), widened by RANGE_MARGIN; None: a model fitted before, whose features were never
     # held.
     ranges: np.ndarray | None = None
-    squared: Squared = Squared()      # a model fitted before: none
 
     @property
     def lag(self) -> int:
@@ -103,8 +67,7 @@ class AheadPredictor:
         """Measured less predicted, on the steps of ``sensors`` (NaN where the prediction
         lacks a sample or reaches across one of ``cuts``); ``inputs``: the measured inputs
         (None: the model has none)."""
-        commands, state = self.squared.extend(commands,
-                                              _state(sensors, inputs if self.inputs else None))
+        state = _state(sensors, inputs if self.inputs else None)
         rows, features, change = _design(commands, state, sensors.shape[1], self.steps,
                                          self.lag, cuts, each_signal=True)
         if self.ranges is not None:
@@ -116,10 +79,7 @@ class AheadPredictor:
     def to_json(self) -> dict[str, Any]:
         return {"ahead_s_steps": self.steps, "lag_steps": self.lag, "state_inputs": self.inputs,
                 "features": "s(k), s(k)-s(k-lag), c(k), c(k+steps//2), c(k+steps), 1 "
-                            "(s: the sensors, then the measured inputs, then the squares of "
-                            "`squared` state; c: the commands, then the squares of `squared` "
-                            "commands)",
-                **({} if self.squared == Squared() else {"squared": self.squared.to_json()}),
+                            "(s: the sensors, then the measured inputs)",
                 "weights": np.round(self.weights, 9).tolist(),
                 "heldout_skill": {n: round(v, 4) for n, v in self.skill.items()},
                 **({} if self.ranges is None else {"feature_range": self.ranges.tolist()})}
@@ -130,10 +90,8 @@ class AheadPredictor:
         """Raises ValueError where the entry does not fit the model's signals."""
         weights = np.asarray(entry["weights"], dtype=float)
         inputs = int(entry.get("state_inputs", 0))
-        squared = Squared.from_json(entry.get("squared"), n_commands, n_sensors + inputs)
         if inputs not in (0, n_inputs) or weights.shape != (
-                2 * (n_sensors + inputs + len(squared.state))
-                + 3 * (n_commands + len(squared.commands)) + 1, n_sensors):
+                2 * (n_sensors + inputs) + 3 * n_commands + 1, n_sensors):
             raise ValueError(f"ahead predictor weights of shape {weights.shape} with "
                              f"{inputs} inputs do not fit {n_commands} commands, "
                              f"{n_sensors} signals and {n_inputs} inputs")
@@ -145,7 +103,7 @@ class AheadPredictor:
                              f"fit its {len(weights)} features")
         return cls(int(entry["ahead_s_steps"]), weights,
                    {str(k): float(v) for k, v in entry.get("heldout_skill", {}).items()},
-                   inputs, ranges, squared)
+                   inputs, ranges)
 
 
 def _state(sensors: np.ndarray, inputs: np.ndarray | None) -> np.ndarray:
@@ -189,15 +147,13 @@ class AheadLog:
 
 
 def _weights(logs: Sequence[AheadLog], n_sensors: int, steps: int, lag: int,
-             penalties: Sequence[float] = (0.0,), squared: Squared = Squared()
-             ) -> tuple[list[np.ndarray], np.ndarray] | None:
+             penalties: Sequence[float] = (0.0,)) -> tuple[list[np.ndarray], np.ndarray] | None:
     """Least squares, each log with its own constant (`fit_ahead`), once per shrinkage in
     ``penalties`` (`_solve`), and the range each feature is held within (`RANGE_MARGIN`);
     None where the logs hold too few complete rows."""
-    extended = [squared.extend(log.commands, log.state) for log in logs]
-    fed = [_fed(state) for _, state in extended]
-    parts = [_design(commands, np.where(f, state, 0.0), n_sensors, steps, lag, log.cuts)
-             for log, (commands, state), f in zip(logs, extended, fed, strict=True)]
+    fed = [_fed(log.state) for log in logs]
+    parts = [_design(log.commands, np.where(f, log.state, 0.0), n_sensors, steps, lag, log.cuts)
+             for log, f in zip(logs, fed, strict=True)]
     if not parts or sum(len(p[0]) for p in parts) < 10 * (parts[0][1].shape[1] + len(parts)):
         return None
     rows_of = np.repeat(np.arange(len(parts)), [len(p[0]) for p in parts])
@@ -255,8 +211,7 @@ def _errors(predictor: AheadPredictor, logs: Sequence[AheadLog]
 
 
 def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
-              heldout: Sequence[AheadLog] = (), squared: Squared = Squared()
-              ) -> AheadPredictor | None:
+              heldout: Sequence[AheadLog] = ()) -> AheadPredictor | None:
     """Least squares on the normal logs; a signal that fit cannot judge has its weights
     shrunk as far as predicts the logs left out best (`_shrinkage`, `_solve`). None where
     the logs hold too few complete rows to fit it. Its skill is measured on ``heldout``
@@ -276,7 +231,7 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
     own changes there are left out of its fit: they say nothing of how it moves."""
     steps = max(1, round(AHEAD_S / dt_s))
     lag = max(1, steps // 2)
-    fitted = _weights(logs, len(names), steps, lag, SHRINKAGE, squared)
+    fitted = _weights(logs, len(names), steps, lag, SHRINKAGE)
     if fitted is None:
         return None
     n_inputs = 0 if not logs or logs[0].inputs is None else logs[0].inputs.shape[1]
@@ -285,21 +240,21 @@ def fit_ahead(logs: Sequence[AheadLog], names: Sequence[str], dt_s: float,
     held: list[np.ndarray] = []
     folds = ([(fitted, heldout)] if heldout else [] if len(logs) < 2 else [
         (_weights([log for i, log in enumerate(logs) if i not in group], len(names), steps,
-                  lag, SHRINKAGE, squared), [logs[i] for i in group])
+                  lag, SHRINKAGE), [logs[i] for i in group])
         for group in np.array_split(np.arange(len(logs)), min(CROSS_FOLDS, len(logs)))])
     for others, left_out in folds:
         if others is None:
             continue
         for k, weights in enumerate(others[0]):
-            more, sensors = _errors(AheadPredictor(steps, weights, {}, n_inputs, others[1],
-                                                   squared), left_out)
+            more, sensors = _errors(AheadPredictor(steps, weights, {}, n_inputs, others[1]),
+                                    left_out)
             errors[k] += more
         held += sensors
     skills = [_skill(e, held, steps, names) for e in errors]
     chosen = [_shrinkage(name, skills) for name in names]
     weights = np.column_stack([fitted[0][k][:, i] for i, k in enumerate(chosen)])
     return AheadPredictor(steps, weights, {n: skills[k][n] for n, k in zip(
-        names, chosen, strict=True) if n in skills[k]}, n_inputs, fitted[1], squared)
+        names, chosen, strict=True) if n in skills[k]}, n_inputs, fitted[1])
 
 
 def _shrinkage(name: str, skills: Sequence[Mapping[str, float]]) -> int:

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from models.ahead import AheadLog, AheadPredictor, Squared, fit_ahead
+from models.ahead import AheadLog, AheadPredictor, fit_ahead
 
 DT_S = 0.1
 NAMES = ["attitude", "rate"]
@@ -81,45 +81,6 @@ def test_the_predictor_travels_through_model_json_as_numbers():
                                ahead.residual(commands, sensors), atol=1e-6)
     with pytest.raises(ValueError, match="do not fit 2 commands"):
         AheadPredictor.from_json(entry, n_commands=2, n_sensors=2, n_inputs=0)
-
-
-def _banked(seconds: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """A roll following its set point, and a climb that sinks in a bank either way (the
-    load factor: the lift a bank of φ needs grows with φ²): set point, (roll, climb)."""
-    rng = np.random.default_rng(seed)
-    steps = round(seconds / DT_S)
-    set_point = np.repeat(rng.uniform(-0.7, 0.7, steps // 60 + 1), 60)[:steps, None]
-    state = np.zeros((steps, 2))
-    for k in range(steps - 1):
-        roll, climb = state[k]
-        state[k + 1] = (roll + DT_S * 1.5 * (set_point[k, 0] - roll),
-                        climb + DT_S * (-4.0 * roll ** 2 - 1.0 * climb) + rng.normal(0, 0.005))
-    return set_point, state + rng.normal(0, 0.002, state.shape)
-
-
-def test_a_tilt_angles_square_predicts_what_a_bank_does_either_way():
-    logs = [AheadLog(*_banked(120.0, seed)) for seed in range(3)]
-    held = [AheadLog(*_banked(60.0, 9))]
-    names = ["roll", "climb"]
-    plain = fit_ahead(logs, names, DT_S, held)
-    squared = fit_ahead(logs, names, DT_S, held, Squared(state=(0,), commands=(0,)))
-    assert plain is not None and squared is not None
-    # A straight line in the roll cannot say that a bank either way sinks the aircraft.
-    assert squared.skill["climb"] > 0.7 > 0.5 > plain.skill["climb"]
-    # model.json keeps which squares it reads; an entry without them reads none.
-    entry = json.loads(json.dumps(squared.to_json()))
-    assert entry["squared"] == {"state": [0], "commands": [0]}
-    again = AheadPredictor.from_json(entry, n_commands=1, n_sensors=2, n_inputs=0)
-    commands, sensors = _banked(20.0, 14)
-    np.testing.assert_allclose(again.residual(commands, sensors),
-                               squared.residual(commands, sensors), atol=1e-6)
-    assert "squared" not in plain.to_json()
-    assert AheadPredictor.from_json(plain.to_json(), 1, 2, 0).squared == Squared()
-    del entry["squared"]
-    with pytest.raises(ValueError, match="do not fit 1 commands"):
-        AheadPredictor.from_json(entry, n_commands=1, n_sensors=2, n_inputs=0)
-    with pytest.raises(ValueError, match="squared columns"):
-        AheadPredictor.from_json({**entry, "squared": {"state": [5]}}, 1, 2, 0)
 
 
 def _loop_pushed_by_a_measured_input(seconds: float, seed: int

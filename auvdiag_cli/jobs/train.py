@@ -31,7 +31,7 @@ from auvdiag_cli.jobs.training_logs import (
 )
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
-from models.ahead import AheadLog, Squared, fit_ahead
+from models.ahead import AheadLog, fit_ahead
 from models.card import Refused, StartReference
 from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
@@ -254,11 +254,8 @@ def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog], wh
 
     fitted = [ahead_log(t) for t in training]
     held = [ahead_log(t) for t in heldout]
-    # The tilt angles' squares (`Squared`): the sensors', then their set points'.
-    squared = Squared(tuple(i for i, s in enumerate(profile.sensors) if s.tilt),
-                      tuple(i for i, c in enumerate(profile.commands) if c.tilt))
-    ahead = (fit_ahead([*fitted, *held], profile.sensor_names, profile.dt_s, squared=squared)
-             if whole else fit_ahead(fitted, profile.sensor_names, profile.dt_s, held, squared))
+    ahead = (fit_ahead([*fitted, *held], profile.sensor_names, profile.dt_s) if whole
+             else fit_ahead(fitted, profile.sensor_names, profile.dt_s, held))
     if ahead is None:
         return {"refused": "too few complete samples to fit it"}
     progress("the change test's predictor a moment ahead, skill on logs left out of its fit: "

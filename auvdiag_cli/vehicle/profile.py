@@ -41,7 +41,6 @@ class Command:
     description: str
     kind: str = "thruster"       # an actuator kind (ACTUATOR_KINDS) or a set point
     unit: str = ""               # "": normalised (an actuator's full scale is 1)
-    tilt: bool = False           # a tilt angle's set point: its square is a feature too
 
     @property
     def failure(self) -> str:
@@ -73,8 +72,6 @@ class Sensor:
     own_log_only: str | None = None
     # Judged only within a part's signature (`weakened`), never alone: why (None: alone too).
     signature_only: str | None = None
-    # A tilt angle (a roll): the change test's predictor reads its square too (`Squared`).
-    tilt: bool = False
 
 
 @dataclass(frozen=True)
@@ -194,7 +191,7 @@ def _horizon(matching: TableReader) -> float | None:
 def _command(reader: TableReader, kinds: tuple[str, ...]) -> Command:
     return Command(reader.get("name", str), reader.get("component", str),
                    reader.get("description", str, ""), parse_kind(reader, "thruster", kinds),
-                   reader.get("unit", str, ""), reader.get("tilt", bool, False))
+                   reader.get("unit", str, ""))
 
 
 def _rows(top: TableReader, key: str) -> list[TableReader]:
@@ -212,8 +209,7 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
                r.get("truth_column", str, None), parse_moved_by(r, movers),
-               r.get("own_log_only", str, None), r.get("signature_only", str, None),
-               r.get("tilt", bool, False))
+               r.get("own_log_only", str, None), r.get("signature_only", str, None))
         for r in top.items("sensors"))
     check_weakened(actuators, sensors)
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
