@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from auvdiag_cli.vehicle.pattern_table import PatternRow
+from auvdiag_cli.vehicle.profile import PatternRow
 
 
 @dataclass(frozen=True)

@@ -19,8 +19,7 @@ from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.segments import dms_template
 from auvdiag_cli.vehicle.controller import VehicleController
 from auvdiag_cli.vehicle.followers import make_follower
-from auvdiag_cli.vehicle.pattern_table import PatternRow
-from auvdiag_cli.vehicle.profile import MISSION_MODE, Profile
+from auvdiag_cli.vehicle.profile import MISSION_MODE, PatternRow, Profile
 from auvdiag_errors import DerivationError
 from models.fast import FastStepper, fast_replay
 from models.store import LoadedModel

@@ -19,7 +19,6 @@ from auvdiag_cli.vehicle.actuators import (
 from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.controller_table import parse_controller
 from auvdiag_cli.vehicle.effort_groups import parse_effort_groups, with_reach
-from auvdiag_cli.vehicle.pattern_table import PatternRow, parse_pattern
 from auvdiag_cli.vehicle.simulation_spec import SimulationSpec, parse_simulation
 from auvdiag_cli.vehicle.sources import log_sources
 from auvdiag_cli.vehicle.toml_reader import TableReader, positive
@@ -80,6 +79,13 @@ class Navigation:
 
     speed: str
     yaw_rate: str
+
+
+@dataclass(frozen=True)
+class PatternRow:
+    case: int
+    b: dict[str, int]
+    components: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -261,7 +267,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     thresholds = _thresholds(top.sub("thresholds"), sensor_names)
     components = ({c.component for c in commands + outputs} | {s.component for s in sensors}
                   | {a.name for a in actuators})
-    pattern = parse_pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
+    pattern = _pattern(top.items("pattern") if "pattern" in data else [], sensor_names,
                        components)
     dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.names()}
@@ -303,6 +309,45 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     )
     top.check_all_read()
     return profile
+
+
+def _pattern(rows: list[TableReader], sensor_names: list[str], components: set[str]
+             ) -> tuple[PatternRow, ...]:
+    """The optional pattern table; a row that repeats another's case or b vector is an
+    error naming both rows."""
+    pattern: list[PatternRow] = []
+    for reader in rows:
+        row = _pattern_row(reader, sensor_names, components)
+        for earlier, other in zip(rows, pattern, strict=False):
+            if other.case == row.case:
+                raise ProfileError(f"key '{reader.key('case')}' repeats case {row.case} of "
+                                   f"{earlier.where}")
+            if other.b == row.b:
+                raise ProfileError(f"key '{reader.key('b')}' repeats the b vector of "
+                                   f"{earlier.where} (case {other.case})")
+        pattern.append(row)
+    return tuple(pattern)
+
+
+def _pattern_row(reader: TableReader, sensor_names: list[str], components: set[str]
+                 ) -> PatternRow:
+    b_reader = reader.sub("b")
+    unknown = [name for name in b_reader.names() if name not in sensor_names]
+    if unknown:
+        raise ProfileError(f"key '{b_reader.key(unknown[0])}' names no sensor (b has one bit "
+                           f"per sensor: {', '.join(sensor_names)})")
+    b = {}
+    for name in sensor_names:
+        bit = b_reader.get(name, int)
+        if bit not in (0, 1):
+            raise ProfileError(f"key '{b_reader.key(name)}' must be 0 or 1")
+        b[name] = bit
+    named = [str(c) for c in reader.get("components", list)]
+    strangers = [c for c in named if c not in components]
+    if strangers:
+        raise ProfileError(f"key '{reader.key('components')}' names unknown component "
+                           f"{strangers[0]!r} (the profile's: {', '.join(sorted(components))})")
+    return PatternRow(reader.get("case", int), b, tuple(named))
 
 
 def _dms(reader: TableReader, name: str, n_commands: int) -> DiagnosisSequence:
