@@ -130,7 +130,7 @@ def smallest_later_rise(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds
 
 
 def rise_since(setup: GroupSetup, log: EffortLog, time_s: np.ndarray, onset_s: float
-                ) -> np.ndarray | None:
+               ) -> np.ndarray | None:
     """Per member, its share of the group's steady effort from ``onset_s`` on against its
     share before it, less one (None where either part holds no steady effort)."""
     steady, effort, level, _ = setup.steady_steps(log)
