@@ -392,6 +392,12 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     assert "nan" not in effect and effect.endswith(
         f"{time_s[-2] - check.onset_s:.1f} s after the onset the healthy vehicle would have "
         "read yaw_rate 0 where it read 0.2 rad/s")
+    # A signal the model cannot predict: its gap would be the model's own error, not the
+    # failure's effect, and where it "would have read" a guess.
+    assert failure_effect(seen, check, healthy, None, {"yaw_rate": "-0.51"}) == (
+        "the model of the healthy vehicle cannot say what yaw_rate would have done (its "
+        "skill on normal logs left out of its training: yaw_rate -0.51)")
+    assert failure_effect(seen, check, healthy, None, {"roll": "0.10"}) == effect
 
 
 def test_change_judges_no_log_is_long_enough_for_take_no_share_of_the_budget():

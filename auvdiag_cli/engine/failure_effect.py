@@ -1,6 +1,8 @@
 """What a failure did: the vehicle against the model of the healthy vehicle started from
 the measured state at the change test's onset."""
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from auvdiag_cli.engine.change_check import ChangeCheck
@@ -9,13 +11,15 @@ from auvdiag_cli.engine.substitution import rms
 
 
 def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
-                   horizon_steps: int | None) -> str:
+                   horizon_steps: int | None, unpredicted: Mapping[str, str] = {}) -> str:
     """What the vehicle did against what the model of the healthy vehicle, started from
     the measured state at the onset, says it would have done, in each signal that changed:
     the failure's effect. The gap is the rms from the onset on (against the model's own
     error before it), and the two values where the first replay from the onset ends (its
     horizon, or the log's end; the last step there where every changed signal has a
-    reading): the furthest the model predicts with the skill it has."""
+    reading): the furthest the model predicts with the skill it has. A signal in
+    ``unpredicted`` (name -> its skill, which is too low to judge it) gets neither: its gap would
+    be the model's own error, not the failure's effect."""
     histories, onset = seen.histories, change.onset_s
     matching = histories.matching
     if matching is None or onset is None:
@@ -23,8 +27,24 @@ def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
     start = int(np.searchsorted(histories.time_s, onset))
     stop = len(histories.time_s) if horizon_steps is None else min(
         start + horizon_steps, len(histories.time_s))
+    if stop - start < 2:
+        return ""
     changed = [name for name in change.changed if name in histories.sensor_names]
-    if stop - start < 2 or not changed:     # a loop's gain alone: no sensor to compare
+    cannot = [name for name in changed if name in unpredicted]
+    said = _effect(seen, healthy, [n for n in changed if n not in unpredicted], start, stop)
+    unsaid = "" if not cannot else (
+        f"the model of the healthy vehicle cannot say what {', '.join(cannot)} would have "
+        "done (its skill on normal logs left out of its training: " + ", ".join(
+            f"{name} {unpredicted[name]}" for name in cannot) + ")")
+    return "; ".join(part for part in (said, unsaid) if part)
+
+
+def _effect(seen: Observations, healthy: np.ndarray, changed: list[str], start: int,
+            stop: int) -> str:
+    """`failure_effect` in the signals of ``changed`` the model predicts."""
+    histories = seen.histories
+    matching = histories.matching
+    if matching is None or not changed:     # a loop's gain alone: no sensor to compare
         return ""
     columns = [histories.sensor_names.index(name) for name in changed]
     read = np.flatnonzero(np.isfinite(matching.measured[start:stop, columns]).all(axis=1)

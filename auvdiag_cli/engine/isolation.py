@@ -17,7 +17,7 @@ from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.judging import Judging, unpredicted
 from auvdiag_cli.engine.narrowing import (
     DECISIVE_MARGIN,
     closest,
@@ -127,8 +127,8 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if len(ranked) > 1:
         note += (f"; the part that moves most of what changed{_carriers(change)} is named, "
                  "before " + ", ".join(ranked[1:]))
-    effect = "" if healthy is None else failure_effect(seen, change, healthy,
-                                                          judging.model.horizon_steps)
+    effect = "" if healthy is None else failure_effect(
+        seen, change, healthy, judging.model.horizon_steps, unpredicted(judging.model))
     if effect:
         note += "; " + effect
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)

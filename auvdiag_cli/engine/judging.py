@@ -115,6 +115,13 @@ def skilled(model: LoadedModel, profile: Profile) -> list[str]:
     return [name for name in profile.sensor_names if name not in not_judged_signals(model)]
 
 
+def unpredicted(model: LoadedModel) -> dict[str, str]:
+    """The signals the model has no skill for, each with its skill ("unmeasured": none)."""
+    signals = model.card.skill or {}
+    return {name: "unmeasured" if signals[name].skill is None else f"{signals[name].skill:.2f}"
+            for name in model.unskilled}
+
+
 def not_judged_signals(model: LoadedModel) -> dict[str, str]:
     """The signals the model has no skill for, with the reason reports print."""
     signals, needed = model.card.skill or {}, model.card.judged_from_samples
