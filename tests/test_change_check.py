@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import zeroed_column
+from typer.testing import CliRunner
 
 from auvdiag_cli import api
+from auvdiag_cli.cli import app
 from auvdiag_cli.engine.change_check import (
     REFERENCE_MIN_S,
     SUM,
@@ -28,6 +30,7 @@ from auvdiag_cli.reports.training import calibration_lines
 from auvdiag_errors import ModelError
 
 DT_S, WINDOW = 0.1, 10
+runner = CliRunner()
 
 
 def _limits(value: float) -> dict[str, dict[str, float]]:
@@ -257,6 +260,38 @@ def test_a_thruster_weakening_mid_log_is_found_first_by_the_change_test(calibrat
     assert (diagnosis.verdict, diagnosis.component) == ("fault", "thruster_0")
     assert check.onset_s - check.onset_error_s <= 60.0 <= check.onset_s + check.onset_error_s
     assert any(note.startswith("found by the change test") for note in diagnosis.notes)
+
+
+def test_the_report_draws_what_the_change_test_judged(calibrated, make_log, tmp_path):
+    """The change test found it: the PDF draws each judged signal over its threshold, not
+    judged while its reference fills, above it from the alarm; `auvdiag report` draws it
+    again from the saved time histories."""
+    import pypdf
+
+    from auvdiag_cli.reports.series import load_series
+    model, _ = calibrated
+    diagnosis = api.diagnose(make_log("mission-thruster-0-weak", 11), api.load_profile(None),
+                             model)
+    check = diagnosis.change_check
+    assert check is not None and check.alarm_s is not None and check.judged_from_s is not None
+    json_path, pdf = tmp_path / "d.json", tmp_path / "d.pdf"
+    api.write_reports(diagnosis, json=json_path, pdf=pdf)
+    series = load_series(tmp_path / "d.series.npz")
+    names = [str(n) for n in series["change_names"]]
+    assert names == list(check.ratio_names) and set(names) == {"flow", "yaw_rate"}
+    ratio, time_s = series["change_ratio"], series["time_s"]
+    assert np.isnan(ratio[time_s < check.judged_from_s - 0.5]).all()
+    at = int(np.searchsorted(time_s, check.alarm_s))
+    assert np.nanmax(ratio[at]) > 1.0 and (np.nan_to_num(ratio[:at]) <= 1.0).all()
+    pages = [page.extract_text() for page in pypdf.PdfReader(pdf).pages]
+    drawn = [text for text in pages if "Against the log's own beginning: each signal's" in text]
+    assert len(drawn) == 1 and all(name in drawn[0] for name in names)
+    # No Diagnosis Motion Sequences in this log: no page says they are shaded.
+    assert not any("shaded: Diagnosis Motion Sequences" in text for text in pages)
+    again = tmp_path / "again.pdf"
+    result = runner.invoke(app, ["report", str(json_path), "--output", str(again)])
+    assert result.exit_code == 0, result.output
+    assert [p.extract_text() for p in pypdf.PdfReader(again).pages][1:] == pages[1:]
 
 
 def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(calibrated,

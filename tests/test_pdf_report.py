@@ -112,6 +112,9 @@ def test_normal_dive_report(make_log, tmp_path):
     assert "NORMAL: no fault detected" in first
     assert "4 (3 Diagnosis Motion Sequences)" in first
     assert all(name in first for name in ("ZA", "ZB", "ZC", "MISSION"))
+    # Its sequences are shaded on the time histories, and their titles say so.
+    assert "shaded: Diagnosis Motion Sequences" in reader.pages[1].extract_text()
+    assert "Commands, with the Diagnosis Motion Sequences" in reader.pages[3].extract_text()
 
 
 @pytest.mark.parametrize("content", ["{not json", '{"a": 1}'])

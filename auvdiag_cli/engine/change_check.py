@@ -108,6 +108,11 @@ class ChangeCheck:
     ways: Mapping[str, str] = field(default_factory=dict)
     # The loops judged (`models.tracking`): their gain, judged below its usual value only.
     loops: tuple[str, ...] = ()
+    # Per step, each of ``ratio_names`` (the signals and signatures with a threshold) over
+    # its threshold, the larger of the two statistics (NaN before it is judged): what the
+    # report draws.
+    ratio_names: tuple[str, ...] = ()
+    ratios: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @property
     def changed(self) -> tuple[str, ...]:
@@ -354,9 +359,12 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                  for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
              for s, values in statistics.items()}
     members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
+    drawn = [k for k, n in enumerate(names_judged) if any(n in kept[s] for s in STATISTICS)]
     check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None,
-                        members=members, loops=tuple(n for n in names_judged if n in below_only))
+                        members=members, loops=tuple(n for n in names_judged if n in below_only),
+                        ratio_names=tuple(names_judged[k] for k in drawn),
+                        ratios=combined[:, drawn])
     with np.errstate(invalid="ignore"):
         over = np.flatnonzero((combined > 1).any(axis=1))
     if not over.size:

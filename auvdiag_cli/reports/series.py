@@ -31,6 +31,10 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
         series["measured"] = d.histories.matching.measured.astype(np.float32)
         series["modelled"] = d.histories.matching.modelled.astype(np.float32)
         series["g_percent"] = d.histories.matching.g_percent.astype(np.float32)
+    change = d.change_check
+    if change is not None and change.ratios is not None and change.ratio_names:
+        series["change_names"] = np.asarray(change.ratio_names, dtype=str)
+        series["change_ratio"] = change.ratios.astype(np.float32)
     if d.effort_check is not None:
         series.update(effort_series(d.effort_check))
     waypoints = [point for leg in d.mission_legs for point in leg.waypoints]

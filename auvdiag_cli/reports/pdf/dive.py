@@ -7,6 +7,7 @@ from pathlib import Path
 from auvdiag_cli.reports.json_report import verdict_title
 from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
 from auvdiag_cli.reports.pdf.plots import (
+    change_page,
     commands_page,
     effort_page,
     residual_page,
@@ -101,10 +102,12 @@ def render_dive_report(report: Report, series: Series | None, target: Path) -> i
         # rather than a page of their own that is mostly empty.
         text = [*first_page_lines(report, series), *heading("Segments and evidence"),
                 *detail_lines(report)]
-        pages = write_text_pages(pdf, text, title, f"Diagnosis of {name}")
+        # The page title names the log: a running title beside it would run into a long one.
+        pages = write_text_pages(pdf, text, "", f"Diagnosis of {name}")
         if series is None or "measured" not in series:
             return pages
-        for draw in (sensors_page, residual_page, commands_page, effort_page, substitution_page):
+        for draw in (sensors_page, residual_page, change_page, commands_page, effort_page,
+                     substitution_page):
             figure = draw(report, series)
             if figure is not None:
                 figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])

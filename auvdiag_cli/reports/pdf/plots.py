@@ -50,18 +50,41 @@ def _stacked(report: Report, rows: int, title: str) -> tuple["Figure", list["Axe
     return figure, axes
 
 
+# From this many panels on a page, each is too short for its label written upright.
+UPRIGHT_LABEL_ROWS = 5
+
+
+def _label(ax: "Axes", text: str, rows: int, **style: Any) -> None:
+    """A panel's y label: upright beside a tall panel; across, the unit under the name,
+    beside a short one (written upright it would run into the panels above and below)."""
+    if rows < UPRIGHT_LABEL_ROWS:
+        ax.set_ylabel(text, **style)
+    else:
+        ax.set_ylabel(text.replace(" [", "\n["), rotation=0, ha="right", va="center",
+                      fontsize=8, **style)
+
+
+def _has_dms(report: Report) -> bool:
+    """Whether the log holds Diagnosis Motion Sequences (shaded on every page)."""
+    return any(segment.mode == "routine" for segment in report.segments)
+
+
+def _with_dms(report: Report, title: str) -> str:
+    """``title`` with a word on the shading where the log has Diagnosis Motion Sequences."""
+    return f"{title}; shaded: Diagnosis Motion Sequences" if _has_dms(report) else title
+
+
 def sensors_page(report: Report, series: Series) -> "Figure":
     names, units = _names(series, "sensor_names"), report.units
-    figure, axes = _stacked(report, len(names),
-                            "Sensors (SS) and the model of the healthy vehicle (SM); "
-                            "shaded: Diagnosis Motion Sequences")
+    figure, axes = _stacked(report, len(names), _with_dms(
+        report, "Sensors (SS) and the model of the healthy vehicle (SM)"))
     t = series["time_s"]
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         ax.plot(t, series["measured"][:, i], color=COLOURS["measured"], lw=0.8,
                 label="sensor SS")
         ax.plot(t, series["modelled"][:, i], color=COLOURS["modelled"], lw=0.8,
                 label="model SM")
-        ax.set_ylabel(f"{name} [{units.get(name, '?')}]")
+        _label(ax, f"{name} [{units.get(name, '?')}]", len(axes))
     _figure_legend(figure, axes)
     return figure
 
@@ -76,7 +99,7 @@ def residual_page(report: Report, series: Series) -> "Figure":
     for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
         if name in not_judged:      # drawn, greyed: it raises no alarm
             ax.plot(t, series["g_percent"][:, i], color=COLOURS["dms"], lw=0.8)
-            ax.set_ylabel(f"g {name} [%]\n(not judged)", color=COLOURS["muted"])
+            _label(ax, f"g {name} [%] (not judged)", len(axes), color=COLOURS["muted"])
             ax.set_ylim(bottom=0)
             continue
         ax.plot(t, series["g_percent"][:, i], color=COLOURS["measured"], lw=0.8, label="g")
@@ -85,14 +108,42 @@ def residual_page(report: Report, series: Series) -> "Figure":
         ax.fill_between(t, 0, 1, where=series["b"][:, i] > 0, step="post",
                         color=COLOURS["alarm"], alpha=0.25, lw=0,
                         transform=ax.get_xaxis_transform(), label="b = 1")
-        ax.set_ylabel(f"g {name} [%]")
+        _label(ax, f"g {name} [%]", len(axes))
+        ax.set_ylim(bottom=0)
+    _figure_legend(figure, axes)
+    return figure
+
+
+def change_page(report: Report, series: Series) -> "Figure | None":
+    """The change test: each signal it judges against the log's own beginning, its
+    statistic over its threshold (1: the threshold), step by step."""
+    if "change_ratio" not in series or report.change_check is None:
+        return None
+    names = _names(series, "change_names")
+    figure, axes = _stacked(report, len(names),
+                            "Against the log's own beginning: each signal's change "
+                            "statistic over its threshold")
+    t, ratios = series["time_s"], series["change_ratio"]
+    start = report.change_check.judged_from_s
+    for i, (ax, name) in enumerate(zip(axes, names, strict=True)):
+        if start is not None:
+            ax.axvspan(t[0], start, color=COLOURS["dms"], alpha=0.12, lw=0,
+                       label="its reference, not judged")
+        ax.plot(t, ratios[:, i], color=COLOURS["measured"], lw=0.8, label="over its threshold")
+        ax.axhline(1.0, color=COLOURS["threshold"], lw=1.0, ls=":", label="threshold")
+        with np.errstate(invalid="ignore"):
+            over = ratios[:, i] > 1.0
+        ax.fill_between(t, 0, 1, where=over, step="post", color=COLOURS["alarm"], alpha=0.25,
+                        lw=0, transform=ax.get_xaxis_transform(), label="over")
+        _label(ax, name, len(axes))
         ax.set_ylim(bottom=0)
     _figure_legend(figure, axes)
     return figure
 
 
 def commands_page(report: Report, series: Series) -> "Figure":
-    figure, axes = _stacked(report, 1, "Commands, with the Diagnosis Motion Sequences")
+    figure, axes = _stacked(report, 1, "Commands, with the Diagnosis Motion Sequences"
+                            if _has_dms(report) else "Commands")
     ax, t = axes[0], series["time_s"]
     for i, name in enumerate(_names(series, "command_names")):
         ax.plot(t, series["commands"][:, i], lw=0.9, label=name,

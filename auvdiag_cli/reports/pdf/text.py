@@ -54,7 +54,9 @@ def _start_page(title: str, page_title: str) -> "Figure":
     figure = new_page()
     figure.text(LEFT, 0.965, page_title, fontsize=14, weight="bold", color=COLOURS["text"],
                 va="top")
-    figure.text(RIGHT, 0.965, title, fontsize=8, color=COLOURS["muted"], va="top", ha="right")
+    if title:       # "": the page title says it already
+        figure.text(RIGHT, 0.965, title, fontsize=8, color=COLOURS["muted"], va="top",
+                    ha="right")
     return figure
 
 
