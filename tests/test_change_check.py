@@ -274,8 +274,8 @@ def test_the_report_draws_what_the_change_test_judged(calibrated, make_log, tmp_
                              model)
     check = diagnosis.change_check
     assert check is not None and check.alarm_s is not None and check.judged_from_s is not None
-    json_path, pdf = tmp_path / "d.json", tmp_path / "d.pdf"
-    api.write_reports(diagnosis, json=json_path, pdf=pdf)
+    json_path, pdf, mcap = tmp_path / "d.json", tmp_path / "d.pdf", tmp_path / "d.mcap"
+    api.write_reports(diagnosis, json=json_path, pdf=pdf, mcap=mcap)
     series = load_series(tmp_path / "d.series.npz")
     names = [str(n) for n in series["change_names"]]
     assert names == list(check.ratio_names) and set(names) == {"flow", "yaw_rate"}
@@ -292,6 +292,14 @@ def test_the_report_draws_what_the_change_test_judged(calibrated, make_log, tmp_
     result = runner.invoke(app, ["report", str(json_path), "--output", str(again)])
     assert result.exit_code == 0, result.output
     assert [p.extract_text() for p in pypdf.PdfReader(again).pages][1:] == pages[1:]
+    # The MCAP carries it too, a message each step, for a plot beside the log.
+    from mcap.reader import make_reader
+    with mcap.open("rb") as stream:
+        bodies = [json.loads(m.data) for _, channel, m in make_reader(stream).iter_messages()
+                  if channel.topic == "/auvdiag/change"]
+    assert len(bodies) == time_s.size and set(bodies[at]) == set(names)
+    assert max(v for v in bodies[at].values() if v is not None) > 1.0
+    assert bodies[0] == {name: None for name in names}
 
 
 def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(calibrated,

@@ -9,6 +9,9 @@ docs/reports.md):
   ``model`` (SM), ``g_percent``, ``threshold_percent``, ``b`` (0/1), and ``substituted``
   where Substituting Control replaced the sensor;
 - ``/auvdiag/commands``: the actuator commands, each model step;
+- ``/auvdiag/change``: where the change test ran, each signal and signature it judges, its
+  statistic over its threshold (1: the threshold; null while its reference fills), each
+  model step;
 - ``/auvdiag/effort/GROUP``: each actuator's share of its group's effort, window by window,
   and the normal share for the window's conditions (``NAME`` and ``NAME_normal``);
 - ``/auvdiag/segments``: one message at the start of each segment (DMS run or mission);
@@ -151,6 +154,9 @@ def _write_time_histories(channels: _Channels, report: Report, series: Series,
     present = {key: values for key, values in columns.items()
                if values is not None and values.shape == (times_ns.size, len(names))}
     commands_schema = _numbers_schema(commands)
+    change = series.get("change_ratio")
+    judged = [str(n) for n in series.get("change_names", [])]
+    change_schema = _numbers_schema(judged)
     for step, time_ns in enumerate(times_ns.tolist()):
         for column, name in enumerate(names):
             body = {key: _number(values[step, column]) for key, values in present.items()}
@@ -161,8 +167,15 @@ def _write_time_histories(channels: _Channels, report: Report, series: Series,
             channels.write(f"{TOPIC_PREFIX}/signals/{name}", "auvdiag.Signal", body, time_ns)
         if commands:
             channels.write(f"{TOPIC_PREFIX}/commands", "auvdiag.Commands",
-                           {name: _number(series["commands"][step, k])
-                            for k, name in enumerate(commands)}, time_ns, commands_schema)
+                           _row(series["commands"], commands, step), time_ns, commands_schema)
+        if change is not None and judged:
+            channels.write(f"{TOPIC_PREFIX}/change", "auvdiag.ChangeOverThreshold",
+                           _row(change, judged, step), time_ns, change_schema)
+
+
+def _row(values: np.ndarray, names: list[str], step: int) -> dict[str, float | None]:
+    """One step of a table of histories, by column name."""
+    return {name: _number(values[step, k]) for k, name in enumerate(names)}
 
 
 def _write_effort(channels: _Channels, series: Series, start_ns: int) -> None:
