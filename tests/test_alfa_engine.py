@@ -122,6 +122,33 @@ def test_the_set_points_are_drawn_in_their_unit(calibrated):
 
 
 @pytest.mark.shared_data("alfa")
+def test_the_report_draws_the_failures_effect_where_the_model_predicts(calibrated):
+    """The model of the healthy aircraft replayed from the onset, beside what it did: drawn
+    in each signal the model predicts, never in one it cannot (its values would be a
+    guess), and said so in the note."""
+    from auvdiag_cli.engine.judging import unpredicted
+    from auvdiag_cli.reports.pdf.plots import effect_page
+    from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.series import series_from_diagnosis
+
+    _, model, _ = calibrated
+    diagnosis, _ = _judged(calibrated, "carbonZ_2018-07-18-15-53-31_1_engine_failure")
+    healthy, time_s = diagnosis.healthy_from_onset, diagnosis.histories.time_s
+    names = diagnosis.histories.sensor_names
+    assert healthy is not None and diagnosis.change_check is not None
+    cannot = unpredicted(model)
+    drawn = [n for i, n in enumerate(names) if np.isfinite(healthy[:, i]).any()]
+    assert drawn and set(drawn) == set(names) - set(cannot)
+    assert np.isnan(healthy[time_s < diagnosis.change_check.onset_s - 0.05]).all()
+    figure = effect_page(build_report(diagnosis), series_from_diagnosis(diagnosis))
+    assert figure is not None
+    assert [ax.get_ylabel().split("\n")[0] for ax in figure.axes] == drawn
+    (note,) = [n for n in diagnosis.notes if n.startswith("found by the change test")]
+    unsaid = note.split("cannot say what ")[1].split(" would have done")[0].split(", ")
+    assert unsaid and set(unsaid) == set(cannot) & set(diagnosis.change_check.changed)
+
+
+@pytest.mark.shared_data("alfa")
 def test_a_flight_too_short_for_its_own_reference_is_undetermined_and_says_why(calibrated):
     """Every signal of this profile is judged against the flight's own beginning only, and
     the change test needs 30 s of it: a 29.5 s sequence is not judged, not called normal."""

@@ -4,6 +4,7 @@ whose fault begins mid-log: found after the onset and not before, no alarm on a 
 dive it was not calibrated on; the part that moves what changed is named."""
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -309,7 +310,6 @@ def test_a_signal_judged_only_against_its_own_log_is_left_to_the_change_test(cal
     with the day's wind) raises no replay bit and takes no replay threshold, but the change
     test judges it and the coverage counts it; a sensor a log never fed is set aside by
     every judge, the change test too."""
-    from dataclasses import replace
 
     from auvdiag_cli.engine.judging import replay_judged
 
@@ -339,7 +339,6 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
     """Every sensor judged only against the log's own beginning: the replay judges nothing,
     but the change test does, and its alarm makes the verdict (it was "undetermined": "no
     signal is judged")."""
-    from dataclasses import replace
 
     from auvdiag_cli.engine.coverage import Coverage
     from auvdiag_cli.engine.judging import Judging, nothing_judged, replay_judged
@@ -398,7 +397,7 @@ def test_a_log_whose_every_signal_is_left_to_the_change_test_is_still_judged(cal
 def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
     from types import SimpleNamespace
 
-    from auvdiag_cli.engine.failure_effect import failure_effect
+    from auvdiag_cli.engine.failure_effect import failure_effect, healthy_from_onset
 
     time_s = np.arange(1000) * DT_S
     measured = np.zeros((1000, 2))
@@ -441,6 +440,12 @@ def test_the_failures_effect_is_the_gap_to_the_healthy_model_from_the_onset():
         "the model of the healthy vehicle cannot say what yaw_rate would have done (its "
         "skill on normal logs left out of its training: yaw_rate -0.51)")
     assert failure_effect(seen, check, healthy, None, {"roll": "0.10"}) == effect
+    # What the report draws: the first replay from the onset, in what the model predicts.
+    drawn = healthy_from_onset(seen, check, healthy, 40, {"roll": "0.10"})
+    assert drawn is not None and np.isnan(drawn[:, 0]).all()
+    replayed = np.flatnonzero(np.isfinite(drawn[:, 1]))
+    assert (replayed[0], replayed[-1]) == (start, start + 39)
+    assert healthy_from_onset(seen, replace(check, onset_s=None), healthy, 40) is None
 
 
 def test_change_judges_no_log_is_long_enough_for_take_no_share_of_the_budget():
@@ -579,7 +584,6 @@ def test_a_signal_left_to_the_change_test_that_it_cannot_predict_says_why_it_is_
     """Where the predictor a moment ahead barely beats "no change" on a signal the profile
     judges only against the log's own beginning, nothing judges it: the report says so and
     why, not that the change test judges it."""
-    from dataclasses import replace
 
     from auvdiag_cli.audit.record import AuditRecord
     from auvdiag_cli.audit.table import table_row

@@ -342,11 +342,9 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     them and ``within_signatures`` (judged only there) that have one; a window judged every
     ``stride`` steps (None: windows side by side, as models calibrated before judged
     them)."""
-    def limited(name: str) -> bool:
-        return any(name in limits for limits in thresholds.values())
-
-    judged = [i for i, name in enumerate(names) if limited(name) or name in within_signatures]
-    found = [s for s in signatures(actuators, [names[i] for i in judged]) if limited(s.name)]
+    limited = {name for limits in thresholds.values() for name in limits}   # with a threshold
+    judged = [i for i, name in enumerate(names) if name in limited or name in within_signatures]
+    found = [s for s in signatures(actuators, [names[i] for i in judged]) if s.name in limited]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
                                    found, stride, scales, [names[i] for i in judged],
@@ -359,12 +357,11 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                  for k, n in enumerate(names_judged) if np.isfinite(values[:, k]).any()}
              for s, values in statistics.items()}
     members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
-    drawn = [k for k, n in enumerate(names_judged) if any(n in kept[s] for s in STATISTICS)]
     check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None,
                         members=members, loops=tuple(n for n in names_judged if n in below_only),
-                        ratio_names=tuple(names_judged[k] for k in drawn),
-                        ratios=combined[:, drawn])
+                        ratio_names=tuple(n for n in names_judged if n in limited),
+                        ratios=combined[:, [n in limited for n in names_judged]])
     with np.errstate(invalid="ignore"):
         over = np.flatnonzero((combined > 1).any(axis=1))
     if not over.size:

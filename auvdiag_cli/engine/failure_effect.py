@@ -18,25 +18,48 @@ def failure_effect(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
     error before it), and the two values where the first replay from the onset ends (its
     horizon, or the log's end; the last step there where every changed signal has a
     reading): the furthest the model predicts with the skill it has. A signal in
-    ``unpredicted`` (name -> its skill, which is too low to judge it) gets neither: its gap would
-    be the model's own error, not the failure's effect."""
-    histories, onset = seen.histories, change.onset_s
-    matching = histories.matching
-    if matching is None or onset is None:
+    ``unpredicted`` (name -> its skill, too low to judge it) gets neither: its gap would be
+    the model's own error, not the failure's effect."""
+    span = _first_replay(seen, change, horizon_steps)
+    if span is None:
         return ""
-    start = int(np.searchsorted(histories.time_s, onset))
-    stop = len(histories.time_s) if horizon_steps is None else min(
-        start + horizon_steps, len(histories.time_s))
-    if stop - start < 2:
-        return ""
-    changed = [name for name in change.changed if name in histories.sensor_names]
+    changed = [n for n in change.changed if n in seen.histories.sensor_names]
     cannot = [name for name in changed if name in unpredicted]
-    said = _effect(seen, healthy, [n for n in changed if n not in unpredicted], start, stop)
+    said = _effect(seen, healthy, [n for n in changed if n not in unpredicted], *span)
     unsaid = "" if not cannot else (
         f"the model of the healthy vehicle cannot say what {', '.join(cannot)} would have "
         "done (its skill on normal logs left out of its training: " + ", ".join(
             f"{name} {unpredicted[name]}" for name in cannot) + ")")
     return "; ".join(part for part in (said, unsaid) if part)
+
+
+def healthy_from_onset(seen: Observations, change: ChangeCheck, healthy: np.ndarray,
+                       horizon_steps: int | None, unpredicted: Mapping[str, str] = {}
+                       ) -> np.ndarray | None:
+    """The first replay of the healthy vehicle from the onset, per step and sensor, for the
+    report to draw beside what the vehicle did: NaN before the onset, after that replay's
+    horizon and in the signals of ``unpredicted`` (None: no replay from the onset)."""
+    span = _first_replay(seen, change, horizon_steps)
+    if span is None:
+        return None
+    drawn = np.full(healthy.shape, np.nan)
+    drawn[span[0]:span[1]] = healthy[span[0]:span[1]]
+    names = seen.histories.sensor_names
+    drawn[:, [names.index(n) for n in unpredicted if n in names]] = np.nan
+    return drawn
+
+
+def _first_replay(seen: Observations, change: ChangeCheck, horizon_steps: int | None
+                  ) -> tuple[int, int] | None:
+    """The steps of the first replay from the change test's onset: to its horizon, or the
+    log's end (None: no onset, no replay, or under two steps of it)."""
+    histories, onset = seen.histories, change.onset_s
+    if histories.matching is None or onset is None:
+        return None
+    start = int(np.searchsorted(histories.time_s, onset))
+    stop = len(histories.time_s) if horizon_steps is None else min(
+        start + horizon_steps, len(histories.time_s))
+    return None if stop - start < 2 else (start, stop)
 
 
 def _effect(seen: Observations, healthy: np.ndarray, changed: list[str], start: int,

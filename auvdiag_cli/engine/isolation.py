@@ -15,7 +15,7 @@ from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
-from auvdiag_cli.engine.failure_effect import failure_effect
+from auvdiag_cli.engine.failure_effect import failure_effect, healthy_from_onset
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging, unpredicted
 from auvdiag_cli.engine.narrowing import (
@@ -127,10 +127,12 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if len(ranked) > 1:
         note += (f"; the part that moves most of what changed{_carriers(change)} is named, "
                  "before " + ", ".join(ranked[1:]))
-    effect = "" if healthy is None else failure_effect(
-        seen, change, healthy, judging.model.horizon_steps, unpredicted(judging.model))
-    if effect:
-        note += "; " + effect
+    if healthy is not None:
+        horizon, cannot = judging.model.horizon_steps, unpredicted(judging.model)
+        effect = failure_effect(seen, change, healthy, horizon, cannot)
+        note += "; " + effect if effect else ""
+        finding = replace(finding, healthy_from_onset=healthy_from_onset(
+            seen, change, healthy, horizon, cannot))
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
 
 

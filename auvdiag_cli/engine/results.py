@@ -98,6 +98,9 @@ class Finding:
     detected_at_s: float | None = None
     onset_s: float | None = None
     substitution: Substitution | None = None
+    # The model of the healthy vehicle replayed from the change test's onset, per step and
+    # sensor (`failure_effect.healthy_from_onset`): what the vehicle would have done.
+    healthy_from_onset: np.ndarray | None = field(default=None, compare=False, repr=False)
     active: ActiveDiagnosis | None = None
     degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
     hypotheses: HypothesisTest | None = None

@@ -31,6 +31,8 @@ def series_from_diagnosis(diagnosis: Diagnosis) -> Series:
         series["measured"] = d.histories.matching.measured.astype(np.float32)
         series["modelled"] = d.histories.matching.modelled.astype(np.float32)
         series["g_percent"] = d.histories.matching.g_percent.astype(np.float32)
+    if d.healthy_from_onset is not None:
+        series["healthy_from_onset"] = d.healthy_from_onset.astype(np.float32)
     change = d.change_check
     if change is not None and change.ratios is not None and change.ratio_names:
         series["change_names"] = np.asarray(change.ratio_names, dtype=str)

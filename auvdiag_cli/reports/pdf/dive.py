@@ -9,6 +9,7 @@ from auvdiag_cli.reports.pdf.facts import assumption_remarks, summary_facts
 from auvdiag_cli.reports.pdf.plots import (
     change_page,
     commands_page,
+    effect_page,
     effort_page,
     residual_page,
     sensors_page,
@@ -106,8 +107,8 @@ def render_dive_report(report: Report, series: Series | None, target: Path) -> i
         pages = write_text_pages(pdf, text, "", f"Diagnosis of {name}")
         if series is None or "measured" not in series:
             return pages
-        for draw in (sensors_page, residual_page, change_page, commands_page, effort_page,
-                     substitution_page):
+        for draw in (sensors_page, residual_page, change_page, effect_page, commands_page,
+                     effort_page, substitution_page):
             figure = draw(report, series)
             if figure is not None:
                 figure.suptitle(title, x=0.99, ha="right", fontsize=8, color=COLOURS["muted"])

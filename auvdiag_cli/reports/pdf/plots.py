@@ -114,6 +114,37 @@ def residual_page(report: Report, series: Series) -> "Figure":
     return figure
 
 
+# The failure's effect is drawn from this long before the onset to this long after the
+# healthy vehicle's replay from it ends: what came before, and where the two part.
+EFFECT_MARGIN_S = 10.0
+
+
+def effect_page(report: Report, series: Series) -> "Figure | None":
+    """The failure's effect, close up: each signal the model predicts, as the vehicle read
+    it and as the model of the healthy vehicle, replayed from the onset, says it would
+    have (`engine.failure_effect`)."""
+    healthy = series.get("healthy_from_onset")
+    if healthy is None:
+        return None
+    drawn = [i for i in range(healthy.shape[1]) if np.isfinite(healthy[:, i]).any()]
+    if not drawn:
+        return None
+    t, names = series["time_s"], _names(series, "sensor_names")
+    replayed = t[np.isfinite(healthy[:, drawn]).any(axis=1)]
+    shown = (t >= replayed[0] - EFFECT_MARGIN_S) & (t <= replayed[-1] + EFFECT_MARGIN_S)
+    figure, axes = _stacked(report, len(drawn),
+                            "The failure's effect: the vehicle (SS) against the model of the "
+                            "healthy vehicle replayed from the onset")
+    for ax, i in zip(axes, drawn, strict=True):
+        ax.plot(t[shown], series["measured"][shown, i], color=COLOURS["measured"], lw=0.9,
+                label="sensor SS")
+        ax.plot(t[shown], healthy[shown, i], color=COLOURS["healthy"], lw=1.4, ls="--",
+                label="the healthy vehicle from the onset")
+        _label(ax, f"{names[i]} [{report.units.get(names[i], '?')}]", len(axes))
+    _figure_legend(figure, axes)
+    return figure
+
+
 def change_page(report: Report, series: Series) -> "Figure | None":
     """The change test: each signal it judges against the log's own beginning, its
     statistic over its threshold (1: the threshold), step by step."""

@@ -22,6 +22,7 @@ COLOURS = {
     "onset": "#6a1b9a",
     "dms": "#9e9e9e",                # DMS segments
     "closed_loop": "#00838f",
+    "healthy": "#2e7d32",            # the model of the healthy vehicle from the onset
     "normal": "#2e7d32",
     "fault": "#c62828",
     "undetermined": "#ef6c00",
