@@ -127,7 +127,7 @@ def test_the_report_draws_the_failures_effect_where_the_model_predicts(calibrate
     in each signal the model predicts, never in one it cannot (its values would be a
     guess), and said so in the note."""
     from auvdiag_cli.engine.judging import unpredicted
-    from auvdiag_cli.reports.pdf.plots import effect_page
+    from auvdiag_cli.reports.pdf.plots import effect_page, residual_page
     from auvdiag_cli.reports.report_build import build_report
     from auvdiag_cli.reports.series import series_from_diagnosis
 
@@ -140,8 +140,11 @@ def test_the_report_draws_the_failures_effect_where_the_model_predicts(calibrate
     drawn = [n for i, n in enumerate(names) if np.isfinite(healthy[:, i]).any()]
     assert drawn and set(drawn) == set(names) - set(cannot)
     assert np.isnan(healthy[time_s < diagnosis.change_check.onset_s - 0.05]).all()
-    figure = effect_page(build_report(diagnosis), series_from_diagnosis(diagnosis))
+    report, series = build_report(diagnosis), series_from_diagnosis(diagnosis)
+    figure = effect_page(report, series)
     assert figure is not None
+    # Every signal is left to the change test: no page of g curves that raise nothing.
+    assert residual_page(report, series) is None
     assert [ax.get_ylabel().split("\n")[0] for ax in figure.axes] == drawn
     (note,) = [n for n in diagnosis.notes if n.startswith("found by the change test")]
     unsaid = note.split("cannot say what ")[1].split(" would have done")[0].split(", ")

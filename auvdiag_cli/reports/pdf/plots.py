@@ -89,8 +89,13 @@ def sensors_page(report: Report, series: Series) -> "Figure":
     return figure
 
 
-def residual_page(report: Report, series: Series) -> "Figure":
+def residual_page(report: Report, series: Series) -> "Figure | None":
+    """g per signal against its threshold, b shaded; none where the replay judges no signal
+    (every one left to the change test, or none it can predict): its page would show only
+    greyed curves that raise nothing."""
     names = _names(series, "sensor_names")
+    if all(name in report.not_judged for name in names):
+        return None
     figure, axes = _stacked(report, len(names),
                             "Residual index g (percent of full scale) against its threshold; "
                             "red band: b = 1")
