@@ -124,3 +124,31 @@ def test_report_refuses_what_is_not_a_report(tmp_path, content):
     result = runner.invoke(app, ["report", str(path)])
     assert result.exit_code == 2
     assert str(path) in result.output and len(result.output.strip().splitlines()) == 1
+
+
+def test_the_segment_table_keeps_its_columns_apart_for_many_signals():
+    """Columns as wide as their cells; where the signals no longer fit side by side across
+    the page, a row per signal under each segment, never cells run into each other."""
+    from types import SimpleNamespace
+
+    from auvdiag_cli.reports.pdf.dive import _segment_table
+    from auvdiag_cli.reports.pdf.text import columns
+
+    def report(signals: int) -> SimpleNamespace:
+        names = [f"signal_{k}" for k in range(signals)]
+        segment = SimpleNamespace(
+            name="MISSION", mode="mission", start_s=0.0, end_s=156.6, case=None,
+            thresholds={n: 15.0 for n in names}, max_g={n: 1525.5 for n in names},
+            b={n: 0 for n in names})
+        return SimpleNamespace(b={n: 0 for n in names}, not_judged={}, segments=[segment])
+
+    few = [line.text for line in _segment_table(report(3))]
+    assert few[0].startswith("Columns per signal, in the order signal_0, signal_1, signal_2.")
+    header, row = few[-2:]
+    assert row.split() == ["MISSION", "mission", "0.0-156.6", *["15"] * 3, *["1525.5"] * 3,
+                           *["0"] * 3, "-"]
+    assert header.index("max g") == row.index("1525.5")       # the columns line up
+    many = [line.text for line in _segment_table(report(14))]
+    assert max(len(text) for text in many) <= columns(8.5, "monospace")
+    assert "MISSION (mission, 0.0-156.6 s, case -)" in many
+    assert many[-1].split() == ["signal_13", "15", "1525.5", "0"]

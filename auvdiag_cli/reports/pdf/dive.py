@@ -16,7 +16,7 @@ from auvdiag_cli.reports.pdf.plots import (
     substitution_page,
 )
 from auvdiag_cli.reports.pdf.style import COLOURS, pdf_document
-from auvdiag_cli.reports.pdf.text import Line, heading, paragraph, write_text_pages
+from auvdiag_cli.reports.pdf.text import Line, columns, heading, paragraph, write_text_pages
 from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
 
@@ -60,22 +60,44 @@ def _cell(values: Mapping[str, float | int | None], digits: int = 1) -> str:
                     for v in values.values())
 
 
-def detail_lines(report: Report) -> list[Line]:
+TABLE_SIZE = 8.5
+
+
+def _table(rows: list[list[str]]) -> list[Line]:
+    """Monospace rows in columns as wide as their widest cell, the first row the header."""
+    widths = [max(len(row[k]) for row in rows) + 2 for k in range(len(rows[0]))]
+    return [Line("".join(f"{cell:<{w}}" for cell, w in zip(row, widths, strict=True)).rstrip(),
+                 family="monospace", bold=k == 0, size=TABLE_SIZE)
+            for k, row in enumerate(rows)]
+
+
+def _segment_table(report: Report) -> list[Line]:
+    """Every segment with its thresholds, max g and b per signal: a row each where the
+    page is wide enough for the signals side by side, else a row per signal under each."""
+    rows = [["segment", "mode", "start-end [s]", "thresholds", "max g", "b", "case"]] + [
+        [s.name, s.mode, f"{s.start_s:.1f}-{s.end_s:.1f}", _cell(s.thresholds, 0),
+         _cell(s.max_g), _cell(s.b), "-" if s.case is None else str(s.case)]
+        for s in report.segments]
     signals = list(report.b)
     unjudged = [name for name in signals if name in report.not_judged]
-    lines = paragraph(f"Columns per signal, in the order {', '.join(signals)}. Thresholds and "
-                      "g in percent of each signal's full scale."
-                      + (f" Not judged (their g raises no alarm): {', '.join(unjudged)}."
-                         if unjudged else ""), colour=COLOURS["muted"])
-    header = f"{'segment':<10}{'mode':<9}{'start-end [s]':<17}{'thresholds':<22}" \
-             f"{'max g':<24}{'b':<10}case"
-    lines.append(Line(header, family="monospace", bold=True, size=8.5))
-    for s in report.segments:
-        span = f"{s.start_s:.1f}-{s.end_s:.1f}"
-        case = "-" if s.case is None else str(s.case)
-        row = (f"{s.name[:9]:<10}{s.mode:<9}{span:<17}{_cell(s.thresholds, 0):<22}"
-               f"{_cell(s.max_g):<24}{_cell(s.b):<10}{case}")
-        lines.append(Line(row, family="monospace", size=8.5))
+    said = "Thresholds and g in percent of each signal's full scale." + (
+        f" Not judged (their g raises no alarm): {', '.join(unjudged)}." if unjudged else "")
+    side_by_side = _table(rows)
+    if max(len(line.text) for line in side_by_side) <= columns(TABLE_SIZE, "monospace"):
+        return paragraph(f"Columns per signal, in the order {', '.join(signals)}. {said}",
+                         colour=COLOURS["muted"]) + side_by_side
+    lines = paragraph(said, colour=COLOURS["muted"])
+    for s, row in zip(report.segments, rows[1:], strict=True):
+        lines.append(Line(f"{row[0]} ({row[1]}, {row[2]} s, case {row[6]})", size=TABLE_SIZE,
+                          bold=True))
+        lines += _table([["signal", "threshold", "max g", "b"]] + [
+            [name, _cell({name: s.thresholds.get(name)}, 0), _cell({name: s.max_g.get(name)}),
+             _cell({name: s.b.get(name)})] for name in signals])
+    return lines
+
+
+def detail_lines(report: Report) -> list[Line]:
+    lines = _segment_table(report)
     active = report.active_diagnosis
     if active:
         lines += heading("Active diagnosis")

@@ -33,12 +33,17 @@ def heading(text: str) -> list[Line]:
     return [Line(""), Line(text, size=12, bold=True)]
 
 
+def columns(size: float, family: str = "sans-serif", indent: float = 0.0) -> int:
+    """How many characters of this size fit across the text width."""
+    width_pt = (RIGHT - LEFT - indent) * PAGE_INCHES[0] * 72
+    return max(20, int(width_pt / (size * CHAR_WIDTH_EM[family])))
+
+
 def paragraph(text: str, size: float = 9.5, indent: float = 0.0, colour: str = COLOURS["text"],
               family: str = "sans-serif", bold: bool = False) -> list[Line]:
     """One logical line, wrapped to the text width (continuation lines indented a little)."""
-    width_pt = (RIGHT - LEFT - indent) * PAGE_INCHES[0] * 72
-    columns = max(20, int(width_pt / (size * CHAR_WIDTH_EM[family])))
-    wrapped = textwrap.wrap(text, columns, subsequent_indent="   ", break_on_hyphens=False,
+    wrapped = textwrap.wrap(text, columns(size, family, indent), subsequent_indent="   ",
+                            break_on_hyphens=False,
                             replace_whitespace=family != "monospace",
                             drop_whitespace=family != "monospace") or [""]
     return [Line(part, size, bold, colour, family, indent) for part in wrapped]
