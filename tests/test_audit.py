@@ -287,3 +287,25 @@ def test_a_stored_result_this_release_cannot_read_is_done_again(tmp_path):
     stored.write_text(json.dumps({**document, "segments": {"not": "a list"}}))
     again = api.audit([fleet], None, None, tmp_path / "out")
     assert again.reused == 0 and again.computed == 1 and again.records[0].verdict == "normal"
+
+
+def test_the_fleet_headline_is_wrapped_within_the_page():
+    """A fleet of every kind of verdict: the headline says them all, each line of it within
+    the page (it had run off the page's edge)."""
+    from auvdiag_cli.audit.fleet_pdf import summary_lines
+    from auvdiag_cli.audit.record import AuditRecord
+    from auvdiag_cli.engine.coverage import Coverage
+    from auvdiag_cli.reports.pdf.text import columns
+
+    part = Coverage(("roll",), ("roll",), (), (), False, judged_from_s=31.0)
+    rows = [*(AuditRecord(log=f"n{k}", verdict="normal") for k in range(120)),
+            *(AuditRecord(log=f"p{k}", verdict="normal", coverage=part) for k in range(140)),
+            *(AuditRecord(log=f"f{k}", verdict="fault") for k in range(250)),
+            *(AuditRecord(log=f"u{k}", verdict="undetermined") for k in range(10)),
+            *(AuditRecord(log=f"e{k}", error="not a log") for k in range(3))]
+    headline = [line for line in summary_lines(rows, [], 0, False) if line.size == 14]
+    assert len(headline) > 1 and all(len(line.text) <= columns(14, bold=True)
+                                     for line in headline)
+    assert " ".join(line.text.strip() for line in headline) == (
+        "523 logs: 120 normal and 140 normal judged in part, 250 with a fault, "
+        "10 undetermined, 3 not analysable")

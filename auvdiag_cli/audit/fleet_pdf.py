@@ -45,9 +45,9 @@ def summary_lines(rows: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str
                   companions: int, interrupted: bool) -> list[Line]:
     counts = Counter(_verdict(r) for r in rows)
     partly = f" and {counts['partial']} normal judged in part" if counts["partial"] else ""
-    lines = [Line(f"{len(rows)} logs: {counts['normal']} normal{partly}, {counts['fault']} "
-                  f"with a fault, {counts['undetermined']} undetermined, {counts['error']} not "
-                  "analysable", size=14, bold=True)]
+    lines = paragraph(f"{len(rows)} logs: {counts['normal']} normal{partly}, {counts['fault']} "
+                      f"with a fault, {counts['undetermined']} undetermined, {counts['error']} "
+                      "not analysable", size=14, bold=True)
     if companions:
         lines += paragraph(f"{companions} files named after a log beside it (truth, mission "
                            "plans, reports) were left alone.", colour=COLOURS["muted"])

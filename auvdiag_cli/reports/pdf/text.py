@@ -16,6 +16,7 @@ LEFT, RIGHT, TOP, BOTTOM = 0.05, 0.95, 0.93, 0.05
 LINE_SPACING = 1.35
 # Average advance of a character in em; wrapping with these never reaches the margin.
 CHAR_WIDTH_EM = {"sans-serif": 0.58, "monospace": 0.61}
+BOLD_WIDTH = 1.1          # bold sans-serif letters are this much wider
 
 
 @dataclass(frozen=True)
@@ -33,16 +34,18 @@ def heading(text: str) -> list[Line]:
     return [Line(""), Line(text, size=12, bold=True)]
 
 
-def columns(size: float, family: str = "sans-serif", indent: float = 0.0) -> int:
+def columns(size: float, family: str = "sans-serif", indent: float = 0.0,
+            bold: bool = False) -> int:
     """How many characters of this size fit across the text width."""
     width_pt = (RIGHT - LEFT - indent) * PAGE_INCHES[0] * 72
-    return max(20, int(width_pt / (size * CHAR_WIDTH_EM[family])))
+    em = CHAR_WIDTH_EM[family] * (BOLD_WIDTH if bold and family == "sans-serif" else 1.0)
+    return max(20, int(width_pt / (size * em)))
 
 
 def paragraph(text: str, size: float = 9.5, indent: float = 0.0, colour: str = COLOURS["text"],
               family: str = "sans-serif", bold: bool = False) -> list[Line]:
     """One logical line, wrapped to the text width (continuation lines indented a little)."""
-    wrapped = textwrap.wrap(text, columns(size, family, indent), subsequent_indent="   ",
+    wrapped = textwrap.wrap(text, columns(size, family, indent, bold), subsequent_indent="   ",
                             break_on_hyphens=False,
                             replace_whitespace=family != "monospace",
                             drop_whitespace=family != "monospace") or [""]
