@@ -309,3 +309,17 @@ def test_the_fleet_headline_is_wrapped_within_the_page():
     assert " ".join(line.text.strip() for line in headline) == (
         "523 logs: 120 normal and 140 normal judged in part, 250 with a fault, "
         "10 undetermined, 3 not analysable")
+
+
+def test_fleet_charts_show_only_what_the_logs_hold():
+    """The verdict legend lists the verdicts the logs got (beside the bars, not over them);
+    a fleet whose every signal is left to the change test says there is no g to rank."""
+    from auvdiag_cli.audit.fleet_pdf import charts_page
+    from auvdiag_cli.audit.record import AuditRecord
+
+    rows = [AuditRecord(log="a", verdict="fault", component="engine"),
+            AuditRecord(log="b", verdict="normal")]
+    page = charts_page(rows)
+    verdicts, _, _, worst = page.axes
+    assert [t.get_text() for t in verdicts.get_legend().get_texts()] == ["normal", "fault"]
+    assert [t.get_text() for t in worst.texts] == ["no log has a signal the replay judges"]

@@ -91,6 +91,8 @@ def _by_vehicle_and_date(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     for verdict in VERDICTS:
         heights = [sum(1 for r in rows if _verdict(r) == verdict and _vehicle_and_date(r) == g)
                    for g in groups]
+        if not any(heights):
+            continue        # a verdict no log got: not in the legend either
         ax.bar(labels, heights, bottom=bottom, color=COLOURS[verdict],
                label=LABELS.get(verdict, verdict))
         bottom = [b + h for b, h in zip(bottom, heights, strict=True)]
@@ -98,7 +100,8 @@ def _by_vehicle_and_date(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     ax.set_ylabel("logs")
     ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.tick_params(axis="x", labelsize=7, labelrotation=30)
-    ax.legend(loc="upper right", fontsize=7)
+    # Beside the bars, not over the tallest of them.
+    ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=7)
 
 
 def _faults_by_component(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
@@ -160,6 +163,8 @@ def _worst_g(ax: "Axes", rows: Sequence[AuditRecord]) -> None:
     shown = f" (the {WORST_SHOWN} highest)" if len(ranked) == WORST_SHOWN else ""
     ax.set_title(f"Worst g per log, over its threshold{shown}", loc="left", fontweight="bold")
     if not ranked:
+        ax.text(0.5, 0.5, "no log has a signal the replay judges", ha="center", va="center",
+                transform=ax.transAxes, color=COLOURS["muted"])
         ax.set_axis_off()
         return
     names = [Path(r.log).name for r in ranked]
