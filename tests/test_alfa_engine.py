@@ -146,6 +146,10 @@ def test_the_report_draws_the_failures_effect_where_the_model_predicts(calibrate
     # Every signal is left to the change test: no page of g curves that raise nothing.
     assert residual_page(report, series) is None
     assert [ax.get_ylabel().split("\n")[0] for ax in figure.axes] == drawn
+    # Close up: from a little before the onset to a little after the replay from it ends.
+    replayed = time_s[np.isfinite(healthy).any(axis=1)]
+    low, high = figure.axes[0].get_xlim()
+    assert replayed[0] - 10.2 <= low < replayed[0] <= replayed[-1] <= high <= replayed[-1] + 10.2
     (note,) = [n for n in diagnosis.notes if n.startswith("found by the change test")]
     unsaid = note.split("cannot say what ")[1].split(" would have done")[0].split(", ")
     assert unsaid and set(unsaid) == set(cannot) & set(diagnosis.change_check.changed)

@@ -146,6 +146,7 @@ def effect_page(report: Report, series: Series) -> "Figure | None":
         ax.plot(t[shown], healthy[shown, i], color=COLOURS["healthy"], lw=1.4, ls="--",
                 label="the healthy vehicle from the onset")
         _label(ax, f"{names[i]} [{report.units.get(names[i], '?')}]", len(axes))
+    axes[0].set_xlim(t[shown][0], t[shown][-1])     # the shaded sequences reach further
     _figure_legend(figure, axes)
     return figure
 
