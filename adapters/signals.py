@@ -68,6 +68,9 @@ _Source = TypeVar("_Source", FieldSource, SegmentSource)
 # The reserved signal that says when the vehicle is operating (armed, under way): where a
 # profile names one, only that time is trained on and judged.
 OPERATING = "operating"
+# The reserved signal of a UTC time the log carries on messages its own clock stamps (a
+# GPS time reference): where the log's clock is off, its UTC times are set by it.
+CLOCK_REFERENCE = "clock_reference"
 # CSV logs have no topics: a column is both a signal's topic and its field.
 TIME_UNITS = ("s", "ms", "us", "ns", "iso", "hhmmss")
 

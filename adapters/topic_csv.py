@@ -11,8 +11,9 @@ folder renamed since, it is what every file's name begins with up to its last ``
 that starts with a digit (a ROS name's parts never do, a recording's date does:
 ``carbonZ_2018-07-30-17-20-01_engine_failure-mavros-imu-data.csv``). A profile's field
 path ``channels[0]`` is the column ``field.channels0`` (``rostopic``'s flattening) or
-``channels[0]``; ``%time`` (the time the recorder received the message) is the clock, as a
-bag's record time is."""
+``channels[0]``; a part of a ROS time (``header.stamp.sec``, ``nanosec``) is read from the
+time rostopic writes whole (``field.header.stamp``, nanoseconds); ``%time`` (the time the
+recorder received the message) is the clock, as a bag's record time is."""
 
 import csv
 from collections.abc import Iterable, Sequence
@@ -88,6 +89,25 @@ def column_names(path: str) -> list[str]:
         flattened += str(step) if isinstance(step, int) else ("." if flattened else "") + step
     return [prefix + form for form in dict.fromkeys((flattened, path))
             for prefix in (TOPIC_CSV_FIELD_PREFIX, "")]
+
+
+# A ROS time's parts as a bag holds them (ROS 1 secs/nsecs, ROS 2 sec/nanosec); rostopic
+# writes the whole time as one column of nanoseconds.
+TIME_PARTS = {"sec": "seconds", "secs": "seconds", "nanosec": "nanoseconds",
+              "nsecs": "nanoseconds"}
+
+
+def time_part(path: str) -> tuple[str, str] | None:
+    """(the time's own path, "seconds" or "nanoseconds") where ``path`` names a part of a
+    ROS time (``header.stamp.sec``); None otherwise."""
+    parent, _, last = path.rpartition(".")
+    return (parent, TIME_PARTS[last]) if parent and last in TIME_PARTS else None
+
+
+def _part_of_time(nanoseconds: np.ndarray, part: str) -> np.ndarray:
+    """The seconds or the nanoseconds of a time read whole in nanoseconds."""
+    seconds = np.floor(nanoseconds / 1e9)
+    return seconds if part == "seconds" else nanoseconds - seconds * 1e9
 
 
 @dataclass
@@ -171,7 +191,8 @@ class TopicCsvAdapter:
     def _add_topic(collector: SignalCollector, topic: str, file: Path,
                    lost: dict[str, int]) -> None:
         paths = collector.field_paths(topic)
-        wanted = {name for path in paths for name in column_names(path)}
+        wholes = [whole[0] for path in paths if (whole := time_part(path)) is not None]
+        wanted = {name for path in [*paths, *wholes] for name in column_names(path)}
         table = _read_table(file, wanted)
         for what, count in (("row(s) with the wrong number of cells", table.wrong_width),
                             ("row(s) whose time does not read", table.bad_times)):
@@ -191,6 +212,11 @@ class TopicCsvAdapter:
                     values = _numbers(cells)
                     texts_only = np.isnan(values).all() and any(cells)
                     return (np.asarray(cells, object) if texts_only else values)[timed]
+            whole = time_part(path)     # a time rostopic wrote whole, in nanoseconds
+            if whole is not None:
+                for name in column_names(whole[0]):
+                    if name in table.columns:
+                        return _part_of_time(_numbers(table.columns[name]), whole[1])[timed]
             raise KeyError(path)
 
         collector.add_columns(topic, table.times_ns[timed], column, fields)

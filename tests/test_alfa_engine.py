@@ -242,3 +242,25 @@ def test_three_short_normal_flights_leave_the_roll_loop_unjudged_and_say_so(tmp_
     assert all("roll_tracking" not in limits for limits in result.change.values())
     assert any(line.startswith("  change test: no thresholds (not judged) where these logs")
                and line.endswith("roll_tracking 15.6 s") for line in calibration_lines(result))
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_flight_recorded_on_a_clock_days_off_is_dated_by_its_gps_time(calibrated):
+    """Four sequences of 2018-07-30 were received on a clock 9.8 days behind the GPS time
+    they carry: their UTC times are the GPS's, their seconds the log's own, and the model
+    calibrated on that day's flights knows the day as 2018-07-30, not 2018-07-21."""
+    from auvdiag_cli.reports.report_build import build_report
+
+    _, model, _ = calibrated
+    assert model.card.calibration_days == ("2018-07-30", "2018-09-11")
+    diagnosis, onset = _judged(calibrated,
+                               "carbonZ_2018-07-30-16-29-45_engine_failure_with_emr_traj")
+    report = build_report(diagnosis)
+    assert report.start_time_utc is not None and report.start_time_utc.startswith(
+        "2018-07-30T20:24:5")
+    assert any(n.startswith("the log's clock runs 9.8 days behind the UTC time it carries")
+               for n in diagnosis.notes)
+    assert onset is not None and 0 < diagnosis.detected_at_s - onset < 10
+    # Another day's flight on a clock that kept time: nothing said, nothing moved.
+    other, _ = _judged(calibrated, "carbonZ_2018-07-30-17-10-45_engine_failure_with_emr_traj")
+    assert other.utc_offset_ns == 0 and not any("clock runs" in n for n in other.notes)

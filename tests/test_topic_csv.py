@@ -18,6 +18,7 @@ from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from adapters import detect_format, inventory, read_log
+from adapters.signals import CLOCK_REFERENCE, FieldSource, LogSources
 from auvdiag_cli import api
 from auvdiag_cli.audit.discovery import discover
 from auvdiag_cli.cli import app
@@ -165,7 +166,7 @@ def test_alfa_flights_read_the_same_from_bag_and_csv_folder(sequence):
     from_bag = read_log(folder / f"{sequence}.bag", profile.sources)
     assert from_csv.format == "topic-csv" and from_bag.format == "bag"
     assert set(from_csv.series) == set(from_bag.series) == {
-        *profile.command_names, *profile.sensor_names, *profile.input_names}
+        *profile.command_names, *profile.sensor_names, *profile.input_names, CLOCK_REFERENCE}
     for name, series in from_bag.series.items():
         other = from_csv.series[name]
         assert np.array_equal(series.times_ns, other.times_ns), name
@@ -247,6 +248,24 @@ def test_report_times_line_up_with_other_records_in_utc(exported):
                          (report["detected_at_s"], report["detected_at_utc"])):
         assert datetime.fromisoformat(utc) - start == pytest.approx(
             timedelta(seconds=seconds), abs=timedelta(milliseconds=1))
+
+
+def test_a_part_of_a_time_reads_from_the_time_rostopic_writes_whole(tmp_path):
+    """rostopic writes a ROS time as one column of nanoseconds; a profile names its parts
+    as a bag holds them (``header.stamp.sec``, ``nanosec``), and reads them from either."""
+    folder = tmp_path / "rec"
+    folder.mkdir()
+    (folder / "rec-gps-time.csv").write_text(
+        "%time,field.header.stamp,field.time_ref\n"
+        "1532133199412325200,1532133199411901392,1532982290839000000\n"
+        "1532133199916705840,1532133199916312144,1532982291341000000\n")
+    sources = LogSources({name: FieldSource("/gps/time", path) for name, path in (
+        ("seconds", "time_ref.sec"), ("nanoseconds", "time_ref.nanosec"),
+        ("stamp", "header.stamp.secs"))})
+    series = read_log(folder, {"ros": sources}).series
+    assert series["seconds"].values.tolist() == [1532982290.0, 1532982291.0]
+    np.testing.assert_allclose(series["nanoseconds"].values, [839e6, 341e6], atol=512)
+    assert series["stamp"].values.tolist() == [1532133199.0, 1532133199.0]
 
 
 def test_a_stray_quote_ends_that_topic_as_damage_not_a_crash(exported, tmp_path):

@@ -34,6 +34,7 @@ from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
 from auvdiag_cli.engine.isolation import apply_change_alarm, apply_other_evidence, isolate
 from auvdiag_cli.engine.judging import Judging, nothing_judged, skilled
+from auvdiag_cli.engine.log_clock import clock_note, utc_offset_ns, utc_start_ns
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
@@ -131,7 +132,7 @@ def _companion_problem(main: IngestedLog, other: IngestedLog) -> str | None:
     a, b = main.signals, other.signals
     if a.start_ns < b.end_ns and b.start_ns < a.end_ns:
         return "it overlaps this log in time (one vehicle cannot fly two dives at once)"
-    day_a, day_b = utc_day(a.start_ns), utc_day(b.start_ns)
+    day_a, day_b = utc_day(utc_start_ns(a)), utc_day(utc_start_ns(b))
     if day_a and day_b and day_a != day_b:
         return f"recorded on {day_b}, this log on {day_a}"
     return None
@@ -223,7 +224,9 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
     if model.skill is None:
         notes.append("the model has no skill scores (trained before they were measured): "
                      "every signal is judged; 'auvdiag score' measures them")
-    notes += _calibrated_on_another_day(model.card.calibration_days, signals.start_ns)
+    utc_offset = utc_offset_ns(signals)
+    notes += clock_note(utc_offset) + _calibrated_on_another_day(
+        model.card.calibration_days, signals.start_ns + utc_offset)
     change_check = _check_change(change_errors, judging, frame, notes)
     seen = Observations(
         log=signals.path, format=signals.format, vehicle=profile.name,
@@ -237,7 +240,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         histories=Histories(frame.time_s, frame.commands, frame.command_names,
                             frame.sensor_names, matching, thresholds, b_series,
                             change_errors, tuple(change_names(model))),
-        start_ns=signals.start_ns, mission_legs=tuple(mission_legs),
+        start_ns=signals.start_ns, utc_offset_ns=utc_offset, mission_legs=tuple(mission_legs),
         completeness=completeness_of(signals),
         not_operating_s=round(frame.not_operating_s, 3),
         not_judged={**not_judged, **left_by_the_change_test(change_check, judging)},

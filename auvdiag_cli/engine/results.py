@@ -73,6 +73,8 @@ class Observations:
     decision_window_s: float
     sensor_units: Mapping[str, str]   # every sensor's, and each command's the profile gives
     start_ns: int = 0
+    # The UTC time the log carries less its clock, where that is off (`engine.log_clock`).
+    utc_offset_ns: int = 0
     mission_legs: tuple[MissionLeg, ...] = ()
     histories: Histories = field(default_factory=Histories)
     completeness: Completeness | None = None

@@ -4,6 +4,7 @@ may differ: too few of them for the margin rule, or all of one day."""
 from collections.abc import Sequence
 
 from auvdiag_cli.engine.ingest import IngestedLog
+from auvdiag_cli.engine.log_clock import utc_start_ns
 from auvdiag_cli.engine.results import utc_day
 from models.false_alarms import MIN_LOGS
 
@@ -38,5 +39,5 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
 def utc_days(logs: Sequence[IngestedLog]) -> tuple[str, ...]:
     """The UTC days (ISO dates) the logs were recorded on, where every log's clock is UTC
     (none where one is a clock since boot: its day is not known)."""
-    days = [utc_day(log.signals.start_ns) for log in logs]
+    days = [utc_day(utc_start_ns(log.signals)) for log in logs]
     return () if None in days else tuple(sorted({day for day in days if day}))

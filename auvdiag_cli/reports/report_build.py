@@ -74,9 +74,9 @@ def build_report(diagnosis: Diagnosis) -> Report:
         verdict=d.verdict.value, component=d.component, candidates=tuple(d.candidates),
         case=d.case, b=dict(d.b), units=dict(d.sensor_units), detected_at_s=d.detected_at_s,
         onset_s=d.onset_s, duration_s=None if duration is None else round(duration, 3),
-        start_time_utc=utc_text(d.start_ns, "milliseconds"),
-        onset_utc=_utc_after(d.start_ns, d.onset_s),
-        detected_at_utc=_utc_after(d.start_ns, d.detected_at_s),
+        start_time_utc=utc_text(d.start_ns + d.utc_offset_ns, "milliseconds"),
+        onset_utc=_utc_after(d.start_ns + d.utc_offset_ns, d.onset_s),
+        detected_at_utc=_utc_after(d.start_ns + d.utc_offset_ns, d.detected_at_s),
         completeness=completeness, not_operating_s=d.not_operating_s,
         not_judged=dict(d.not_judged),
         coverage=CoveragePart(

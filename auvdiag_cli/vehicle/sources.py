@@ -1,9 +1,11 @@
 """A profile's ``[sources.FAMILY]`` tables: where each signal lives in a log of that format
-family, the operating flag (and its fallback), segment markers and a CSV clock."""
+family, the operating flag (and its fallback), a UTC time the log carries, segment markers
+and a CSV clock."""
 
 from collections.abc import Sequence
 
 from adapters.signals import (
+    CLOCK_REFERENCE,
     OPERATING,
     TIME_UNITS,
     FieldSource,
@@ -72,6 +74,12 @@ def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence
     if "operating" in reader.table:   # a flag: the vehicle is operating where it is not 0
         signals[OPERATING], fallback = _operating(reader)
         fallbacks = {OPERATING: fallback} if fallback is not None else {}
+    if "clock_reference" in reader.table:   # a UTC time: a log may lack it
+        if CLOCK_REFERENCE in signal_names:
+            raise ProfileError(f"signal name {CLOCK_REFERENCE!r} is reserved for the UTC "
+                               "time a log carries ([sources.FAMILY] clock_reference)")
+        signals[CLOCK_REFERENCE] = _field_source(reader.sub("clock_reference"))
+        optional = (*optional, CLOCK_REFERENCE)
     segment = None
     if "segment" in reader.table:
         entry = reader.sub("segment")
