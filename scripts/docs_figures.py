@@ -30,7 +30,10 @@ def on_files(files: Files, config: MkDocsConfig) -> Files:
     report, series = api.build_report(diagnosis), series_from_diagnosis(diagnosis)
     for name, draw in (("img/sample-sensors.png", sensors_page),
                        ("img/sample-residual.png", residual_page)):
+        figure = draw(report, series)
+        if figure is None:      # the sample's replay judges its signals: never here
+            raise RuntimeError(f"{SAMPLE}: no page to draw {name} from")
         buffer = BytesIO()
-        draw(report, series).savefig(buffer, format="png", dpi=DPI)
+        figure.savefig(buffer, format="png", dpi=DPI)
         files.append(File.generated(config, name, content=buffer.getvalue()))
     return files
