@@ -261,6 +261,12 @@ def test_a_flight_recorded_on_a_clock_days_off_is_dated_by_its_gps_time(calibrat
     assert any(n.startswith("the log's clock runs 9.8 days behind the UTC time it carries")
                for n in diagnosis.notes)
     assert onset is not None and 0 < diagnosis.detected_at_s - onset < 10
+    # inspect says so, and that its span (what --healthy takes) is on the log's own clock.
+    inspection = api.inspect(ALFA / "carbonZ_2018-07-30-16-29-45_engine_failure_with_emr_traj",
+                             calibrated[0])
+    assert any(w.startswith("the log's clock runs 9.8 days behind") and w.endswith(
+        "the span above is on the log's own clock, as --healthy takes it")
+        for w in inspection.warnings)
     # Another day's flight on a clock that kept time: nothing said, nothing moved.
     other, _ = _judged(calibrated, "carbonZ_2018-07-30-17-10-45_engine_failure_with_emr_traj")
     assert other.utc_offset_ns == 0 and not any("clock runs" in n for n in other.notes)

@@ -43,12 +43,18 @@ def utc_start_ns(signals: Signals) -> int:
     return signals.start_ns + utc_offset_ns(signals)
 
 
-def clock_note(offset_ns: int) -> list[str]:
-    """What a report says of a log whose clock is off from the UTC time it carries."""
+def clock_gap(offset_ns: int) -> str | None:
+    """How far the log's clock is off from the UTC time it carries (None: it is not)."""
     if not offset_ns:
-        return []
+        return None
     days = abs(offset_ns) / 86400e9
     how_far = f"{days:.1f} days" if days >= 1 else f"{abs(offset_ns) / 3600e9:.1f} hours"
-    return [f"the log's clock runs {how_far} {'behind' if offset_ns > 0 else 'ahead of'} the "
-            "UTC time it carries (the profile's clock_reference): its UTC times here are set "
-            "by that time, to the second; times in seconds count on the log's own clock"]
+    return (f"the log's clock runs {how_far} {'behind' if offset_ns > 0 else 'ahead of'} the "
+            "UTC time it carries (the profile's clock_reference)")
+
+
+def clock_note(offset_ns: int) -> list[str]:
+    """What a report says of a log whose clock is off from the UTC time it carries."""
+    gap = clock_gap(offset_ns)
+    return [] if gap is None else [f"{gap}: its UTC times here are set by that time, to the "
+                                   "second; times in seconds count on the log's own clock"]

@@ -5,6 +5,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from adapters import FieldSource, LogInventory, LogSources, Signals, inventory, read_log
+from adapters.signals import CLOCK_REFERENCE
+from auvdiag_cli.engine.log_clock import clock_gap, utc_offset_ns
 from auvdiag_cli.engine.resample import slow_command_note
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import LogError
@@ -53,6 +55,8 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
         return f"held: the last command at each {step}"
     if name in profile.output_names:
         return f"held: the last output at each {step}, read for the effort check only"
+    if name == CLOCK_REFERENCE:
+        return "the UTC time the log carries: where its clock is off, its UTC times"
     if name not in profile.sensor_names + profile.input_names:
         return "a flag: the last value holds"
     per_step = (rate_hz or 0.0) * profile.dt_s
@@ -146,4 +150,8 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     slow = slow_command_note({s.name: s.rate_hz for s in results
                               if s.name in profile.command_names}, profile.dt_s)
     warnings = [note for note in (clock_note, slow) if note is not None]
+    gap = clock_gap(utc_offset_ns(read[CLOCK_REFERENCE]) if CLOCK_REFERENCE in read else 0)
+    if gap is not None:
+        warnings.append(f"{gap}: diagnose and audit date it by that time; the span above is "
+                        "on the log's own clock, as --healthy takes it")
     return Inspection(path, family, contents, results, markers, warnings=warnings)
