@@ -143,15 +143,18 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     first = next(iter(read.values()), None)
     if contents.start_ns is None and first is not None:     # a CSV: its clock is a column
         contents = replace(contents, start_ns=first.start_ns, end_ns=first.end_ns)
-    clock_note = None
-    if contents.start_ns is None and family == "csv":
-        contents, clock_note = _guessed_span(path, contents)
+    contents, clock_note = _guessed_span(path, contents) if (
+        contents.start_ns is None and family == "csv") else (contents, None)
     markers = [m.label for m in first.markers] if first is not None else []
     slow = slow_command_note({s.name: s.rate_hz for s in results
                               if s.name in profile.command_names}, profile.dt_s)
     warnings = [note for note in (clock_note, slow) if note is not None]
+    return Inspection(path, family, contents, results, markers,
+                      warnings=warnings + _clock_off(read))
+
+
+def _clock_off(read: dict[str, Signals]) -> list[str]:
+    """A log whose clock is off from the UTC time it carries, said beside its span."""
     gap = clock_gap(utc_offset_ns(read[CLOCK_REFERENCE]) if CLOCK_REFERENCE in read else 0)
-    if gap is not None:
-        warnings.append(f"{gap}: diagnose and audit date it by that time; the span above is "
-                        "on the log's own clock, as --healthy takes it")
-    return Inspection(path, family, contents, results, markers, warnings=warnings)
+    return [] if gap is None else [f"{gap}: diagnose and audit date it by that time; the span "
+                                   "above is on the log's own clock, as --healthy takes it"]
