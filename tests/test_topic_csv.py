@@ -299,3 +299,6 @@ def test_a_profile_drafted_from_an_alfa_folder_takes_set_points_as_set_points(tm
     assert "throttle" in profile.output_names      # read for the effort check only
     assert not any(set(g.members) & {c.name for c in profile.commands
                                      if c.kind == "set_point"} for g in profile.effort_groups)
+    # The autopilot's GPS time the flight carries: it dates a log whose own clock is off.
+    reference = profile.sources["ros"].signals[CLOCK_REFERENCE]
+    assert (reference.topic, reference.field) == ("/mavros/time_reference", "time_ref.sec")

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from adapters.signals import OPERATING, FieldSource, TimeColumn
+from adapters.signals import CLOCK_REFERENCE, OPERATING, FieldSource, TimeColumn
 
 # A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
 # it drives a model of the closed loop, but it is no actuator.
@@ -73,7 +73,8 @@ def _groups_and_loops(groups: list[list[str]], loops: Sequence[tuple[str, str, s
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                  sensors: list[Proposal], operating: FieldSource | None,
                  time: TimeColumn | None, groups: list[list[str]],
-                 loops: Sequence[tuple[str, str, str]] = ()) -> str:
+                 loops: Sequence[tuple[str, str, str]] = (),
+                 clock_reference: FieldSource | None = None) -> str:
     lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
              "# Every signal below is in that log and varies there. Lines marked CHECK are",
              "# what the log cannot tell: read them before you train.", "",
@@ -118,6 +119,9 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                      "   # CHECK: the clock's unit")
     if operating is not None:
         lines.append(f"{OPERATING} = {entry(operating, family)}   # armed flag")
+    if clock_reference is not None:
+        lines.append(f"{CLOCK_REFERENCE} = {entry(clock_reference, family)}   # a UTC time "
+                     "it carries: dates a log whose own clock is off")
     lines += ["", f"[sources.{family}.signals]"]
     for proposal in commands:
         lines.append(f"{proposal.name} = {entry(proposal.source, family)}   "

@@ -320,6 +320,16 @@ def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource |
     return FieldSource("HEARTBEAT", "base_mode", where=(("type", str(kind)),), bits=128)
 
 
+def _clock_reference(family: str, contents: LogInventory) -> FieldSource | None:
+    """A UTC time the log carries (a ROS TimeReference, as mavros publishes the autopilot's
+    GPS time), where it has one: it dates a log whose own clock is off."""
+    if family != "ros":
+        return None
+    topic = next((t.name for t in contents.topics
+                  if {"time_ref.sec", "time_ref"} & set(t.fields)), None)
+    return None if topic is None else FieldSource(topic, "time_ref.sec")
+
+
 def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
     """The text of a starting profile for the vehicle that wrote the log at ``path``;
     ``closed_loop``: a model driven by ArduPilot's set points, the motor outputs read for
@@ -348,7 +358,7 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                          "minimal profile)")
     operating = _operating(path, family, contents)
     return render_draft(path, name, family, commands, sensors, operating, time, groups,
-                        _loops(commands, sensors))
+                        _loops(commands, sensors), _clock_reference(family, contents))
 
 
 def _loops(commands: list[Proposal], sensors: list[Proposal]) -> list[tuple[str, str, str]]:
