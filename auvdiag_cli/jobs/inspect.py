@@ -56,7 +56,7 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
     if name in profile.output_names:
         return f"held: the last output at each {step}, read for the effort check only"
     if name == CLOCK_REFERENCE:
-        return "the UTC time the log carries: where its clock is off, its UTC times"
+        return "the UTC time the log carries: where its clock is off, it dates the log"
     if name not in profile.sensor_names + profile.input_names:
         return "a flag: the last value holds"
     per_step = (rate_hz or 0.0) * profile.dt_s
