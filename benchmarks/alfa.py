@@ -222,7 +222,7 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     import numpy as np
 
     from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics
-    from auvdiag_cli.engine.change_signatures import signatures
+    from auvdiag_cli.engine.change_signatures import below_only, signatures
 
     residual, time_s = diagnosis.histories.change_residual, diagnosis.histories.time_s
     if residual is None:
@@ -237,7 +237,9 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     found = signatures(profile.actuators, names)
     for statistic, values in change_statistics(
             residual, profile.window_samples, round(REFERENCE_MIN_S / profile.dt_s),
-            found, names=names, below_only={loop.name for loop in profile.tracking}).items():
+            found, names=names,
+            below_only={*(loop.name for loop in profile.tracking),
+                        *below_only(profile.sensors)}).items():
         for column, name in enumerate([*names, *(s.name for s in found)]):
             for part, into in parts:
                 known = values[part, column]

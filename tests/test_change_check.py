@@ -647,3 +647,46 @@ def test_a_signal_the_normal_logs_judge_too_briefly_gets_no_threshold():
     unknown = enough_judged(three, [*seconds, None])
     assert unknown.too_little == {} and set(change_thresholds(unknown, 1.5, None)[SUM]) == {
         "roll", "loop"}
+
+
+def test_a_signal_judged_below_only_passes_a_rise_and_finds_a_drop(calibrated):
+    from auvdiag_cli.jobs.change_calibration import change_evidence
+    from models.change_training import TrainedOnPeaks
+
+    residual = _noise(150.0, signals=1, seed=5)
+    rise, drop = residual.copy(), residual.copy()
+    rise[900:, 0] += 3.0
+    drop[900:, 0] -= 3.0
+    time_s = np.arange(residual.shape[0]) * DT_S
+    limits = {WINDOW_Z: {"speed": 7.0}, SUM: {"speed": 21.0}}
+
+    def checked(values: np.ndarray, below: set[str]) -> ChangeCheck:
+        return check_change(values, ["speed"], limits, time_s, WINDOW, DT_S, below_only=below)
+
+    assert checked(rise, set()).alarm_s is not None            # judged either way: found
+    assert checked(rise, {"speed"}).alarm_s is None             # below only: no failure
+    found = checked(drop, {"speed"})
+    assert found.alarm_s is not None and 90.0 <= found.alarm_s < 92.0
+    assert found.ways == {"speed": "below"} and not found.loops
+    assert "below the prediction" in found.describe()
+    # Calibrate leaves out the way above of the logs a model was trained on before the
+    # signal was judged below only: that way no longer sets its thresholds.
+    model, _ = calibrated
+    profile = api.load_profile(None)
+    one_way = replace(profile, sensors=tuple(
+        replace(s, below_only="why") if s.name == "flow" else s for s in profile.sensors))
+    trained = [TrainedOnPeaks(f"log{i}", "0" * 64, {
+        statistic: {"flow above": 9.0, "flow below": 3.0 + i,
+                    "yaw_rate above": 2.0, "yaw_rate below": 2.0}
+        for statistic in (WINDOW_Z, SUM)}) for i in range(3)]
+    for shape, expected in ((profile, [9.0, 9.0, 9.0]), (one_way, [3.0, 4.0, 5.0])):
+        evidence = change_evidence([], ["flow", "yaw_rate"], model, shape, trained)
+        assert [p[SUM]["flow"] for p in evidence.peaks] == expected
+        assert [p[SUM]["yaw_rate"] for p in evidence.peaks] == [2.0] * 3
+
+
+def test_the_plane_judges_its_forward_acceleration_below_the_prediction_only():
+    profile = api.load_profile("arduplane_carbonz")
+    assert {s.name for s in profile.sensors if s.below_only} == {"accel_x"}
+    engine = next(a for a in profile.actuators if a.name == "engine")
+    assert dict(engine.weakened)["accel_x"] == -1      # the way its engine's loss moves it

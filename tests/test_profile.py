@@ -120,9 +120,9 @@ def test_the_operating_fallback_is_read_as_a_value_map():
     # A key no part of the profile reads (a typo) would be dropped without a word: the
     # setting it meant to make silently not made.
     ("arduplane_carbonz", 'own_log_only = "the ground speed', 'own_log_onyl = "the ground speed',
-     "unknown key 'sensors[6].own_log_onyl' (a typo? 'sensors[6]' takes: component, "
-     "description, full_scale, moved_by, name, own_log_only, signature_only, truth_column, "
-     "unit)"),
+     "unknown key 'sensors[6].own_log_onyl' (a typo? 'sensors[6]' takes: below_only, "
+     "component, description, full_scale, moved_by, name, own_log_only, signature_only, "
+     "truth_column, unit)"),
     ("arduplane_carbonz", "[[tracking]]", "[[trackin]]",
      "unknown key 'trackin' (a typo? the profile's tables:"),
     ("arduplane_carbonz", 'pitch_sp = { topic = "/mavros/nav_info/pitch"',

@@ -74,7 +74,7 @@ def test_a_loop_is_judged_below_only():
     names = ["roll_tracking", "yaw_tracking"]
     thresholds = {WINDOW: {n: 8.0 for n in names}, SUM: {n: 15.0 for n in names}}
     check = check_change(residual, names, thresholds, np.arange(1200) * DT, 10, DT,
-                         below_only=set(names))
+                         loops=set(names))
     assert check.alarm_s is not None and 70.0 <= check.alarm_s < 72.0
     assert set(check.flagged) == {"yaw_tracking"} and not check.ways
     assert "yaw_tracking" in check.describe() and "answers slower" in check.describe()

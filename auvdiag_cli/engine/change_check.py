@@ -334,21 +334,22 @@ def check_change(residual: np.ndarray, names: Sequence[str],
                  thresholds: Mapping[str, Mapping[str, float]], time_s: np.ndarray,
                  window: int, dt_s: float, actuators: Sequence[Actuator] = (),
                  stride: int | None = STRIDE_STEPS, scales: WayScales | None = None,
-                 below_only: Collection[str] = (), within_signatures: Collection[str] = ()
-                 ) -> ChangeCheck:
+                 loops: Collection[str] = (), within_signatures: Collection[str] = (),
+                 below_only: Collection[str] = ()) -> ChangeCheck:
     """The test on one log's residuals (columns ``names``), for the signals with a
     threshold (``thresholds``: statistic -> signal -> threshold), each way divided by its
     scale (``scales``, `change_statistics`), and the signatures of the ``actuators`` over
-    them and ``within_signatures`` (judged only there) that have one; a window judged every
-    ``stride`` steps (None: windows side by side, as models calibrated before judged
-    them)."""
+    them and ``within_signatures`` (judged only there) that have one; the ``loops`` and the
+    signals ``below_only`` judged below their prediction (or usual gain) only; a window
+    judged every ``stride`` steps (None: windows side by side, as models calibrated before
+    judged them)."""
     limited = {name for limits in thresholds.values() for name in limits}   # with a threshold
     judged = [i for i, name in enumerate(names) if name in limited or name in within_signatures]
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if s.name in limited]
     names_judged = [*(names[i] for i in judged), *(s.name for s in found)]
     statistics = change_statistics(residual[:, judged], window, round(REFERENCE_MIN_S / dt_s),
                                    found, stride, scales, [names[i] for i in judged],
-                                   below_only)
+                                   {*loops, *below_only})
     kept = {s: {n: v for n, v in thresholds.get(s, {}).items() if n in names_judged}
             for s in STATISTICS}
     combined = _ratios(statistics, kept, names_judged)
@@ -359,7 +360,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     members = {s.name: tuple(names_judged[c] for c in s.signs) for s in found}
     check = ChangeCheck(kept, peaks,
                         round(float(time_s[started[0]]), 3) if started.size else None,
-                        members=members, loops=tuple(n for n in names_judged if n in below_only),
+                        members=members, loops=tuple(n for n in names_judged if n in loops),
                         ratio_names=tuple(n for n in names_judged if n in limited),
                         ratios=combined[:, [n in limited for n in names_judged]])
     with np.errstate(invalid="ignore"):

@@ -66,6 +66,11 @@ def signature_only(sensors: Sequence[Sensor]) -> frozenset[str]:
     return frozenset(s.name for s in sensors if s.signature_only)
 
 
+def below_only(sensors: Sequence[Sensor]) -> frozenset[str]:
+    """The sensors the change test judges only below the prediction (`below_only`)."""
+    return frozenset(s.name for s in sensors if s.below_only)
+
+
 def judged_within(actuators: Sequence[Actuator], sensors: Sequence[Sensor],
                   judged: Sequence[str]) -> dict[str, tuple[tuple[str, ...], str]]:
     """Each of the ``judged`` sensors judged only within signatures -> (those signatures,

@@ -15,7 +15,7 @@ from auvdiag_cli.engine.change_columns import (
     left_by_the_change_test,
     loop_names,
 )
-from auvdiag_cli.engine.change_signatures import signature_only, thresholded
+from auvdiag_cli.engine.change_signatures import below_only, signature_only, thresholded
 from auvdiag_cli.engine.change_suspects import beyond_the_replay, names_a_mover
 from auvdiag_cli.engine.command_check import CommandCheck, check_commands
 from auvdiag_cli.engine.completeness import completeness_of
@@ -334,7 +334,8 @@ def _check_change(residual: np.ndarray, judging: Judging, frame: AlignedFrame,
     return check_change(residual, names, thresholds, frame.time_s,
                         judging.window, profile.dt_s, profile.actuators,
                         model.card.change_stride, model.card.change_way_scales,
-                        loop_names(model), signature_only(profile.sensors) & set(in_play))
+                        loop_names(model), signature_only(profile.sensors) & set(in_play),
+                        below_only(profile.sensors))
 
 
 def _check_commands(log: IngestedLog, segments: list[Segment], judging: Judging,

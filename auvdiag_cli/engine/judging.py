@@ -72,10 +72,11 @@ class Judging:
 def own_log_only(profile: Profile) -> dict[str, str]:
     """The signals the profile has judged only against the log's own beginning (the change
     test), with the reason reports print; those judged only within a part's signature
-    there say so."""
+    there, or only below the prediction, say so."""
     return {s.name: (f"judged only within a part's signature against the log's own "
                      f"beginning ({s.signature_only})" if s.signature_only else
-                     f"judged only against the log's own beginning ({s.own_log_only})")
+                     f"judged only against the log's own beginning ({s.own_log_only})"
+                     + (f", only below the prediction ({s.below_only})" if s.below_only else ""))
             for s in profile.sensors if s.own_log_only or s.signature_only}
 
 

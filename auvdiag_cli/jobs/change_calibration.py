@@ -24,7 +24,7 @@ from auvdiag_cli.engine.change_check import (
     way_statistics,
 )
 from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
-from auvdiag_cli.engine.change_signatures import signatures, thresholded
+from auvdiag_cli.engine.change_signatures import below_only, signatures, thresholded
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.actuators import Actuator
@@ -95,7 +95,8 @@ def log_change_peaks(residual: np.ndarray, set_aside: Sequence[str], judged: Seq
     columns = [names.index(name) for name in judged]
     window = model.card.window_samples or profile.window_samples
     peaks, seconds = change_peaks(residual[:, columns], list(judged), window, profile.dt_s,
-                                  profile.actuators, below_only=loop_names(model))
+                                  profile.actuators,
+                                  below_only={*loop_names(model), *below_only(profile.sensors)})
     return ({statistic: {name: float("nan") if signal_of(name) in set_aside else value
                          for name, value in values.items()}
              for statistic, values in peaks.items()},
@@ -137,14 +138,23 @@ def change_evidence(diagnoses: Sequence[Diagnosis], replay_judged: Sequence[str]
     judged = change_judged(model, replay_judged)
     logs = [log_change_peaks(_residual(d), d.set_aside, judged, model, profile)
             for d in diagnoses]
-    ways = [*(peaks for peaks, _ in logs), *({s: dict(v) for s, v in t.peaks.items()}
-                                             for t in trained)]
+    ways = [*(peaks for peaks, _ in logs),
+            *(_below_only(t.peaks, below_only(profile.sensors)) for t in trained)]
     scales = way_scales(ways, judged)
     return without_outliers(enough_judged(ChangeEvidence(
         thresholded(profile.actuators, profile.sensors, judged),
         [either_way(p, judged, scales) for p in ways],
         trained_on=tuple(t.log for t in trained), trained_not_counted=trained_not_counted,
         scales=scales), [*(seconds for _, seconds in logs), *(t.judged_s for t in trained)]))
+
+
+def _below_only(peaks: Mapping[str, Mapping[str, float]], names: Collection[str]
+                ) -> dict[str, dict[str, float]]:
+    """One log's largest values per way without the way above of the signals ``names``,
+    judged below only: a model trained before they were so keeps both ways' values."""
+    return {statistic: {name: float("nan") if name.endswith(ABOVE) and signal_of(name) in names
+                        else value for name, value in values.items()}
+            for statistic, values in peaks.items()}
 
 
 def enough_judged(evidence: ChangeEvidence, seconds: Sequence[Mapping[str, float] | None]

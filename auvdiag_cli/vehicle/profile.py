@@ -65,12 +65,13 @@ class Sensor:
     full_scale: float
     description: str
     truth_column: str | None = None     # its true value in a NAME.truth.csv, when one exists
-    # The actuators (or command components) that move what it measures ([[actuators]]).
-    moved_by: tuple[str, ...] = ()
+    moved_by: tuple[str, ...] = ()     # the actuators (or command components) that move it
     # Judged only against the log's own beginning (a ground speed, with the day's wind): why.
     own_log_only: str | None = None
     # Judged only within a part's signature (`weakened`), never alone: why (None: alone too).
     signature_only: str | None = None
+    # Judged by the change test only below the prediction, the way its parts fail: why.
+    below_only: str | None = None
 
 
 @dataclass(frozen=True)
@@ -124,15 +125,13 @@ class Profile:
     horizon_s: float | None = None
     # Actuators that act alike: each one's steady share of their effort is judged.
     effort_groups: tuple[EffortGroup, ...] = ()
-    # Measured inputs of the model beside the commands ([[inputs]]).
-    inputs: tuple[Input, ...] = ()
+    inputs: tuple[Input, ...] = ()        # measured inputs beside the commands ([[inputs]])
     # The parts that move the vehicle where they are not its commands ([[actuators]]).
     actuators: tuple[Actuator, ...] = ()
     # Actuator outputs read for the effort check only: a model driven by the controller's set
     # points does not read them, yet what each actuator carries is judged ([[outputs]]).
     outputs: tuple[Command, ...] = ()
-    # Loops of the controller whose gain the change test judges ([[tracking]]).
-    tracking: tuple[TrackingSpec, ...] = ()
+    tracking: tuple[TrackingSpec, ...] = ()   # loops whose gain the change test judges
 
     @property
     def command_names(self) -> tuple[str, ...]:
@@ -215,7 +214,8 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
         Sensor(r.get("name", str), r.get("component", str), r.get("unit", str),
                positive(r, "full_scale"), r.get("description", str, ""),
                r.get("truth_column", str, None), parse_moved_by(r, movers),
-               r.get("own_log_only", str, None), r.get("signature_only", str, None))
+               r.get("own_log_only", str, None), r.get("signature_only", str, None),
+               r.get("below_only", str, None))
         for r in top.items("sensors"))
     check_weakened(actuators, sensors)
     inputs = tuple(Input(r.get("name", str), r.get("unit", str, ""), r.get("description", str, ""))
