@@ -685,8 +685,10 @@ def test_a_signal_judged_below_only_passes_a_rise_and_finds_a_drop(calibrated):
         assert [p[SUM]["yaw_rate"] for p in evidence.peaks] == [2.0] * 3
 
 
-def test_the_plane_judges_its_forward_acceleration_below_the_prediction_only():
+def test_the_plane_judges_what_only_its_engine_moves_below_the_prediction_only():
     profile = api.load_profile("arduplane_carbonz")
-    assert {s.name for s in profile.sensors if s.below_only} == {"accel_x"}
+    below = {s.name for s in profile.sensors if s.below_only}
+    assert below == {"accel_x", "ground_speed"}
+    assert all(profile.sensor(name).moved_by == ("engine",) for name in below)
     engine = next(a for a in profile.actuators if a.name == "engine")
-    assert dict(engine.weakened)["accel_x"] == -1      # the way its engine's loss moves it
+    assert all(dict(engine.weakened)[name] == -1 for name in below)   # the way its loss moves them
