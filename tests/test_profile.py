@@ -123,6 +123,10 @@ def test_the_operating_fallback_is_read_as_a_value_map():
      "unknown key 'sensors[6].own_log_onyl' (a typo? 'sensors[6]' takes: below_only, "
      "component, description, full_scale, moved_by, name, own_log_only, signature_only, "
      "truth_column, unit)"),
+    # A signal judged only within a signature has no way of its own to judge.
+    ("arduplane_carbonz", 'signature_only = "rising', 'below_only = "x"\nsignature_only = "rising',
+     "key 'sensors[5].below_only': 'climb' is judged only within a part's signature "
+     "(signature_only), which is judged one way already"),
     ("arduplane_carbonz", "[[tracking]]", "[[trackin]]",
      "unknown key 'trackin' (a typo? the profile's tables:"),
     ("arduplane_carbonz", 'pitch_sp = { topic = "/mavros/nav_info/pitch"',

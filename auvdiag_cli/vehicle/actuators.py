@@ -19,6 +19,8 @@ class _Sensor(Protocol):
     def name(self) -> str: ...
     @property
     def signature_only(self) -> str | None: ...
+    @property
+    def below_only(self) -> str | None: ...
 
 # Each kind, and how its failure is said. A command may also be a controller's set point
 # (SET_POINT): it drives the model, but nothing fails in it.
@@ -90,7 +92,8 @@ def _weakened(reader: TableReader) -> tuple[tuple[str, float], ...]:
 
 def check_weakened(actuators: Sequence[Actuator], sensors: Sequence[_Sensor]) -> None:
     """Every signal an actuator's `weakened` names is a sensor, and every sensor judged only
-    within a signature is in one (else nothing would judge it)."""
+    within a signature is in one (else nothing would judge it) and not below only as well
+    (it has no way of its own there)."""
     known = {s.name for s in sensors}
     for actuator in actuators:
         strangers = [name for name, _ in actuator.weakened if name not in known]
@@ -102,6 +105,10 @@ def check_weakened(actuators: Sequence[Actuator], sensors: Sequence[_Sensor]) ->
         if sensor.signature_only and sensor.name not in in_signatures:
             raise ProfileError(f"key 'sensors[{index}].signature_only': {sensor.name!r} is in "
                                "no actuator's 'weakened', so nothing would judge it")
+        if sensor.signature_only and sensor.below_only:
+            raise ProfileError(f"key 'sensors[{index}].below_only': {sensor.name!r} is judged "
+                               "only within a part's signature (signature_only), which is "
+                               "judged one way already")
 
 
 def parse_moved_by(reader: TableReader, known: set[str]) -> tuple[str, ...]:
