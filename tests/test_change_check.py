@@ -179,6 +179,8 @@ def test_what_a_signal_carried_from_the_onset_outweighs_what_crossed_at_the_alar
     # Judged every step: the window ending 0.6 s after the jump holds six steps of it.
     assert check.alarm_s == pytest.approx(89.5) and list(check.flagged) == ["yaw"]
     assert check.evidence["speed"] > check.evidence["yaw"] > 0.0
+    # The way each moved is kept for what it carried, not only for what crossed.
+    assert check.ways == {"speed": "above", "yaw": "above"}
     # On the aircraft: the engine's signals carried the change from the onset, the roll
     # rate crossed at the alarm; without what was carried, the ailerons come first.
     profile = api.load_profile("arduplane_carbonz")
@@ -186,6 +188,22 @@ def test_what_a_signal_carried_from_the_onset_outweighs_what_crossed_at_the_alar
     carried = {"accel_x": 0.6, "climb": 0.4, "ground_speed": 0.1, "roll_rate": 0.3}
     assert change_suspects(flagged, profile)[0] == "ailerons"
     assert change_suspects(flagged, profile, carried)[0] == "engine"
+
+
+def test_a_signal_moved_the_way_a_parts_weakening_moves_it_counts_for_that_part():
+    # An engine failure of ALFA (2018-07-18-16-37-39_2) as a model of three normal flights
+    # of another day saw it: the pitch crossed, below the prediction (the autopilot lowering
+    # the nose), the engine's signature carried a quarter of its threshold. The elevator
+    # moves the pitch either way; the engine's declared weakening moves it below, so a
+    # pitch below counts for the engine as well.
+    profile = api.load_profile("arduplane_carbonz")
+    flagged = {"pitch": 1.18}
+    carried = {"roll": 0.087, "pitch": 0.331, "roll_rate": 0.316, "pitch_rate": 0.03,
+               "yaw_rate": 0.14, "accel_x": 0.071, "engine weakened": 0.253}
+    assert change_suspects(flagged, profile, carried, {"pitch": "below"})[0] == "engine"
+    # Above the prediction, the engine's weakening does not explain it.
+    assert change_suspects(flagged, profile, carried, {"pitch": "above"})[0] == "rudder"
+    assert change_suspects(flagged, profile, carried)[0] == "rudder"
 
 
 def test_a_sensor_is_suspected_only_where_every_change_is_its_own():

@@ -103,8 +103,8 @@ class ChangeCheck:
     evidence: Mapping[str, float] = field(default_factory=dict)
     # Each signature judged (`change_signatures`) -> the signals it sums.
     members: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
-    # Each flagged signal -> the way its residual moved from the onset ("above" or "below"
-    # the prediction).
+    # Each signal that crossed or carried some of the change -> the way its residual moved
+    # from the onset ("above" or "below" the prediction).
     ways: Mapping[str, str] = field(default_factory=dict)
     # The loops judged (`models.tracking`): their gain, judged below its usual value only.
     loops: tuple[str, ...] = ()
@@ -386,8 +386,9 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     flagged = _flagged(combined, names_judged, at, window)
-    ways = shift_ways(residual, names, [n for n in flagged if n in names
-                                        and n not in check.loops], first, at)
+    ways = shift_ways(residual, names, [n for n in names_judged if n in names
+                                        and n not in check.loops
+                                        and (n in flagged or evidence[n] > 0)], first, at)
     return replace(check, alarm_s=round(float(time_s[at]), 3), onset_s=round(onset, 3),
                    onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways)
 

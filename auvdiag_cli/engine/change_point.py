@@ -59,7 +59,7 @@ def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: flo
 
 def shift_ways(residual: np.ndarray, names: Sequence[str], flagged: Sequence[str],
                onset: int, at: int) -> dict[str, str]:
-    """Which way each flagged signal's residual moved: its mean from the onset to the alarm
+    """Which way each of ``flagged`` moved: its residual's mean from the onset to the alarm
     against its mean before the onset."""
     ways = {}
     for name in flagged:

@@ -19,11 +19,23 @@ def names_a_mover(change: ChangeCheck, profile: Profile) -> bool:
         moved_by for name, moved_by in _movers(profile).items() if name in change.flagged)
 
 
-def _movers(profile: Profile) -> dict[str, tuple[str, ...]]:
+def _movers(profile: Profile, ways: Mapping[str, str] | None = None
+            ) -> dict[str, tuple[str, ...]]:
     """Each signal the change test judges -> the parts that move it (`moved_by`): the
-    sensors', then the controller's loops' (a loop's gain is made by its parts)."""
-    return {**{s.name: s.moved_by for s in profile.sensors},
-            **{loop.name: loop.moved_by for loop in profile.tracking}}
+    sensors', then the controller's loops' (a loop's gain is made by its parts). With the
+    ``ways`` the signals moved (`ChangeCheck.ways`), a signal that moved the way a part's
+    declared weakening moves it (`weakened`) is that part's as well: an engine that stops
+    pushing leaves the pitch below the prediction as its autopilot lowers the nose, though
+    the elevator is what moves the pitch."""
+    movers = {**{s.name: s.moved_by for s in profile.sensors},
+              **{loop.name: loop.moved_by for loop in profile.tracking}}
+    for actuator in profile.actuators:
+        for signal, sign in actuator.weakened:
+            moved = movers.get(signal, ())
+            if (ways or {}).get(signal) == ("above" if sign > 0 else "below") \
+                    and actuator.name not in moved:
+                movers[signal] = (*moved, actuator.name)
+    return movers
 
 
 def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
@@ -37,22 +49,31 @@ def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
 
 
 def change_suspects(flagged: Mapping[str, float], profile: Profile,
-                    evidence: Mapping[str, float] | None = None) -> list[str]:
-    """The parts that could explain the signals that changed, likeliest first: each signal
-    counts for the parts that move what it measures, and a part moving several of them
-    gathers their weight. A signal counts by how much of the change it carried from the
-    onset to the alarm (``evidence``, `ChangeCheck.evidence`: every judged signal, over
-    its threshold at the alarm or not), else by how far it went past its threshold at the
-    alarm (``flagged``); a signal barely over is weak evidence, so a part that moved one
-    signal far outweighs one that nudged several. A sensor is a suspect only where every
-    signal that crossed is its own: a sensor's fault shows in its own readings, while a
-    part that moves the vehicle changes what other sensors measure too. On a tie the part
-    that moves comes first: a vehicle that stops following its set points the same way has
-    first changed in what moves it."""
+                    evidence: Mapping[str, float] | None = None,
+                    ways: Mapping[str, str] | None = None) -> list[str]:
+    """The parts of `suspect_weights`, likeliest first."""
+    return list(suspect_weights(flagged, profile, evidence, ways))
+
+
+def suspect_weights(flagged: Mapping[str, float], profile: Profile,
+                    evidence: Mapping[str, float] | None = None,
+                    ways: Mapping[str, str] | None = None) -> dict[str, float]:
+    """The parts that could explain the signals that changed, each with the weight of what
+    it explains, likeliest first: each signal counts for the parts that move what it
+    measures (and for a part whose declared weakening moves it the way it moved, ``ways``),
+    and a part moving several of them gathers their weight. A signal counts by how much of
+    the change it carried from the onset to the alarm (``evidence``, `ChangeCheck.evidence`:
+    every judged signal, over its threshold at the alarm or not), else by how far it went
+    past its threshold at the alarm (``flagged``); a signal barely over is weak evidence, so
+    a part that moved one signal far outweighs one that nudged several. A sensor is a
+    suspect only where every signal that crossed is its own: a sensor's fault shows in its
+    own readings, while a part that moves the vehicle changes what other sensors measure
+    too. On a tie the part that moves comes first: a vehicle that stops following its set
+    points the same way has first changed in what moves it."""
     weights = dict(evidence) if evidence else {n: r - 1.0 for n, r in flagged.items()}
     weight: dict[str, float] = {}
     movers: set[str] = set()
-    for name, moved_by in _movers(profile).items():
+    for name, moved_by in _movers(profile, ways).items():
         for part in moved_by if name in weights else ():
             weight[part] = weight.get(part, 0.0) + weights[name]
             movers.add(part)
@@ -67,4 +88,5 @@ def change_suspects(flagged: Mapping[str, float], profile: Profile,
         (component,) = own
         weight[component] = weight.get(component, 0.0) + sum(
             weights.get(name, 0.0) for name in flagged)
-    return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
+    return {part: weight[part] for part in sorted(
+        weight, key=lambda part: (-round(weight[part], 6), part not in movers))}

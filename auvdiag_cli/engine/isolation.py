@@ -115,7 +115,8 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if row is not None and row.components:
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
-    ranked = change_suspects(change.flagged, judging.profile, change.evidence)
+    ranked = change_suspects(change.flagged, judging.profile, change.evidence,
+                              change.ways)
     alone = weak_alone(seen, change.onset_s)
     if alone is not None and ranked and ranked[0] in {s.component
                                                       for s in judging.profile.sensors}:
