@@ -10,25 +10,9 @@ the gain, re-estimated over a window all along the log, is what changes. On ALFA
 single-aileron failures (docs/results.md) the roll rate per radian of roll error fell
 from about 1.0 to 0.6-0.75 and stayed there.
 
-A gain re-estimated over windows long enough to hold a manoeuvre moves with what each
-window happened to hold (a hard turn saturates the loop; a window of level flight holds
-almost no error), so a model with a predictor a moment ahead (`models.ahead`) judges the
-loop by the rate's shortfall instead: over a short window, how far the rate fell below its
-prediction along the error it answers,
-
-    Σ r(k) e(k - lag) / √Σ e(k - lag)²
-
-(r: the rate measured less predicted a moment ahead; e: the error). The predictor already
-knows how a healthy loop answers every error it saw; what is left of the rate along the
-error is what the loop failed to give, and divided by the error's size over the window it
-is in units of the rate's own noise whether the window held a hard turn or hardly any
-error: the windows that hold a manoeuvre carry the evidence, the others add only noise.
-On ALFA's flights (docs/results.md) a single stuck aileron's roll shortfall stood further
-above every healthy flight's than the gain ever did.
-
 A profile declares the loops (`[[tracking]]`); `train` fits each one's lag and the error
-it needs to be judged (`fit_tracking`); the change test judges the gain, or the shortfall,
-against the log's own beginning like any other signal (`engine.change_columns`).
+it needs to be judged (`fit_tracking`); the change test judges the gain against the log's
+own beginning like any other signal (`engine.change_columns`).
 """
 
 import math
@@ -51,11 +35,6 @@ FORETOLD_SHARE = 0.95
 # loop saturates there (its surfaces or its rate at their limit), and a hard manoeuvre of a
 # healthy vehicle would read as a slower loop. On ALFA: a roll error beyond 31 degrees.
 SATURATED_SHARE = 0.02
-# What the change test judges of a loop: its gain over WINDOW_S (a model fitted without a
-# predictor a moment ahead, or before the shortfall was judged), or the rate's shortfall
-# from that predictor along the error over SHORTFALL_WINDOW_S.
-GAIN, SHORTFALL = "gain", "shortfall"
-SHORTFALL_WINDOW_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -83,35 +62,6 @@ class TrackingFit:
     floor: float            # the smallest error rms over a window that is judged
     typical: float          # the gain on normal logs (median over their windows)
     limit: float            # a larger error (in size) is left out: the loop saturates
-    judged: str = GAIN      # GAIN or SHORTFALL (`column`)
-
-    def column(self, commands: np.ndarray, sensors: np.ndarray,
-               command_names: Sequence[str], sensor_names: Sequence[str], dt_s: float,
-               rate_error: np.ndarray | None) -> np.ndarray:
-        """What the change test judges of the loop: the rate's shortfall where it is judged
-        so and ``rate_error`` (the rate measured less predicted a moment ahead) is known,
-        else its gain."""
-        if self.judged == SHORTFALL and rate_error is not None:
-            return self.shortfall(rate_error, commands, sensors, command_names, sensor_names,
-                                  dt_s)
-        return self.gain(commands, sensors, command_names, sensor_names, dt_s)
-
-    def shortfall(self, rate_error: np.ndarray, commands: np.ndarray, sensors: np.ndarray,
-                  command_names: Sequence[str], sensor_names: Sequence[str], dt_s: float
-                  ) -> np.ndarray:
-        """Over the SHORTFALL_WINDOW_S ending at every step, Σ r e / √Σ e² (r: the rate
-        measured less predicted, ``rate_error``; e: the error ``lag_steps`` before): below
-        zero where the rate fell short of the prediction along the error (NaN where half
-        the window is missing, or its error is below the floor, as for the gain: a window
-        of level flight holds nothing of how the loop answers, only noise)."""
-        error, _ = _error_and_rate(self, commands, sensors, command_names, sensor_names,
-                                   dt_s)
-        error = _lagged(error, self.lag_steps)
-        window = max(2, round(SHORTFALL_WINDOW_S / dt_s))
-        count, cross, energy = _window_moments(error, rate_error, window)
-        judged = (count * 2 >= window) & (energy >= count * self.floor ** 2) & (energy > 0)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(judged, cross / np.sqrt(energy), np.nan)
 
     def gain(self, commands: np.ndarray, sensors: np.ndarray,
              command_names: Sequence[str], sensor_names: Sequence[str], dt_s: float
@@ -127,15 +77,14 @@ class TrackingFit:
         return {"name": self.name, "set_point": self.set_point, "measured": self.measured,
                 "rate": self.rate, "lag_steps": self.lag_steps,
                 "window_steps": self.window_steps, "floor": self.floor,
-                "typical": self.typical, "limit": self.limit, "judged": self.judged}
+                "typical": self.typical, "limit": self.limit}
 
     @classmethod
     def from_json(cls, entry: Mapping[str, Any]) -> "TrackingFit":
         return cls(str(entry["name"]), str(entry["set_point"]), str(entry["measured"]),
                    None if entry.get("rate") is None else str(entry["rate"]),
                    int(entry["lag_steps"]), int(entry["window_steps"]),
-                   float(entry["floor"]), float(entry["typical"]), float(entry["limit"]),
-                   str(entry.get("judged", GAIN)))
+                   float(entry["floor"]), float(entry["typical"]), float(entry["limit"]))
 
 
 def _error_and_rate(spec: TrackingSpec | TrackingFit, commands: np.ndarray,
@@ -171,20 +120,14 @@ def _window_sums(values: np.ndarray, window: int) -> np.ndarray:
     return np.asarray(running[ends] - running[np.maximum(ends - window, 0)])
 
 
-def _window_moments(error: np.ndarray, rate: np.ndarray, window: int
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Over the window ending at every step, where both are known: how many steps, Σ e r
-    and Σ e²."""
-    known = np.isfinite(error) & np.isfinite(rate)
-    e = np.where(known, error, 0.0)
-    return (_window_sums(known.astype(float), window),
-            _window_sums(e * np.where(known, rate, 0.0), window), _window_sums(e * e, window))
-
-
 def _windowed_gain(error: np.ndarray, rate: np.ndarray, window: int, floor: float
                    ) -> np.ndarray:
     """The least-squares gain of ``rate`` on ``error`` over the window ending at every step."""
-    count, cross, energy = _window_moments(error, rate, window)
+    known = np.isfinite(error) & np.isfinite(rate)
+    e = np.where(known, error, 0.0)
+    count = _window_sums(known.astype(float), window)
+    cross = _window_sums(e * np.where(known, rate, 0.0), window)
+    energy = _window_sums(e * e, window)
     judged = (count * 2 >= window) & (energy >= count * floor * floor) & (energy > 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(judged, cross / energy, np.nan)
@@ -227,7 +170,7 @@ def _fit_at(spec: TrackingSpec, pairs: Sequence[tuple[np.ndarray, np.ndarray]], 
         return None
     typical = float(np.nanmedian(np.concatenate(gains)))
     fit = TrackingFit(spec.name, spec.set_point, spec.measured, spec.rate, lag, window,
-                      round(floor, 6), round(typical, 6), round(limit, 6), SHORTFALL)
+                      round(floor, 6), round(typical, 6), round(limit, 6))
     return fit, [g - fit.typical for g in gains]
 
 

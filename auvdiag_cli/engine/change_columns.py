@@ -1,7 +1,6 @@
 """What the change test judges on a log: one column per sensor (the error of the model's
-predictor a moment ahead, or of its replay) and one per loop of the controller the model
-keeps (`models.tracking`: the rate's shortfall from that predictor along the loop's error,
-or, for a model without one, the loop's gain less its typical value); and, of the signals
+predictor a moment ahead, or of its replay) and one per loop of the controller whose gain
+the model keeps (`models.tracking`: the gain less its typical value); and, of the signals
 the profile leaves to it, why it judges none it leaves out."""
 
 from collections.abc import Sequence
@@ -13,7 +12,6 @@ from auvdiag_cli.engine.judging import Judging, not_judged_signals, own_log_only
 from auvdiag_cli.engine.residuals import Matching
 from models.ahead import MIN_AHEAD_SKILL
 from models.store import LoadedModel
-from models.tracking import GAIN
 
 
 def loop_names(model: LoadedModel) -> list[str]:
@@ -84,20 +82,11 @@ def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray
     """What the test judges (columns `change_names`): the error of the model's predictor a
     moment ahead (`models.ahead`; ``inputs``: the measured inputs, None: the profile has
     none), or the replay's where the model has none (trained before it); then each loop's
-    column (`models.tracking.TrackingFit.column`)."""
+    gain less its typical value."""
     ahead = model.card.ahead
     errors = matching.measured - matching.modelled if ahead is None else ahead.residual(
         commands, matching.measured, inputs, cuts)
     card = model.card
-    loops = [loop.column(commands, matching.measured, card.command_names, card.sensor_names,
-                         card.dt_s, None if ahead is None else errors[
-                             :, card.sensor_names.index(loop.rate or loop.measured)])
-             for loop in card.tracking]
-    return np.column_stack([errors, *loops]) if loops else errors
-
-
-def loops_read_from_the_log(model: LoadedModel) -> list[str]:
-    """The loops judged by their gain, read from the log's set points and sensors alone
-    (`models.tracking`): what the model predicts does not move them."""
-    return [loop.name for loop in model.card.tracking
-            if loop.judged == GAIN or model.card.ahead is None]
+    gains = [loop.gain(commands, matching.measured, card.command_names, card.sensor_names,
+                       card.dt_s) for loop in card.tracking]
+    return np.column_stack([errors, *gains]) if gains else errors

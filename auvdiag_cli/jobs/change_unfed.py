@@ -10,17 +10,16 @@ at its typical value and, beside those, takes the normal logs that never fed it 
 are (on ALFA a whole flying day logged no airspeed: left out, such a flight's thresholds
 rested on half the logs), and sets the change test's thresholds on them the same way (the
 same share of the budget for each judge, or the margin rule); a log without that input is
-judged by the larger of the two. A loop judged by its gain (`models.tracking`) is read
-from the log's set points and sensors, never from the model, so holding an input leaves it
-as it was: its thresholds stay the fed ones (on ALFA, the roll loop's threshold for flights
-without airspeed had risen 17 % from fewer logs alone, and left a stuck aileron under it);
-a loop judged by its rate's shortfall from the predictor is set as the signals are."""
+judged by the larger of the two. A loop's gain (`models.tracking`) is read from the log's
+set points and sensors, never from the model, so holding an input leaves it as it was: its
+thresholds stay the fed ones (on ALFA, the roll loop's threshold for flights without
+airspeed had risen 17 % from fewer logs alone, and left a stuck aileron under it)."""
 
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
 from auvdiag_cli.engine.change_check import WayScales
-from auvdiag_cli.engine.change_columns import change_judged, loops_read_from_the_log
+from auvdiag_cli.engine.change_columns import change_judged, loop_names
 from auvdiag_cli.engine.change_signatures import thresholded
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import IngestedLog
@@ -57,8 +56,8 @@ def unfed_thresholds(logs: Sequence[IngestedLog], model: LoadedModel, profile: P
     """Per model input, the change test's thresholds on the normal ``logs`` as judged
     without it: those that fed it replayed with it held, the others as they are (only where
     that raises them above ``fed``, the thresholds with it fed)."""
-    fixed = loops_read_from_the_log(model)
-    judged = [n for n in change_judged(model, skilled(model, profile)) if n not in fixed]
+    loops = loop_names(model)
+    judged = [n for n in change_judged(model, skilled(model, profile)) if n not in loops]
     if not judged or not fed:
         return {}
     result: UnfedThresholds = {}

@@ -9,7 +9,7 @@ import numpy as np
 from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, SUM, way_statistics
 from auvdiag_cli.vehicle.profile import Profile
 from models.skill import ScoringLog
-from models.tracking import SHORTFALL_WINDOW_S, fit_tracking
+from models.tracking import fit_tracking
 
 
 def tracking_entry(profile: Profile, logs: Sequence[ScoringLog],
@@ -27,12 +27,9 @@ def tracking_entry(profile: Profile, logs: Sequence[ScoringLog],
                         profile.drive_names, profile.sensor_names, profile.dt_s, unsteadiness)
     for fit in fits:
         progress(f"the loop {fit.name}: a gain of {fit.typical:.3g} (the rate per unit of "
-                 f"error {fit.lag_steps * profile.dt_s:.1f} s before); judged by how far the "
-                 "rate falls short of its prediction a moment ahead along that error, over "
-                 f"{SHORTFALL_WINDOW_S:g} s windows (by the gain over "
+                 f"error {fit.lag_steps * profile.dt_s:.1f} s before), judged over "
                  f"{fit.window_steps * profile.dt_s:.0f} s windows from an error of "
-                 f"{fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left out as saturated, "
-                 "where the model has no such predictor)")
+                 f"{fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left out (saturated)")
     missing = {spec.name for spec in profile.tracking} - {fit.name for fit in fits}
     if missing:
         progress(f"not fitted (the logs never move their error): {', '.join(sorted(missing))}")
