@@ -386,9 +386,8 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     flagged = _flagged(combined, names_judged, at, window)
-    ways = shift_ways(residual, names, [n for n in names_judged if n in names
-                                        and n not in check.loops
-                                        and (n in flagged or evidence[n] > 0)], first, at)
+    moved = [n for n in names_judged if n in names and (n in flagged or evidence[n] > 0)]
+    ways = shift_ways(residual, names, [n for n in moved if n not in check.loops], first, at)
     return replace(check, alarm_s=round(float(time_s[at]), 3), onset_s=round(onset, 3),
                    onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways)
 
