@@ -51,25 +51,18 @@ def beyond_the_replay(change: ChangeCheck, judging: Judging) -> bool:
 def change_suspects(flagged: Mapping[str, float], profile: Profile,
                     evidence: Mapping[str, float] | None = None,
                     ways: Mapping[str, str] | None = None) -> list[str]:
-    """The parts of `suspect_weights`, likeliest first."""
-    return list(suspect_weights(flagged, profile, evidence, ways))
-
-
-def suspect_weights(flagged: Mapping[str, float], profile: Profile,
-                    evidence: Mapping[str, float] | None = None,
-                    ways: Mapping[str, str] | None = None) -> dict[str, float]:
-    """The parts that could explain the signals that changed, each with the weight of what
-    it explains, likeliest first: each signal counts for the parts that move what it
-    measures (and for a part whose declared weakening moves it the way it moved, ``ways``),
-    and a part moving several of them gathers their weight. A signal counts by how much of
-    the change it carried from the onset to the alarm (``evidence``, `ChangeCheck.evidence`:
-    every judged signal, over its threshold at the alarm or not), else by how far it went
-    past its threshold at the alarm (``flagged``); a signal barely over is weak evidence, so
-    a part that moved one signal far outweighs one that nudged several. A sensor is a
-    suspect only where every signal that crossed is its own: a sensor's fault shows in its
-    own readings, while a part that moves the vehicle changes what other sensors measure
-    too. On a tie the part that moves comes first: a vehicle that stops following its set
-    points the same way has first changed in what moves it."""
+    """The parts that could explain the signals that changed, likeliest first: each signal
+    counts for the parts that move what it measures (and for a part whose declared weakening
+    moves it the way it moved, ``ways``), and a part moving several of them gathers their
+    weight. A signal counts by how much of the change it carried from the onset to the alarm
+    (``evidence``, `ChangeCheck.evidence`: every judged signal, over its threshold at the
+    alarm or not), else by how far it went past its threshold at the alarm (``flagged``); a
+    signal barely over is weak evidence, so a part that moved one signal far outweighs one
+    that nudged several. A sensor is a suspect only where every signal that crossed is its
+    own: a sensor's fault shows in its own readings, while a part that moves the vehicle
+    changes what other sensors measure too. On a tie the part that moves comes first: a
+    vehicle that stops following its set points the same way has first changed in what moves
+    it."""
     weights = dict(evidence) if evidence else {n: r - 1.0 for n, r in flagged.items()}
     weight: dict[str, float] = {}
     movers: set[str] = set()
@@ -88,5 +81,4 @@ def suspect_weights(flagged: Mapping[str, float], profile: Profile,
         (component,) = own
         weight[component] = weight.get(component, 0.0) + sum(
             weights.get(name, 0.0) for name in flagged)
-    return {part: weight[part] for part in sorted(
-        weight, key=lambda part: (-round(weight[part], 6), part not in movers))}
+    return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
