@@ -58,6 +58,7 @@ if TYPE_CHECKING:
     from models.effort_model import EffortModel
     from models.skill import HorizonScore
     from models.store import LoadedModel
+    from models.thrust_relations import ThrustRelations
 
     AuditProgress = Reporter
 
@@ -67,7 +68,8 @@ __all__ = [
     "CommandRelations", "DerivedTable", "Diagnosis", "EffortModel", "FalseAlarmBudget",
     "FleetTrend", "HealthyParts", "HorizonScore", "Inspection", "LoadedModel", "ModelCard",
     "Profile", "Refused", "Report", "Scenario", "Signals", "SimulatedDive", "StartReference",
-    "TrainOptions", "TrainingResult", "Verdict", "audit", "build_report", "calibrate",
+    "ThrustRelations", "TrainOptions", "TrainingResult", "Verdict", "audit", "build_report",
+    "calibrate",
     "derive_table", "diagnose", "draft_profile", "inspect", "load_model", "load_profile",
     "log_format", "read_healthy_parts", "read_log", "redraw_report", "relate", "save_model",
     "scenarios", "score", "simulate", "summary_text", "to_json", "train", "trend", "write_reports",
@@ -97,6 +99,7 @@ _EXPORTED = {name: f"{module}.{name}" for module, names in {
     "models.command_relations": ["CommandRelations"],
     "models.effort_model": ["EffortModel"],
     "models.skill": ["HorizonScore"],
+    "models.thrust_relations": ["ThrustRelations"],
     "models.store": ["LoadedModel"],
 }.items() for name in names}
 # start(total, reused), done(record), stop(): an audit's progress
@@ -216,7 +219,7 @@ def score(logs: Sequence[Path], profile: Profile, model: LoadedModel, *,
 
 def relate(logs: Sequence[Path], profile: Profile, model: LoadedModel, *,
            holdout: Sequence[Path] = (), progress: Progress = _quiet
-           ) -> tuple[CommandRelations | Refused, StartReference]:
+           ) -> tuple[CommandRelations | ThrustRelations | Refused, StartReference]:
     """Learn how the commands follow the motion and where normal logs start, into the model
     (write it with `save_model`): `auvdiag relate`. Returns both; a `Refused` relation or a
     start with ``refused`` set says why nothing was learned, and the model keeps what it

@@ -18,40 +18,38 @@ signature to the departure. Two actuators whose signatures are the same over nor
 (e.g. a vectored ROV's diagonally opposite thrusters) cannot be told apart: they form a
 group, named together."""
 
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from models.skill import MIN_SKILL
+from models.relation_windows import (
+    WINDOW_S,
+    FittedOn,
+    RelationLog,
+    RelationsRefused,
+    RelationWindow,
+    WindowedRelations,
+    groups_of,
+    numbers_in,
+    numbers_out,
+    peaks_by_window,
+    thresholds_from,
+    trailing_sum,
+    window_for,
+    window_steps_for,
+)
 
-WINDOW_S = 30.0           # a weakness is persistent; a current or a gust averages out
-MIN_WINDOW_S = 5.0        # logs too short for WINDOW_S: windows of half a log, this at least
-# A stretch too short for the window is judged over a shorter one too, this share of it (at
-# least MIN_WINDOW_S), with thresholds of its own: noisier, it sees a large extra effort only.
-SHORTER_WINDOW = 1 / 3
+__all__ = ["WINDOW_S", "CommandRelations", "RelationLog", "RelationsRefused", "fit_relations",
+           "window_for"]
+
 SMOOTHING_S = 1.0         # of the rates that stand for inertia
 MIN_DRIVE = 0.1           # an actuator must work at this rms command in a window to be judged
-MARGIN = 1.5              # thresholds: this many times the held-out normal peak of |α|
 SUBSPACE_ENERGY = 1e-3    # a direction holding less of the commands' energy is not used
-SAME_SIGNATURE = 0.98     # cosine above which two actuators' signatures are the same
 OPEN_LOOP_RATIO = 2.0     # a log departing this many times the median is not closed loop
 OPEN_LOOP_ROUNDS = 3
 MIN_SAMPLES_PER_FEATURE = 20
-
-
-@dataclass(frozen=True)
-class RelationLog:
-    """One log on the model grid; ``usable`` marks the steps the relation may speak for
-    (operating, outside open-loop test sequences)."""
-
-    name: str
-    commands: np.ndarray
-    sensors: np.ndarray
-    usable: np.ndarray
-    efforts: np.ndarray | None = None   # the commands, then outputs only the effort reads
 
 
 def _rates(x: np.ndarray, dt_s: float, smoothing_steps: int) -> np.ndarray:
@@ -75,61 +73,8 @@ def motion_features(sensors: np.ndarray, scale: np.ndarray, dt_s: float,
                             np.ones(len(x))])
 
 
-def _trailing_sum(values: np.ndarray, steps: int) -> np.ndarray:
-    total = np.cumsum(values, axis=0)
-    total[steps:] = total[steps:] - total[:-steps]
-    return total
-
-
 @dataclass(frozen=True)
-class FittedOn:
-    """What a relation was learned from."""
-
-    logs: tuple[str, ...] = ()                  # the training logs fitted
-    open_loop_left_out: tuple[str, ...] = ()    # training logs left out as open loop
-    steps: int = 0                              # usable steps fitted
-    heldout: tuple[str, ...] = ()               # the logs that set the thresholds
-    heldout_judged_steps: tuple[int, ...] | None = None   # per actuator, in whole windows
-
-    def to_json(self) -> dict[str, object]:
-        return {"logs": list(self.logs), "open_loop_left_out": list(self.open_loop_left_out),
-                "steps": self.steps, "heldout": list(self.heldout),
-                **({} if self.heldout_judged_steps is None
-                   else {"heldout_judged_steps": list(self.heldout_judged_steps)})}
-
-    @classmethod
-    def from_json(cls, entry: dict[str, Any]) -> "FittedOn":
-        judged = entry.get("heldout_judged_steps")
-        return cls(tuple(entry.get("logs", [])), tuple(entry.get("open_loop_left_out", [])),
-                   int(entry.get("steps", 0)), tuple(entry.get("heldout", [])),
-                   None if judged is None else tuple(int(n) for n in judged))
-
-
-@dataclass(frozen=True)
-class RelationWindow:
-    """A window of the extra effort and the extra effort allowed over it."""
-
-    steps: int
-    thresholds: np.ndarray           # (n_commands,) |α| allowed; NaN: not judged
-
-    def to_json(self) -> dict[str, Any]:
-        return {"window_steps": self.steps, "thresholds": _numbers_out(self.thresholds)}
-
-    @classmethod
-    def from_json(cls, data: dict[str, Any]) -> "RelationWindow":
-        return cls(int(data["window_steps"]), _numbers_in(data["thresholds"]))
-
-
-def _numbers_out(values: np.ndarray) -> list[float | None]:
-    return [None if math.isnan(v) else round(v, 6) for v in values.tolist()]
-
-
-def _numbers_in(values: list[float | None]) -> np.ndarray:
-    return np.asarray([math.nan if v is None else float(v) for v in values], float)
-
-
-@dataclass(frozen=True)
-class CommandRelations:
+class CommandRelations(WindowedRelations):
     sensor_scale: np.ndarray         # (n_sensors,)
     weights: np.ndarray              # (n_features, n_commands)
     basis: np.ndarray                # (n_commands, rank): the mixer's subspace
@@ -143,41 +88,22 @@ class CommandRelations:
     # Shorter windows for stretches shorter than the main one (none in older models).
     shorter: tuple[RelationWindow, ...] = ()
 
-    @property
-    def windows(self) -> tuple[RelationWindow, ...]:
-        """The main window first, then the shorter ones."""
-        return (RelationWindow(self.window_steps, self.thresholds), *self.shorter)
+    measure = "extra effort"
 
-    def window_label(self, index: int) -> str | None:
-        """How window ``index`` of `windows` is named (None: the main one)."""
-        return None if index == 0 else f"{self.windows[index].steps * self.dt_s:g} s window"
+    def unpredicted(self, k: int) -> str:
+        """Why actuator k is not judged where its relation lacks skill."""
+        skill = self.skill[k]
+        return ("the relation does not predict its commands better than their mean"
+                + ("" if np.isnan(skill) else f": skill {skill:.2f}"))
 
-    @property
-    def judges_anything(self) -> bool:
-        """Some actuator has a threshold over some window."""
-        return any(bool(np.isfinite(w.thresholds).any()) for w in self.windows)
-
-    def with_window_thresholds(self, thresholds: Sequence[np.ndarray]) -> "CommandRelations":
-        """The same relations with new thresholds, one array per window of `windows`."""
-        main, *rest = thresholds
-        return replace(self, thresholds=main, shorter=tuple(
-            replace(w, thresholds=t) for w, t in zip(self.shorter, rest, strict=True)))
-
-    def too_little_heldout(self, k: int) -> str:
-        """Why actuator k has no threshold though its relation has skill: how long the
-        held-out logs drove it in whole windows, against one window's length."""
-        judged = self.fitted_on.heldout_judged_steps
-        steps = None if judged is None else judged[k]
-        had = "" if steps is None else f"{steps * self.dt_s:.1f} s, "
-        return (f"too little held-out data drove it to set a threshold ({had}needs "
-                f"{self.window_steps * self.dt_s:g} s: one window)")
+    def undriven(self, window_s: float) -> str:
+        """Why an actuator with a threshold was not judged in a log."""
+        return (f"never driven at {MIN_DRIVE:g} of full scale rms or more through one "
+                f"{window_s:g} s window of this log")
 
     @property
     def projector(self) -> np.ndarray:
         return self.basis @ self.basis.T
-
-    def group_of(self, k: int) -> tuple[int, ...]:
-        return next(g for g in self.groups if k in g)
 
     def departure(self, commands: np.ndarray, sensors: np.ndarray) -> np.ndarray:
         """Commands minus what the relation expects for the measured motion (NaN rows where
@@ -204,9 +130,9 @@ class CommandRelations:
         steps or the actuator barely worked."""
         window = self.window_steps if window_steps is None else window_steps
         product, drive2, _, ok = self._terms(commands, sensors, usable)
-        numerator = _trailing_sum(product, window)
-        weight = _trailing_sum(drive2, window)
-        count = _trailing_sum(ok.astype(float), window)
+        numerator = trailing_sum(product, window)
+        weight = trailing_sum(drive2, window)
+        count = trailing_sum(ok.astype(float), window)
         norms = np.maximum(np.diag(self.projector), 1e-12)
         enough = (count >= window / 2)[:, None] & (
             weight >= MIN_DRIVE**2 * np.maximum(count, 1.0)[:, None])
@@ -228,8 +154,8 @@ class CommandRelations:
     def to_json(self) -> dict[str, Any]:
         return {
             "sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
-            "basis": self.basis.tolist(), "thresholds": _numbers_out(self.thresholds),
-            "skill": _numbers_out(self.skill), "groups": [list(g) for g in self.groups],
+            "basis": self.basis.tolist(), "thresholds": numbers_out(self.thresholds),
+            "skill": numbers_out(self.skill), "groups": [list(g) for g in self.groups],
             "dt_s": self.dt_s, "window_steps": self.window_steps,
             "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on.to_json(),
             **({"shorter_windows": [w.to_json() for w in self.shorter]} if self.shorter
@@ -241,23 +167,16 @@ class CommandRelations:
         """Raises ValueError where a window or an array does not fit the commands."""
         relations = cls(
             np.asarray(data["sensor_scale"], float), np.asarray(data["weights"], float),
-            np.asarray(data["basis"], float), _numbers_in(data["thresholds"]),
-            _numbers_in(data["skill"]), tuple(tuple(int(i) for i in g) for g in data["groups"]),
+            np.asarray(data["basis"], float), numbers_in(data["thresholds"]),
+            numbers_in(data["skill"]), tuple(tuple(int(i) for i in g) for g in data["groups"]),
             float(data["dt_s"]), int(data["window_steps"]), int(data["smoothing_steps"]),
             FittedOn.from_json(data.get("fitted_on", {})),
             tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
         m = relations.weights.shape[1]
-        for window in relations.windows:
-            if window.steps < 1 or window.thresholds.shape != (m,):
-                raise ValueError(f"command relations: a window of {window.steps} steps with "
-                                 f"{window.thresholds.size} thresholds for {m} commands")
+        relations.check_windows(m, "command relations")
         if relations.skill.shape != (m,) or relations.basis.shape[0] != m:
             raise ValueError(f"command relations: skill or mixer basis do not fit {m} commands")
         return relations
-
-
-class RelationsRefused(ValueError):
-    """The logs cannot teach the relation; the message says why."""
 
 
 def _rows(logs: Sequence[RelationLog], scale: np.ndarray, dt_s: float, smoothing: int
@@ -309,26 +228,8 @@ def _subspace(commands: np.ndarray) -> np.ndarray:
 def _groups(commands: np.ndarray, basis: np.ndarray) -> tuple[tuple[int, ...], ...]:
     """Actuators whose signatures c_k·P·e_k coincide over the data (up to scale)."""
     projector = basis @ basis.T
-    m = commands.shape[1]
-    signatures = [np.outer(commands[:, k], projector[:, k]).ravel() for k in range(m)]
-    norms = [float(np.linalg.norm(s)) for s in signatures]
-    parent = list(range(m))
-    for i in range(m):
-        for j in range(i + 1, m):
-            if norms[i] > 0 and norms[j] > 0 and float(
-                    signatures[i] @ signatures[j]) / (norms[i] * norms[j]) > SAME_SIGNATURE:
-                parent[j] = parent[i]
-    return tuple(tuple(k for k in range(m) if parent[k] == root)
-                 for root in sorted(set(parent)))
-
-
-def window_for(logs: Sequence[RelationLog], dt_s: float) -> float:
-    """WINDOW_S, or half the median log's usable time where logs are shorter than two
-    windows (short flights, short runs), never below MIN_WINDOW_S."""
-    usable_s = [float(log.usable.sum()) * dt_s for log in logs]
-    if not usable_s:
-        return WINDOW_S
-    return min(WINDOW_S, max(MIN_WINDOW_S, float(np.median(usable_s)) / 2))
+    return groups_of([np.outer(commands[:, k], projector[:, k]).ravel()
+                      for k in range(commands.shape[1])])
 
 
 def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
@@ -349,8 +250,7 @@ def fit_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog
     commands = np.vstack([c for _, c in rows])
     basis = _subspace(commands)
     m = commands.shape[1]
-    window = max(2, round(window_s / dt_s))
-    shorter = max(2, round(max(MIN_WINDOW_S, SHORTER_WINDOW * window_s) / dt_s))
+    window, shorter = window_steps_for(window_s, dt_s)
     relations = CommandRelations(
         scale, _least_squares(rows), basis, np.full(m, np.nan), np.full(m, np.nan),
         _groups(commands, basis), dt_s, window, smoothing,
@@ -369,16 +269,9 @@ def _heldout_thresholds(relations: CommandRelations, heldout: Sequence[RelationL
                         window_steps: int, skill: np.ndarray
                         ) -> tuple[tuple[int, ...], np.ndarray]:
     """Over windows of ``window_steps``: how many steps of the held-out logs judged each
-    actuator, and the extra effort it may show (MARGIN times the held-out peak; NaN where
-    less than one window judged it, or its relation has no skill)."""
-    m = len(skill)
-    efforts = [relations.extra_effort(h.commands, h.sensors, h.usable, window_steps)
-               for h in heldout]
-    stacked = np.vstack(efforts) if efforts else np.full((0, m), np.nan)
-    finite = np.isfinite(stacked)
-    peak = np.where(finite, np.abs(stacked), 0.0).max(axis=0, initial=0.0)
-    judged = (finite.sum(axis=0) >= window_steps) & (skill >= MIN_SKILL)
-    return tuple(finite.sum(axis=0).tolist()), np.where(judged, MARGIN * peak, np.nan)
+    actuator, and the extra effort it may show (`thresholds_from` their peak of |α|)."""
+    peak, judged = peaks_by_window(relations, heldout, window_steps, len(skill))
+    return tuple(judged.tolist()), thresholds_from(peak, judged, window_steps, skill)
 
 
 def _skill(relations: CommandRelations, heldout: Sequence[RelationLog], mean: np.ndarray

@@ -20,7 +20,6 @@ import numpy as np
 
 from auvdiag_errors import ModelError
 from models.card import ModelCard, ModelIdentity
-from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
 from models.fast import (
     LINEAR_REPLAY,
@@ -31,6 +30,7 @@ from models.fast import (
     linear_only,
 )
 from models.normaliser import Normaliser
+from models.relation_forms import Relations, relations_from_json
 
 if TYPE_CHECKING:
     from models.dynamics import RecurrentDynamics
@@ -160,11 +160,11 @@ class LoadedModel:
         return self.card.unskilled
 
     @cached_property
-    def relations(self) -> CommandRelations | None:
+    def relations(self) -> Relations | None:
         """How the commands follow the motion on normal logs; None where the model has none
         (trained before they were learned, or the logs could not teach them)."""
         entry = self.card.entry("command_relations")
-        return None if not entry or "weights" not in entry else CommandRelations.from_json(entry)
+        return None if not entry or "weights" not in entry else relations_from_json(entry)
 
     @cached_property
     def effort(self) -> EffortModel | None:

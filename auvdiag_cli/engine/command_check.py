@@ -1,12 +1,13 @@
 """The commands judged against the motion: an actuator driven harder than the motion needs
-(`models.command_relations`), which a controller hides from the motion itself."""
+(`models.command_relations`), or one whose thrust the motion shows less of than a healthy
+one gives (`models.thrust_relations`), which a controller hides from the motion itself."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.vehicle.profile import Profile
-from models.command_relations import MIN_DRIVE, CommandRelations
+from models.relation_forms import Relations
 from models.skill import MIN_SKILL
 
 # An actuator (or a group that acts alike) is named when its signature explains at least
@@ -36,6 +37,9 @@ class CommandCheck:
     explained: dict[str, float] | None      # share of the departure each actuator explains
     extra_effort: float | None              # the named actuator's mean extra effort after it
     window_s: float                         # the window that alarmed (else the main one)
+    # What the windows measure: "extra effort" (the command asked beyond what the motion
+    # needs) or "thrust lost" (the share of its thrust the motion did not show).
+    measure: str = "extra effort"
 
     @property
     def peak_ratio(self) -> dict[str, float | None]:
@@ -64,9 +68,14 @@ class CommandCheck:
             return (f"the commands depart from what the motion needs from {self.alarm_s:.1f} s, "
                     f"but no single actuator explains it (at most {best:.0%}): a sensor "
                     "misreading the motion, or more than one fault")
+        named = " or ".join(self.named)
+        since = f"from {self.alarm_s:.1f} s ({self.window_s:.0f} s windows)"
+        if self.measure == "thrust lost":
+            lost = "" if self.extra_effort is None else f" ({self.extra_effort:.0%} on average)"
+            return (f"{named} short of thrust: the motion shows less of it than a healthy "
+                    f"one gives{lost} {since}")
         effort = "" if self.extra_effort is None else f" by {self.extra_effort:.0%} on average"
-        return (f"{' or '.join(self.named)} driven harder than the motion needs{effort} "
-                f"from {self.alarm_s:.1f} s ({self.window_s:.0f} s windows)")
+        return f"{named} driven harder than the motion needs{effort} {since}"
 
 
 def _confirmed_alarm(ratio: np.ndarray, window_steps: int) -> tuple[int, int] | None:
@@ -83,6 +92,24 @@ def _confirmed_alarm(ratio: np.ndarray, window_steps: int) -> tuple[int, int] | 
     return since + int(np.argmax(over[since:at + 1])), at
 
 
+def _dominant(shares: np.ndarray, groups: tuple[tuple[int, ...], ...], best: int
+              ) -> tuple[int, ...]:
+    """The actuators named: the best one's group where it explains at least MIN_EXPLAINED
+    and DOMINANCE times what any other explains; else with the next group where the two
+    together do and leave out as many actuators as they hold (two thrusters whose effects
+    on the vehicle are alike in this log, named as either: a sensor misreading the motion
+    spreads over many, and naming most of the actuators would say nothing); else none."""
+    first = next(g for g in groups if best in g)
+    rest = sorted((g for g in groups if g != first), key=lambda g: -max(shares[k] for k in g))
+    pair = first + rest[0] if rest else ()
+    for named in (first, pair) if 0 < 2 * len(pair) <= len(shares) else (first,):
+        explained = sum(shares[k] for k in named) if named != first else shares[best]
+        others = max((shares[k] for k in range(len(shares)) if k not in named), default=0.0)
+        if explained >= max(MIN_EXPLAINED, DOMINANCE * others):
+            return named
+    return ()
+
+
 def _peaks(ratio: np.ndarray, names: tuple[str, ...]) -> dict[str, float | None]:
     peaks: dict[str, float | None] = {}
     for k, name in enumerate(names):
@@ -91,7 +118,7 @@ def _peaks(ratio: np.ndarray, names: tuple[str, ...]) -> dict[str, float | None]
     return peaks
 
 
-def check_commands(relations: CommandRelations, profile: Profile, commands: np.ndarray,
+def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
                    sensors: np.ndarray, usable: np.ndarray, time_s: np.ndarray
                    ) -> CommandCheck:
     """Each window of the relations judges the extra effort against its own thresholds;
@@ -112,14 +139,11 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
     for k, name in enumerate(names):
         skill = relations.skill[k]
         if not skill >= MIN_SKILL:
-            not_judged[name] = ("not judged (the relation does not predict its commands better "
-                                "than their mean" + ("" if np.isnan(skill) else
-                                                     f": skill {skill:.2f}") + ")")
+            not_judged[name] = f"not judged ({relations.unpredicted(k)})"
         elif all(np.isnan(w.thresholds[k]) for w in windows):
             not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
         elif all(p[name] is None for p in by_window):
-            not_judged[name] = (f"not judged (never driven at {MIN_DRIVE:g} of full scale "
-                                f"rms or more through one {shortest_s:g} s window of this log)")
+            not_judged[name] = f"not judged ({relations.undriven(shortest_s)})"
     alarms = [(alarm, w) for w, r in enumerate(ratios)
               if (alarm := _confirmed_alarm(r, windows[w].steps)) is not None]
     alarm, which = min(alarms, key=lambda item: item[0][1]) if alarms else (None, 0)
@@ -132,9 +156,8 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
         since[:max(0, first - window_steps)] = False
         shares = relations.explained(commands, sensors, since)
         best = int(np.argmax(shares))
-        group = relations.group_of(best)
-        others = max((shares[k] for k in range(len(names)) if k not in group), default=0.0)
-        if shares[best] >= max(MIN_EXPLAINED, DOMINANCE * others):
+        group = _dominant(shares, relations.groups, best)
+        if group:
             components = [profile.commands[k].component for k in group]
             named = tuple(dict.fromkeys(components))
             effort = efforts[which]
@@ -147,4 +170,4 @@ def check_commands(relations: CommandRelations, profile: Profile, commands: np.n
         None if alarm is None else round(float(time_s[alarm[0]]), 3), named,
         None if shares is None else {n: round(float(v), 3) for n, v in zip(
             names, shares, strict=True)}, extra,
-        window_steps * relations.dt_s)
+        window_steps * relations.dt_s, relations.measure)

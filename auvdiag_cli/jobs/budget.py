@@ -29,7 +29,6 @@ from auvdiag_cli.engine.start_check import StartReading
 from auvdiag_cli.numeric import peak
 from auvdiag_errors import UsageError
 from models.card import StartReference
-from models.command_relations import CommandRelations
 from models.false_alarms import (
     MIN_LOGS,
     LawFit,
@@ -38,6 +37,7 @@ from models.false_alarms import (
     fit_law,
     judge_share,
 )
+from models.relation_forms import Relations
 
 # With fewer calibration logs than a law over logs needs (`MIN_LOGS`), a g judge's law is
 # fitted to the peaks of blocks of its logs, each this share of a log of the median length.
@@ -254,7 +254,7 @@ def start_judges(start: StartReference, readings: Sequence[StartReading | None],
         for i, allowed in enumerate(start.thresholds) if allowed is not None]
 
 
-def command_judges(relations: CommandRelations | None, checks: Sequence[CommandCheck | None],
+def command_judges(relations: Relations | None, checks: Sequence[CommandCheck | None],
                    command_names: Sequence[str]) -> list[Judge]:
     """Each judged actuator's peak extra effort per log and window (NaN: not judged in
     that log); a judge's mode is its window (None: the main one)."""
@@ -273,9 +273,9 @@ def command_judges(relations: CommandRelations | None, checks: Sequence[CommandC
     return judges
 
 
-def with_command_thresholds(relations: CommandRelations,
+def with_command_thresholds(relations: Relations,
                             allowed: Mapping[tuple[str | None, str], float],
-                            command_names: Sequence[str]) -> CommandRelations:
+                            command_names: Sequence[str]) -> Relations:
     """The relations with the thresholds fitted to the budget (``allowed``: (mode, command)
     -> threshold, as `command_judges` names them); the others kept."""
     windows = []

@@ -15,12 +15,8 @@ from auvdiag_cli.vehicle.actuators import SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
 from models.card import Refused, StartReference
-from models.command_relations import (
-    CommandRelations,
-    RelationLog,
-    RelationsRefused,
-    fit_relations,
-)
+from models.relation_forms import Relations, learn_relations_forms
+from models.relation_windows import RelationLog, RelationsRefused
 
 if TYPE_CHECKING:
     from auvdiag_cli.engine.command_check import CommandCheck
@@ -46,7 +42,7 @@ def _split_in_time(log: RelationLog) -> tuple[RelationLog, RelationLog]:
 
 
 def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationLog],
-                    profile: Profile) -> CommandRelations | Refused:
+                    profile: Profile) -> Relations | Refused:
     """The relation, or why the logs could not teach one. One
     training log and no held-out one: its last 20 % (in time) sets the thresholds."""
     if all(command.kind == SET_POINT for command in profile.commands):
@@ -57,7 +53,7 @@ def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationL
         training, heldout = [head], [tail]
     scales = [profile.full_scales[name] for name in profile.sensor_names]
     try:
-        relations = fit_relations(training, heldout, scales, profile.dt_s)
+        relations = learn_relations_forms(training, heldout, scales, profile.dt_s)
     except RelationsRefused as why:
         return Refused(str(why))
     return relations
@@ -65,7 +61,7 @@ def learn_relations(training: Sequence[RelationLog], heldout: Sequence[RelationL
 
 def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
                  holdout: Sequence[Path], progress: Callable[[str], None] = lambda _: None
-                 ) -> tuple[CommandRelations | Refused, StartReference]:
+                 ) -> tuple[Relations | Refused, StartReference]:
     """Learn, for an existing model, how the commands follow the motion and where normal
     logs recorded from rest start, and record both in the model's entries (not yet
     written); a refusal (which says why) keeps what the model had."""
@@ -88,7 +84,7 @@ def relate_model(model: "LoadedModel", profile: Profile, logs: Sequence[Path],
 
     start = learn_start_state(readings(training), readings(heldout),
                               [profile.full_scales[n] for n in profile.sensor_names])
-    learned: dict[str, CommandRelations | StartReference] = (
+    learned: dict[str, Relations | StartReference] = (
         {} if isinstance(relations, Refused) else {"command_relations": relations})
     if start.refused is None:
         learned["start_state"] = start

@@ -33,9 +33,9 @@ from auvdiag_cli.vehicle.profile import Profile
 from auvdiag_errors import UsageError
 from models.ahead import AheadLog, fit_ahead
 from models.card import Refused, StartReference
-from models.command_relations import CommandRelations
 from models.effort_model import EffortModel
 from models.fast import NETWORK, PREDICTOR_KINDS
+from models.relation_forms import Relations
 from models.skill import (
     HORIZON_CANDIDATES_S,
     MIN_SCORED_SAMPLES,
@@ -105,7 +105,7 @@ class TrainingResult:
     chosen: HorizonScore
     operating_hours: float
     logged_rates_hz: dict[str, float]   # per signal, median over the training logs
-    command_relations: CommandRelations | Refused   # how the commands follow the motion
+    command_relations: Relations | Refused   # how the commands follow the motion
     start_state: StartReference                     # where normal logs start (or why not)
     effort: EffortModel | Refused                   # each actuator's share of the effort
     effort_notes: tuple[str, ...] = ()  # logs the effort model left out, and why
@@ -119,7 +119,7 @@ class TrainingResult:
         some actuator's share of the effort can be judged."""
         relations, effort = self.command_relations, self.effort
         return bool(self.chosen.judged) or (
-            isinstance(relations, CommandRelations) and relations.judges_anything) or (
+            not isinstance(relations, Refused) and relations.judges_anything) or (
             isinstance(effort, EffortModel) and effort.judges_anything)
 
 
@@ -228,7 +228,7 @@ def _save(output: Path, fitted: Candidates, metadata: dict[str, Any], profile: P
 
 def _learn_beside_the_model(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
                             training: Sequence[ScoringLog], profile: Profile
-                            ) -> tuple[CommandRelations | Refused, StartReference]:
+                            ) -> tuple[Relations | Refused, StartReference]:
     """The command relations and the start state (or why there are none). ``training`` is
     what the network trained on (a single log's first part)."""
     relations = learn_relations([r.relation for r in read], [r.relation for r in read_heldout],

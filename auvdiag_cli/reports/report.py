@@ -102,6 +102,9 @@ class CommandsPart:
     named: tuple[str, ...] = ()
     explained: Numbers | None = None
     extra_effort: float | None = None
+    # What the two effort figures measure: "extra effort" (command beyond what the motion
+    # needs) or "thrust lost" (share of the thrust the motion did not show).
+    measure: str = "extra effort"
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -188,7 +188,7 @@ def _command_check(check: CommandCheck | None) -> CommandsPart | None:
         peak_over_threshold=dict(check.peak_ratio), not_judged=dict(check.not_judged),
         alarm_s=check.alarm_s, onset_s=check.onset_s, named=tuple(check.named),
         explained=None if check.explained is None else dict(check.explained),
-        extra_effort=check.extra_effort)
+        extra_effort=check.extra_effort, measure=check.measure)
 
 
 def _change_check(check: ChangeCheck | None) -> ChangePart | None:

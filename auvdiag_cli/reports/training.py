@@ -15,10 +15,10 @@ from auvdiag_cli.jobs.train import TrainingResult
 from auvdiag_cli.reports.sentences import by_reason
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused, StartReference
-from models.command_relations import CommandRelations
 from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
 from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
+from models.relation_forms import Relations
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
 
 
@@ -122,25 +122,28 @@ def _listed(names: Sequence[str], most: int = 5) -> str:
     return shown if len(names) <= most else f"{shown} and {len(names) - most} more"
 
 
-def relation_lines(relations: CommandRelations | Refused, command_names: Sequence[str],
+def relation_lines(relations: Relations | Refused, command_names: Sequence[str],
                    effort_groups: Sequence[EffortGroup] = ()) -> list[str]:
-    """How the commands follow the motion: learned from which logs, and the extra effort
-    each actuator may show before it is called weakened (and, for actuators this check
-    cannot tell apart, the ``effort_groups`` whose shares can)."""
+    """How the commands follow the motion: learned from which logs, in which form and why,
+    and the extra effort (or thrust lost) each actuator may show before it is called
+    weakened (and, for actuators this check cannot tell apart, the ``effort_groups`` whose
+    shares can)."""
     if isinstance(relations, Refused):
         return [f"commands not judged against the motion: {relations.reason}"]
     fitted = relations.fitted_on
     left_out = list(fitted.open_loop_left_out)
     lines = [f"command relations learned from {len(fitted.logs)} log(s), {fitted.steps} steps"
              + (f" (left out as open loop: {_listed(left_out)})" if left_out else "")
-             + f"; extra effort allowed per {relations.window_steps * relations.dt_s:g} s "
-             "window:"]
+             + f"; {relations.measure} allowed per "
+             f"{relations.window_steps * relations.dt_s:g} s window:"]
+    if fitted.chosen:
+        lines.insert(1, f"  kept: {fitted.chosen}")
     groups = [[command_names[k] for k in g] for g in relations.groups if len(g) > 1]
     for k, (name, threshold, skill) in enumerate(zip(
             command_names, relations.thresholds.tolist(), relations.skill.tolist(),
             strict=True)):
         if math.isnan(skill) or skill < MIN_SKILL:
-            allowed = "not judged (the relation does not predict its commands)"
+            allowed = f"not judged ({relations.unpredicted(k)})"
         else:
             shorter = "".join(f", {w.thresholds[k]:.0%} per {w.steps * relations.dt_s:g} s"
                               for w in relations.shorter if not math.isnan(w.thresholds[k]))
