@@ -38,7 +38,7 @@ NORMAL = ("paper-normal", "mission-ccw", "mission-large-cw", "mission-sprint-ccw
 TRAINING_SEED, CALIBRATION_SEED, NORMAL_SEEDS, FAULT_SEED = 1, 2, (11, 12), 21
 FAULT_FROM_S = 60.0
 # Each actuator weakened this far from FAULT_FROM_S, flown with these seeds.
-WEAKENED, WEAKENED_SEEDS = 0.7, (21, 22)
+WEAKENED, WEAKENED_SEEDS = 0.7, tuple(range(21, 31))
 
 
 def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,

@@ -1,0 +1,148 @@
+"""The commands against the motion judged forward (`models.thrust_relations`): on simulated
+BlueROV2 dives written as MAVLink .tlog files, the motion learnt from each thruster's thrust
+finds a horizontal thruster kept at 70 % of its thrust, which the commands learnt from the
+motion cannot judge on these slow missions, and train keeps that form and says why."""
+
+import json
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from auvdiag_cli.engine.command_check import _dominant, check_commands
+from auvdiag_cli.engine.ingest import ingest
+from auvdiag_cli.jobs.relate import learn_relations, relation_log
+from auvdiag_cli.reports.training import relation_lines
+from auvdiag_cli.simulator.run import simulate
+from auvdiag_cli.simulator.scenarios import get_scenario
+from auvdiag_cli.simulator.writers import write_log
+from auvdiag_cli.vehicle.profile import Profile, load_profile
+from models.card import Refused
+from models.command_relations import CommandRelations, fit_relations
+from models.relation_forms import relations_from_json, smallest_loss
+from models.relation_windows import RelationLog, RelationsRefused
+from models.thrust_relations import ThrustRelations, fit_thrust_relations
+
+TRAINING = ("paper-normal", "mission-ccw", "mission-large-cw")
+
+
+@pytest.fixture(scope="module")
+def bluerov2() -> Profile:
+    return load_profile(Path("bluerov2"))
+
+
+def _dive(folder: Path, profile: Profile, scenario: str, seed: int,
+          fraction: float | None = None) -> RelationLog:
+    path = folder / f"{scenario}-{seed}-{fraction}.tlog"
+    write_log(simulate(get_scenario(scenario, profile, severity=fraction), profile, seed),
+              profile, path, "tlog")
+    return relation_log(ingest(path, profile), profile)
+
+
+@pytest.fixture(scope="module")
+def learnt(bluerov2: Profile, tmp_path_factory: pytest.TempPathFactory
+           ) -> tuple[ThrustRelations, list[RelationLog]]:
+    folder = tmp_path_factory.mktemp("bluerov2")
+    logs = [_dive(folder, bluerov2, name, 1) for name in TRAINING]
+    relations = learn_relations(logs[:2], logs[2:], bluerov2)    # as train holds one out
+    assert isinstance(relations, ThrustRelations), relations
+    return relations, logs
+
+
+def _judged(relations: ThrustRelations, profile: Profile, log: RelationLog):
+    time_s = profile.dt_s * np.arange(len(log.commands))
+    return check_commands(relations, profile, log.commands, log.sensors, log.usable, time_s)
+
+
+def test_train_keeps_the_form_that_judges_the_smaller_loss_and_says_why(learnt, bluerov2):
+    relations, logs = learnt
+    loss = smallest_loss(relations)
+    other = smallest_loss(fit_relations(logs[:2], logs[2:], [
+        bluerov2.full_scales[n] for n in bluerov2.sensor_names], bluerov2.dt_s))
+    assert np.median(loss) < np.median(other)
+    # The commands learnt from the motion judge no horizontal thruster on these slow
+    # missions; the thrust form judges every one, a loss of less than half its thrust.
+    assert np.all(other[:4] == 1.0) and np.all(loss[:4] < 0.5)
+    lines = relation_lines(relations, bluerov2.command_names, bluerov2.effort_groups)
+    assert lines[0].endswith("thrust lost allowed per 30 s window:"), lines
+    assert lines[1] == (f"  kept: the motion learnt from each actuator's thrust judges a loss "
+                        f"of thrust from {np.median(loss):.0%} (median over the actuators), "
+                        f"the commands learnt from the motion from {np.median(other):.0%}")
+    # Each log judged by a fit to the others set the thresholds.
+    assert relations.fitted_on.logs == tuple(log.name for log in logs)
+
+
+def test_a_horizontal_thruster_at_70_percent_is_found_and_named(learnt, bluerov2, tmp_path):
+    relations, _ = learnt
+    check = _judged(relations, bluerov2, _dive(tmp_path, bluerov2, "mission-thruster-4-weak",
+                                               301, 0.7))
+    assert check.alarm_s is not None and 60.0 < check.alarm_s < 120.0, check.describe()
+    assert check.named == ("thruster_4",) and check.measure == "thrust lost"
+    assert check.extra_effort is not None and 0.15 < check.extra_effort < 0.6   # 0.3 lost
+    assert check.describe().startswith("thruster_4 short of thrust: the motion shows less "
+                                       "of it than a healthy one gives (")
+
+
+def test_normal_missions_of_another_seed_raise_no_alarm(learnt, bluerov2, tmp_path):
+    relations, _ = learnt
+    for name in ("mission-sprint-ccw", "mission-fast-cw"):
+        check = _judged(relations, bluerov2, _dive(tmp_path, bluerov2, name, 102))
+        assert check.alarm_s is None and check.judged, check.describe()
+
+
+def test_a_pair_driven_alike_shares_its_effect(learnt, bluerov2):
+    """The depth loop drives both vertical thrusters alike: the fit splits their effect on
+    the heave evenly, not all to one and none to the other."""
+    relations, logs = learnt
+    _, features, change = relations.rows(logs[0].commands, logs[0].sensors, logs[0].usable)
+    _, parts = relations.parts(features, change, len(bluerov2.commands))
+    heave = bluerov2.sensor_names.index("heave")
+    five, six = (parts[:, 4, heave] ** 2).sum(), (parts[:, 5, heave] ** 2).sum()
+    assert 1 / 3 < five / six < 3
+
+
+def test_the_relation_reads_back_and_older_models_read_as_the_commands_form(learnt):
+    relations, _ = learnt
+    entry = json.loads(json.dumps(relations.to_json()))
+    again = relations_from_json(entry)
+    assert isinstance(again, ThrustRelations) and again.groups == relations.groups
+    assert np.allclose(again.weights, relations.weights, atol=1e-8)
+    assert np.allclose(again.thresholds, relations.thresholds, atol=1e-6, equal_nan=True)
+    assert again.fitted_on == relations.fitted_on
+    with pytest.raises(ValueError, match="do not fit 5 signals and 6 commands"):
+        relations_from_json({**entry, "weights": entry["weights"][:-1]})
+    older = {k: v for k, v in entry.items() if k != "form"}
+    with pytest.raises(KeyError):       # no form: the commands' form, which needs a basis
+        relations_from_json(older)
+
+
+def test_one_log_cannot_teach_it_alone(learnt, bluerov2):
+    _, logs = learnt
+    with pytest.raises(RelationsRefused, match="two logs or more"):
+        fit_thrust_relations(logs[:1], [1.0] * 5, bluerov2.dt_s)
+    # train splits a single log in time; the commands' form is learnt from its two parts
+    kept = learn_relations(logs[:1], [], bluerov2)
+    assert not isinstance(kept, Refused)
+
+
+def test_the_commands_form_is_compared_as_the_thrust_it_makes_up_for(learnt, bluerov2):
+    """An extra 20 % of command makes up for 1 - 1/1.2² = 31 % of a thrust that grows with
+    the command's square."""
+    _, logs = learnt
+    commands = fit_relations(logs[:2], logs[2:], [
+        bluerov2.full_scales[n] for n in bluerov2.sensor_names], bluerov2.dt_s)
+    asked = replace(commands, thresholds=np.full(6, 0.2), skill=np.full(6, 0.9))
+    assert np.allclose(smallest_loss(asked), 1 - 1 / 1.2 ** 2)
+    unskilled = replace(asked, skill=np.full(6, 0.1))
+    assert np.all(smallest_loss(unskilled) == 1.0)
+    assert isinstance(asked, CommandRelations)
+
+
+def test_two_actuators_alike_in_the_log_are_named_as_either():
+    groups = tuple((k,) for k in range(6))
+    assert _dominant(np.array([0.8, 0.05, 0.1, 0.05, 0.0, 0.0]), groups, 0) == (0,)
+    assert _dominant(np.array([0.45, 0.05, 0.43, 0.07, 0.0, 0.0]), groups, 0) == (0, 2)
+    assert _dominant(np.array([0.3, 0.25, 0.25, 0.2, 0.0, 0.0]), groups, 0) == ()
+    # Two actuators in all: naming both would say nothing (a sensor misreading the motion)
+    assert _dominant(np.array([0.5, 0.5]), ((0,), (1,)), 0) == ()
