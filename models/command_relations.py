@@ -96,6 +96,12 @@ class CommandRelations(WindowedRelations):
         return ("the relation does not predict its commands better than their mean"
                 + ("" if np.isnan(skill) else f": skill {skill:.2f}"))
 
+    def rests_on(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray,
+                 actuators: Sequence[int]) -> tuple[int, ...] | None:
+        """Which signals the extra effort rests on: this form cannot tell (None), for any
+        sensor misreading the motion makes the controller push on the actuators."""
+        return None
+
     def undriven(self, window_s: float) -> str:
         """Why an actuator with a threshold was not judged in a log."""
         return (f"never driven at {MIN_DRIVE:g} of full scale rms or more through one "

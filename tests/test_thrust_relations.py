@@ -146,3 +146,17 @@ def test_two_actuators_alike_in_the_log_are_named_as_either():
     assert _dominant(np.array([0.3, 0.25, 0.25, 0.2, 0.0, 0.0]), groups, 0) == ()
     # Two actuators in all: naming both would say nothing (a sensor misreading the motion)
     assert _dominant(np.array([0.5, 0.5]), ((0,), (1,)), 0) == ()
+
+
+def test_a_sensor_misreading_the_motion_is_kept_among_the_candidates(learnt, bluerov2,
+                                                                      tmp_path):
+    """A dead gyro leaves the yaw rate alone out of line: the loss the check fits rests on
+    that signal, so the gyro stays a candidate; a thruster that died leaves every signal
+    it moves short, and its loss rests on none of them alone."""
+    relations, _ = learnt
+    gyro = _judged(relations, bluerov2, _dive(tmp_path, bluerov2, "mission-gyro-dead", 301))
+    assert gyro.alarm_s is not None and gyro.rests_on == ("yaw_rate",)
+    dead = _judged(relations, bluerov2, _dive(tmp_path, bluerov2, "mission-thruster-2-dead",
+                                              301))
+    assert dead.named == ("thruster_2",) and dead.rests_on == ()
+    assert dead.alarm_s is not None and 60.0 < dead.alarm_s < 70.0

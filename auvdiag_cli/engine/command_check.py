@@ -40,6 +40,9 @@ class CommandCheck:
     # What the windows measure: "extra effort" (the command asked beyond what the motion
     # needs) or "thrust lost" (the share of its thrust the motion did not show).
     measure: str = "extra effort"
+    # The sensors the finding rests on (the loss vanishes without their signal): only they
+    # could be misreading instead; None: the relation cannot tell, any could.
+    rests_on: tuple[str, ...] | None = None
 
     @property
     def peak_ratio(self) -> dict[str, float | None]:
@@ -150,6 +153,7 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
     window_steps = windows[which].steps
     named: tuple[str, ...] = ()
     extra = shares = None
+    rests_on: tuple[str, ...] | None = None
     if alarm is not None:
         first = alarm[0]
         since = usable.copy()
@@ -163,6 +167,9 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
             effort = efforts[which]
             over = effort[first:, best][np.isfinite(effort[first:, best])]
             extra = round(float(over.mean()), 3) if over.size else None
+            signals = relations.rests_on(commands, sensors, since, group)
+            rests_on = None if signals is None else tuple(
+                profile.sensor_names[s] for s in signals)
     return CommandCheck(
         names, {n: None if np.isnan(t) else round(float(t), 4) for n, t in zip(
             names, relations.thresholds, strict=True)}, not_judged, ratio, by_window,
@@ -170,4 +177,4 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
         None if alarm is None else round(float(time_s[alarm[0]]), 3), named,
         None if shares is None else {n: round(float(v), 3) for n, v in zip(
             names, shares, strict=True)}, extra,
-        window_steps * relations.dt_s, relations.measure)
+        window_steps * relations.dt_s, relations.measure, rests_on)

@@ -190,7 +190,8 @@ def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandChe
                       detected_at_s=check.alarm_s, onset_s=check.onset_s)
     # A sensor reading the motion wrongly also makes the controller push harder; the motion
     # model rules that out only for the sensors it judges.
-    unjudged = [s.component for s in judging.profile.sensors if s.name in seen.not_judged]
+    unjudged = [s.component for s in judging.profile.sensors if s.name in seen.not_judged
+                and (check.rests_on is None or s.name in check.rests_on)]
     candidates = list(dict.fromkeys([*check.named, *unjudged])) if check.named else []
     note = f"found in the commands, not the motion: {check.describe()}"
     if len(check.named) > 1:
