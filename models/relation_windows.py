@@ -167,13 +167,14 @@ def groups_of(signatures: Sequence[np.ndarray]) -> tuple[tuple[int, ...], ...]:
                  for root in sorted(set(parent)))
 
 
-def window_for(logs: Sequence[RelationLog], dt_s: float) -> float:
-    """WINDOW_S, or half the median log's usable time where logs are shorter than two
+def window_for(logs: Sequence[RelationLog], dt_s: float, longest_s: float = WINDOW_S
+               ) -> float:
+    """``longest_s``, or half the median log's usable time where logs are shorter than two
     windows (short flights, short runs), never below MIN_WINDOW_S."""
     usable_s = [float(log.usable.sum()) * dt_s for log in logs]
     if not usable_s:
-        return WINDOW_S
-    return min(WINDOW_S, max(MIN_WINDOW_S, float(np.median(usable_s)) / 2))
+        return longest_s
+    return min(longest_s, max(MIN_WINDOW_S, float(np.median(usable_s)) / 2))
 
 
 def window_steps_for(window_s: float, dt_s: float) -> tuple[int, int]:
