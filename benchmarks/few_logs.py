@@ -22,6 +22,7 @@ import platform
 import statistics
 import tempfile
 import time
+from collections import Counter
 from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -72,14 +73,15 @@ def _faults(vehicle: str) -> dict[str, str]:
 
 
 def _found_named(model: "LoadedModel", profile: "Profile", faulty: dict[Path, str]
-                 ) -> tuple[int, int, list[float]]:
+                 ) -> tuple[int, int, list[float], Counter[str]]:
     """How many of the ``faulty`` logs (log -> the failed part) the model finds (a fault
-    detected a second before the onset or later), how many it names, and the delays of
-    those named."""
+    detected a second before the onset or later), how many it names, the delays of those
+    named, and how many it names of each part."""
     from auvdiag_cli import api
 
     found = named = 0
     delays = []
+    by_part: Counter[str] = Counter()
     for path, part in faulty.items():
         diagnosis = api.diagnose(path, profile, model)
         seen = (diagnosis.verdict.value == "fault"
@@ -87,8 +89,9 @@ def _found_named(model: "LoadedModel", profile: "Profile", faulty: dict[Path, st
         found += seen
         if seen and diagnosis.component == part:
             named += 1
+            by_part[part] += 1
             delays.append((diagnosis.detected_at_s or 0.0) - FAULT_FROM_S)
-    return found, named, delays
+    return found, named, delays, by_part
 
 
 def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
@@ -102,14 +105,16 @@ def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
                else api.CalibrateOptions())
     result = api.calibrate(calibration, profile, model, options=options)
     alarms = sum(api.diagnose(p, profile, model).verdict.value == "fault" for p in normal)
-    found, named, _ = _found_named(model, profile, faulty)
-    weak_found, weak_named, delays = _found_named(model, profile, weakened)
+    found, named, _, _ = _found_named(model, profile, faulty)
+    weak_found, weak_named, delays, by_part = _found_named(model, profile, weakened)
     shown = ", ".join(f"{name} {mode.thresholds[name]:g} %" for mode in result.modes
                       for name in mode.evidence) or "none judged"
     delay = (f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "–")
     return (f"`{vehicle}`", label, shown, f"{alarms}/{len(normal)}",
             f"{found}/{len(faulty)}", f"{named}/{len(faulty)}",
-            f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}", delay)
+            f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}", delay,
+            ", ".join(f"{part} {by_part[part]}/{len(WEAKENED_SEEDS)}"
+                      for part in dict.fromkeys(weakened.values())))
 
 
 def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
@@ -160,7 +165,10 @@ def main() -> None:
           "named | delay (s) |")
     print("|---|---|---|---|---|---|---|---|---|")
     for row in rows:
-        print("| " + " | ".join(row) + " |")
+        print("| " + " | ".join(row[:-1]) + " |")
+    print(f"\nWeakened to {WEAKENED:.0%}, named per actuator (of {len(WEAKENED_SEEDS)} seeds):\n")
+    for row in rows:
+        print(f"- {row[0]}, {row[1]}: {row[-1]}")
 
 
 if __name__ == "__main__":

@@ -91,10 +91,8 @@ class CommandRelations(WindowedRelations):
     measure = "extra effort"
 
     def unpredicted(self, k: int) -> str:
-        """Why actuator k is not judged where its relation lacks skill."""
-        skill = self.skill[k]
-        return ("the relation does not predict its commands better than their mean"
-                + ("" if np.isnan(skill) else f": skill {skill:.2f}"))
+        """Why actuator k is not judged where its relation lacks skill (its skill aside)."""
+        return "the relation does not predict its commands better than their mean"
 
     def rests_on(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray,
                  actuators: Sequence[int]) -> tuple[int, ...] | None:

@@ -64,7 +64,9 @@ def learn_relations_forms(training: Sequence[RelationLog], heldout: Sequence[Rel
     kept, other = (thrust, commands) if _median(thrust) < _median(commands) else (
         commands, thrust)
     why = (f"{_NAMES[kept.measure]} judges a loss of thrust from {_median(kept):.0%} (median "
-           f"over the actuators), {_NAMES[other.measure]} from {_median(other):.0%}")
+           f"over the actuators), {_NAMES[other.measure]} from {_median(other):.0%}"
+           if _median(kept) < 1.0 else f"neither form judges most actuators; "
+           f"{_NAMES[kept.measure]} kept")
     return replace(kept, fitted_on=replace(kept.fitted_on, chosen=why))
 
 

@@ -108,10 +108,9 @@ class ThrustRelations(WindowedRelations):
     measure = "thrust lost"
 
     def unpredicted(self, k: int) -> str:
-        """Why actuator k is not judged where its relation lacks skill."""
-        skill = self.skill[k]
+        """Why actuator k is not judged where its relation lacks skill (its skill aside)."""
         return ("the motion it drives is not predicted from the thrusts better than by its "
-                "mean change" + ("" if np.isnan(skill) else f": skill {skill:.2f}"))
+                "mean change")
 
     def undriven(self, window_s: float) -> str:
         """Why an actuator with a threshold was not judged in a log."""

@@ -142,7 +142,8 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
     for k, name in enumerate(names):
         skill = relations.skill[k]
         if not skill >= MIN_SKILL:
-            not_judged[name] = f"not judged ({relations.unpredicted(k)})"
+            not_judged[name] = (f"not judged ({relations.unpredicted(k)}"
+                                + ("" if np.isnan(skill) else f": skill {skill:.2f}") + ")")
         elif all(np.isnan(w.thresholds[k]) for w in windows):
             not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
         elif all(p[name] is None for p in by_window):
