@@ -143,8 +143,10 @@ def relate(
 
     A controller holding heading, depth or attitude hides a weakened thruster from the
     motion by driving it harder; the commands then depart from what the motion needs. This
-    learns that relation from normal logs (DMS runs and open-loop logs are left out) and
-    sets, per actuator, how much extra effort normal logs reach. It also records where the
+    learns that relation from normal logs (DMS runs are left out) both ways: each command
+    from the motion (open-loop logs left out), and the motion from each actuator's thrust;
+    it keeps the one that judges the smaller loss of thrust, says which and why, and sets
+    per actuator how much extra effort (or thrust lost) normal logs reach. It also records where the
     normal logs recorded from rest start, so that a sensor wrong from the first sample is
     found. 'auvdiag train' does both itself; use this command for a model trained before,
     or to learn from other dives. What cannot be learned keeps what the model had."""
