@@ -165,3 +165,20 @@ def test_a_sensor_misreading_the_motion_is_kept_among_the_candidates(learnt, blu
                                               301))
     assert dead.named == ("thruster_2",) and dead.rests_on == ()
     assert dead.alarm_s is not None and 60.0 < dead.alarm_s < 70.0
+
+
+def test_a_peak_below_zero_counts_as_zero_when_thresholds_are_fitted_to_a_budget(learnt,
+                                                                                  bluerov2):
+    """The check judges one way: a log whose actuator gave more than expected all along
+    (its largest loss below zero) came no nearer an alarm than one at zero."""
+    from auvdiag_cli.jobs.budget import command_judges
+
+    relations, logs = learnt
+    check = _judged(relations, bluerov2, logs[0])
+    below = dict(check.peak_by_window[0], motor_5=-0.4)
+    judges = command_judges(relations, [replace(check, peak_by_window=(
+        below, *check.peak_by_window[1:])), check], bluerov2.command_names)
+    main = next(j for j in judges if j.name == "motor_5" and j.mode is None)
+    assert main.values[0] == 0.0
+    assert main.values[1] == pytest.approx(check.peak_by_window[0]["motor_5"]
+                                           * relations.thresholds[4])
