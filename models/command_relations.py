@@ -32,13 +32,12 @@ from models.relation_windows import (
     RelationWindow,
     WindowedRelations,
     groups_of,
-    numbers_in,
-    numbers_out,
     peaks_by_window,
     thresholds_from,
     trailing_sum,
     window_for,
     window_steps_for,
+    windows_fields,
 )
 
 __all__ = ["WINDOW_S", "CommandRelations", "RelationLog", "RelationsRefused", "fit_relations",
@@ -156,26 +155,17 @@ class CommandRelations(WindowedRelations):
         return np.nan_to_num(share, nan=0.0)
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
-            "basis": self.basis.tolist(), "thresholds": numbers_out(self.thresholds),
-            "skill": numbers_out(self.skill), "groups": [list(g) for g in self.groups],
-            "dt_s": self.dt_s, "window_steps": self.window_steps,
-            "smoothing_steps": self.smoothing_steps, "fitted_on": self.fitted_on.to_json(),
-            **({"shorter_windows": [w.to_json() for w in self.shorter]} if self.shorter
-               else {}),
-        }
+        return {"sensor_scale": self.sensor_scale.tolist(), "weights": self.weights.tolist(),
+                "basis": self.basis.tolist(), "smoothing_steps": self.smoothing_steps,
+                **self.windows_json()}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "CommandRelations":
         """Raises ValueError where a window or an array does not fit the commands."""
-        relations = cls(
-            np.asarray(data["sensor_scale"], float), np.asarray(data["weights"], float),
-            np.asarray(data["basis"], float), numbers_in(data["thresholds"]),
-            numbers_in(data["skill"]), tuple(tuple(int(i) for i in g) for g in data["groups"]),
-            float(data["dt_s"]), int(data["window_steps"]), int(data["smoothing_steps"]),
-            FittedOn.from_json(data.get("fitted_on", {})),
-            tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
+        relations = cls(sensor_scale=np.asarray(data["sensor_scale"], float),
+                        weights=np.asarray(data["weights"], float),
+                        basis=np.asarray(data["basis"], float),
+                        smoothing_steps=int(data["smoothing_steps"]), **windows_fields(data))
         m = relations.weights.shape[1]
         relations.check_windows(m, "command relations")
         if relations.skill.shape != (m,) or relations.basis.shape[0] != m:

@@ -136,12 +136,30 @@ class WindowedRelations:
     def group_of(self, k: int) -> tuple[int, ...]:
         return next(g for g in self.groups if k in g)
 
+    def windows_json(self) -> dict[str, Any]:
+        """What every form writes of its windows, thresholds and fitting."""
+        return {"thresholds": numbers_out(self.thresholds), "skill": numbers_out(self.skill),
+                "groups": [list(g) for g in self.groups], "dt_s": self.dt_s,
+                "window_steps": self.window_steps, "fitted_on": self.fitted_on.to_json(),
+                **({"shorter_windows": [w.to_json() for w in self.shorter]} if self.shorter
+                   else {})}
+
     def check_windows(self, m: int, what: str) -> None:
         """Raises ValueError where a window's thresholds do not fit ``m`` commands."""
         for window in self.windows:
             if window.steps < 1 or window.thresholds.shape != (m,):
                 raise ValueError(f"{what}: a window of {window.steps} steps with "
                                  f"{window.thresholds.size} thresholds for {m} commands")
+
+
+def windows_fields(data: dict[str, Any]) -> dict[str, Any]:
+    """The fields `WindowedRelations.windows_json` wrote, read back (keyword arguments)."""
+    return {"thresholds": numbers_in(data["thresholds"]), "skill": numbers_in(data["skill"]),
+            "groups": tuple(tuple(int(i) for i in g) for g in data["groups"]),
+            "dt_s": float(data["dt_s"]), "window_steps": int(data["window_steps"]),
+            "fitted_on": FittedOn.from_json(data.get("fitted_on", {})),
+            "shorter": tuple(RelationWindow.from_json(w)
+                             for w in data.get("shorter_windows", []))}
 
 
 class JudgesWindows(Protocol):

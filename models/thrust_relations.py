@@ -39,13 +39,12 @@ from models.relation_windows import (
     RelationWindow,
     WindowedRelations,
     groups_of,
-    numbers_in,
-    numbers_out,
     peaks_by_window,
     thresholds_from,
     trailing_sum,
     window_for,
     window_steps_for,
+    windows_fields,
 )
 
 AHEAD_S = 0.5
@@ -197,27 +196,17 @@ class ThrustRelations(WindowedRelations):
         return tuple(rests) if whole > 0 else ()
 
     def to_json(self) -> dict[str, Any]:
-        return {
-            "form": "thrust", "sensor_scale": self.sensor_scale.tolist(),
-            "weights": np.round(self.weights, 9).tolist(), "noise": self.noise.tolist(),
-            "thresholds": numbers_out(self.thresholds), "skill": numbers_out(self.skill),
-            "groups": [list(g) for g in self.groups], "dt_s": self.dt_s,
-            "window_steps": self.window_steps, "ahead_steps": self.ahead_steps,
-            "fitted_on": self.fitted_on.to_json(),
-            **({"shorter_windows": [w.to_json() for w in self.shorter]} if self.shorter
-               else {}),
-        }
+        return {"form": "thrust", "sensor_scale": self.sensor_scale.tolist(),
+                "weights": np.round(self.weights, 9).tolist(), "noise": self.noise.tolist(),
+                "ahead_steps": self.ahead_steps, **self.windows_json()}
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "ThrustRelations":
         """Raises ValueError where a window or an array does not fit the commands."""
-        relations = cls(
-            np.asarray(data["sensor_scale"], float), np.asarray(data["weights"], float),
-            np.asarray(data["noise"], float), numbers_in(data["thresholds"]),
-            numbers_in(data["skill"]), tuple(tuple(int(i) for i in g) for g in data["groups"]),
-            float(data["dt_s"]), int(data["window_steps"]), int(data["ahead_steps"]),
-            FittedOn.from_json(data.get("fitted_on", {})),
-            tuple(RelationWindow.from_json(w) for w in data.get("shorter_windows", [])))
+        relations = cls(sensor_scale=np.asarray(data["sensor_scale"], float),
+                        weights=np.asarray(data["weights"], float),
+                        noise=np.asarray(data["noise"], float),
+                        ahead_steps=int(data["ahead_steps"]), **windows_fields(data))
         m = len(relations.skill)
         relations.check_windows(m, "thrust relations")
         n = len(relations.sensor_scale)
