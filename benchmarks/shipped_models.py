@@ -18,7 +18,7 @@ def _figure(value: float | None, digits: int) -> str:
 
 def main() -> None:
     from auvdiag_cli import api
-    from auvdiag_cli.jobs.train import paper_model_error
+    from auvdiag_cli.jobs.skill_record import paper_model_error
 
     lines = [f"Read {date.today()} from the model cards (`api.load_model(profile=…).card`).", "",
              "| model | signal | held-out error (rms) | paper's training error | skill | "

@@ -18,6 +18,7 @@ signature to the departure. Two actuators whose signatures are the same over nor
 (e.g. a vectored ROV's diagonally opposite thrusters) cannot be told apart: they form a
 group, named together."""
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -88,6 +89,15 @@ class CommandRelations(WindowedRelations):
     shorter: tuple[RelationWindow, ...] = ()
 
     measure = "extra effort"
+
+    def as_loss(self, measured: np.ndarray) -> np.ndarray:
+        """With thrust growing as the command's square (as the thrust form takes it), an
+        extra α of command makes up for 1 - 1/(1 + α)² of the thrust lost."""
+        with np.errstate(invalid="ignore"):
+            return np.asarray(1.0 - 1.0 / (1.0 + measured) ** 2)
+
+    def from_loss(self, loss: float) -> float:
+        return 1.0 / math.sqrt(1.0 - loss) - 1.0
 
     def unpredicted(self, k: int) -> str:
         """Why actuator k is not judged where its relation lacks skill (its skill aside)."""
@@ -263,9 +273,11 @@ def _heldout_thresholds(relations: CommandRelations, heldout: Sequence[RelationL
                         window_steps: int, skill: np.ndarray
                         ) -> tuple[tuple[int, ...], np.ndarray]:
     """Over windows of ``window_steps``: how many steps of the held-out logs judged each
-    actuator, and the extra effort it may show (`thresholds_from` their peak of |α|)."""
+    actuator, and the extra effort it may show (`thresholds_from` their peak of |α|; at
+    least the extra command that makes up for the least loss either form judges)."""
     peak, judged = peaks_by_window(relations, heldout, window_steps, len(skill))
-    return tuple(judged.tolist()), thresholds_from(peak, judged, window_steps, skill)
+    return tuple(judged.tolist()), thresholds_from(peak, judged, window_steps, skill,
+                                                   relations.least_judged(window_steps))
 
 
 def _skill(relations: CommandRelations, heldout: Sequence[RelationLog], mean: np.ndarray

@@ -28,19 +28,16 @@ def relations_from_json(entry: dict[str, Any]) -> Relations:
 
 def smallest_loss(relations: Relations) -> np.ndarray:
     """Per actuator, the share of its thrust it must lose before the main window's threshold
-    is reached (1: never judged). The commands' form judges the extra command a controller
-    asks; with thrust growing as the command's square (as the thrust form takes it), an
-    extra α of command makes up for 1 - 1/(1 + α)² of the thrust lost."""
-    allowed = relations.thresholds
+    is reached (1: never judged; the commands' form's extra command converted, `as_loss`)."""
+    allowed = relations.as_loss(relations.thresholds)
     judged = np.isfinite(allowed) & (np.nan_to_num(relations.skill, nan=-1.0) >= MIN_SKILL)
-    if isinstance(relations, CommandRelations):
-        with np.errstate(invalid="ignore"):
-            allowed = 1.0 - 1.0 / (1.0 + allowed) ** 2
     return np.where(judged, np.minimum(allowed, 1.0), 1.0)
 
 
 def _median(relations: Relations) -> float:
-    return float(np.median(smallest_loss(relations)))
+    """Rounded: two forms both at the least loss judged (`least_loss`) tie exactly, where
+    the commands' form's converted floor differs from the thrust form's in the last bits."""
+    return round(float(np.median(smallest_loss(relations))), 9)
 
 
 def learn_relations_forms(training: Sequence[RelationLog], heldout: Sequence[RelationLog],

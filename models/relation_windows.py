@@ -17,6 +17,12 @@ MIN_WINDOW_S = 5.0        # logs too short for WINDOW_S: windows of half a log, 
 # least MIN_WINDOW_S), with thresholds of its own: noisier, it sees a large extra effort only.
 SHORTER_WINDOW = 1 / 3
 MARGIN = 1.5              # thresholds: this many times the held-out normal peak
+# The least share of thrust lost that either form judges over its main window (over a
+# shorter one, as much more as its noise is: by the square root of how much shorter): the
+# thrust a command gives drifts by a few percent with the battery, the water and the
+# temperature. On the simulated quadrotor three normal missions set 2 % (thrust form) and
+# 3 % extra command (commands' form), which normal missions of another seed crossed.
+MIN_LOSS = 0.1
 
 
 @dataclass(frozen=True)
@@ -103,6 +109,18 @@ class WindowedRelations:
     fitted_on: FittedOn
     shorter: tuple[RelationWindow, ...]
     measure: str                     # what the windows measure ("extra effort", "thrust lost")
+
+    def as_loss(self, measured: np.ndarray) -> np.ndarray:
+        """The share of thrust lost that this much of the measure makes up for."""
+        raise NotImplementedError
+
+    def from_loss(self, loss: float) -> float:
+        """The measure that makes up for this share of thrust lost (`as_loss` inverted)."""
+        raise NotImplementedError
+
+    def least_judged(self, window_steps: int) -> float:
+        """The least of the measure judged over a window of ``window_steps`` (`least_loss`)."""
+        return self.from_loss(least_loss(window_steps, self.window_steps))
 
     @property
     def windows(self) -> tuple[RelationWindow, ...]:
@@ -213,9 +231,14 @@ def peaks_by_window(relations: JudgesWindows, logs: Sequence[RelationLog],
             finite.sum(axis=0))
 
 
+def least_loss(window_steps: int, main_steps: int) -> float:
+    """MIN_LOSS over a window of ``window_steps``, the main one of ``main_steps``."""
+    return MIN_LOSS * math.sqrt(main_steps / window_steps)
+
+
 def thresholds_from(peak: np.ndarray, judged_steps: np.ndarray, window_steps: int,
-                    skill: np.ndarray) -> np.ndarray:
-    """MARGIN times the held-out peak; NaN where less than one window judged it, or its
-    relation has no skill."""
+                    skill: np.ndarray, floor: float) -> np.ndarray:
+    """MARGIN times the held-out peak, at least ``floor``; NaN where less than one window
+    judged it, or its relation has no skill."""
     judged = (judged_steps >= window_steps) & (skill >= MIN_SKILL)
-    return np.where(judged, MARGIN * peak, np.nan)
+    return np.where(judged, np.maximum(MARGIN * peak, floor), np.nan)

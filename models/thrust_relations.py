@@ -58,12 +58,6 @@ MIN_ROWS_PER_FEATURE = 20
 # windows (named in 43), in 58 over 45 s (named in 50) and in 58 over 60 s (49), with no
 # false alarm on 20 normal dives at any of them.
 WINDOW_S = 45.0
-# The least share of thrust lost that is judged over the main window (over a shorter one,
-# as much more as its noise is: by the square root of how much shorter): the thrust a
-# command gives drifts by a few percent with the battery, the water and the temperature,
-# and on the simulated quadrotor three normal missions set 2 %, which normal missions of
-# other seeds crossed at take-off.
-MIN_LOSS = 0.1
 # The thrusts' standardised weights are shrunk by this times the rows (`_ridge`): on the
 # simulated BlueROV2 its vertical pair's effect was split evenly (0 split it 15:1 and left one
 # thruster unjudged; 0.03 judged it, but found fewer weak horizontal thrusters).
@@ -105,6 +99,12 @@ class ThrustRelations(WindowedRelations):
     shorter: tuple[RelationWindow, ...] = ()
 
     measure = "thrust lost"
+
+    def as_loss(self, measured: np.ndarray) -> np.ndarray:
+        return measured
+
+    def from_loss(self, loss: float) -> float:
+        return loss
 
     def unpredicted(self, k: int) -> str:
         """Why actuator k is not judged where its relation lacks skill (its skill aside)."""
@@ -323,8 +323,8 @@ def fit_thrust_relations(logs: Sequence[RelationLog], sensor_scale: Sequence[flo
         peak = np.max([p for p, _ in peaks], axis=0) if peaks else np.zeros(m)
         judged = np.sum([j for _, j in peaks], axis=0) if peaks else np.zeros(m)
         judged_steps = judged if index == 0 else judged_steps
-        floor = MIN_LOSS * np.sqrt(relations.window_steps / w.steps)
-        thresholds.append(np.maximum(thresholds_from(peak, judged, w.steps, skill), floor))
+        thresholds.append(thresholds_from(peak, judged, w.steps, skill,
+                                          relations.least_judged(w.steps)))
     fitted_on = replace(relations.fitted_on,
                         heldout_judged_steps=tuple(int(n) for n in judged_steps))
     return replace(relations.with_window_thresholds(thresholds), skill=skill,

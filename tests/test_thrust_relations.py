@@ -182,3 +182,29 @@ def test_a_peak_below_zero_counts_as_zero_when_thresholds_are_fitted_to_a_budget
     assert main.values[0] == 0.0
     assert main.values[1] == pytest.approx(check.peak_by_window[0]["motor_5"]
                                            * relations.thresholds[4])
+
+
+def test_neither_form_judges_less_than_the_least_loss_nor_does_a_budget(learnt, bluerov2):
+    """A thrust drifts by a few percent with the battery and the water: however quiet the
+    held-out logs, neither form's threshold lies below a 10 % loss over its main window
+    (the commands' form as the extra command that makes it up, 1/√0.9 - 1), nor below it
+    scaled by √3 over the window a third as long; a budget's law keeps the floor too."""
+    from auvdiag_cli.jobs.budget import with_command_thresholds
+    from models.relation_windows import thresholds_from
+
+    relations, logs = learnt
+    commands = fit_relations(logs[:2], logs[2:], [
+        bluerov2.full_scales[n] for n in bluerov2.sensor_names], bluerov2.dt_s)
+    for form in (relations, commands):
+        main, shorter = form.windows[0].steps, form.windows[1].steps
+        assert form.as_loss(np.array(form.least_judged(main))) == pytest.approx(0.1)
+        assert form.as_loss(np.array(form.least_judged(shorter))) == pytest.approx(
+            0.1 * np.sqrt(main / shorter))
+        quiet = thresholds_from(np.array([0.0, 0.01, 1.0]), np.full(3, main), main,
+                                np.full(3, 0.9), form.least_judged(main))
+        assert quiet.tolist() == pytest.approx([form.least_judged(main)] * 2 + [1.5])
+    assert commands.least_judged(commands.window_steps) == pytest.approx(1 / np.sqrt(0.9) - 1)
+    fitted = with_command_thresholds(relations, {(None, "motor_5"): 0.01,
+                                                 (None, "motor_6"): 0.5},
+                                     bluerov2.command_names)
+    assert fitted.thresholds[4:].tolist() == pytest.approx([0.1, 0.5])

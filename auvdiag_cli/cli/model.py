@@ -75,7 +75,7 @@ def train(
     the training report then says so). Exit status 1 when nothing can be judged (no model
     is written unless --keep-unskilled)."""
     from auvdiag_cli import api
-    from auvdiag_cli.jobs.train import paper_model_error
+    from auvdiag_cli.jobs.skill_record import paper_model_error
     from auvdiag_cli.reports.training import training_lines
     from models.fast import PREDICTOR_KINDS
 

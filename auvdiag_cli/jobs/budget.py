@@ -281,12 +281,15 @@ def with_command_thresholds(relations: Relations,
                             allowed: Mapping[tuple[str | None, str], float],
                             command_names: Sequence[str]) -> Relations:
     """The relations with the thresholds fitted to the budget (``allowed``: (mode, command)
-    -> threshold, as `command_judges` names them); the others kept."""
+    -> threshold, as `command_judges` names them; never below the least loss the relation
+    judges, `least_judged`); the others kept."""
     windows = []
     for w, window in enumerate(relations.windows):
         extra = window.thresholds.copy()
+        least = relations.least_judged(window.steps)
         for k, name in enumerate(command_names):
-            extra[k] = allowed.get((relations.window_label(w), name), extra[k])
+            fitted = allowed.get((relations.window_label(w), name))
+            extra[k] = extra[k] if fitted is None else max(fitted, least)
         windows.append(extra)
     return relations.with_window_thresholds(windows)
 

@@ -76,7 +76,7 @@ def _mode_key(segment_name: str) -> str:
     return MISSION_MODE if segment_name == "MISSION" else segment_name
 
 
-def _g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
+def g_by_mode(diagnosis: Diagnosis) -> dict[str, np.ndarray]:
     """The log's g per mode (`Diagnosis.judged_g`: NaN where it set a signal aside)."""
     g, time_s = diagnosis.judged_g, diagnosis.histories.time_s
     result: dict[str, list[np.ndarray]] = {}
@@ -156,7 +156,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
                                                       diagnoses)
     judged = replay_judged(model, profile)
-    modes = _margin_modes(labels, per_log, profile, margin, floor_at_profile, model)
+    modes = margin_modes(labels, per_log, profile, margin, floor_at_profile, model)
     hours = sum(m.hours for m in modes)
     if hours == 0:
         raise UsageError("no usable normal data in the calibration logs")
@@ -216,13 +216,13 @@ def _g_per_log(model: LoadedModel, profile: Profile, logs: Sequence[Path],
                                  if p in in_sample], profile.sensor_names) if in_sample else {}
     factor = np.asarray([widening.get(name, 1.0) for name in profile.sensor_names])
     per_log = [{mode: g * factor if path in in_sample else g
-                for mode, g in _g_by_mode(d).items()}
+                for mode, g in g_by_mode(d).items()}
                for path, d in zip(logs, diagnoses, strict=True)]
     labels = [f"{p.name} (in-sample, widened)" if p in in_sample else p.name for p in logs]
     return in_sample, widening, per_log, labels
 
 
-def _margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
+def margin_modes(labels: Sequence[str], per_log: Sequence[dict[str, np.ndarray]],
                   profile: Profile, margin: float, floor_at_profile: bool,
                   model: LoadedModel) -> list[ModeCalibration]:
     """Each mode's thresholds by calibrate's rule: margin x the largest g on the logs, for

@@ -17,8 +17,10 @@ from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.jobs.candidates import Candidates, NetworkFit, fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts
+from auvdiag_cli.jobs.heldout_thresholds import heldout_thresholds, raised
 from auvdiag_cli.jobs.holdout import HELD_OUT_FRACTION
 from auvdiag_cli.jobs.relate import learn_relations
+from auvdiag_cli.jobs.skill_record import skill_metadata
 from auvdiag_cli.jobs.tracking_fit import tracking_entry
 from auvdiag_cli.jobs.training_change import training_change_peaks
 from auvdiag_cli.jobs.training_logs import (
@@ -38,9 +40,6 @@ from models.fast import NETWORK, PREDICTOR_KINDS
 from models.relation_forms import Relations
 from models.skill import (
     HORIZON_CANDIDATES_S,
-    MIN_SCORED_SAMPLES,
-    MIN_SKILL,
-    SKILL_MARGIN,
     HorizonScore,
     ScoringLog,
     assess,
@@ -49,27 +48,6 @@ from models.skill import (
 
 if TYPE_CHECKING:
     from models.store import LoadedModel
-
-# The paper's model errors after training (Takai & Ura 1999), for comparison in reports.
-PAPER_MODEL_ERROR = {"flow": 0.0175, "yaw_rate": 0.0168}
-PAPER_VEHICLE = "twin-burger"
-SKILL_METHOD = ("skill = 1 - rms_model / min(rms_hold, rms_mean) on held-out normal data, "
-                "replays re-starting every horizon from a median start state; versus_linear "
-                "= 1 - rms_model / rms_linear")
-PREDICTOR_METHOD = ("each signal is read from the predictor with the best held-out skill at "
-                    "the horizon chosen: linear (least squares), linear-replay (the same "
-                    "refined against the replay's error), network, or network-on-linear; "
-                    "a later one must win by "
-                    f"{SKILL_MARGIN} skill")
-SKILL_THRESHOLD_REASON = (
-    "a stuck or dead sensor leaves a residual of about rms_hold; it clears a threshold of "
-    "1.5 x the normal g only if rms_hold / rms_model >= 1.5, i.e. skill >= 1/3")
-
-
-def paper_model_error(profile: Profile) -> dict[str, float]:
-    """The paper's figures, for the paper's vehicle only: no other vehicle is comparable."""
-    return dict(PAPER_MODEL_ERROR) if profile.name == PAPER_VEHICLE else {}
-
 
 @dataclass(frozen=True)
 class TrainOptions:
@@ -112,6 +90,8 @@ class TrainingResult:
     by_predictor: dict[str, list[HorizonScore]] = field(default_factory=dict)
     predictor_notes: tuple[str, ...] = ()   # predictors left out, and why
     input_names: tuple[str, ...] = ()       # measured inputs driving it beside the commands
+    # The profile's g thresholds the held-out logs raised ('mode signal from -> to').
+    thresholds_raised: tuple[str, ...] = ()
 
     @property
     def judges_anything(self) -> bool:
@@ -180,8 +160,9 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
                                                      profile, progress),
                      "tracking": tracking_entry(profile, [*training, *heldout], progress)}
-        _save(output, fitted, metadata, profile, [*training_paths, *heldout_paths], options,
-              progress)
+        raised_by_heldout = _save(output, fitted, metadata, profile,
+                                  (training_paths, heldout_paths), options, progress)
+        result = replace(result, thresholds_raised=tuple(raised_by_heldout))
     return result
 
 
@@ -212,18 +193,24 @@ def _network_fit(training: Sequence[ScoringLog], options: TrainOptions,
 
 
 def _save(output: Path, fitted: Candidates, metadata: dict[str, Any], profile: Profile,
-          logs: Sequence[Path], options: "TrainOptions", progress: Callable[[str], None]
-          ) -> None:
-    """Write the model, then add the change test's largest statistics on the logs it was
-    trained on (`training_change`: they need the model), which calibrate counts beside its
-    own logs."""
+          logs: tuple[Sequence[Path], Sequence[Path]], options: "TrainOptions",
+          progress: Callable[[str], None]) -> list[str]:
+    """Write the model, then add what needs it: the change test's largest statistics on the
+    logs (trained on, held out) it learnt from (`training_change`), which calibrate counts
+    beside its own logs, and the g thresholds the held-out logs raise
+    (`heldout_thresholds`). Returns those raised."""
     from models.store import load_model, save_model, write_model
 
     save_model(output, fitted.network, fitted.normaliser, metadata, fitted.extra)
     model = load_model(output)
     model.update_entries(change_training=training_change_peaks(
-        model, profile, logs, options.healthy, progress))
+        model, profile, [*logs[0], *logs[1]], options.healthy, progress))
+    if logs[1]:
+        progress(f"g on the {len(logs[1])} held-out log(s)")
+    thresholds = heldout_thresholds(model, profile, logs[1], options.healthy)
+    model.update_entries(thresholds=thresholds)
     write_model(model, output)
+    return raised(profile.thresholds, thresholds)
 
 
 def _learn_beside_the_model(read: Sequence[ReadLog], read_heldout: Sequence[ReadLog],
@@ -265,48 +252,6 @@ def _fit_ahead(training: Sequence[ScoringLog], heldout: Sequence[ScoringLog], wh
 
 def _complete_steps(log: ScoringLog) -> int:
     return int(np.isfinite(log.sensors).all(axis=1).sum())
-
-
-def _skill_record(score: HorizonScore) -> dict[str, Any]:
-    def number(value: float) -> float | None:
-        return round(value, 6) if math.isfinite(value) else None
-
-    return {"horizon_s": score.horizon_s, "signals": {
-        name: {"skill": number(s.skill), "judged": s.judged, "samples": s.samples,
-               "versus_linear": number(s.versus_linear), "model_rms": number(s.model_rms),
-               **{f"{k}_rms": number(v) for k, v in s.baseline_rms.items()}}
-        for name, s in score.signals.items()}}
-
-
-def skill_metadata(scores: Sequence[HorizonScore], chosen: HorizonScore,
-                   heldout_names: Sequence[str], profile: Profile) -> dict[str, Any]:
-    """The model.json keys that say how far the model can be trusted: its horizon, its skill
-    per signal at that horizon (and at every horizon tried), its held-out error."""
-    record = _skill_record(chosen)["signals"]
-    return {
-        "horizon_s": chosen.horizon_s,        # null: the paper's free run
-        "skill": {
-            "method": SKILL_METHOD,
-            "judged_from": round(MIN_SKILL, 4),
-            "why": SKILL_THRESHOLD_REASON,
-            "signals": {name: {"skill": record[name]["skill"], "judged": s.judged,
-                               "samples": s.samples, "best_naive": s.best_naive,
-                               "versus_linear": record[name]["versus_linear"]}
-                        for name, s in chosen.signals.items()},
-            "judged_from_samples": MIN_SCORED_SAMPLES,
-            "horizons": [_skill_record(s) for s in scores],
-        },
-        "predictors": {
-            "method": PREDICTOR_METHOD,
-            "per_signal": dict(chosen.predictors),
-        },
-        "heldout_error": {
-            "logs": list(heldout_names),
-            "horizon_s": chosen.horizon_s,
-            "rms": {name: record[name]["model_rms"] for name in chosen.signals},
-            "paper_rms": paper_model_error(profile),
-        },
-    }
 
 
 def _input_entries(profile: Profile, training: Sequence[ScoringLog]) -> list[dict[str, Any]]:

@@ -109,6 +109,11 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float], profile:
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
+    if result.thresholds_raised:
+        lines.append("g thresholds: the profile's, raised to 1.5 x the largest g the held-out "
+                     "log(s) reached where that is more (" + ", ".join(result.thresholds_raised)
+                     + "); 'auvdiag calibrate' on normal logs the model has not seen sets "
+                       "them anew")
     groups = ([] if isinstance(result.effort, Refused)
               else [setup.group for setup in result.effort.setups])
     return lines + relation_lines(result.command_relations, profile.command_names,
