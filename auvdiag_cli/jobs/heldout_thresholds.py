@@ -24,13 +24,13 @@ Thresholds = dict[str, dict[str, float]]
 def heldout_thresholds(model: LoadedModel, profile: Profile, heldout: Sequence[Path],
                        healthy: HealthyParts) -> Thresholds:
     """Per mode and signal: the profile's threshold, or the margin times the largest g the
-    ``heldout`` logs (the parts of them trained on, ``healthy``) reach where that is more."""
+    ``heldout`` logs (the parts of them trained on, ``healthy``) reach where that is more;
+    ``model`` as written, with the profile's thresholds."""
     thresholds = {mode: dict(values) for mode, values in profile.thresholds.items()}
     if not heldout:
         return thresholds
-    base = model.with_entries(thresholds=profile.thresholds)
     per_log = [g_by_mode(diagnose_ingested(ingest(path, profile, part=healthy.of(path)),
-                                           profile, base)) for path in heldout]
+                                           profile, model)) for path in heldout]
     for mode in margin_modes([path.name for path in heldout], per_log, profile,
                              DEFAULT_CALIBRATION.margin, True, model):
         thresholds[mode.mode] = mode.thresholds
