@@ -1,19 +1,15 @@
 """A vehicle's thresholds from the handful of normal logs a user has: a model trained on
-three normal missions, its thresholds set by `calibrate` on two more, by the margin rule
-(1.5 x the largest g) and to a false-alarm budget (`--false-alarm-rate 0.01`, which with
-fewer than five logs fits each signal's g to blocks of them), and to the budget on those
-two and the three training logs (five logs: a law of each judge's peaks, the training logs'
-in-sample g widened as `calibrate` does); then false alarms on ten
-normal missions of other seeds, and every fault of the simulator's mission scenarios (each
-actuator dead or at half its thrust, each sensor dead, from 60 s) found and named; and each
-actuator weakened to 70 % of its thrust from 60 s (two noise seeds), found and named by the
-whole tool (motion, commands against the motion, change test, effort shares), with the
-detection's delay.
-
-The simulated quadrotor (`arducopter_quad`, DataFlash logs as ArduCopter writes them) and
-BlueROV2 (`bluerov2`, MAVLink .tlog), each flown by its profile's controller.
-
-Usage: python benchmarks/few_logs.py > few_logs.md
+three normal missions, judged as trained (the profile's thresholds, raised to what its
+held-out log shows), with its thresholds set by `calibrate` on those three by the margin
+rule, and on two more by the margin rule (1.5 x the largest g) and to a false-alarm budget
+(`--false-alarm-rate 0.01`, which with fewer than five logs fits each signal's g to blocks
+of them), and to the budget on those two and the three training logs (five logs: a law of
+each judge's peaks, the training logs' in-sample g widened as `calibrate` does); then false
+alarms on ten normal missions of other seeds, and every fault of the simulator's mission
+scenarios (each actuator dead or at half its thrust, each sensor dead, from 60 s) found and
+named; and each actuator weakened to 70 % of its thrust from 60 s (ten noise seeds), found
+and named by the whole tool (motion, commands against the motion, change test, effort
+shares), with the detection's delay.
 """
 
 import argparse
@@ -98,17 +94,23 @@ def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
             budgeted: bool, normal: list[Path], faulty: dict[Path, str],
             weakened: dict[Path, str]) -> tuple[str, ...]:
     from auvdiag_cli import api
+    from auvdiag_cli.engine.judging import replay_judged
 
     profile = api.load_profile(vehicle)
     model = api.load_model(model_dir, profile)
     options = (api.CalibrateOptions(budget=api.FalseAlarmBudget(0.01)) if budgeted
                else api.CalibrateOptions())
-    result = api.calibrate(calibration, profile, model, options=options)
+    if calibration:
+        result = api.calibrate(calibration, profile, model, options=options)
+        shown = ", ".join(f"{name} {mode.thresholds[name]:g} %" for mode in result.modes
+                          for name in mode.evidence) or "none judged"
+    else:       # as trained: the profile's thresholds, raised to what its held-out log shows
+        mission = (model.card.thresholds or profile.thresholds)["mission"]
+        shown = ", ".join(f"{name} {mission[name]:g} %"
+                          for name in replay_judged(model, profile)) or "none judged"
     alarms = sum(api.diagnose(p, profile, model).verdict.value == "fault" for p in normal)
     found, named, _, _ = _found_named(model, profile, faulty)
     weak_found, weak_named, delays, by_part = _found_named(model, profile, weakened)
-    shown = ", ".join(f"{name} {mode.thresholds[name]:g} %" for mode in result.modes
-                      for name in mode.evidence) or "none judged"
     delay = (f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "–")
     return (f"`{vehicle}`", label, shown, f"{alarms}/{len(normal)}",
             f"{found}/{len(faulty)}", f"{named}/{len(faulty)}",
@@ -131,9 +133,14 @@ def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
                 for name, part in _weakened(vehicle).items() for seed in WEAKENED_SEEDS}
     model = work / f"{vehicle}-model"
     api.train(training, api.load_profile(vehicle), model)
-    # The margin rule and the budget on the two new logs; the budget on the training logs
-    # as well (five: a law of each judge's peaks; calibrate widens their in-sample g).
-    ways = (("margin rule (1.5 x the largest g), 2 logs", calibration, False),
+    # As trained (the three logs a user may have, and nothing more); the margin rule on
+    # those three (calibrate widens their in-sample g); the margin rule and the budget on
+    # the two new logs; the budget on the training logs as well (five: a law of each
+    # judge's peaks).
+    ways = (("as trained (no calibration: the profile's, raised to 1.5 x the held-out log's "
+             "g)", [], False),
+            ("margin rule (1.5 x the largest g), the 3 training logs", training, False),
+            ("margin rule (1.5 x the largest g), 2 logs", calibration, False),
             ("to a budget of 1 %, 2 logs (g from blocks of them)", calibration, True),
             ("to a budget of 1 %, these and the 3 training logs", [*training, *calibration],
              True))
@@ -150,12 +157,13 @@ def main() -> None:
     minutes = (time.perf_counter() - started) / 60
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), Python "
           f"{platform.python_version()}, in {minutes:.1f} min: each vehicle trained on "
-          f"{len(TRAINING)} normal missions (seed {TRAINING_SEED}), calibrated on "
-          f"{len(CALIBRATION)} more (seed {CALIBRATION_SEED}); {len(NORMAL) * len(NORMAL_SEEDS)}"
-          f" normal missions of seeds {', '.join(map(str, NORMAL_SEEDS))} and every fault of "
-          f"its mission scenarios from {FAULT_FROM_S:.0f} s (seed {FAULT_SEED}: each actuator "
-          "dead or at half its thrust, each sensor dead) diagnosed, and each actuator "
-          f"weakened to {WEAKENED:.0%} of its thrust from {FAULT_FROM_S:.0f} s (seeds "
+          f"{len(TRAINING)} normal missions (seed {TRAINING_SEED}), judged as trained, "
+          f"calibrated on those, or on {len(CALIBRATION)} more (seed {CALIBRATION_SEED}); "
+          f"{len(NORMAL) * len(NORMAL_SEEDS)} normal missions of seeds "
+          f"{', '.join(map(str, NORMAL_SEEDS))} and every fault of its mission scenarios "
+          f"from {FAULT_FROM_S:.0f} s (seed {FAULT_SEED}: each actuator dead or at half its "
+          "thrust, each sensor dead) diagnosed, and each actuator weakened to "
+          f"{WEAKENED:.0%} of its thrust from {FAULT_FROM_S:.0f} s (seeds "
           f"{', '.join(map(str, WEAKENED_SEEDS))}); found: a fault detected "
           f"{FAULT_FROM_S - 1:.0f} s or later (earlier, a false alarm), named: found and "
           "that part named; the delay: from the weakness's onset to its detection, median / "
