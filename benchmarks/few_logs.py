@@ -137,13 +137,13 @@ def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
     # those three (calibrate widens their in-sample g); the margin rule and the budget on
     # the two new logs; the budget on the training logs as well (five: a law of each
     # judge's peaks).
-    ways = (("as trained (no calibration: the profile's, raised to 1.5 x the held-out log's "
-             "g)", [], False),
-            ("margin rule (1.5 x the largest g), the 3 training logs", training, False),
-            ("margin rule (1.5 x the largest g), 2 logs", calibration, False),
-            ("to a budget of 1 %, 2 logs (g from blocks of them)", calibration, True),
-            ("to a budget of 1 %, these and the 3 training logs", [*training, *calibration],
-             True))
+    ways: list[tuple[str, list[Path], bool]] = [
+        ("as trained (no calibration: the profile's, raised to 1.5 x the held-out log's g)",
+         [], False),
+        ("margin rule (1.5 x the largest g), the 3 training logs", training, False),
+        ("margin rule (1.5 x the largest g), 2 logs", calibration, False),
+        ("to a budget of 1 %, 2 logs (g from blocks of them)", calibration, True),
+        ("to a budget of 1 %, these and the 3 training logs", [*training, *calibration], True)]
     return [_judged(vehicle, model, logs, label, budgeted, normal, faulty, weakened)
             for label, logs, budgeted in ways]
 
