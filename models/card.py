@@ -234,6 +234,9 @@ class ModelCard:
     calibration_days: tuple[str, ...] = ()
     # The controller's loops whose gain the change test judges (`models.tracking`).
     tracking: tuple[TrackingFit, ...] = ()
+    # signal -> the largest |value| the logs it learnt from reached (`engine.envelope`;
+    # none: trained before it was kept).
+    envelope: Mapping[str, float] = field(default_factory=dict)
     # model.json as the card writes it back: every entry, the records kept for people
     # (how it was trained and calibrated) among them, as JSON text so that it stays frozen.
     document_text: str = field(default="{}", repr=False, compare=False)
@@ -348,4 +351,6 @@ class ModelCard:
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
+            envelope=_frozen({str(k): float(v) for k, v in
+                              (meta.get("envelope") or {}).get("sensors", {}).items()}),
             document_text=json.dumps(meta))

@@ -28,6 +28,7 @@ from auvdiag_cli.engine.detection import (
     look_up,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
+from auvdiag_cli.engine.envelope import within_the_envelope
 from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
@@ -255,8 +256,11 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
-    return Diagnosis.of(seen, _conclude(seen, normal, detection, judging, log, matching,
-                                        thresholds, dms_starts, companion_runs))
+    finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
+                        dms_starts, companion_runs)
+    return Diagnosis.of(seen, within_the_envelope(finding, normal, dict(model.card.envelope),
+                                                  judging.judged, frame))
+
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,

@@ -54,6 +54,11 @@ class Judging:
     def judged_mask(self) -> np.ndarray:
         return np.asarray([name not in self.not_judged for name in self.sensor_names])
 
+    @property
+    def judged(self) -> list[str]:
+        """The signals the replay judges."""
+        return [name for name in self.sensor_names if name not in self.not_judged]
+
     def g(self, measured: np.ndarray, modelled: np.ndarray) -> np.ndarray:
         return residual_index(measured, modelled, self.scales, self.window)
 

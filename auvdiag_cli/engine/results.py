@@ -107,6 +107,8 @@ class Finding:
     degradation: Hypothesis | None = None      # a thruster weakened (kind "weakened")
     hypotheses: HypothesisTest | None = None
     notes: tuple[str, ...] = ()
+    # Why the verdict is undetermined where it is (None: nothing could be judged).
+    undetermined_because: str | None = None
 
     def noted(self, *notes: str) -> "Finding":
         return replace(self, notes=(*self.notes, *notes))

@@ -13,6 +13,7 @@ import numpy as np
 
 from auvdiag_cli import __version__
 from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.envelope import envelope_entry
 from auvdiag_cli.engine.start_check import learn_start_state, start_reading
 from auvdiag_cli.jobs.candidates import Candidates, NetworkFit, fit_candidates
 from auvdiag_cli.jobs.effort import learn_effort_model
@@ -155,7 +156,10 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, options.seed)
-        metadata |= {"command_relations": relations.to_json(),
+        metadata |= {"envelope": envelope_entry(
+                         [r.relation.sensors[r.relation.usable] for r in [*read, *read_heldout]],
+                         profile.sensor_names),
+                     "command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),
                                                      profile, progress),

@@ -8,6 +8,8 @@ from auvdiag_cli.reports.report_build import build_report, utc_text
 
 __all__ = ["diagnosis_to_dict", "utc_text", "verdict_title"]
 
+NOTHING_JUDGED = "no signal could be judged"
+
 
 def diagnosis_to_dict(diagnosis: Diagnosis) -> dict[str, object]:
     return build_report(diagnosis).to_json()
@@ -23,4 +25,6 @@ def verdict_title(report: Report) -> str:
     if report.verdict == "fault":
         named = report.named.replace("_", " ")
         return f"FAULT: {named or 'component not identified'}"
+    if report.verdict == "undetermined":
+        return f"UNDETERMINED: {report.undetermined_because or NOTHING_JUDGED}"
     return report.verdict.upper()

@@ -254,6 +254,7 @@ class Report:
     format: str = ""
     vehicle: str = ""
     verdict: str                      # "fault", "normal" or "undetermined"
+    undetermined_because: str | None = None   # None: no signal could be judged
     component: str | None = None
     candidates: tuple[str, ...] = ()
     case: int | None = None

@@ -71,7 +71,8 @@ def build_report(diagnosis: Diagnosis) -> Report:
     coverage = d.coverage
     return Report(
         tool=f"auvdiag {__version__}", log=str(d.log), format=d.format, vehicle=d.vehicle,
-        verdict=d.verdict.value, component=d.component, candidates=tuple(d.candidates),
+        verdict=d.verdict.value, undetermined_because=d.undetermined_because,
+        component=d.component, candidates=tuple(d.candidates),
         case=d.case, b=dict(d.b), units=dict(d.sensor_units), detected_at_s=d.detected_at_s,
         onset_s=d.onset_s, duration_s=None if duration is None else round(duration, 3),
         start_time_utc=utc_text(d.start_ns + d.utc_offset_ns, "milliseconds"),

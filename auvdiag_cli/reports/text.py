@@ -26,8 +26,6 @@ def summary_lines(report: Report) -> list[str]:
         lines.append(f"PARTIAL LOG: analysed only what was readable: {r.completeness.reason}")
     if r.verdict == "fault":
         lines += _fault_lines(r)
-    elif r.verdict == "undetermined":
-        lines.append("verdict: UNDETERMINED: no signal could be judged")
     else:
         lines.append("verdict: " + verdict_title(r))
     if coverage is not None:
