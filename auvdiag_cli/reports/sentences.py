@@ -108,5 +108,6 @@ def model_sentence(report: Report) -> str:
     budget = model.false_alarm_rate
     text += (f"; thresholds set for {budget.rate:g} false alarms per {budget.per}" if budget
              else "; thresholds calibrated on normal logs" if model.thresholds_calibrated
-             else "; thresholds: the profile's (the paper's for the Twin-Burger)")
+             else "; thresholds not calibrated: the profile's, or 1.5 x the g of the logs "
+                  "held out of training where that is more")
     return text
