@@ -351,6 +351,10 @@ class ModelCard:
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
-            envelope=_frozen({str(k): float(v) for k, v in
-                              (meta.get("envelope") or {}).get("sensors", {}).items()}),
+            envelope=_envelope(meta.get("envelope") or {}),
             document_text=json.dumps(meta))
+
+
+def _envelope(entry: Mapping[str, Any]) -> Mapping[str, float]:
+    """model.json's `envelope`: signal -> the largest |value| the model learnt from."""
+    return _frozen({str(k): float(v) for k, v in entry.get("sensors", {}).items()})

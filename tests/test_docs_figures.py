@@ -19,11 +19,12 @@ CONSTANTS = {
     "glossary.md": {"2 of 2"},                               # a verdict's wording
     "reports.md": {"0/1", "1 of 6", "0 of 4", "1/6",         # JSON keys' example values
                    "64 %"},                                  # the trend example's thrust
-    "limits.md": {"1/3"},                                    # the skill threshold
+    "limits.md": {"1/3",                                     # the skill threshold
+                  "5.4 %"},                  # the extra command that makes up 10 % thrust
     "method.md": {"10 %", "7 %", "75 %", "1/3", "1/1",       # the paper's thresholds,
-                  "95 %"},
+                  "95 %", "5.4 %"},
     # the hypotheses' thrust levels, the skill threshold and its derivation, the confidence
-    # of the spread that alike logs are judged against
+    # of the spread that alike logs are judged against, the commands' relation's floor
     "results.md": {"1/25",                                   # ZA's command, of full thrust
                    "10 %",                                   # the paper's yaw threshold
                    "97.96 %"},                               # a published classifier

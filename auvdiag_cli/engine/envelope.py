@@ -43,8 +43,8 @@ class Beyond:
 def envelope_entry(sensors: list[np.ndarray], names: tuple[str, ...]) -> dict[str, Any]:
     """model.json's `envelope`: per signal, the largest |value| over ``sensors`` (each a
     log's steps x signals, the steps it learnt from)."""
-    stacked = np.vstack(sensors) if sensors else np.empty((0, len(names)))
-    largest = np.nanmax(np.abs(stacked), axis=0, initial=0.0) if len(stacked) else []
+    stacked = np.vstack([np.empty((0, len(names))), *sensors])
+    largest = np.nanmax(np.abs(stacked), axis=0, initial=0.0)
     return {"margin": MARGIN, "sensors": {name: round(float(v), 9)
                                           for name, v in zip(names, largest, strict=True)
                                           if np.isfinite(v) and v > 0}}
