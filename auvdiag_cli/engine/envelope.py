@@ -1,5 +1,6 @@
 """How far the logs a model learnt from took the vehicle, and a finding that comes after
-the vehicle went past that: a learnt model extrapolates there, and its error is not a fault.
+the vehicle went past that: a learnt model extrapolates there, and its error there is no
+evidence of a fault.
 
 The model keeps each signal's largest |value| over the logs it learnt from (its envelope).
 A fault the tool finds in a log where, in the stretch before the fault's estimated onset, a
@@ -37,7 +38,8 @@ class Beyond:
     def describe(self) -> str:
         return (f"{self.signal} reached {self.reached:.3g} from {self.since_s:.1f} s, past "
                 f"the {self.learnt:.3g} it reached at most in the logs the model learnt "
-                f"from: the model extrapolates there, and its error is not a fault")
+                f"from: the model extrapolates there, and its error there is no evidence "
+                f"of a fault")
 
 
 def envelope_entry(sensors: list[np.ndarray], names: tuple[str, ...]) -> dict[str, Any]:
