@@ -47,12 +47,18 @@ def test_a_sprint_past_three_slow_missions_is_undetermined_a_lost_thruster_a_fau
         return path
 
     normal = [flown(name, 1) for name in ("paper-normal", "mission-ccw", "mission-large-cw")]
-    api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
+    trained = api.train(normal, profile, tmp_path / "model", options=api.TrainOptions(
         iterations_scale=0.05, hidden=8, predictors=("linear", "linear-replay")),
         progress=lambda _: None)
     model = api.load_model(tmp_path / "model", profile)
     learnt = dict(model.card.envelope)
     assert set(learnt) == set(profile.sensor_names) and 0.1 < learnt["surge"] < 0.25
+    assert learnt == pytest.approx(dict(trained.envelope))
+    from auvdiag_cli.reports.training import training_lines
+    said = [line for line in training_lines(trained, {}, profile)
+            if line.startswith("learnt up to (a fault found after a judged signal went past "
+                               "1.25 times this is undetermined): ")]
+    assert len(said) == 1 and f"surge {learnt['surge']:.3g} m/s" in said[0], said
 
     sprint = api.diagnose(flown("mission-sprint-ccw", 11), profile, model)
     assert sprint.verdict.value == "undetermined", sprint.notes

@@ -3,7 +3,7 @@ held-out normal data, choose the prediction horizon, and write a model directory
 
 import hashlib
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
@@ -93,6 +93,8 @@ class TrainingResult:
     input_names: tuple[str, ...] = ()       # measured inputs driving it beside the commands
     # The profile's g thresholds the held-out logs raised ('mode signal from -> to').
     thresholds_raised: tuple[str, ...] = ()
+    # signal -> the largest |value| the logs learnt from reached (`engine.envelope`).
+    envelope: Mapping[str, float] = field(default_factory=dict)
 
     @property
     def judges_anything(self) -> bool:
@@ -145,20 +147,20 @@ def train_from_logs(logs: Sequence[Path], output: Path, profile: Profile,
     relations, start_state = _learn_beside_the_model(read, read_heldout, training, profile)
     effort, effort_notes = learn_effort_model([r.relation for r in [*read, *read_heldout]],
                                               profile)
+    envelope = envelope_entry([r.relation.sensors[r.relation.usable]
+                               for r in [*read, *read_heldout]], profile.sensor_names)
     result = TrainingResult(
-        output=output, written=False, training_logs=len(training), heldout_logs=len(heldout),
-        heldout_split=split, scores=fitted.scores, chosen=choose_horizon(fitted.scores),
-        operating_hours=hours, logged_rates_hz=rates, command_relations=relations,
-        start_state=start_state,
+        envelope=envelope["sensors"], output=output, written=False,
+        training_logs=len(training), heldout_logs=len(heldout), heldout_split=split,
+        scores=fitted.scores, chosen=choose_horizon(fitted.scores), operating_hours=hours,
+        logged_rates_hz=rates, command_relations=relations, start_state=start_state,
         effort=effort, effort_notes=tuple(effort_notes), by_predictor=fitted.by_kind,
         predictor_notes=fitted.notes, input_names=profile.input_names)
     result = replace(result, written=result.judges_anything or options.keep_unskilled)
     if result.written:
         metadata = _metadata(output, profile, training_paths, training, heldout, result,
                              stages, options.seed)
-        metadata |= {"envelope": envelope_entry(
-                         [r.relation.sensors[r.relation.usable] for r in [*read, *read_heldout]],
-                         profile.sensor_names),
+        metadata |= {"envelope": envelope,
                      "command_relations": relations.to_json(),
                      "start_state": start_state.to_json(), "effort": effort.to_json(),
                      "ahead_predictor": _fit_ahead(training, heldout, bool(read_heldout),

@@ -8,6 +8,7 @@ from collections.abc import Collection, Sequence
 from auvdiag_cli.engine.change_check import MIN_JUDGED_S
 from auvdiag_cli.engine.effort_check import rise_range
 from auvdiag_cli.engine.effort_spans import smallest_later_rise, typical_later_threshold
+from auvdiag_cli.engine.envelope import MARGIN
 from auvdiag_cli.engine.judging import own_log_only
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.jobs.calibration_result import CalibrationResult, ModeCalibration
@@ -109,6 +110,12 @@ def training_lines(result: TrainingResult, paper_rms: dict[str, float], profile:
     if paper_rms:
         lines.append("the paper's model error for this vehicle (rms): "
                      + ", ".join(f"{k} {v}" for k, v in paper_rms.items()))
+    if result.envelope:
+        units = {s.name: s.unit for s in profile.sensors}
+        lines.append(f"learnt up to (a fault found after a judged signal went past {MARGIN:g} "
+                     "times this is undetermined): " + ", ".join(
+                         f"{name} {value:.3g} {units.get(name, '')}".rstrip()
+                         for name, value in result.envelope.items()))
     if result.thresholds_raised:
         lines.append("g thresholds: the profile's, raised to 1.5 x the largest g the held-out "
                      "log(s) reached where that is more (" + ", ".join(result.thresholds_raised)
