@@ -6,6 +6,7 @@ before that key existed means. A writer (train, calibrate, relate, score) gives 
 entries as typed values that say their own JSON (``ModelEntry``) and gets a new card."""
 
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -356,5 +357,7 @@ class ModelCard:
 
 
 def _envelope(entry: Mapping[str, Any]) -> Mapping[str, float]:
-    """model.json's `envelope`: signal -> the largest |value| the model learnt from."""
-    return _frozen({str(k): float(v) for k, v in entry.get("sensors", {}).items()})
+    """model.json's `envelope`: signal -> the largest |value| the model learnt from (a
+    value that is no positive number bounds nothing: left out)."""
+    values = {str(k): float(v) for k, v in entry.get("sensors", {}).items()}
+    return _frozen({k: v for k, v in values.items() if math.isfinite(v) and v > 0})

@@ -73,3 +73,28 @@ def test_a_sprint_past_three_slow_missions_is_undetermined_a_lost_thruster_a_fau
     lost = api.diagnose(flown("mission-thruster-2-dead", 21), profile, model)
     assert lost.verdict.value == "fault" and lost.component == "thruster_2", lost.notes
     assert lost.undetermined_because is None
+
+
+def test_an_envelope_that_bounds_nothing_is_left_out_and_a_malformed_one_names_the_file(
+        tmp_path: Path):
+    """A model file edited by hand: a value that is no positive number bounds nothing (a
+    negative one would make every fault undetermined); one that is no number at all is a
+    one-line error naming the model."""
+    import json
+
+    from models.card import ModelCard
+    from models.store import ModelFileError, load_model
+
+    document = json.loads((Path(__file__).parents[1] / "models" / "bluerov2" / "model.json")
+                          .read_text())
+    document["envelope"] = {"sensors": {"surge": -1.0, "heave": float("nan"), "yaw_rate": 0.3}}
+    assert dict(ModelCard.from_document(document).envelope) == {"yaw_rate": 0.3}
+    model = tmp_path / "model"
+    model.mkdir()
+    for name in ("model.json", "weights.npz"):
+        (model / name).write_bytes((Path(__file__).parents[1] / "models" / "bluerov2" / name)
+                                   .read_bytes())
+    document["envelope"] = {"sensors": {"surge": "fast"}}
+    (model / "model.json").write_text(json.dumps(document))
+    with pytest.raises(ModelFileError, match="could not convert"):
+        load_model(model)
