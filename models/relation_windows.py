@@ -3,6 +3,7 @@ the windows it judges an actuator over, and the thresholds held-out normal logs 
 (`models.command_relations`, `models.thrust_relations`)."""
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Protocol, Self
@@ -98,7 +99,7 @@ class RelationWindow:
         return cls(int(data["window_steps"]), numbers_in(data["thresholds"]))
 
 
-class WindowedRelations:
+class WindowedRelations(ABC):
     """The windows and thresholds of a relation (a frozen dataclass with these fields)."""
 
     thresholds: np.ndarray           # (n_commands,) over the main window; NaN: not judged
@@ -110,13 +111,13 @@ class WindowedRelations:
     shorter: tuple[RelationWindow, ...]
     measure: str                     # what the windows measure ("extra effort", "thrust lost")
 
+    @abstractmethod
     def as_loss(self, measured: np.ndarray) -> np.ndarray:
         """The share of thrust lost that this much of the measure makes up for."""
-        raise NotImplementedError
 
+    @abstractmethod
     def from_loss(self, loss: float) -> float:
         """The measure that makes up for this share of thrust lost (`as_loss` inverted)."""
-        raise NotImplementedError
 
     def least_judged(self, window_steps: int) -> float:
         """The least of the measure judged over a window of ``window_steps`` (`least_loss`)."""
