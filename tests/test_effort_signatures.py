@@ -115,6 +115,25 @@ def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
                               judging).component == "gyro"
 
 
+def test_an_anomaly_no_fault_explains_is_named_by_shares_that_changed_by_its_detection():
+    """The replay dates its onset from a window's residual, seconds before the change the
+    shares date closely: where no single fault explains the anomaly, shares that match
+    motor 3 weak alone and began by the replay's detection name it (the same event); shares
+    that changed only after the detection name nothing."""
+    judging = cast(Judging, SimpleNamespace(profile=load_profile(Path("arducopter_quad"))))
+    check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_error_s=3.0)
+    test = HypothesisTest((Hypothesis("barometer", "dead", 2.9),
+                           Hypothesis("motor_3", "weakened", 3.4, 0.5, "rotor")))
+    finding = Finding(verdict=Verdict.FAULT, b={"climb": 1, "yaw_rate": 1}, onset_s=10.0,
+                      detected_at_s=17.0)
+    assert check.alone_by(10.0) is None           # began after the replay's onset ...
+    named = name_by_hypotheses(observed(check, {}), finding, test, judging)
+    assert named.component == "motor_3"           # ... but by its detection
+    assert "named by the effort its group carries" in named.notes[-1]
+    late = replace(check, onset_s=25.0, alarm_s=30.0)
+    assert name_by_hypotheses(observed(late, {}), finding, test, judging).component is None
+
+
 def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shares():
     """The table reads b as either of two actuators (a vectored ROV's vertical pair) and
     nothing else decides: the one whose shares match its weakness alone, begun by the

@@ -211,7 +211,9 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     then."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
     effort = seen.effort_check
-    alone = weak_alone(seen, finding.onset_s)
+    # The same event where the effort's change began by the replay's detection: an onset
+    # dated from a window's residual may come before the change the shares date closely.
+    alone = weak_alone(seen, finding.onset_s, finding.detected_at_s)
     if not best.explains:
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "

@@ -35,11 +35,12 @@ def narrowed(seen: Observations, finding: Finding, runs: Sequence[tuple[DmsRun, 
     return replace(finding, active=active, candidates=active.candidates)
 
 
-def weak_alone(seen: Observations, time_s: float | None) -> str | None:
-    """The actuator whose group's shares match its weakness alone, begun by ``time_s``
-    (`EffortCheck.alone_by`), or None."""
+def weak_alone(seen: Observations, time_s: float | None, until_s: float | None = None
+               ) -> str | None:
+    """The actuator whose group's shares match its weakness alone, begun by ``time_s`` (or
+    by a moment from it to ``until_s``: `EffortCheck.alone_by`), or None."""
     effort = seen.effort_check
-    return None if effort is None else effort.alone_by(time_s)
+    return None if effort is None else effort.alone_by(time_s, until_s)
 
 
 def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest

@@ -6,12 +6,21 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from adapters.signals import CLOCK_REFERENCE, OPERATING, FieldSource, TimeColumn
 
 # A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
 # it drives a model of the closed loop, but it is no actuator.
 SET_POINT_NAME = re.compile(r"(commanded|desired|^des|setpoint|set_point|target)",
                             re.IGNORECASE)
+NEUTRAL = 1e-3            # a command this small is at rest
+
+
+def typical_level(value: np.ndarray) -> float:
+    """A command's median magnitude where it is not at rest."""
+    moving = np.abs(value[np.isfinite(value) & (np.abs(value) > NEUTRAL)])
+    return float(np.median(moving)) if moving.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -24,6 +33,16 @@ class Proposal:
     level: float = 0.0    # a command's median magnitude where it is not neutral
     two_way: bool = False  # a command that also runs negative (a thruster that reverses)
     set_point: bool = False  # a controller's set point, whatever its name
+    kind: str | None = None  # an actuator's kind where the log says it (a copter's motor)
+
+
+@dataclass(frozen=True)
+class DraftGroup:
+    """An ``[[effort]]`` group the draft proposes."""
+
+    members: list[str]
+    name: str | None = None     # None: "group_N", guessed from the commands' levels
+    said: str = ""              # what the log said of it, where it did
 
 
 def is_set_point(proposal: Proposal) -> bool:
@@ -49,17 +68,19 @@ def entry(source: FieldSource, family: str) -> str:
     return "{ " + ", ".join(parts) + " }"
 
 
-def _groups_and_loops(groups: list[list[str]], loops: Sequence[tuple[str, str, str]]
+def _groups_and_loops(groups: list[DraftGroup], loops: Sequence[tuple[str, str, str]]
                       ) -> list[str]:
     """The drafted ``[[effort]]`` groups and ``[[tracking]]`` loops, each with what to check."""
     lines: list[str] = []
     for number, group in enumerate(groups, 1):
-        lines += ["# CHECK: actuators that seem to act alike (their commands run at similar "
-                  "levels in this", "# log): each one's share of their effort is judged. "
-                  "Split the group as the frame's", "# geometry says (horizontal and vertical "
-                  "thrusters apart), add the mixing factors.", "[[effort]]",
-                  f'name = "group_{number}"',
-                  "actuators = [" + ", ".join(f'"{m}"' for m in group) + "]", ""]
+        lines += ([f"# {group.said}: each one's share of their effort is judged."]
+                  if group.said else
+                  ["# CHECK: actuators that seem to act alike (their commands run at similar "
+                   "levels in this", "# log): each one's share of their effort is judged. "
+                   "Split the group as the frame's", "# geometry says (horizontal and vertical "
+                   "thrusters apart), add the mixing factors."])
+        lines += ["[[effort]]", f'name = "{group.name or f"group_{number}"}"',
+                  "actuators = [" + ", ".join(f'"{m}"' for m in group.members) + "]", ""]
     for set_point, measured, rate in loops:
         lines += ["# A loop of the controller: how much rate its error brings, judged against "
                   "the log's own", "# beginning (a part that fails makes it slower). CHECK: "
@@ -72,13 +93,16 @@ def _groups_and_loops(groups: list[list[str]], loops: Sequence[tuple[str, str, s
 
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                  sensors: list[Proposal], operating: FieldSource | None,
-                 time: TimeColumn | None, groups: list[list[str]],
+                 time: TimeColumn | None, groups: list[DraftGroup],
                  loops: Sequence[tuple[str, str, str]] = (),
-                 clock_reference: FieldSource | None = None) -> str:
+                 clock_reference: FieldSource | None = None, vehicle_said: str = "") -> str:
+    """``vehicle_said``: what the log says of the vehicle that wrote it (its firmware)."""
     lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
              "# Every signal below is in that log and varies there. Lines marked CHECK are",
              "# what the log cannot tell: read them before you train.", "",
-             "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}"',
+             "[vehicle]", f'name = "{name}"', 'description = "drafted from '
+             + path.name + (f": {vehicle_said}" if vehicle_said else "").replace('"', "'")
+             + '"',
              "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
     # With set points in the log, the model follows the closed loop: driven by the set
     # points, the actuators read for the effort check only.
@@ -91,6 +115,8 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
     for proposal in commands:
         kind = ('kind = "set_point"   # CHECK: a controller\'s set point (drives a model of '
                 'the closed loop; no actuator)' if is_set_point(proposal) else
+                f'kind = "{proposal.kind}"   # as the log says: {proposal.check}'
+                if proposal.kind else
                 'kind = "thruster"   # CHECK: thruster, rotor, control_surface or engine' + (
                     "" if closed_loop else " (or set_point)"))
         table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"

@@ -13,10 +13,25 @@ from pathlib import Path
 import numpy as np
 
 from adapters import LogInventory, inventory, read_log
+from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.csv_log import csv_rows
 from adapters.recognise import is_number
 from adapters.signals import FieldSource, LogSources, TimeColumn
-from auvdiag_cli.jobs.draft_text import Proposal, is_set_point, render_draft
+from auvdiag_cli.jobs.autopilot_outputs import (
+    climb_source,
+    output_channel,
+    output_roles,
+    role_groups,
+    role_proposal,
+)
+from auvdiag_cli.jobs.draft_text import (
+    NEUTRAL,
+    DraftGroup,
+    Proposal,
+    is_set_point,
+    render_draft,
+    typical_level,
+)
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -52,7 +67,6 @@ ARDUPILOT_LOOPS = {("ATT", "DesRoll"): (("ATT", "Roll"), ("RATE", "R")),
 
 
 ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
-NEUTRAL = 1e-3
 
 
 def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
@@ -207,15 +221,19 @@ def _set_point(name: str, source: FieldSource, scale: float, unit: str) -> Propo
 
 
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
-               every_field: bool = False, guess_commands: bool = False,
-               closed_loop: bool = False
-               ) -> tuple[list[Proposal], list[Proposal], list[list[str]]]:
+               setup: AutopilotSetup | None, every_field: bool = False,
+               guess_commands: bool = False, closed_loop: bool = False
+               ) -> tuple[list[Proposal], list[Proposal], list[DraftGroup]]:
     """``every_field``: fields with unknown names are sensors; ``guess_commands``: those of
     them that hold their value between changes are commands (marked CHECK);
-    ``closed_loop``: ArduPilot's set points (`ARDUPILOT_SET_POINTS`) are commands."""
+    ``closed_loop``: ArduPilot's set points (`ARDUPILOT_SET_POINTS`) are commands;
+    ``setup``: what an ArduPilot log says of its vehicle (a copter's motors by output)."""
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
            for kind, source in _candidates(contents, family, every_field, closed_loop)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
+    roles = output_roles(setup, sorted({c for kind, source in raw.values()
+                                        if kind == "command"
+                                        and (c := output_channel(source)) is not None}))
     commands, sensors = [], []
     command_values: list[np.ndarray] = []
     for key, (kind, source) in raw.items():
@@ -223,6 +241,15 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         if series is None or series.size < 2 or not np.nanstd(series) > 0:
             continue                                   # not in the log, or never moves
         name = _signal_name(source.topic, source.field)
+        channel = output_channel(source) if kind == "command" else None
+        if roles and channel is not None:
+            # A copter's or a plane's output: what its log says it drives, or nothing
+            # the model needs (a camera mount, a light).
+            if channel in roles:
+                role = roles[channel]
+                commands.append(role_proposal(role, source, series))
+                command_values.append(series * role.scale + role.offset)
+            continue
         paired = _paired(source) if closed_loop else None
         if paired is not None:
             name = _signal_name("", f"{source.topic}_{source.field}")
@@ -241,9 +268,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                 check = ("not recognised by its name: proposed as a command because it holds "
                          "its value between changes, as commands do; " + check)
             value = series * converted.scale + converted.offset
-            moving = np.abs(value[np.isfinite(value) & (np.abs(value) > NEUTRAL)])
-            commands.append(Proposal(name, converted, "1", check,
-                                     level=float(np.median(moving)) if moving.size else 0.0,
+            commands.append(Proposal(name, converted, "1", check, level=typical_level(value),
                                      two_way=bool((value < -NEUTRAL).any())))
             command_values.append(value)
         else:
@@ -256,15 +281,15 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                          "vehicle's motion (remove battery, position fixes, bookkeeping); "
                          + check)
             if source.field in ("climb", "CRt"):
-                factor = -0.01 if source.field == "CRt" else -1.0
-                source, unit = replace(source, scale=factor), "m/s"
-                check = "down positive (the log's climb rate negated" + (
-                    ", CTUN CRt in cm/s)" if factor == -0.01 else ")")
+                source, unit, check = climb_source(source, setup)
             full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
             sensors.append(Proposal(name, source, unit, check, _nice(full_scale)))
     named = _unique(commands + sensors)
     commands, sensors = named[:len(commands)], named[len(commands):]
-    return commands, sensors, effort_groups(commands, _repeated(commands, command_values))
+    if roles:
+        return commands, sensors, role_groups(commands, roles)
+    return commands, sensors, [DraftGroup(g) for g in effort_groups(
+        commands, _repeated(commands, command_values))]
 
 
 def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
@@ -340,14 +365,16 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
     if family == "csv" and time is None:
         raise UsageError(f"{path}: no column is named like a clock (time, timestamp, …): "
                          "write [sources.csv] time = { column, unit } by hand")
-    commands, sensors, groups = _proposals(path, family, contents, time,
+    setup = autopilot_setup(path, family)
+    commands, sensors, groups = _proposals(path, family, contents, time, setup,
                                            closed_loop=closed_loop)
     if closed_loop and not any(is_set_point(c) for c in commands):
         raise UsageError(f"{path}: --closed-loop found no controller set point that varies "
                          "in this log (ArduPilot DataFlash ATT DesRoll, RATE RDes, CTUN DCRt "
                          "…, or fields named commanded, desired, setpoint or target)")
     if not commands or not sensors:   # names it does not know: every field that varies
-        commands, sensors, groups = _proposals(path, family, contents, time, every_field=True,
+        commands, sensors, groups = _proposals(path, family, contents, time, setup,
+                                               every_field=True,
                                                guess_commands=not commands)
     if not commands or not sensors:
         what = ("command (none is named like a motor output, thrust or PWM, and none holds "
@@ -358,7 +385,8 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                          "minimal profile)")
     operating = _operating(path, family, contents)
     return render_draft(path, name, family, commands, sensors, operating, time, groups,
-                        _loops(commands, sensors), _clock_reference(family, contents))
+                        _loops(commands, sensors), _clock_reference(family, contents),
+                        "" if setup is None else setup.evidence)
 
 
 def _loops(commands: list[Proposal], sensors: list[Proposal]) -> list[tuple[str, str, str]]:

@@ -36,14 +36,16 @@ KNOWN_LAYOUTS = {
     "RCOU": ("Q" + "H" * 14, "TimeUS," + ",".join(f"C{i}" for i in range(1, 15))),
     "IMU": ("QBffffff", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ"),
     "MSG": ("QZ", "TimeUS,Message"),
+    "PARM": ("QNf", "TimeUS,Name,Value"),
 }
 FIRST_TYPE_ID = 34
 
 
 def _formats(profile: Profile) -> dict[str, _Message]:
-    """One record format per message name the profile reads, plus MSG for the banner."""
+    """One record format per message name the profile reads, plus MSG for the banner and
+    PARM for the parameters."""
     sources = family_sources(profile, "dataflash")
-    fields: dict[str, list[str]] = {"MSG": []}
+    fields: dict[str, list[str]] = {"MSG": [], "PARM": []}
     where: dict[str, list[str]] = {}
     for source in sources.signals.values():
         fields.setdefault(source.topic, []).append(source.field)
@@ -98,10 +100,59 @@ def write_dataflash(dive: SimulatedDive, profile: Profile, path: Path) -> None:
     with path.open("wb") as stream:
         for message in (FMT, *formats.values()):
             stream.write(_format_record(message))
-        stream.write(formats["MSG"].pack(0, b"ArduSub V4.5.0 (auvdiag simulate)"))
+        for text in _banner(profile):
+            stream.write(formats["MSG"].pack(0, text.encode()))
+        for name, value in _parameters(profile):
+            stream.write(formats["PARM"].pack(0, name.encode(), value))
         armed = _armed(profile)
         if armed is not None:
             stream.write(_pack(formats[armed.topic], armed, 0))
         for record in dive_records(dive, profile, "dataflash"):
             time_us = (record.time_ns - dive.start_ns) // 1000
             stream.write(_pack(formats[record.topic], record, time_us))
+
+
+
+FRAMES = {3: "TRI", 4: "QUAD/X", 6: "HEXA/X", 8: "OCTA/X"}
+
+
+def _motors(profile: Profile) -> list[tuple[int, float, float, str]]:
+    """(output number, scale, offset, kind) of each rotor or thruster the profile reads
+    from RCOU, in the profile's order: ArduPilot's motor 1, 2 …"""
+    sources = family_sources(profile, "dataflash").signals
+    found = []
+    for command in profile.effort_actuators:
+        source = sources.get(command.name)
+        if command.kind in ("rotor", "thruster") and source is not None and \
+                source.topic == "RCOU" and source.field[1:].isdigit():
+            found.append((int(source.field[1:]), source.scale, source.offset, command.kind))
+    return found
+
+
+def _banner(profile: Profile) -> list[str]:
+    """What the firmware writes first: its name (a vehicle with rotors flies ArduCopter,
+    one with control surfaces ArduPlane, else ArduSub) and a multirotor's frame."""
+    kinds = {c.kind for c in profile.effort_actuators}
+    rotors = sum(kind == "rotor" for *_, kind in _motors(profile))
+    if "rotor" in kinds:
+        return ["ArduCopter V4.5.0 (auvdiag simulate)",
+                *([f"Frame: {FRAMES[rotors]}"] if rotors in FRAMES else [])]
+    if kinds & {"control_surface", "engine"}:
+        return ["ArduPlane V4.5.0 (auvdiag simulate)"]
+    return ["ArduSub V4.5.0 (auvdiag simulate)"]
+
+
+def _parameters(profile: Profile) -> list[tuple[str, float]]:
+    """The parameters that say which output drives which motor (SERVOn_FUNCTION 33 is motor
+    1) and the PWM range the profile's map gives the motors (MOT_PWM_MIN/MAX: command 0 …
+    1 of a rotor, -1 … 1 of a thruster)."""
+    motors = _motors(profile)
+    parameters: list[tuple[str, float]] = [
+        (f"SERVO{output}_FUNCTION", 33.0 + number) for number, (output, *_) in
+        enumerate(motors)]
+    if motors:
+        _, scale, offset, kind = motors[0]
+        low = (0.0 if kind == "rotor" else -1.0)
+        parameters += [("MOT_PWM_MIN", round((low - offset) / scale)),
+                       ("MOT_PWM_MAX", round((1.0 - offset) / scale))]
+    return parameters
