@@ -91,19 +91,22 @@ def _groups_and_loops(groups: list[DraftGroup], loops: Sequence[tuple[str, str, 
     return lines
 
 
+def _header(path: Path, name: str, vehicle_said: str) -> list[str]:
+    said = f": {vehicle_said}".replace('"', "'") if vehicle_said else ""
+    return [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
+            "# Every signal below is in that log and varies there. Lines marked CHECK are",
+            "# what the log cannot tell: read them before you train.", "",
+            "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}{said}"',
+            "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
+
+
 def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                  sensors: list[Proposal], operating: FieldSource | None,
                  time: TimeColumn | None, groups: list[DraftGroup],
                  loops: Sequence[tuple[str, str, str]] = (),
                  clock_reference: FieldSource | None = None, vehicle_said: str = "") -> str:
     """``vehicle_said``: what the log says of the vehicle that wrote it (its firmware)."""
-    lines = [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
-             "# Every signal below is in that log and varies there. Lines marked CHECK are",
-             "# what the log cannot tell: read them before you train.", "",
-             "[vehicle]", f'name = "{name}"', 'description = "drafted from '
-             + path.name + (f": {vehicle_said}" if vehicle_said else "").replace('"', "'")
-             + '"',
-             "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
+    lines = _header(path, name, vehicle_said)
     # With set points in the log, the model follows the closed loop: driven by the set
     # points, the actuators read for the effort check only.
     closed_loop = any(is_set_point(p) for p in commands)

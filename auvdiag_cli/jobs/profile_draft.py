@@ -24,6 +24,12 @@ from auvdiag_cli.jobs.autopilot_outputs import (
     role_groups,
     role_proposal,
 )
+from auvdiag_cli.jobs.autopilot_set_points import (
+    attitude_loops,
+    paired_unit,
+    set_point_pairs,
+    set_point_proposal,
+)
 from auvdiag_cli.jobs.draft_text import (
     NEUTRAL,
     DraftGroup,
@@ -49,23 +55,6 @@ TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNOR
 MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
 HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
-DEGREES = 0.017453292519943295
-# ArduPilot's controllers log each set point beside what they measured (Copter and Sub:
-# ATT in degrees, RATE in deg/s, CTUN's climb rates in cm/s): message -> (set point,
-# measured, scale to SI, unit). The climb rates are negated like a drafted climb (down
-# positive, as a depth rate).
-ARDUPILOT_SET_POINTS = {
-    "ATT": (("DesRoll", "Roll", DEGREES, "rad"), ("DesPitch", "Pitch", DEGREES, "rad")),
-    "RATE": (("RDes", "R", DEGREES, "rad/s"), ("PDes", "P", DEGREES, "rad/s"),
-             ("YDes", "Y", DEGREES, "rad/s")),
-    "CTUN": (("DCRt", "CRt", -0.01, "m/s"),),
-}
-# The attitude loops whose gain the change test can judge (`[[tracking]]`): set point ->
-# (what was measured beside it, its rate), each (message, field).
-ARDUPILOT_LOOPS = {("ATT", "DesRoll"): (("ATT", "Roll"), ("RATE", "R")),
-                   ("ATT", "DesPitch"): (("ATT", "Pitch"), ("RATE", "P"))}
-
-
 ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
 
 
@@ -93,32 +82,12 @@ def _signal_name(topic: str, field: str) -> str:
     return text.lower() or "signal"
 
 
-def _set_point_pairs(contents: LogInventory) -> list[tuple[str, FieldSource]]:
-    """("set_point", source) and ("sensor", source) of each ArduPilot set point the log
-    holds beside what was measured (`ARDUPILOT_SET_POINTS`)."""
-    found: list[tuple[str, FieldSource]] = []
-    for topic in contents.topics:
-        for desired, measured, _, _ in ARDUPILOT_SET_POINTS.get(topic.name, ()):
-            if {desired, measured} <= set(topic.fields):
-                found += [("set_point", FieldSource(topic.name, desired)),
-                          ("sensor", FieldSource(topic.name, measured))]
-    return found
-
-
-def _paired(source: FieldSource) -> tuple[float, str] | None:
-    """The scale to SI and the unit of an ArduPilot set point or what was measured beside
-    it; None for any other field."""
-    return next(((scale, unit) for desired, measured, scale, unit
-                 in ARDUPILOT_SET_POINTS.get(source.topic, ())
-                 if source.field in (desired, measured)), None)
-
-
 def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                 closed_loop: bool = False) -> list[tuple[str, FieldSource]]:
     """(kind, source) for every field whose name or topic looks like a command or a sensor;
     ``every_field``: any other field is a sensor too (names this does not recognise);
     ``closed_loop``: ArduPilot's set points and what was measured beside them too."""
-    found = _set_point_pairs(contents) if closed_loop and family == "dataflash" else []
+    found = set_point_pairs(contents) if closed_loop and family == "dataflash" else []
     for topic in contents.topics:
         if topic.count < 2:
             continue
@@ -215,11 +184,6 @@ def _holds_its_value(series: np.ndarray) -> bool:
     return finite.size > 2 and float(np.mean(np.diff(finite) == 0)) >= HELD_SHARE
 
 
-def _set_point(name: str, source: FieldSource, scale: float, unit: str) -> Proposal:
-    return Proposal(name, replace(source, scale=scale), unit, "the controller's set point, "
-                    "in the unit of what it measured beside it", set_point=True)
-
-
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
                setup: AutopilotSetup | None, every_field: bool = False,
                guess_commands: bool = False, closed_loop: bool = False
@@ -242,54 +206,63 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             continue                                   # not in the log, or never moves
         name = _signal_name(source.topic, source.field)
         channel = output_channel(source) if kind == "command" else None
-        if roles and channel is not None:
-            # A copter's or a plane's output: what its log says it drives, or nothing
-            # the model needs (a camera mount, a light).
-            if channel in roles:
-                role = roles[channel]
-                commands.append(role_proposal(role, source, series))
-                command_values.append(series * role.scale + role.offset)
-            continue
-        paired = _paired(source) if closed_loop else None
+        paired = paired_unit(source) if closed_loop else None
         if paired is not None:
             name = _signal_name("", f"{source.topic}_{source.field}")
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
-        if kind == "set_point" and paired is not None:
-            commands.append(_set_point(name, source, *paired))
-            command_values.append(series * paired[0])
+        if roles and channel is not None:
+            # A copter's or a plane's output: what its log says it drives, or nothing
+            # the model needs (a camera mount, a light).
+            proposal = None if channel not in roles else role_proposal(roles[channel],
+                                                                       source, series)
+        elif kind == "set_point" and paired is not None:
+            proposal = set_point_proposal(name, source, *paired)
         elif kind == "command" or guessed:
-            pwm = 800 <= float(np.nanmedian(series)) <= 2200
-            converted = replace(source, scale=PWM_SCALE, offset=-PWM_CENTRE_US * PWM_SCALE) \
-                if pwm else source
-            check = ("PWM µs mapped as ArduPilot does, (pwm - 1500) / 400: check the neutral "
-                     "and the direction; remove outputs that are no thruster (lights, camera "
-                     "mount)" if pwm else "should run -1 … 1: set scale and offset")
-            if guessed:
-                check = ("not recognised by its name: proposed as a command because it holds "
-                         "its value between changes, as commands do; " + check)
-            value = series * converted.scale + converted.offset
-            commands.append(Proposal(name, converted, "1", check, level=typical_level(value),
-                                     two_way=bool((value < -NEUTRAL).any())))
-            command_values.append(value)
+            proposal = _command(name, source, series, guessed)
         else:
-            unit = _sensor_unit(source.field) if paired is None else paired[1]
-            check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
-            if paired is not None:
-                source, check = replace(source, scale=paired[0]), "as its set point's"
-            elif not SENSOR_NAME.search(source.field):
-                check = ("not recognised by its name: keep it only if it measures the "
-                         "vehicle's motion (remove battery, position fixes, bookkeeping); "
-                         + check)
-            if source.field in ("climb", "CRt"):
-                source, unit, check = climb_source(source, setup)
-            full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
-            sensors.append(Proposal(name, source, unit, check, _nice(full_scale)))
+            sensors.append(_sensor(name, source, series, paired, setup))
+            continue
+        if proposal is not None:
+            commands.append(proposal)
+            command_values.append(series * proposal.source.scale + proposal.source.offset)
     named = _unique(commands + sensors)
     commands, sensors = named[:len(commands)], named[len(commands):]
     if roles:
         return commands, sensors, role_groups(commands, roles)
     return commands, sensors, [DraftGroup(g) for g in effort_groups(
         commands, _repeated(commands, command_values))]
+
+
+def _command(name: str, source: FieldSource, series: np.ndarray, guessed: bool) -> Proposal:
+    """A command of a vehicle the log says nothing of: PWM about 1500 µs as ArduPilot maps a
+    thruster's, anything else as logged."""
+    pwm = 800 <= float(np.nanmedian(series)) <= 2200
+    converted = replace(source, scale=PWM_SCALE, offset=-PWM_CENTRE_US * PWM_SCALE) \
+        if pwm else source
+    check = ("PWM µs mapped as ArduPilot does, (pwm - 1500) / 400: check the neutral "
+             "and the direction; remove outputs that are no thruster (lights, camera "
+             "mount)" if pwm else "should run -1 … 1: set scale and offset")
+    if guessed:
+        check = ("not recognised by its name: proposed as a command because it holds "
+                 "its value between changes, as commands do; " + check)
+    value = series * converted.scale + converted.offset
+    return Proposal(name, converted, "1", check, level=typical_level(value),
+                    two_way=bool((value < -NEUTRAL).any()))
+
+
+def _sensor(name: str, source: FieldSource, series: np.ndarray,
+            paired: tuple[float, str] | None, setup: AutopilotSetup | None) -> Proposal:
+    unit = _sensor_unit(source.field) if paired is None else paired[1]
+    check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
+    if paired is not None:
+        source, check = replace(source, scale=paired[0]), "as its set point's"
+    elif not SENSOR_NAME.search(source.field):
+        check = ("not recognised by its name: keep it only if it measures the "
+                 "vehicle's motion (remove battery, position fixes, bookkeeping); " + check)
+    if source.field in ("climb", "CRt"):
+        source, unit, check = climb_source(source, setup)
+    full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
+    return Proposal(name, source, unit, check, _nice(full_scale))
 
 
 def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
@@ -385,13 +358,6 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                          "minimal profile)")
     operating = _operating(path, family, contents)
     return render_draft(path, name, family, commands, sensors, operating, time, groups,
-                        _loops(commands, sensors), _clock_reference(family, contents),
+                        attitude_loops(commands, sensors), _clock_reference(family, contents),
                         "" if setup is None else setup.evidence)
 
-
-def _loops(commands: list[Proposal], sensors: list[Proposal]) -> list[tuple[str, str, str]]:
-    """(set point, measured, rate) of each ArduPilot attitude loop the draft holds whole."""
-    named = {(p.source.topic, p.source.field): p.name for p in [*commands, *sensors]}
-    return [(named[point], named[measured], named[rate])
-            for point, (measured, rate) in ARDUPILOT_LOOPS.items()
-            if {point, measured, rate} <= set(named)]
