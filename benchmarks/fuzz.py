@@ -3,9 +3,9 @@
 Writes one short simulated dive in every format (bag, db3, ros2-mcap, mcap, tlog, bin), damages
 each --cases times (bit flips, random runs, 2/4/8-byte length or count fields set to huge, zero
 or negative values, truncation, duplicated, deleted and swapped blocks), and runs every case
-through `inspect` and `diagnose` in a forked child with a time limit (20 s) and an address-space
-limit (1 GiB above the fuzzer's own). Real ArduSub logs from ../shared/data/ardusub (when that
-folder is there) are damaged too, --real-cases times each.
+through `inspect`, `init-profile` and `diagnose` in a forked child with a time limit (20 s)
+and an address-space limit (1 GiB above the fuzzer's own). Real ArduSub logs from
+../shared/data/ardusub (when that folder is there) are damaged too, --real-cases times each.
 
 Usage: python benchmarks/fuzz.py [--cases 10000] [--real-cases 2000] [--jobs N]
                                  [--json fuzz.json]

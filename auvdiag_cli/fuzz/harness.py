@@ -1,5 +1,5 @@
-"""Run damaged logs through `inspect` and `diagnose`, each case in a child process with a
-time limit and an address-space limit, and sort what happens into outcomes.
+"""Run damaged logs through `inspect`, `init-profile` and `diagnose`, each case in a child
+process with a time limit and an address-space limit, and sort what happens into outcomes.
 
 An outcome is *read* (analysed, perhaps with notes), *rejected* (a one-line `AuvdiagError`
 that names the file), or a defect: *crash* (any other exception, a signal, or an error
@@ -65,20 +65,24 @@ class Limits:
 
 
 def exercise(path: Path, profile: Profile, model: LoadedModel) -> tuple[str, str]:
-    """What `auvdiag inspect` and `auvdiag diagnose --json -` do with ``path``, without the
-    terminal: (outcome, detail). Raises nothing the CLI would not turn into one line."""
+    """What `auvdiag inspect`, `auvdiag init-profile` and `auvdiag diagnose --json -` do
+    with ``path``, without the terminal: (outcome, detail). Raises nothing the CLI would not
+    turn into one line."""
     from auvdiag_cli.engine.diagnosis import diagnose
     from auvdiag_cli.jobs.inspect import inspect_log
+    from auvdiag_cli.jobs.profile_draft import draft_profile
     from auvdiag_cli.reports.report_build import build_report
     from auvdiag_cli.reports.series import series_from_diagnosis
     from auvdiag_cli.reports.text import inspection_lines, summary_lines
     from auvdiag_errors import AuvdiagError
 
     outcomes, details = [], []
-    for command in ("inspect", "diagnose"):
+    for command in ("inspect", "init-profile", "diagnose"):
         try:
             if command == "inspect":
                 inspection_lines(inspect_log(path, profile))
+            elif command == "init-profile":
+                draft_profile(path, "fuzzed")
             else:
                 result = diagnose(path, profile, model)
                 report = build_report(result)
