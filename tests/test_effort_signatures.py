@@ -12,6 +12,7 @@ import numpy as np
 from helpers import observed
 
 from auvdiag_cli.engine.active import ActiveDiagnosis
+from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.effort_check import (
     CLEAR_MATCH,
     ActuatorEffort,
@@ -20,7 +21,7 @@ from auvdiag_cli.engine.effort_check import (
     signature_matches,
 )
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.isolation import name_by_hypotheses
+from auvdiag_cli.engine.isolation import _measured_instead, name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
 from auvdiag_cli.engine.results import Finding, Verdict
@@ -197,6 +198,59 @@ def test_a_sensor_the_table_reads_but_no_fault_of_its_own_explains_yields_to_the
     # began after the detection is another event.
     late = replace(check, onset_s=24.0, alarm_s=30.0)
     assert unsupported_table(observed(late, {}), finding, closer) is None
+
+
+def _thrust_lost(named: tuple[str, ...], crossed_s: float, rests_on: tuple[str, ...] | None
+                 ) -> CommandCheck:
+    """The commands against the motion: ``named`` short of thrust from a window that
+    crossed at ``crossed_s`` (45 s windows), resting on ``rests_on``."""
+    return CommandCheck(("thruster_1", "thruster_3"), {"thruster_1": 0.1, "thruster_3": 0.1},
+                        {}, np.zeros((1, 2)), (), crossed_s + 40.0, crossed_s, named,
+                        {"thruster_1": 0.9}, 0.37, 45.0, "thrust lost", rests_on)
+
+
+def test_what_the_commands_measured_on_one_thruster_names_it_where_the_replay_cannot():
+    """A horizontal thruster weakened mid-mission: the replay's heave g crosses, marginally,
+    and the table reads the depth-rate sensor. Where no fault of that sensor explains it and
+    the commands against the motion measure one thruster short of thrust, resting on no
+    signal of that sensor, it is named; where the check rests on the depth rate (a misread
+    depth would look the same), or began after the detection, the table stands. Where the
+    hypotheses that explain the log are of several thrusters about as well, the thruster the
+    commands measured is named, not the best by a hair."""
+    profile = load_profile(Path("bluerov2"))
+    depth = next(s for s in profile.sensors if s.component == "depth_rate_sensor")
+    finding = Finding(verdict=Verdict.FAULT, b={"heave": 1}, component="depth_rate_sensor",
+                      candidates=("depth_rate_sensor",), onset_s=59.0, detected_at_s=66.4)
+    closer = HypothesisTest((Hypothesis("thruster_5", "weakened", 1.02, 0.75, "thruster"),
+                             Hypothesis("thruster_3", "weakened", 1.14, 0.75, "thruster"),
+                             Hypothesis("depth_rate_sensor", "dead", 1.9)))
+    short = _thrust_lost(("thruster_3",), 74.5, ("surge", "yaw_rate"))
+    seen = replace(observed(None, {}, "bluerov2"), command_check=short)
+    assert unsupported_table(seen, finding, closer, profile.sensors) == "thruster_3"
+    on_depth = replace(seen, command_check=replace(short, rests_on=(depth.name,)))
+    assert unsupported_table(on_depth, finding, closer, profile.sensors) is None
+    later = replace(seen, command_check=_thrust_lost(("thruster_3",), 115.0, ("surge",)))
+    assert unsupported_table(later, finding, closer, profile.sensors) is None
+    pair = replace(seen, command_check=_thrust_lost(("thruster_1", "thruster_3"), 74.5, ()))
+    assert unsupported_table(pair, finding, closer, profile.sensors) is None
+    # Several thrusters explain the replay's g about as well: the measured one is named.
+    undecided = HypothesisTest((Hypothesis("thruster_5", "weakened", 0.80, 0.75, "thruster"),
+                                Hypothesis("thruster_6", "weakened", 0.85, 0.75, "thruster"),
+                                Hypothesis("thruster_1", "weakened", 1.25, 0.75, "thruster")))
+    first = replace(seen, command_check=_thrust_lost(("thruster_1",), 74.5, ("surge",)))
+    alarmed = replace(finding, detected_at_s=68.3)
+    named = _measured_instead(first, alarmed, undecided)
+    assert named is not None and named.component == "thruster_1"
+    assert named.substitution is None and named.degradation is None
+    assert "the commands against the motion name thruster_1 alone" in named.notes[-1]
+    # A decisive hypothesis, none measured, or a sensor's hypothesis best: as before.
+    decisive = HypothesisTest((undecided.ranked[0],
+                               Hypothesis("thruster_6", "weakened", 1.9, 0.75, "thruster"),
+                               undecided.ranked[2]))
+    assert _measured_instead(first, alarmed, decisive) is None
+    assert _measured_instead(replace(first, command_check=None), alarmed, undecided) is None
+    sensed = HypothesisTest((Hypothesis("dvl", "biased", 0.8), *undecided.ranked))
+    assert _measured_instead(first, alarmed, sensed) is None
 
 
 def test_a_member_the_clear_match_leaves_out_is_not_described_as_driven_harder():

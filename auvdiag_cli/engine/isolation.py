@@ -21,6 +21,7 @@ from auvdiag_cli.engine.judging import Judging, unpredicted
 from auvdiag_cli.engine.narrowing import (
     DECISIVE_MARGIN,
     closest,
+    commands_alone,
     narrowed,
     unsupported_table,
     weak_alone,
@@ -50,29 +51,57 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
         return apply_active_diagnosis(seen, finding, [*own, *companion_runs], judging)
     if finding.substitution is not None:
         if weak is not None and weak.explains and _outweighs_the_table(weak, finding, test):
+            measured = _measured_instead(seen, finding, test)
+            if measured is not None:
+                return measured
             return apply_weakened_thruster(finding, weak, judging.profile)
-        alone = unsupported_table(seen, finding, test)
+        alone = unsupported_table(seen, finding, test, judging.profile.sensors)
         if alone is not None:
-            return _instead_of_the_table(finding, alone, test)
+            return _instead_of_the_table(finding, alone, test, seen)
         return finding
     if not finding.candidates:
         return name_by_hypotheses(seen, finding, test, judging)
     return finding
 
 
-def _instead_of_the_table(finding: Finding, actuator: str, test: HypothesisTest) -> Finding:
+def _instead_of_the_table(finding: Finding, actuator: str, test: HypothesisTest,
+                          seen: Observations) -> Finding:
     """``actuator`` named where the table read a sensor that no fault of its own explains
     (`narrowing.unsupported_table`)."""
     table_says = finding.component
     best = min((h for h in test.ranked if h.component == actuator),
                key=lambda h: h.peak_g_ratio)
+    effort = seen.effort_check
+    measured = (f"the effort its group carries matches {actuator} weak alone, seen then"
+                if effort is not None and effort.alone_by(finding.onset_s,
+                                                          finding.detected_at_s) == actuator
+                else "the commands against the motion name it alone: "
+                + (seen.command_check.describe() if seen.command_check else ""))
     return replace(finding, component=actuator, candidates=(actuator,),
                    substitution=None).noted(
         f"the pattern table reads b as {table_says}, but no fault of it explains the log (the "
         f"closest leaves g at {closest(test, table_says):.0%} of its threshold); "
-        f"{best.describe()} comes closer ({best.peak_g_ratio:.0%}), and the effort its group "
-        "carries matches "
-        f"{actuator} weak alone, seen then: {actuator} is named")
+        f"{best.describe()} comes closer ({best.peak_g_ratio:.0%}), and {measured}: "
+        f"{actuator} is named")
+
+
+def _measured_instead(seen: Observations, finding: Finding, test: HypothesisTest
+                      ) -> Finding | None:
+    """Where the hypotheses that explain the log are of actuators and do not decide between
+    them (the best by less than DECISIVE_MARGIN), the one actuator the commands against
+    the motion measured short (`narrowing.commands_alone`) is named: its own evidence,
+    where the replay's g is reached about as well by several; else None."""
+    best, margin, check = test.best, test.margin, seen.command_check
+    named = commands_alone(seen, finding)
+    if (named is None or check is None or not best.is_actuator or named == best.component
+            or margin is None or margin >= DECISIVE_MARGIN
+            or not any(h.component == named for h in test.ranked)):
+        return None
+    return replace(finding, component=named, candidates=(named,), substitution=None,
+                   degradation=None).noted(
+        f"the pattern table reads b as {finding.component}; the hypothesis test does not "
+        f"decide (best {best.describe()}, {margin:.1f}x the next); the commands against the "
+        f"motion name {named} alone: {check.describe()}")
 
 
 def _outweighs_the_table(weak: Hypothesis, finding: Finding, test: HypothesisTest) -> bool:

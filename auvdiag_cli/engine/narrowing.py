@@ -10,6 +10,7 @@ from auvdiag_cli.engine.hypotheses import HypothesisTest
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Observations
 from auvdiag_cli.engine.signatures import dms_signature
+from auvdiag_cli.vehicle.profile import Sensor
 
 # The candidate the hypotheses name must leave this many times less of its threshold than
 # any other candidate.
@@ -43,20 +44,39 @@ def weak_alone(seen: Observations, time_s: float | None, until_s: float | None =
     return None if effort is None else effort.alone_by(time_s, until_s)
 
 
-def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest
-                      ) -> str | None:
+def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest,
+                      sensors: Sequence[Sensor] = ()) -> str | None:
     """The actuator to name instead of the sensor the pattern table reads, or None: where
     none of that sensor's faults explains the log, the hypothesis of one actuator comes
     closer than any of them, and its group's shares match that actuator weak alone, seen
     from the replay's onset to its detection (a thruster dying as the vehicle dives raises
-    the depth-rate sensor's row). A sensor's fault in a closed loop moves the shares too
-    (the controller answers what it misreads), but then its own replay comes closest."""
+    the depth-rate sensor's row), or the commands against the motion name it alone while
+    resting on none of that sensor's signals (``sensors``: the profile's). A sensor's fault
+    in a closed loop moves the shares too (the controller answers what it misreads), but
+    then its own replay comes closest."""
     sensor = closest(test, finding.component)
-    effort = seen.effort_check
-    if sensor < 1.0 or effort is None:
+    if sensor < 1.0:
         return None
-    alone = effort.alone_by(finding.onset_s, finding.detected_at_s)
+    effort = seen.effort_check
+    alone = None if effort is None else effort.alone_by(finding.onset_s,
+                                                        finding.detected_at_s)
+    check = seen.command_check
+    if alone is None and check is not None and check.rests_on is not None and not any(
+            s.name in check.rests_on for s in sensors if s.component == finding.component):
+        alone = commands_alone(seen, finding)
     return alone if alone is not None and closest(test, alone) < sensor else None
+
+
+def commands_alone(seen: Observations, finding: Finding) -> str | None:
+    """The one actuator the commands against the motion name (the motion short of its
+    thrust, or the command beyond what the motion needs), their windows over begun by the
+    replay's detection: the same event, measured on that actuator alone; else None."""
+    check = seen.command_check
+    if check is None or check.alarm_s is None or len(check.named) != 1:
+        return None
+    began = check.onset_s
+    return check.named[0] if (began is not None and finding.detected_at_s is not None
+                              and began <= finding.detected_at_s) else None
 
 
 def closest(test: HypothesisTest, component: str | None,
