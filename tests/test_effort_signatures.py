@@ -187,17 +187,17 @@ def test_a_sensor_the_table_reads_but_no_fault_of_its_own_explains_yields_to_the
                       candidates=("depth_rate_sensor",), onset_s=15.0, detected_at_s=20.0)
     closer = HypothesisTest((Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor"),
                              Hypothesis("depth_rate_sensor", "dead", 1.7)))
-    assert unsupported_table(observed(check, {}), finding, closer) == "motor_3"
+    assert unsupported_table(observed(check, {}), finding, closer, ()) == "motor_3"
     explained = HypothesisTest((Hypothesis("depth_rate_sensor", "stuck", 0.8),
                                 Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor")))
-    assert unsupported_table(observed(check, {}), finding, explained) is None
+    assert unsupported_table(observed(check, {}), finding, explained, ()) is None
     own_closest = HypothesisTest((Hypothesis("depth_rate_sensor", "dead", 1.2),
                                   Hypothesis("motor_3", "weakened", 1.3, 0.75, "rotor")))
-    assert unsupported_table(observed(check, {}), finding, own_closest) is None
+    assert unsupported_table(observed(check, {}), finding, own_closest, ()) is None
     # The shares' event (16.5 s to 25 s) overlaps the replay's (15 s to 20 s); one that
     # began after the detection is another event.
     late = replace(check, onset_s=24.0, alarm_s=30.0)
-    assert unsupported_table(observed(late, {}), finding, closer) is None
+    assert unsupported_table(observed(late, {}), finding, closer, ()) is None
 
 
 def _thrust_lost(named: tuple[str, ...], crossed_s: float, rests_on: tuple[str, ...] | None

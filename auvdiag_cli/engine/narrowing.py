@@ -45,7 +45,7 @@ def weak_alone(seen: Observations, time_s: float | None, until_s: float | None =
 
 
 def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest,
-                      sensors: Sequence[Sensor] = ()) -> str | None:
+                      sensors: Sequence[Sensor]) -> str | None:
     """The actuator to name instead of the sensor the pattern table reads, or None: where
     none of that sensor's faults explains the log, the hypothesis of one actuator comes
     closer than any of them, and its group's shares match that actuator weak alone, seen
