@@ -40,6 +40,10 @@ def test_a_copter_log_says_its_firmware_frame_and_parameters(quad_logs):
     assert heard is not None and (heard.vehicle, heard.motors) == ("copter", 4)
     assert "MAV_TYPE 2" in heard.evidence
     assert autopilot_setup(quad_logs["bin"], "ros") is None
+    # `inspect` says it beside the span.
+    shown = runner.invoke(app, ["inspect", str(quad_logs["bin"])])
+    assert shown.exit_code == 0
+    assert '  vehicle   copter ("ArduCopter V4.5.0' in shown.stdout and "QUAD/X" in shown.stdout
 
 
 @pytest.mark.shared_data("ardusub")

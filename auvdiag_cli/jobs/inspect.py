@@ -5,6 +5,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from adapters import FieldSource, LogInventory, LogSources, Signals, inventory, read_log
+from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.signals import CLOCK_REFERENCE
 from auvdiag_cli.engine.log_clock import clock_gap, utc_offset_ns
 from auvdiag_cli.engine.resample import slow_command_note
@@ -39,6 +40,8 @@ class Inspection:
     mapped: bool = True          # False: the profile says nothing about this format family
     warnings: list[str] = field(default_factory=list)
     checked: bool = True         # False: no profile given, the log described only
+    # What an ArduPilot log says of the vehicle that wrote it; None: nothing.
+    autopilot: AutopilotSetup | None = None
 
     @property
     def usable(self) -> bool:
@@ -91,19 +94,26 @@ def _guessed_span(path: Path, contents: LogInventory) -> tuple[LogInventory, str
             "map this log's clock)")
 
 
+def _described_only(path: Path, family: str, contents: LogInventory,
+                    setup: AutopilotSetup | None) -> Inspection:
+    """The log without a profile: a CSV's span from its column named like a clock."""
+    note = None
+    if contents.start_ns is None and family == "csv":
+        contents, note = _guessed_span(path, contents)
+    return Inspection(path, family, contents, [], [], mapped=False, checked=False,
+                      warnings=[] if note is None else [note], autopilot=setup)
+
+
 def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     """Inventory the log, then read each of the profile's signals that its topics offer
     (None: describe the log only, its span from a column named like a clock for a CSV)."""
     contents, family = inventory(path)
+    setup = autopilot_setup(path, family)
     if profile is None:
-        notes: list[str | None] = [None]
-        if contents.start_ns is None and family == "csv":
-            contents, notes[0] = _guessed_span(path, contents)
-        return Inspection(path, family, contents, [], [], mapped=False, checked=False,
-                          warnings=[n for n in notes if n is not None])
+        return _described_only(path, family, contents, setup)
     sources = profile.sources.get(family)
     if sources is None:
-        return Inspection(path, family, contents, [], [], mapped=False)
+        return Inspection(path, family, contents, [], [], mapped=False, autopilot=setup)
     available = {topic.name for topic in contents.topics}
     # A signal whose own topic is absent is read from its fallback where the log has that.
     shown = {n: s if s.topic in available or n not in sources.fallbacks
@@ -150,7 +160,7 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
                               if s.name in profile.command_names}, profile.dt_s)
     warnings = [note for note in (clock_note, slow) if note is not None]
     return Inspection(path, family, contents, results, markers,
-                      warnings=warnings + _clock_off(read))
+                      warnings=warnings + _clock_off(read), autopilot=setup)
 
 
 def _clock_off(read: dict[str, Signals]) -> list[str]:

@@ -162,6 +162,9 @@ def inspection_lines(inspection: Inspection) -> list[str]:
              f"[sources.{inspection.family}])",
              f"  span      {_span(inv.start_ns, inv.end_ns)}"
              + (f"  ({duration:.1f} s)" if duration is not None else "")]
+    setup = inspection.autopilot
+    if setup is not None:
+        lines.append(f"  vehicle   {setup.vehicle or 'not said'} ({setup.evidence})")
     lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'mean rate':>9}")
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
