@@ -7,18 +7,25 @@ banner where a ground station fetched them (PARAM_VALUE, STATUSTEXT). Nothing he
 on a damaged log: what cannot be read says nothing."""
 
 import struct
+from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from adapters.mavlink_scan import RecordIndex, index_dataflash, index_tlog, tlog_frame_fields
+from adapters.mavlink_scan import (
+    TLOG_TIME_LENGTH,
+    RecordIndex,
+    index_dataflash,
+    index_tlog,
+    tlog_frame_fields,
+)
 
 # The banner and the parameters come first; a log's first megabytes hold them.
 PREFIX_BYTES = 8 << 20
 HEARTBEAT, PARAM_VALUE, STATUSTEXT = 0, 22, 253
 AUTOPILOT_INVALID = 8            # MAV_AUTOPILOT_INVALID: a ground station, not a vehicle
-PARAM_VALUE_LENGTH, STATUSTEXT_LENGTH = 25, 51
+HEARTBEAT_LENGTH, PARAM_VALUE_LENGTH, STATUSTEXT_LENGTH = 6, 25, 51   # what is read of each
 DATAFLASH_NAME, DATAFLASH_TEXT = 16, 64        # PARM's Name ('N'), MSG's Message ('Z')
 
 # The firmware's name as its banner starts -> the kind of vehicle.
@@ -57,7 +64,7 @@ def autopilot_setup(path: Path, family: str) -> AutopilotSetup | None:
             prefix = stream.read(PREFIX_BYTES)
         if family == "dataflash":
             index = index_dataflash(prefix)
-            texts, parameters = _dataflash_texts(index), _dataflash_parameters(index)
+            texts, parameters = _dataflash_texts(index), dataflash_parameters(index)
             mav_type = None
         else:
             index = index_tlog(prefix, {})
@@ -109,7 +116,8 @@ def _dataflash_texts(index: RecordIndex) -> list[str]:
     return [_text(p[:DATAFLASH_TEXT]) for p in _dataflash_records(index, "MSG", "QZ")]
 
 
-def _dataflash_parameters(index: RecordIndex) -> dict[str, float]:
+def dataflash_parameters(index: RecordIndex) -> dict[str, float]:
+    """Every parameter a DataFlash log wrote (PARM), by name."""
     parameters = {}
     for payload in _dataflash_records(index, "PARM", "QNf"):
         (value,) = struct.unpack_from("<f", payload, DATAFLASH_NAME)
@@ -118,24 +126,43 @@ def _dataflash_parameters(index: RecordIndex) -> dict[str, float]:
     return parameters
 
 
+class TlogPayloads:
+    """A telemetry log's frames, their payloads read by message id."""
+
+    def __init__(self, index: RecordIndex) -> None:
+        self.data = index.data
+        version, self.msgid, self.starts, self.lengths = tlog_frame_fields(index.data,
+                                                                           index.offsets)
+        frames = index.offsets + TLOG_TIME_LENGTH
+        self.sysids = np.where(version == 2, self.data[frames + 5],
+                               self.data[frames + 3]).astype(int)
+
+    def of(self, msgid: int, size: int) -> list[tuple[int, bytes]]:
+        """(system id, payload padded to ``size``: MAVLink 2 drops trailing zeros) of every
+        frame of ``msgid``."""
+        return [(int(self.sysids[k]), bytes(self.data[self.starts[k]:self.starts[k] + min(
+            int(self.lengths[k]), size)]).ljust(size, b"\0"))
+            for k in np.flatnonzero(self.msgid == msgid)]
+
+
+def autopilot_heartbeats(index: RecordIndex) -> Counter[tuple[int, int]]:
+    """How many HEARTBEATs each (system id, MAV_TYPE) sent, of vehicles: a ground station's,
+    a companion's or a camera's say MAV_AUTOPILOT_INVALID."""
+    return Counter((sysid, payload[4]) for sysid, payload in TlogPayloads(index).of(
+        HEARTBEAT, HEARTBEAT_LENGTH) if payload[5] != AUTOPILOT_INVALID)
+
+
 def _tlog_contents(index: RecordIndex) -> tuple[list[str], dict[str, float], int | None]:
     """(STATUSTEXT texts, PARAM_VALUE parameters, the autopilot's MAV_TYPE)."""
-    data = index.data
-    _, msgid, starts, lengths = tlog_frame_fields(data, index.offsets)
-
-    def payload(k: np.integer, size: int) -> bytes:
-        # MAVLink 2 drops a payload's trailing zeros.
-        return bytes(data[starts[k]:starts[k] + min(lengths[k], size)]).ljust(size, b"\0")
-
-    types = [payload(k, 6)[4] for k in np.flatnonzero(msgid == HEARTBEAT)
-             if payload(k, 6)[5] != AUTOPILOT_INVALID]
-    texts = [_text(payload(k, STATUSTEXT_LENGTH)[1:])
-             for k in np.flatnonzero(msgid == STATUSTEXT)]
+    frames = TlogPayloads(index)
+    texts = [_text(raw[1:]) for _, raw in frames.of(STATUSTEXT, STATUSTEXT_LENGTH)]
     parameters = {}
-    for k in np.flatnonzero(msgid == PARAM_VALUE):
-        raw = payload(k, PARAM_VALUE_LENGTH)
+    for _, raw in frames.of(PARAM_VALUE, PARAM_VALUE_LENGTH):
         (value,) = struct.unpack_from("<f", raw)
         if np.isfinite(value):
             parameters[_text(raw[8:24])] = float(value)
-    mav_type = max(set(types), key=types.count) if types else None
-    return texts, parameters, mav_type
+    heard = autopilot_heartbeats(index)
+    types: Counter[int] = Counter()
+    for (_, mav_type), count in heard.items():
+        types[mav_type] += count
+    return texts, parameters, types.most_common(1)[0][0] if types else None

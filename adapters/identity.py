@@ -6,20 +6,16 @@ bag's or an MCAP's topics are under. Nothing here raises on a damaged log: what 
 read says nothing."""
 
 import struct
-from collections import Counter
 from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from adapters import inventory
+from adapters.autopilot_setup import TlogPayloads, autopilot_heartbeats, dataflash_parameters
 from adapters.mavlink_scan import (
-    TLOG_TIME_LENGTH,
     RecordIndex,
     index_dataflash,
     index_tlog,
-    tlog_frame_fields,
 )
 from adapters.mcap import summary_topics
 from adapters.namespace import resolve
@@ -28,9 +24,8 @@ from adapters.rosbag import bag_topics
 from adapters.rosbag2_sqlite import db3_topics
 from auvdiag_errors import LogError
 
-HEARTBEAT, AUTOPILOT_VERSION = 0, 148
-AUTOPILOT_INVALID = 8          # MAV_AUTOPILOT_INVALID: a ground station, not a vehicle
-DATAFLASH_PARM_NAME = 16       # PARM's Name column: 16 bytes ('N')
+AUTOPILOT_VERSION = 148
+BOARD_UID_END = 16             # AUTOPILOT_VERSION's uid: payload bytes 8-15
 # Autopilots send HEARTBEAT and AUTOPILOT_VERSION, and write their parameters, as a log
 # begins: its first bytes say who wrote it, and an audit does not walk every log twice.
 PREFIX_BYTES = 2 << 20
@@ -81,48 +76,31 @@ def log_identity(path: Path, log_format: str, ros_topics: Collection[str] = (),
 
 
 def _tlog_identity(index: RecordIndex) -> LogIdentity | None:
-    data = index.data
-    version, msgid, starts, lengths = tlog_frame_fields(data, index.offsets)
-    frames = index.offsets + TLOG_TIME_LENGTH
-    sysids = np.where(version == 2, data[frames + 5], data[frames + 3]).astype(int)
-    vehicles: Counter[tuple[int, int]] = Counter()
-    for k in np.flatnonzero((msgid == HEARTBEAT) & (lengths >= 6)):
-        payload = bytes(data[starts[k]:starts[k] + 6])
-        if payload[5] != AUTOPILOT_INVALID:            # type, autopilot after custom_mode
-            vehicles[(int(sysids[k]), payload[4])] += 1
+    vehicles = autopilot_heartbeats(index)
     if not vehicles:
         return None
     (sysid, mav_type), _ = vehicles.most_common(1)[0]
     name, evidence = f"mavlink-{sysid}", f"HEARTBEAT: system {sysid}, MAV_TYPE {mav_type}"
-    uid = _board_uid(data, starts, lengths, msgid, sysids, sysid)
+    uid = _board_uid(index, sysid)
     if uid:
         name, evidence = f"{name}-uid-{uid}", f"{evidence}; AUTOPILOT_VERSION uid {uid}"
     return LogIdentity(name, evidence)
 
 
-def _board_uid(data: np.ndarray, starts: np.ndarray, lengths: np.ndarray, msgid: np.ndarray,
-               sysids: np.ndarray, sysid: int) -> str | None:
+def _board_uid(index: RecordIndex, sysid: int) -> str | None:
     """AUTOPILOT_VERSION's 64-bit uid (bytes 8-15 of the payload), where non-zero."""
-    for k in np.flatnonzero((msgid == AUTOPILOT_VERSION) & (sysids == sysid)):
-        payload = bytes(data[starts[k]:starts[k] + lengths[k]]).ljust(16, b"\0")
-        uid = int.from_bytes(payload[8:16], "little")
-        if uid:
+    for sender, payload in TlogPayloads(index).of(AUTOPILOT_VERSION, BOARD_UID_END):
+        uid = int.from_bytes(payload[8:BOARD_UID_END], "little")
+        if sender == sysid and uid:
             return f"{uid:016x}"
     return None
 
 
 def _dataflash_identity(index: RecordIndex) -> LogIdentity | None:
-    parm = next((t for t, f in index.formats.items()
-                 if f.name == "PARM" and f.types[:3] == "QNf"), None)
-    if parm is None:
+    value = dataflash_parameters(index).get("SYSID_THISMAV")
+    if value is None:
         return None
-    for position in index.of_type(parm):
-        start = int(index.offsets[position]) + 3 + 8
-        raw = bytes(index.data[start:start + DATAFLASH_PARM_NAME + 4])
-        if raw[:DATAFLASH_PARM_NAME].split(b"\0", 1)[0] == b"SYSID_THISMAV":
-            (value,) = struct.unpack("<f", raw[DATAFLASH_PARM_NAME:])
-            return LogIdentity(f"mavlink-{int(value)}", f"PARM SYSID_THISMAV = {int(value)}")
-    return None
+    return LogIdentity(f"mavlink-{int(value)}", f"PARM SYSID_THISMAV = {int(value)}")
 
 
 def _ulog_info(prefix: bytes) -> dict[str, bytes]:

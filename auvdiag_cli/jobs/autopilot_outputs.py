@@ -78,9 +78,8 @@ def output_roles(setup: AutopilotSetup | None, channels: list[int]) -> dict[int,
         return {}
     functions = {c: _function(setup, c) for c in channels}
     known = any(f is not None for f in functions.values())
-    roles = _copter(setup, functions, known) if setup.vehicle == "copter" \
+    return _copter(setup, functions, known) if setup.vehicle == "copter" \
         else _plane(setup, functions, known)
-    return roles
 
 
 def _copter(setup: AutopilotSetup, functions: dict[int, float | None], known: bool
