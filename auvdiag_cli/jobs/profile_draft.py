@@ -259,7 +259,8 @@ def _sensor(name: str, source: FieldSource, series: np.ndarray,
     elif not SENSOR_NAME.search(source.field):
         check = ("not recognised by its name: keep it only if it measures the "
                  "vehicle's motion (remove battery, position fixes, bookkeeping); " + check)
-    if source.field in ("climb", "CRt"):
+    if source.field in ("climb", "CRt") and paired is None:
+        # Measured beside its set point (DCRt), it keeps the set point's sign.
         source, unit, check = climb_source(source, setup)
     full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
     return Proposal(name, source, unit, check, _nice(full_scale))
