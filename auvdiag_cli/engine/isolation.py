@@ -23,6 +23,7 @@ from auvdiag_cli.engine.narrowing import (
     closest,
     commands_alone,
     narrowed,
+    tied_with,
     unsupported_table,
     weak_alone,
 )
@@ -31,7 +32,8 @@ from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
 from auvdiag_cli.engine.start_check import StartCheck
 from auvdiag_cli.engine.substitution import substitute
-from auvdiag_cli.vehicle.profile import Profile, Sensor
+from auvdiag_cli.engine.weakened_naming import left_undecided, name_weakened
+from auvdiag_cli.vehicle.profile import Sensor
 
 
 def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s: float,
@@ -54,7 +56,7 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
             measured = _measured_instead(seen, finding, test)
             if measured is not None:
                 return measured
-            return apply_weakened_thruster(finding, weak, judging.profile)
+            return name_weakened(seen, finding, weak, test, judging.profile)
         alone = unsupported_table(seen, finding, test, judging.profile.sensors)
         if alone is not None:
             return _instead_of_the_table(finding, alone, test, seen)
@@ -280,34 +282,15 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
                       f"the hypothesis test does not decide (best {best.describe()}"
                       f"{beside})",
                       judging)
+    rival = tied_with(test, best)
+    if rival is not None:
+        return left_undecided(finding, best, rival)
     if best.kind == "weakened":
         finding = replace(finding, degradation=best)
     return _found(seen, finding, [best.component],
                   f"named by the hypothesis test: {best.describe()} explains the log (g then "
                   f"stays at {best.peak_g_ratio:.0%} of its threshold at most){beside}",
                   judging)
-
-
-def apply_weakened_thruster(finding: Finding, weak: Hypothesis, profile: Profile) -> Finding:
-    table_says = finding.component
-    finding = replace(finding, component=weak.component, candidates=(weak.component,),
-                      substitution=None)
-    explained = (f"the pattern table reads b as {table_says}, but the log is explained by "
-                 f"{weak.component} ")
-    if weak.stuck_at is not None:
-        return finding.noted(explained + f"stuck {weak.stuck_at} from the onset (g then stays "
-                             f"at {weak.peak_g_ratio:.0%} of its threshold at most)")
-    if weak.thrust_fraction == 0.0:
-        # A thruster dying in a turn or at low speed raises one bit before the other: the
-        # decision window saw only that one, and it is a sensor's row.
-        row = next((r for r in profile.pattern if weak.component in r.components), None)
-        return replace(finding, case=None if row is None else row.case).noted(
-            explained + f"dead from the onset (g then stays at {weak.peak_g_ratio:.0%} of its "
-            "threshold at most): its failure raised the bits of its row one after the other")
-    return replace(finding, degradation=weak).noted(
-        explained + f"giving {weak.thrust_fraction:.0%} of its thrust from the onset "
-        f"(g then stays at {weak.peak_g_ratio:.0%} of its threshold at most): a partial "
-        "failure, which the paper's table (assumption 3) does not describe")
 
 
 def apply_active_diagnosis(seen: Observations, finding: Finding,
