@@ -298,3 +298,18 @@ def test_a_rotor_that_stopped_matches_its_signature_with_the_tilt_balance():
     assert load_profile(Path("crazyflie")).effort_groups[0].balance is None
     assert all(g.balance is None for g in load_profile(Path("bluerov2")).effort_groups
                if g.reach is not None)
+
+
+def test_a_part_whose_output_is_named_otherwise_is_said_as_the_verdict_names_it():
+    """A BlueROV2's outputs are motor_1 … motor_6, its parts thruster_1 … thruster_6: the
+    effort says both, never the output's name alone beside a verdict naming the part."""
+    pair = (ActuatorEffort("motor_5", "thruster_5", "vertical", 1.08, 1.0, 0.01, 0.08, 2.0,
+                           None),
+            ActuatorEffort("motor_6", "thruster_6", "vertical", 0.92, 1.0, 0.01, -0.08, 0.5,
+                           None))
+    text = EffortCheck(pair, 0.01, 66.0, 62.0, ("thruster_5",), (), "a weak motor",
+                       signature_matches(pair)).describe()
+    assert text.startswith("thruster_5 (motor_5) carries 8% more of the effort")
+    assert "the shares match thruster_5 (motor_5) weak (1.00; the next, thruster_6 (motor_6)" \
+        in text
+    assert _check(_group([-0.02, -0.01, 0.06, -0.03], 2)).describe().startswith("motor_3 carr")

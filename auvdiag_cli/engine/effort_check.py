@@ -65,14 +65,17 @@ class ActuatorEffort:
     not_judged: str | None       # why not, or None
     # The smallest rise of its share the whole-log test judges over this log (`smallest_rise`)
     smallest_rise_shown: float | None = None
-    # Where its group changed within the log: its share from the onset on against its
-    # share before it, less one (a rotor lost in a flight's last seconds barely moves the
-    # whole log's share); None otherwise.
+    # Where its group changed within the log: its share from the onset on over its share
+    # before, less one (a rotor lost in a log's last seconds barely moves the whole log's).
     since_onset: float | None = None
 
     @property
     def driven_harder(self) -> bool:
         return self.ratio is not None and self.ratio > 1
+
+    @property
+    def said(self) -> str:      # its part, as the verdict names it, and its own name
+        return self.name if self.component == self.name else f"{self.component} ({self.name})"
 
 
 @dataclass(frozen=True)
@@ -139,7 +142,7 @@ class EffortCheck:
                 return "not judged"
             worst = max(judged, key=lambda a: a.ratio or 0.0)
             return (f"every actuator carries its normal share of the effort (closest: "
-                    f"{worst.name}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
+                    f"{worst.said}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
                     f"its threshold){_smallest_rise_shown(judged)}")
         # A member its group's clear match leaves out (`_named`) is not a weakness of its own.
         parts = [_carries(a) for a in suspects if a.component in self.named or not self.named]
@@ -147,11 +150,10 @@ class EffortCheck:
                 + self._since() + self._caution())
 
     def _caution(self) -> str:
-        if not self.against_alike_logs:
-            return ""
-        return ("; caution: the normal logs it is judged against differ no more than their "
-                "own noise makes them (logs of one day, it may be): a normal log of another "
-                "day may stray this far")
+        return "" if not self.against_alike_logs else (
+            "; caution: the normal logs it is judged against differ no more than their own "
+            "noise makes them (logs of one day, it may be): a normal log of another day may "
+            "stray this far")
 
     def _since(self) -> str:
         """When it began, where it began during the log."""
@@ -163,7 +165,8 @@ class EffortCheck:
     def _pattern(self) -> str:
         if len(self.matches) < 2:
             return ""
-        (best, match), (second, other) = self.matches[:2]
+        said = {a.name: a.said for a in self.actuators}
+        (best, match), (second, other) = ((said.get(n, n), m) for n, m in self.matches[:2])
         if match < CLEAR_MATCH:
             return (f"; the shares match no one actuator's weakness well (closest {best}, "
                     f"{match:.2f}): more than one, or a load between them")
@@ -176,9 +179,9 @@ def _carries(actuator: ActuatorEffort) -> str:
     a = actuator
     figures = f"{a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f}"
     if a.since_onset is None:
-        return (f"{a.name} carries {a.departure or 0.0:.0%} more of the effort than on normal "
+        return (f"{a.said} carries {a.departure or 0.0:.0%} more of the effort than on normal "
                 f"logs ({figures})")
-    return (f"{a.name} carries {a.since_onset:.0%} more of the effort since the change than "
+    return (f"{a.said} carries {a.since_onset:.0%} more of the effort since the change than "
             f"before it in this log (over the whole log, {a.departure or 0.0:.0%} more than on "
             f"normal logs: {figures})")
 
