@@ -69,13 +69,13 @@ def _faults(vehicle: str) -> dict[str, str]:
 
 
 def _found_named(model: "LoadedModel", profile: "Profile", faulty: dict[Path, str]
-                 ) -> tuple[int, int, list[float], Counter[str]]:
+                 ) -> tuple[int, int, int, list[float], Counter[str]]:
     """How many of the ``faulty`` logs (log -> the failed part) the model finds (a fault
-    detected a second before the onset or later), how many it names, the delays of those
-    named, and how many it names of each part."""
+    detected a second before the onset or later), how many it names, how many it names
+    another part, the delays of those named, and how many it names of each part."""
     from auvdiag_cli import api
 
-    found = named = 0
+    found = named = wrong = 0
     delays = []
     by_part: Counter[str] = Counter()
     for path, part in faulty.items():
@@ -83,11 +83,12 @@ def _found_named(model: "LoadedModel", profile: "Profile", faulty: dict[Path, st
         seen = (diagnosis.verdict.value == "fault"
                 and (diagnosis.detected_at_s or 0.0) >= FAULT_FROM_S - 1.0)
         found += seen
+        wrong += seen and diagnosis.component not in (None, part)
         if seen and diagnosis.component == part:
             named += 1
             by_part[part] += 1
             delays.append((diagnosis.detected_at_s or 0.0) - FAULT_FROM_S)
-    return found, named, delays, by_part
+    return found, named, wrong, delays, by_part
 
 
 def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
@@ -109,12 +110,14 @@ def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
         shown = ", ".join(f"{name} {mission[name]:g} %"
                           for name in replay_judged(model, profile)) or "none judged"
     alarms = sum(api.diagnose(p, profile, model).verdict.value == "fault" for p in normal)
-    found, named, _, _ = _found_named(model, profile, faulty)
-    weak_found, weak_named, delays, by_part = _found_named(model, profile, weakened)
+    found, named, _, _, _ = _found_named(model, profile, faulty)
+    weak_found, weak_named, weak_wrong, delays, by_part = _found_named(model, profile,
+                                                                      weakened)
     delay = (f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "–")
     return (f"`{vehicle}`", label, shown, f"{alarms}/{len(normal)}",
             f"{found}/{len(faulty)}", f"{named}/{len(faulty)}",
-            f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}", delay,
+            f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}",
+            f"{weak_wrong}/{len(weakened)}", delay,
             ", ".join(f"{part} {by_part[part]}/{len(WEAKENED_SEEDS)}"
                       for part in dict.fromkeys(weakened.values())))
 
@@ -166,12 +169,13 @@ def main() -> None:
           f"{WEAKENED:.0%} of its thrust from {FAULT_FROM_S:.0f} s (seeds "
           f"{', '.join(map(str, WEAKENED_SEEDS))}); found: a fault detected "
           f"{FAULT_FROM_S - 1:.0f} s or later (earlier, a false alarm), named: found and "
-          "that part named; the delay: from the weakness's onset to its detection, median / "
-          "worst over those named.\n")
+          "that part named (another named: found, and another part named alone); the "
+          "delay: from the weakness's onset to its detection, median / worst over those "
+          "named.\n")
     print("| vehicle | thresholds | g thresholds of the judged signals | normal missions "
           f"alarmed | faults found | the part named | weakened to {WEAKENED:.0%}: found | "
-          "named | delay (s) |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "named | another named | delay (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         print("| " + " | ".join(row[:-1]) + " |")
     print(f"\nWeakened to {WEAKENED:.0%}, named per actuator (of {len(WEAKENED_SEEDS)} seeds):\n")
