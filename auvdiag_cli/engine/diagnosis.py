@@ -55,6 +55,7 @@ from auvdiag_cli.engine.segments import (
     segments_of,
     threshold_matrix,
 )
+from auvdiag_cli.engine.slight_alarm import beyond_slight
 from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.actuators import SET_POINT, outing
@@ -258,9 +259,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                      case=_normal_case(profile), notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
                         dms_starts, companion_runs)
-    return Diagnosis.of(seen, within_the_envelope(finding, normal, dict(model.card.envelope),
-                                                  judging.judged, frame))
-
+    return Diagnosis.of(seen, beyond_slight(within_the_envelope(
+        finding, normal, dict(model.card.envelope), judging.judged, frame), normal, seen))
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,

@@ -1,0 +1,55 @@
+"""A replay alarm that barely crosses thresholds no calibration set, with every other judge
+quiet, decides nothing: the verdict is undetermined and says why. A model used as trained
+judges by 1.5 x the g of one held-out log; a normal mission of another noise seed passed
+that by 16-18 % on a simulated BlueROV2 (docs/method.md)."""
+
+from dataclasses import replace
+
+import numpy as np
+from helpers import observed
+
+from auvdiag_cli.engine.effort_check import ActuatorEffort, EffortCheck
+from auvdiag_cli.engine.histories import Histories
+from auvdiag_cli.engine.residuals import Matching
+from auvdiag_cli.engine.results import Finding, Observations, Verdict
+from auvdiag_cli.engine.slight_alarm import SLIGHT, TOO_SLIGHT, beyond_slight
+
+TIME_S = np.arange(0.0, 120.0, 0.1)
+NORMAL = Finding(verdict=Verdict.NORMAL, b={"heave": 0, "sway": 0}, notes=("read",))
+ALARM = Finding(verdict=Verdict.FAULT, b={"heave": 1, "sway": 0}, onset_s=59.0,
+                detected_at_s=67.6, candidates=("thruster_5", "thruster_6"))
+
+
+def _seen(heave_peak: float, sway_peak: float = 0.5, calibrated: bool = False,
+          effort: EffortCheck | None = None) -> Observations:
+    """A BlueROV2 log whose heave g reaches ``heave_peak`` x its 17.72 % threshold at 68 s;
+    sway, which the replay does not judge, ``sway_peak`` x its own."""
+    g = np.full((TIME_S.size, 2), 5.0)
+    g[(TIME_S > 67.0) & (TIME_S < 69.0), 0] = heave_peak * 17.72
+    g[(TIME_S > 67.0) & (TIME_S < 69.0), 1] = sway_peak * 15.0
+    thresholds = np.tile([17.72, 15.0], (TIME_S.size, 1))
+    zeros = np.zeros_like(g)
+    seen = observed(effort, {"sway": "the model cannot predict it"}, "bluerov2")
+    return replace(seen, model=replace(seen.model, thresholds_calibrated=calibrated),
+                   histories=Histories(TIME_S, sensor_names=("heave", "sway"),
+                                       matching=Matching(zeros, zeros, g),
+                                       thresholds=thresholds))
+
+
+def test_a_slight_uncorroborated_alarm_of_uncalibrated_thresholds_is_undetermined():
+    judged = beyond_slight(ALARM, NORMAL, _seen(1.16, sway_peak=3.0))
+    assert judged.verdict is Verdict.UNDETERMINED and judged.undetermined_because == TOO_SLIGHT
+    assert judged.component is None and judged.candidates == () and judged.notes[0] == "read"
+    assert ("an alarm at 67.6 s (it named thruster_5 or thruster_6) is not taken for a fault: "
+            "the replay's heave reached 1.16 x its threshold") in judged.notes[-1]
+    assert "auvdiag calibrate" in judged.notes[-1]
+
+
+def test_a_clear_crossing_calibrated_thresholds_or_another_judge_keep_the_fault():
+    assert beyond_slight(ALARM, NORMAL, _seen(SLIGHT + 0.01)) == ALARM
+    assert beyond_slight(ALARM, NORMAL, _seen(1.16, calibrated=True)) == ALARM
+    thruster = ActuatorEffort("motor_5", "thruster_5", "vertical", 1.08, 1.0, 0.01, 0.08,
+                              2.0, None)
+    effort = EffortCheck((thruster,), 0.01, 66.0, 62.0, ("thruster_5",), ())
+    assert beyond_slight(ALARM, NORMAL, _seen(1.16, effort=effort)) == ALARM
+    assert beyond_slight(NORMAL, NORMAL, _seen(1.16)) == NORMAL
