@@ -130,7 +130,9 @@ def _rows(work: Path, vehicle: str, fmt: str) -> list[tuple[str, ...]]:
 
     training = [flown(s, TRAINING_SEED) for s in TRAINING]
     calibration = [flown(s, CALIBRATION_SEED) for s in CALIBRATION]
-    normal = [flown(s, seed) for seed in NORMAL_SEEDS for s in NORMAL]
+    # The normal missions, and the weakened missions' own paper mission without its fault.
+    normal = [*(flown(s, seed) for seed in NORMAL_SEEDS for s in NORMAL),
+              *(flown("paper-normal", seed) for seed in WEAKENED_SEEDS)]
     faulty = {flown(name, FAULT_SEED): part for name, part in _faults(vehicle).items()}
     weakened = {_flown(work, vehicle, fmt, name, seed, WEAKENED): part
                 for name, part in _weakened(vehicle).items() for seed in WEAKENED_SEEDS}
@@ -163,7 +165,9 @@ def main() -> None:
           f"{len(TRAINING)} normal missions (seed {TRAINING_SEED}), judged as trained, "
           f"calibrated on those, or on {len(CALIBRATION)} more (seed {CALIBRATION_SEED}); "
           f"{len(NORMAL) * len(NORMAL_SEEDS)} normal missions of seeds "
-          f"{', '.join(map(str, NORMAL_SEEDS))} and every fault of its mission scenarios "
+          f"{', '.join(map(str, NORMAL_SEEDS))}, the paper mission without a fault of each "
+          "seed its actuators are weakened on (below), and every fault of its mission "
+          "scenarios "
           f"from {FAULT_FROM_S:.0f} s (seed {FAULT_SEED}: each actuator dead or at half its "
           "thrust, each sensor dead) diagnosed, and each actuator weakened to "
           f"{WEAKENED:.0%} of its thrust from {FAULT_FROM_S:.0f} s (seeds "
