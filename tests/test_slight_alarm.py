@@ -4,6 +4,9 @@ judges by 1.5 x the g of one held-out log; a normal mission of another noise see
 that by 16-18 % on a simulated BlueROV2 (docs/method.md)."""
 
 from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+from typing import cast
 
 import numpy as np
 from helpers import observed
@@ -12,12 +15,20 @@ from auvdiag_cli.engine.effort_check import ActuatorEffort, EffortCheck
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
-from auvdiag_cli.engine.slight_alarm import SLIGHT, TOO_SLIGHT, beyond_slight
+from auvdiag_cli.engine.slight_alarm import (
+    SLIGHT,
+    TOO_SLIGHT,
+    beyond_slight,
+    raised_by_training,
+)
+from auvdiag_cli.vehicle.profile import load_profile
+from models.card import ModelCard
 
 TIME_S = np.arange(0.0, 120.0, 0.1)
 NORMAL = Finding(verdict=Verdict.NORMAL, b={"heave": 0, "sway": 0}, notes=("read",))
 ALARM = Finding(verdict=Verdict.FAULT, b={"heave": 1, "sway": 0}, onset_s=59.0,
                 detected_at_s=67.6, candidates=("thruster_5", "thruster_6"))
+RAISED = frozenset({"heave"})       # its threshold the held-out log's, not the profile's
 
 
 def _seen(heave_peak: float, sway_peak: float = 0.5, calibrated: bool = False,
@@ -37,7 +48,7 @@ def _seen(heave_peak: float, sway_peak: float = 0.5, calibrated: bool = False,
 
 
 def test_a_slight_uncorroborated_alarm_of_uncalibrated_thresholds_is_undetermined():
-    judged = beyond_slight(ALARM, NORMAL, _seen(1.16, sway_peak=3.0))
+    judged = beyond_slight(ALARM, NORMAL, _seen(1.16, sway_peak=3.0), RAISED)
     assert judged.verdict is Verdict.UNDETERMINED and judged.undetermined_because == TOO_SLIGHT
     assert judged.component is None and judged.candidates == () and judged.notes[0] == "read"
     assert ("an alarm at 67.6 s (it named thruster_5 or thruster_6) is not taken for a fault: "
@@ -46,10 +57,22 @@ def test_a_slight_uncorroborated_alarm_of_uncalibrated_thresholds_is_undetermine
 
 
 def test_a_clear_crossing_calibrated_thresholds_or_another_judge_keep_the_fault():
-    assert beyond_slight(ALARM, NORMAL, _seen(SLIGHT + 0.01)) == ALARM
-    assert beyond_slight(ALARM, NORMAL, _seen(1.16, calibrated=True)) == ALARM
+    assert beyond_slight(ALARM, NORMAL, _seen(SLIGHT + 0.01), RAISED) == ALARM
+    assert beyond_slight(ALARM, NORMAL, _seen(1.16, calibrated=True), RAISED) == ALARM
+    # A threshold its profile's author set (the shipped Twin-Burger's 15 %) is crossed.
+    assert beyond_slight(ALARM, NORMAL, _seen(1.16), frozenset()) == ALARM
     thruster = ActuatorEffort("motor_5", "thruster_5", "vertical", 1.08, 1.0, 0.01, 0.08,
                               2.0, None)
     effort = EffortCheck((thruster,), 0.01, 66.0, 62.0, ("thruster_5",), ())
-    assert beyond_slight(ALARM, NORMAL, _seen(1.16, effort=effort)) == ALARM
-    assert beyond_slight(NORMAL, NORMAL, _seen(1.16)) == NORMAL
+    assert beyond_slight(ALARM, NORMAL, _seen(1.16, effort=effort), RAISED) == ALARM
+    assert beyond_slight(NORMAL, NORMAL, _seen(1.16), RAISED) == NORMAL
+
+
+def test_the_thresholds_training_raised_are_those_above_the_profiles():
+    profile = load_profile(Path("bluerov2"))
+    mission = dict(profile.thresholds_for("mission"))
+    trained = cast(ModelCard, SimpleNamespace(thresholds={
+        "mission": {**mission, "heave": mission["heave"] * 1.77, "surge": mission["surge"]}}))
+    assert raised_by_training(profile, trained) == {"heave"}
+    assert raised_by_training(profile, cast(ModelCard, SimpleNamespace(thresholds=None))) \
+        == frozenset()

@@ -28,7 +28,6 @@ from auvdiag_cli.engine.detection import (
     look_up,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
-from auvdiag_cli.engine.envelope import within_the_envelope
 from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
@@ -55,7 +54,7 @@ from auvdiag_cli.engine.segments import (
     segments_of,
     threshold_matrix,
 )
-from auvdiag_cli.engine.slight_alarm import beyond_slight
+from auvdiag_cli.engine.slight_alarm import within_what_it_knows
 from auvdiag_cli.engine.start_check import check_start
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.actuators import SET_POINT, outing
@@ -259,8 +258,7 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                      case=_normal_case(profile), notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
                         dms_starts, companion_runs)
-    return Diagnosis.of(seen, beyond_slight(within_the_envelope(
-        finding, normal, dict(model.card.envelope), judging.judged, frame), normal, seen))
+    return Diagnosis.of(seen, within_what_it_knows(finding, normal, seen, judging, frame))
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
