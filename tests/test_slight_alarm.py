@@ -76,3 +76,38 @@ def test_the_thresholds_training_raised_are_those_above_the_profiles():
     assert raised_by_training(profile, trained) == {"heave"}
     assert raised_by_training(profile, cast(ModelCard, SimpleNamespace(thresholds=None))) \
         == frozenset()
+
+
+def test_a_real_log_that_barely_crosses_thresholds_training_raised_is_undetermined(tmp_path):
+    """The shipped Twin-Burger model on the normal paper mission, its flow threshold set at
+    1/1.1 of the flow's largest g there: where the profile's own threshold lies below (the
+    model's was raised from its held-out logs) the alarm is undetermined; where the profile
+    set that threshold itself, it stands."""
+    import json
+    import shutil
+
+    from auvdiag_cli import api
+    from models.store import default_model_dir
+
+    profile = api.load_profile("twin_burger")
+    log = Path(__file__).resolve().parents[1] / "sample_logs" / "paper-normal"
+    shipped = api.diagnose(log, profile, api.load_model(None, profile))
+    flow = shipped.histories.sensor_names.index("flow")
+    assert shipped.verdict is Verdict.NORMAL
+    threshold = round(float(np.nanmax(shipped.histories.matching.g_percent[:, flow])) / 1.1, 3)
+    model_dir = tmp_path / "model"
+    shutil.copytree(default_model_dir(), model_dir)
+    card = json.loads((model_dir / "model.json").read_text())
+    card["thresholds"]["mission"]["flow"] = threshold
+    (model_dir / "model.json").write_text(json.dumps(card))
+    mission = dict(profile.thresholds["mission"])
+
+    def judged(profile_flow: float) -> Finding:
+        given = replace(profile, thresholds={**profile.thresholds,
+                                             "mission": {**mission, "flow": profile_flow}})
+        return api.diagnose(log, given, api.load_model(model_dir, given))
+
+    raised = judged(threshold / 2)
+    assert raised.verdict is Verdict.UNDETERMINED and raised.undetermined_because == TOO_SLIGHT
+    assert "the replay's flow reached 1.1" in raised.notes[-1]
+    assert judged(threshold).verdict is Verdict.FAULT

@@ -258,7 +258,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                      case=_normal_case(profile), notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
                         dms_starts, companion_runs)
-    return Diagnosis.of(seen, within_what_it_knows(finding, normal, seen, judging, frame))
+    return Diagnosis.of(seen, within_what_it_knows(finding, normal, seen, judging, frame,
+                                                        profile))
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,

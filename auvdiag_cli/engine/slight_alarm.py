@@ -36,13 +36,14 @@ TOO_SLIGHT = "an alarm too slight for thresholds no calibration set"
 
 
 def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
-                         judging: Judging, frame: AlignedFrame) -> Finding:
+                         judging: Judging, frame: AlignedFrame, profile: Profile) -> Finding:
     """``finding`` where the model can make it: not past the logs it learnt from
-    (`envelope`), not on a slight crossing of thresholds its held-out logs set."""
+    (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
+    as given, its thresholds not the model's, as ``judging``'s are)."""
     card = judging.model.card
     return beyond_slight(within_the_envelope(finding, normal, dict(card.envelope),
                                              judging.judged, frame),
-                         normal, seen, raised_by_training(judging.profile, card))
+                         normal, seen, raised_by_training(profile, card))
 
 
 def raised_by_training(profile: Profile, card: ModelCard) -> frozenset[str]:
