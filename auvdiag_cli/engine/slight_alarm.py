@@ -5,18 +5,16 @@ anything.
 A model used as trained judges by the profile's thresholds, raised by `train` to 1.5 times
 the g of the logs it held out (one, of three) where that is more. How far a normal log of
 the same missions goes beyond that one log's g is unknown until the model is calibrated on
-normal logs: on
-a simulated BlueROV2 trained on three missions, two of ten normal paper missions of other
-noise seeds took the heave's g to 1.16 and 1.18 times the threshold so set (20.5 % and
-20.9 % against 17.72 %) at the same manoeuvre, and no other judge departed. Such an
-alarm is not taken for a fault: the verdict is undetermined, and the report says how far
-the g went and what would judge it. An alarm the commands against the motion, the effort
-shares, the change test or the start also raise stands; so does one that crossed a
+normal logs: on a simulated BlueROV2 trained on three missions, two of ten normal paper
+missions of other noise seeds took the heave's g to 1.16 and 1.18 times the threshold so
+set (20.5 % and 20.9 % against 17.72 %) at the same manoeuvre, and no other judge departed.
+Such an alarm is not taken for a fault: the verdict is undetermined, and the report says
+how far the g went and what would judge it. An alarm the commands against the motion, the
+effort shares, the change test or the start also raise stands; so does one that crossed a
 threshold the profile set (its author's, not a held-out log's: the shipped Twin-Burger's
 15 %), and any alarm of a model whose thresholds were calibrated (their false-alarm rate is
-then what calibrate says).
-No fault of the simulated BlueROV2's mission scenarios, weakened thrusters included, was
-found by the replay alone within SLIGHT of its thresholds."""
+then what calibrate says). No fault of the simulated BlueROV2's mission scenarios, weakened
+thrusters included, was found by the replay alone within SLIGHT of its thresholds."""
 
 from dataclasses import replace
 
@@ -95,6 +93,6 @@ def beyond_slight(finding: Finding, normal: Finding, seen: Observations,
         f"an alarm at {finding.detected_at_s or finding.onset_s:.1f} s (it named {named}) is "
         f"not taken for a fault: the replay's {names[furthest]} reached "
         f"{peaks[furthest]:.2f} x its threshold at most, no other judge saw anything, and "
-        "the thresholds are the profile's or 1.5 x the g of the logs held out of training, "
-        "which a normal log may pass this far; calibrate the model on normal logs "
-        "(auvdiag calibrate) to judge it")
+        "the thresholds it crossed are 1.5 x the g of the logs held out of training, which a "
+        "normal log may pass this far; calibrate the model on normal logs (auvdiag "
+        "calibrate) to judge it")

@@ -19,10 +19,9 @@ def name_weakened(seen: Observations, finding: Finding, weak: Hypothesis,
     if rival is None:
         return apply_weakened_thruster(finding, weak, profile)
     alone = weak_alone(seen, finding.onset_s, finding.detected_at_s)
-    if alone == rival.component:
-        return apply_weakened_thruster(finding, rival, profile)
-    if alone == weak.component:
-        return apply_weakened_thruster(finding, weak, profile)
+    if alone in (weak.component, rival.component):
+        return apply_weakened_thruster(finding, rival if alone == rival.component else weak,
+                                       profile)
     return left_undecided(finding, weak, rival,
                           f"the pattern table reads b as {finding.component}, but ")
 
