@@ -42,6 +42,14 @@ SENSOR_FAULTS = ("dead", "stuck", "biased", "drifting")
 # there, they absorb whatever else moved that signal, a weak actuator's effect included.
 FITTED_TO_THE_LOG = ("biased", "drifting")
 STUCK_FROM_SAMPLES = 5       # a stuck part's value: the median of the samples before onset
+# A sensor dead or stuck reads one value from the onset on: one whose every signal changes
+# after the onset at this share, at least, of the steps it changed at before is neither (an
+# onset dated a little early leaves a dead one's few last readings after it). A closed loop
+# holds its rates near zero, so "the gyro reads 0" fitted a simulated quadrotor's log better
+# than the rotor weakened there while the gyro kept reading its noise.
+STILL_MOVING = 0.5
+ONE_VALUE = ("dead", "stuck")
+KEPT_MOVING = "its signals kept changing after the onset as often as before it"
 TRIM, WHERE_IT_WAS, LOW_LIMIT, HIGH_LIMIT = ("at its trim", "where it was",
                                              "hard over at its least command",
                                              "hard over at its largest command")
@@ -55,6 +63,7 @@ class Hypothesis:
     thrust_fraction: float | None = None  # pushing parts: 0 dead, else weakened to this
     part: str | None = None              # an actuator's kind (`vehicle.actuators`); None: a sensor
     stuck_at: str | None = None          # a control surface's: where it stuck
+    ruled_out: str | None = None         # why it was not replayed (peak_g_ratio inf)
 
     @property
     def explains(self) -> bool:
@@ -195,13 +204,28 @@ def _sensor_hypotheses(profile: Profile, frame: AlignedFrame, matching: Matching
     elapsed = frame.time_s[onset:] - frame.time_s[onset]
     for component in dict.fromkeys(s.component for s in profile.sensors):
         columns = [i for i, s in enumerate(profile.sensors) if s.component == component]
+        moving = all(still_moving(matching.measured[:, i], onset) for i in columns)
         for kind in SENSOR_FAULTS:
+            if moving and kind in ONE_VALUE:
+                found.append(Hypothesis(component, kind, float("inf"), ruled_out=KEPT_MOVING))
+                continue
             predicted = matching.modelled.copy()
             for i in columns:
                 predicted[onset:, i] = _faulty_reading(kind, matching.measured[:, i],
                                                        matching.modelled[:, i], onset, elapsed)
             found.append(Hypothesis(component, kind, judge.ratio_of(predicted)))
     return found
+
+
+def still_moving(measured: np.ndarray, onset: int) -> bool:
+    """Whether a signal's reading changes after ``onset`` about as often as before it
+    (`STILL_MOVING`)."""
+    def changing(values: np.ndarray) -> float:
+        values = values[np.isfinite(values)]
+        return float(np.mean(np.diff(values) != 0)) if len(values) > 1 else 0.0
+
+    before = changing(measured[:onset])
+    return before > 0 and changing(measured[onset:]) >= STILL_MOVING * before
 
 
 def _faulty_reading(kind: str, measured: np.ndarray, modelled: np.ndarray, onset: int,

@@ -22,6 +22,7 @@ from auvdiag_cli.engine.narrowing import (
     DECISIVE_MARGIN,
     closest,
     commands_alone,
+    group_mate_instead,
     narrowed,
     tied_with,
     unsupported_table,
@@ -256,19 +257,8 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
-    unweighed = [n for n, v in finding.b.items() if v and n in seen.not_judged]
-    # A bias or a drift fitted to the log after the onset absorbs what a weak actuator did
-    # to the signal (a rotor that died seconds before the log ends), while a sensor's fault
-    # moves a group of three or more in pairs, never as one member's weakness alone (a
-    # pair's shares move as one member's whatever moved them).
-    absorbed = best.fitted and effort is not None and len(effort.matches) > 2
-    if alone is not None and not best.is_actuator and (unweighed or absorbed):
-        # The hypotheses are weighed by the replay's g, which leaves out signals it cannot
-        # predict: a sensor's fault "explains" a change there only by not being looked at.
-        why = (f"cannot weigh {', '.join(unweighed)} (not judged by the replay), where the "
-               "change showed" if unweighed else
-               "fits it to the log after the onset, where it absorbs what a weak actuator "
-               "does to the signal")
+    why = _shares_overrule(seen, finding, best, alone)
+    if alone is not None and why is not None:
         return _found(seen, finding, [alone],
                       f"named by the effort its group carries (its shares match {alone} weak "
                       f"alone, begun by the onset): the hypothesis test favours "
@@ -291,6 +281,33 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
                   f"named by the hypothesis test: {best.describe()} explains the log (g then "
                   f"stays at {best.peak_g_ratio:.0%} of its threshold at most){beside}",
                   judging)
+
+
+def _shares_overrule(seen: Observations, finding: Finding, best: Hypothesis,
+                     alone: str | None) -> str | None:
+    """Why the actuator whose group's shares match its weakness alone (``alone``, begun by
+    the onset) is named over the hypothesis test's ``best``, or None."""
+    if alone is None:
+        return None
+    if best.is_actuator:
+        return None if group_mate_instead(seen, finding, best.component) is None else (
+            f"it is another member of that group (g at {best.peak_g_ratio:.0%} of its "
+            "threshold): which member the controller drives harder is what the shares measure")
+    effort = seen.effort_check
+    unweighed = [n for n, v in finding.b.items() if v and n in seen.not_judged]
+    # The hypotheses are weighed by the replay's g, which leaves out signals it cannot
+    # predict: a sensor's fault "explains" a change there only by not being looked at.
+    if unweighed:
+        return (f"cannot weigh {', '.join(unweighed)} (not judged by the replay), where the "
+                "change showed")
+    # A bias or a drift fitted to the log after the onset absorbs what a weak actuator did
+    # to the signal (a rotor that died seconds before the log ends), while a sensor's fault
+    # moves a group of three or more in pairs, never as one member's weakness alone (a
+    # pair's shares move as one member's whatever moved them).
+    if best.fitted and effort is not None and len(effort.matches) > 2:
+        return ("fits it to the log after the onset, where it absorbs what a weak actuator "
+                "does to the signal")
+    return None
 
 
 def apply_active_diagnosis(seen: Observations, finding: Finding,

@@ -34,7 +34,7 @@ def narrowed(seen: Observations, finding: Finding, runs: Sequence[tuple[DmsRun, 
         active, finding = _narrow_by_predicted_signatures(finding, active, onset_ns, runs,
                                                           judging)
     if len(active.candidates) > 1 and finding.hypotheses is not None:
-        active, finding = _narrow_by_hypotheses(finding, active, finding.hypotheses)
+        active, finding = _narrow_by_hypotheses(seen, finding, active, finding.hypotheses)
     if len(active.candidates) > 1:
         active, finding = _narrow_by_effort(seen, finding, active)
     return replace(finding, active=active, candidates=active.candidates)
@@ -46,6 +46,22 @@ def weak_alone(seen: Observations, time_s: float | None, until_s: float | None =
     by a moment from it to ``until_s``: `EffortCheck.alone_by`), or None."""
     effort = seen.effort_check
     return None if effort is None else effort.alone_by(time_s, until_s)
+
+
+def group_mate_instead(seen: Observations, finding: Finding, component: str) -> str | None:
+    """Another member of ``component``'s effort group, where its group's shares match that
+    member weak alone, begun by the onset (`weak_alone`); else None. The shares measure
+    which member the controller drives harder; a replay tells a group's members apart only
+    as far as its normal logs moved them apart, and a failed member's command pushed past
+    anything they held is beyond what it learned (a simulated quadrotor's rotor stopped 3 s
+    before the log's end: its replay explained the log by the diagonal partner stopped)."""
+    alone = weak_alone(seen, finding.onset_s, finding.detected_at_s)
+    effort = seen.effort_check
+    if alone is None or alone == component or effort is None:
+        return None
+    group = {a.component: a.group for a in effort.actuators}
+    return alone if group.get(component) is not None and group.get(component) == group.get(
+        alone) else None
 
 
 def unsupported_table(seen: Observations, finding: Finding, test: HypothesisTest,
@@ -129,11 +145,12 @@ def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagno
     return replace(active, candidates=(alone,), recommended_dms=()), finding
 
 
-def _narrow_by_hypotheses(finding: Finding, active: ActiveDiagnosis, test: HypothesisTest
-                          ) -> tuple[ActiveDiagnosis, Finding]:
+def _narrow_by_hypotheses(seen: Observations, finding: Finding, active: ActiveDiagnosis,
+                          test: HypothesisTest) -> tuple[ActiveDiagnosis, Finding]:
     """Among the candidates the DMS runs leave, the one whose failure explains the log when
     no other candidate's does, by DECISIVE_MARGIN at least (e.g. which thruster died on a
-    plain mission: the table reads both the same)."""
+    plain mission: the table reads both the same); not where the effort its group carries
+    names another member of the group alone (`group_mate_instead`: the effort decides)."""
     best = {c: min((h for h in test.ranked if h.component == c),
                    key=lambda h: h.peak_g_ratio, default=None) for c in active.candidates}
     scored = sorted((h for h in best.values() if h is not None), key=lambda h: h.peak_g_ratio)
@@ -143,6 +160,8 @@ def _narrow_by_hypotheses(finding: Finding, active: ActiveDiagnosis, test: Hypot
     if margin < DECISIVE_MARGIN:
         return active, finding
     winner = scored[0]
+    if winner.is_actuator and group_mate_instead(seen, finding, winner.component) is not None:
+        return active, finding
     finding = finding.noted(
         f"the pattern table reads b as {' or '.join(active.candidates)}; replayed from the "
         f"onset, {winner.describe()} explains the log (g at most {winner.peak_g_ratio:.0%} of "

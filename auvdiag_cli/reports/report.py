@@ -79,6 +79,7 @@ class HypothesisPart:
     stuck_at: str | None = None
     peak_g_over_threshold: float | None = None
     explains: bool = False
+    ruled_out: str | None = None      # why it was not replayed
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -161,7 +161,8 @@ def _hypothesis(h: Hypothesis | None) -> HypothesisPart | None:
     return None if h is None else HypothesisPart(
         component=h.component, kind=h.kind, description=h.describe(),
         thrust_fraction=h.thrust_fraction, stuck_at=h.stuck_at,
-        peak_g_over_threshold=_finite(h.peak_g_ratio), explains=h.explains)
+        peak_g_over_threshold=_finite(h.peak_g_ratio), explains=h.explains,
+        ruled_out=h.ruled_out)
 
 
 def _hypotheses(diagnosis: Diagnosis) -> HypothesesPart | None:

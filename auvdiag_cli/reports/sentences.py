@@ -44,7 +44,8 @@ def _hypothesis(h: HypothesisPart, margin: float | None = None) -> str:
         kind = (f"weakened to {h.thrust_fraction:.0%} thrust"
                 if h.kind == "weakened" and h.thrust_fraction is not None else h.kind)
         described = f"{h.component.replace('_', ' ')} {kind}"
-    said = [] if h.peak_g_over_threshold is None else [
+    said = ([f"ruled out: {h.ruled_out}"] if h.ruled_out else []) if (
+        h.peak_g_over_threshold is None) else [
         f"g at most {h.peak_g_over_threshold:.0%} of its threshold"]
     if margin is not None and math.isfinite(margin):
         said.append(f"{margin:.1f}x the best's")
