@@ -36,18 +36,27 @@ TRAINING_SEED, CALIBRATION_SEED, NORMAL_SEEDS, FAULT_SEED = 1, 2, (11, 12), 21
 FAULT_FROM_S = 60.0
 # Each actuator weakened this far from FAULT_FROM_S, flown with these seeds.
 WEAKENED, WEAKENED_SEEDS = 0.7, tuple(range(21, 31))
+# Each actuator failing late in its mission, judged as trained: (what, thrust kept, onset
+# from the mission's length without the fault). A rotor that stops seconds before the log
+# ends is how a crash ends a log.
+NEVER_S, MID_FLIGHT_SEED = 1e6, 41
+MID_FLIGHT = (("stopped 3 s before the mission's end", 0.0, lambda end: end - 3.0),
+              (f"weakened to {WEAKENED:.0%} two thirds of the way through", WEAKENED,
+               lambda end: 2 * end / 3))
 
 
 def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
-           severity: float | None = None) -> Path:
-    """The scenario flown once (its fault at ``severity`` of its thrust, None: as named)."""
+           severity: float | None = None, onset_s: float | None = None) -> Path:
+    """The scenario flown once (its fault at ``severity`` of its thrust, None: as named;
+    from ``onset_s``, None: as named)."""
     from auvdiag_cli import api
     from auvdiag_cli.simulator.scenarios import get_scenario
 
-    path = work / f"{vehicle}-{scenario}-{seed}-{severity}.{fmt}"
+    onset = "" if onset_s is None else f"-{onset_s:g}"
+    path = work / f"{vehicle}-{scenario}-{seed}-{severity}{onset}.{fmt}"
     if not path.exists():
         profile = api.load_profile(vehicle)
-        api.simulate(get_scenario(scenario, profile, severity=severity), profile, path,
+        api.simulate(get_scenario(scenario, profile, onset_s, severity), profile, path,
                      log_format=fmt, seed=seed)
     return path
 
@@ -55,6 +64,47 @@ def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
 def _weakened(vehicle: str) -> dict[str, str]:
     """Scenario -> actuator, for each actuator's weakness from 60 s."""
     return {name: part for name, part in _faults(vehicle).items() if name.endswith("-weak")}
+
+
+def _mission_s(vehicle: str, scenario: str) -> float:
+    """How long the scenario's mission lasts flown without its fault."""
+    from auvdiag_cli import api
+    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli.simulator.scenarios import get_scenario
+
+    profile = api.load_profile(vehicle)
+    return simulate(get_scenario(scenario, profile, NEVER_S), profile,
+                    MID_FLIGHT_SEED).duration_s
+
+
+def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
+    """Each actuator failing late in a mission (`MID_FLIGHT`), judged by the model as
+    trained: named (a fault of that part detected after it began), the onset's error and
+    the detection's delay, median / worst over those named."""
+    from auvdiag_cli import api
+
+    profile = api.load_profile(vehicle)
+    model = api.load_model(work / f"{vehicle}-model", profile)
+    rows = []
+    for label, severity, at in MID_FLIGHT:
+        named, errors, delays, said = 0, [], [], Counter[str]()
+        weakened = _weakened(vehicle)
+        for name, part in weakened.items():
+            onset_s = round(at(_mission_s(vehicle, name)), 1)
+            diagnosis = api.diagnose(_flown(work, vehicle, fmt, name, MID_FLIGHT_SEED,
+                                            severity, onset_s), profile, model)
+            seen = (diagnosis.verdict.value == "fault"
+                    and (diagnosis.detected_at_s or 0.0) >= onset_s)
+            said[diagnosis.component or "-"] += seen and diagnosis.component != part
+            if seen and diagnosis.component == part:
+                named += 1
+                errors.append((diagnosis.onset_s or 0.0) - onset_s)
+                delays.append((diagnosis.detected_at_s or 0.0) - onset_s)
+        other = ", ".join(f"{n} {c}" for n, c in said.items() if c) or "none"
+        timing = (f"{statistics.median(errors):+.1f} / {max(errors, key=abs):+.1f} | "
+                  f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "– | –")
+        rows.append(f"| `{vehicle}` | {label} | {named}/{len(weakened)} | {other} | {timing} |")
+    return rows
 
 
 def _faults(vehicle: str) -> dict[str, str]:
@@ -159,6 +209,8 @@ def main() -> None:
     started = time.perf_counter()
     with tempfile.TemporaryDirectory() as folder:
         rows = [row for vehicle, fmt in VEHICLES for row in _rows(Path(folder), vehicle, fmt)]
+        mid_flight = [row for vehicle, fmt in VEHICLES
+                      for row in _mid_flight(Path(folder), vehicle, fmt)]
     minutes = (time.perf_counter() - started) / 60
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), Python "
           f"{platform.python_version()}, in {minutes:.1f} min: each vehicle trained on "
@@ -185,6 +237,13 @@ def main() -> None:
     print(f"\nWeakened to {WEAKENED:.0%}, named per actuator (of {len(WEAKENED_SEEDS)} seeds):\n")
     for row in rows:
         print(f"- {row[0]}, {row[1]}: {row[-1]}")
+    print(f"\nFailing late in a mission (seed {MID_FLIGHT_SEED}; each actuator in turn, judged "
+          "as trained; named: a fault of that part detected after it began; the onset "
+          "estimated less the true one and the detection's delay, median / worst over those "
+          "named):\n")
+    print("| vehicle | failure | named | another named | onset error (s) | delay (s) |")
+    print("|---|---|---|---|---|---|")
+    print("\n".join(mid_flight))
 
 
 if __name__ == "__main__":
