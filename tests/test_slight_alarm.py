@@ -13,12 +13,15 @@ from helpers import observed
 
 from auvdiag_cli.engine.effort_check import ActuatorEffort, EffortCheck
 from auvdiag_cli.engine.histories import Histories
+from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.engine.slight_alarm import (
     SLIGHT,
     TOO_SLIGHT,
+    before_later_judges,
     beyond_slight,
+    later_judges_begin,
     raised_by_training,
 )
 from auvdiag_cli.vehicle.profile import load_profile
@@ -111,3 +114,34 @@ def test_a_real_log_that_barely_crosses_thresholds_training_raised_is_undetermin
     assert raised.verdict is Verdict.UNDETERMINED and raised.undetermined_because == TOO_SLIGHT
     assert "the replay's flow reached 1.1" in raised.notes[-1]
     assert judged(threshold).verdict is Verdict.FAULT
+
+
+def _effort_from(onset_s: float, alarm_s: float) -> EffortCheck:
+    """The vertical pair's shares matching thruster 5 weak alone, from ``onset_s``."""
+    pair = (ActuatorEffort("motor_5", "thruster_5", "vertical", 1.08, 1.0, 0.01, 0.08, 2.0,
+                           None),
+            ActuatorEffort("motor_6", "thruster_6", "vertical", 0.92, 1.0, 0.01, -0.08, 0.5,
+                           None))
+    return EffortCheck(pair, 0.01, alarm_s, onset_s, ("thruster_5",), (), "a weak motor",
+                       (("thruster_5", 1.0),), onset_error_s=2.0)
+
+
+def test_a_slight_alarm_before_another_judges_later_event_leaves_the_verdict_to_it():
+    """The replay crossed slightly at 68 s; the shares show thruster 5 weak from 100 s: the
+    fault is theirs, dated theirs. Where the shares' event began by the replay's detection,
+    or the replay crossed clearly before it, the replay's alarm stands."""
+    judging = cast(Judging, SimpleNamespace(profile=load_profile(Path("bluerov2"))))
+    later = _effort_from(100.0, 104.0)
+    seen = _seen(1.16, effort=later)
+    assert later_judges_begin(seen, ALARM) == 98.0
+    judged = before_later_judges(ALARM, NORMAL, seen, RAISED, judging, 98.0)
+    assert judged.verdict is Verdict.FAULT and judged.component == "thruster_5"
+    assert judged.detected_at_s == 104.0 and judged.onset_s == 100.0
+    assert any("an alarm at 67.6 s (it named thruster_5 or thruster_6) is not taken for a "
+               "fault: the replay's heave reached 1.16 x its threshold at most, no other "
+               "judge saw anything before 98.0 s, where the other judges' event begins" in n
+               for n in judged.notes)
+    assert later_judges_begin(_seen(1.16, effort=_effort_from(62.0, 66.0)), ALARM) is None
+    clear = before_later_judges(ALARM, NORMAL, _seen(SLIGHT + 0.01, effort=later), RAISED,
+                                judging, 98.0)
+    assert clear == ALARM

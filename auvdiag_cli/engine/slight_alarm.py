@@ -21,6 +21,7 @@ from dataclasses import replace
 import numpy as np
 
 from auvdiag_cli.engine.envelope import within_the_envelope
+from auvdiag_cli.engine.isolation import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
@@ -37,11 +38,16 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
                          judging: Judging, frame: AlignedFrame, profile: Profile) -> Finding:
     """``finding`` where the model can make it: not past the logs it learnt from
     (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
-    as given, its thresholds not the model's, as ``judging``'s are)."""
+    as given, its thresholds not the model's, as ``judging``'s are); where other judges
+    alarmed only later, on what they saw (`before_later_judges`)."""
     card = judging.model.card
-    return beyond_slight(within_the_envelope(finding, normal, dict(card.envelope),
-                                             judging.judged, frame),
-                         normal, seen, raised_by_training(profile, card))
+    finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
+                                  frame)
+    raised = raised_by_training(profile, card)
+    later = later_judges_begin(seen, finding)
+    if later is not None:
+        return before_later_judges(finding, normal, seen, raised, judging, later)
+    return beyond_slight(finding, normal, seen, raised)
 
 
 def raised_by_training(profile: Profile, card: ModelCard) -> frozenset[str]:
@@ -63,36 +69,89 @@ def others_silent(seen: Observations) -> bool:
             and (start is None or not start.off))
 
 
-def beyond_slight(finding: Finding, normal: Finding, seen: Observations,
-                  raised: frozenset[str]) -> Finding:
-    """``finding``, or where it is a fault of a model whose thresholds no calibration set,
-    raised by the replay alone, its judged g under SLIGHT times its thresholds from the
-    onset on and over them only in signals of ``raised`` (thresholds `train` raised),
-    undetermined (``normal``'s notes), saying how far g went and what the alarm named."""
+def later_judges_begin(seen: Observations, finding: Finding) -> float | None:
+    """Where the other judges that alarmed say their event began, the earliest of them,
+    when every one of them began after the replay's detection (a later event, which does
+    not bear the replay's alarm out); None where none alarmed or one began by then."""
+    change, command, effort, start = (seen.change_check, seen.command_check,
+                                      seen.effort_check, seen.start_check)
+    if finding.detected_at_s is None or (start is not None and start.off):
+        return None
+    begins = [check.onset_s for check in (change, command)
+              if check is not None and check.alarm_s is not None]
+    if effort is not None and effort.alarm_s is not None:
+        begins.append(None if effort.onset_s is None
+                      else effort.onset_s - (effort.onset_error_s or 0.0))
+    if not begins or any(b is None or b <= finding.detected_at_s for b in begins):
+        return None
+    return min(b for b in begins if b is not None)
+
+
+def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
+                        raised: frozenset[str], judging: Judging, later_s: float
+                        ) -> Finding:
+    """``finding``, or where the replay's alarm is slight until the other judges' event
+    begins at ``later_s`` (`slight_peak`), the verdict of those judges alone, noting the
+    alarm not taken: a normal stretch that barely crossed held-out thresholds takes nothing
+    from a fault seen later (a simulated BlueROV2's heave at 1.04 x its threshold 36 s into
+    a dive was named "thruster 2" for the vertical thruster that stopped at 133 s)."""
+    slight = slight_peak(finding, seen, raised, later_s)
+    if slight is None:
+        return finding
+    name, ratio = slight
+    normal = normal.noted(_not_taken(finding, name, ratio, f"before {later_s:.1f} s, where "
+                                     "the other judges' event begins") + "; the verdict is "
+                          "theirs")
+    change = seen.change_check
+    if change is not None and change.alarm_s is not None:
+        return apply_change_alarm(seen, normal, change, judging)
+    return apply_other_evidence(seen, normal, judging)
+
+
+def slight_peak(finding: Finding, seen: Observations, raised: frozenset[str],
+                until_s: float = np.inf) -> tuple[str, float] | None:
+    """Where ``finding`` is a fault of a model whose thresholds no calibration set and its
+    judged g stays under SLIGHT times its thresholds from the onset to ``until_s``, over
+    them only in signals of ``raised`` (thresholds `train` raised): the signal that went
+    furthest and how far; else None."""
     model, histories = seen.model, seen.histories
     if (finding.verdict is not Verdict.FAULT or finding.onset_s is None
             or model.thresholds_calibrated or model.false_alarm_rate is not None
-            or histories.matching is None or not others_silent(seen)):
-        return finding
+            or histories.matching is None):
+        return None
     names = histories.sensor_names
     judged = np.array([name not in seen.not_judged and name not in seen.set_aside
                        for name in names], bool)
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(judged, histories.matching.g_percent / histories.thresholds, np.nan)
-    after = ratio[histories.time_s >= finding.onset_s]
+    after = ratio[(histories.time_s >= finding.onset_s) & (histories.time_s < until_s)]
     if not np.isfinite(after).any():
-        return finding
+        return None
     peaks = np.nanmax(np.where(np.isfinite(after), after, -np.inf), axis=0)
     furthest = int(np.argmax(peaks))
     crossed = {names[i] for i in np.flatnonzero(peaks >= 1.0)}
     if peaks[furthest] >= SLIGHT or not crossed <= raised:
-        return finding
+        return None
+    return names[furthest], float(peaks[furthest])
+
+
+def _not_taken(finding: Finding, name: str, ratio: float, until: str = "") -> str:
     named = finding.component or " or ".join(finding.candidates) or "no single component"
+    return (f"an alarm at {finding.detected_at_s or finding.onset_s:.1f} s (it named {named}) "
+            f"is not taken for a fault: the replay's {name} reached {ratio:.2f} x its "
+            f"threshold at most, no other judge saw anything{' ' + until if until else ''}, "
+            "and the thresholds it crossed "
+            "are 1.5 x the g of the logs held out of training, which a normal log may pass "
+            "this far; calibrate the model on normal logs (auvdiag calibrate) to judge it")
+
+
+def beyond_slight(finding: Finding, normal: Finding, seen: Observations,
+                  raised: frozenset[str]) -> Finding:
+    """``finding``, or where it is a fault raised by the replay alone whose g is slight
+    from the onset on (`slight_peak`), undetermined (``normal``'s notes), saying how far g
+    went and what the alarm named."""
+    slight = slight_peak(finding, seen, raised) if others_silent(seen) else None
+    if slight is None:
+        return finding
     return replace(normal, verdict=Verdict.UNDETERMINED, case=None,
-                   undetermined_because=TOO_SLIGHT).noted(
-        f"an alarm at {finding.detected_at_s or finding.onset_s:.1f} s (it named {named}) is "
-        f"not taken for a fault: the replay's {names[furthest]} reached "
-        f"{peaks[furthest]:.2f} x its threshold at most, no other judge saw anything, and "
-        "the thresholds it crossed are 1.5 x the g of the logs held out of training, which a "
-        "normal log may pass this far; calibrate the model on normal logs (auvdiag "
-        "calibrate) to judge it")
+                   undetermined_because=TOO_SLIGHT).noted(_not_taken(finding, *slight))
