@@ -95,7 +95,9 @@ def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
                                             severity, onset_s), profile, model)
             seen = (diagnosis.verdict.value == "fault"
                     and (diagnosis.detected_at_s or 0.0) >= onset_s)
-            said[diagnosis.component or "-"] += seen and diagnosis.component != part
+            # Another part named alone, or this one among several ("a or b").
+            said[diagnosis.component or " or ".join(diagnosis.candidates)] += (
+                seen and diagnosis.component != part)
             if seen and diagnosis.component == part:
                 named += 1
                 errors.append((diagnosis.onset_s or 0.0) - onset_s)
@@ -241,7 +243,8 @@ def main() -> None:
           "as trained; named: a fault of that part detected after it began; the onset "
           "estimated less the true one and the detection's delay, median / worst over those "
           "named):\n")
-    print("| vehicle | failure | named | another named | onset error (s) | delay (s) |")
+    print("| vehicle | failure | named | named otherwise (another part, or among several) | "
+          "onset error (s) | delay (s) |")
     print("|---|---|---|---|---|---|")
     print("\n".join(mid_flight))
 
