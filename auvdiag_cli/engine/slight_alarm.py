@@ -10,11 +10,13 @@ missions of other noise seeds took the heave's g to 1.16 and 1.18 times the thre
 set (20.5 % and 20.9 % against 17.72 %) at the same manoeuvre, and no other judge departed.
 Such an alarm is not taken for a fault: the verdict is undetermined, and the report says
 how far the g went and what would judge it. An alarm the commands against the motion, the
-effort shares, the change test or the start also raise stands; so does one that crossed a
-threshold the profile set (its author's, not a held-out log's: the shipped Twin-Burger's
-15 %), and any alarm of a model whose thresholds were calibrated (their false-alarm rate is
-then what calibrate says). No fault of the simulated BlueROV2's mission scenarios, weakened
-thrusters included, was found by the replay alone within SLIGHT of its thresholds."""
+effort shares, the change test or the start also raise, their event begun by its
+detection, stands; so does one that crossed a threshold the profile set (its author's, not
+a held-out log's: the shipped Twin-Burger's 15 %), and any alarm of a model whose
+thresholds were calibrated (their false-alarm rate is then what calibrate says). Where the
+other judges saw only a later event, the verdict is theirs. No fault of the simulated
+BlueROV2's mission scenarios, weakened thrusters included, was found by the replay alone
+within SLIGHT of its thresholds."""
 
 from dataclasses import replace
 
@@ -94,7 +96,7 @@ def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
     begins at ``later_s`` (`slight_peak`), the verdict of those judges alone, noting the
     alarm not taken: a normal stretch that barely crossed held-out thresholds takes nothing
     from a fault seen later (a simulated BlueROV2's heave at 1.04 x its threshold 36 s into
-    a dive was named "thruster 2" for the vertical thruster that stopped at 133 s)."""
+    a dive had named "thruster 2 giving 50 %" a vertical thruster weakened at 90 s)."""
     slight = slight_peak(finding, seen, raised, later_s)
     if slight is None:
         return finding
