@@ -31,8 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import EffortCheck, check_effort, rise_range
+from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.effort_spans import smallest_later_rise
+from auvdiag_cli.engine.effort_words import rise_range
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.jobs.effort import effort_log
 from auvdiag_cli.jobs.relate import relation_log

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from quad_effort import SHARES, STEPS, quad_check, quad_commands, quad_model
 
-from auvdiag_cli.engine.effort_check import rise_range
 from auvdiag_cli.engine.effort_spans import smallest_later_rise
+from auvdiag_cli.engine.effort_words import rise_range
 from auvdiag_cli.reports.training import effort_lines
 from models.effort import smallest_rise
 

@@ -31,6 +31,7 @@ from auvdiag_cli.engine.effort_spans import (
     later_starts,
     rise_since,
 )
+from auvdiag_cli.engine.effort_words import carries, smallest_rise_shown
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import (
     GroupFit,
@@ -129,6 +130,15 @@ class EffortCheck:
         return self.named[0] if (self.onset_s - self.onset_error_s <= end
                                  and time_s <= self.alarm_s) else None
 
+    def throughout(self) -> str | None:
+        """The one component named, where the shares match its actuator's weakness clearly
+        (`CLEAR_MATCH`) over the whole log, against normal logs, with no change within it:
+        a weakness there from the log's start, so there whatever else was seen in it."""
+        if (len(self.named) != 1 or not self.matches or self.matches[0][1] < CLEAR_MATCH
+                or self.onset_error_s is not None or self.alarm_s is None):
+            return None
+        return self.named[0]
+
     @property
     def suspects(self) -> tuple[ActuatorEffort, ...]:
         return tuple(sorted((a for a in self.actuators if a.driven_harder),
@@ -143,9 +153,9 @@ class EffortCheck:
             worst = max(judged, key=lambda a: a.ratio or 0.0)
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.said}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
-                    f"its threshold){_smallest_rise_shown(judged)}")
+                    f"its threshold){smallest_rise_shown(judged)}")
         # A member its group's clear match leaves out (`_named`) is not a weakness of its own.
-        parts = [_carries(a) for a in suspects if a.component in self.named or not self.named]
+        parts = [carries(a) for a in suspects if a.component in self.named or not self.named]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
                 + self._since() + self._caution())
 
@@ -171,40 +181,6 @@ class EffortCheck:
             return (f"; the shares match no one actuator's weakness well (closest {best}, "
                     f"{match:.2f}): more than one, or a load between them")
         return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
-
-
-def _carries(actuator: ActuatorEffort) -> str:
-    """How much more of the effort a suspect carries: than on normal logs over the whole log;
-    where its group changed within the log, first since then against before."""
-    a = actuator
-    figures = f"{a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f}"
-    if a.since_onset is None:
-        return (f"{a.said} carries {a.departure or 0.0:.0%} more of the effort than on normal "
-                f"logs ({figures})")
-    return (f"{a.said} carries {a.since_onset:.0%} more of the effort since the change than "
-            f"before it in this log (over the whole log, {a.departure or 0.0:.0%} more than on "
-            f"normal logs: {figures})")
-
-
-def _smallest_rise_shown(actuators: Sequence[ActuatorEffort]) -> str:
-    """What the normal logs let this log's shares show: with few of them, a weakness must
-    be large to stand out."""
-    by_group: dict[str, list[float]] = {}
-    for a in actuators:
-        if a.smallest_rise_shown is not None:
-            by_group.setdefault(a.group, []).append(a.smallest_rise_shown)
-    if not by_group:
-        return ""
-    said = [rise_range(rises) + ("" if len(by_group) == 1 else f" ({group})")
-            for group, rises in by_group.items()]
-    return (f"; against these normal logs, one weak actuator shows over this log once it "
-            f"carries about {' or '.join(said)} more than its share")
-
-
-def rise_range(rises: Sequence[float]) -> str:
-    """"8%", or "8%-10%" where the members differ."""
-    low, high = min(rises), max(rises)
-    return f"{low:.0%}" if round(low, 2) == round(high, 2) else f"{low:.0%}-{high:.0%}"
 
 
 def signature_matches(actuators: Sequence[ActuatorEffort],

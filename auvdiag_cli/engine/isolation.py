@@ -27,6 +27,7 @@ from auvdiag_cli.engine.narrowing import (
     tied_with,
     unsupported_table,
     weak_alone,
+    weak_throughout,
 )
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
@@ -45,8 +46,7 @@ def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s:
     component where the table leaves it open or misreads it."""
     finding = replace(apply_detection(seen, finding, b, alarm_s, onset_s, judging),
                       hypotheses=test)
-    effort = seen.effort_check
-    if effort is not None and effort.suspects:
+    if (effort := seen.effort_check) is not None and effort.suspects:
         finding = finding.noted(f"the effort too: {effort.describe()}")
     weak = next((h for h in test.ranked if h.is_actuator), None)
     if len(finding.candidates) > 1:
@@ -239,8 +239,8 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     """No row of the pattern table names the component (or there is no table): the
     hypothesis that explains the log does, when one does; when none does (a vehicle that
     lost control), or a sensor's does only on the signals the replay judges while the change
-    showed in others, the actuator whose effort shares match its weakness alone, begun
-    then."""
+    showed in others, the actuator whose effort shares match its weakness alone, begun then
+    (or there over the whole log: there when the motion departed)."""
     best, runner_up, margin = test.best, test.runner_up, test.margin
     effort = seen.effort_check
     # The same event where the effort's change began by the replay's detection: an onset
@@ -250,10 +250,11 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
-        if alone is None:
+        if (weak := alone or weak_throughout(seen)) is None:
             return finding.noted(note)
-        return _found(seen, finding, [alone], f"{note}; named by the effort its group carries"
-                      f" (its shares match {alone} weak alone)", judging)
+        whole = "" if alone else ", over the whole log"
+        return _found(seen, finding, [weak], f"{note}; named by the effort its group carries"
+                      f" (its shares match {weak} weak alone{whole})", judging)
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")

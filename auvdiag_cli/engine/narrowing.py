@@ -48,6 +48,13 @@ def weak_alone(seen: Observations, time_s: float | None, until_s: float | None =
     return None if effort is None else effort.alone_by(time_s, until_s)
 
 
+def weak_throughout(seen: Observations) -> str | None:
+    """The actuator whose group's shares match its weakness alone over the whole log, with
+    no change within it (`EffortCheck.throughout`), or None."""
+    effort = seen.effort_check
+    return None if effort is None else effort.throughout()
+
+
 def group_mate_instead(seen: Observations, finding: Finding, component: str) -> str | None:
     """Another member of ``component``'s effort group, where its group's shares match that
     member weak alone, begun by the onset (`weak_alone`); else None. The shares measure

@@ -6,8 +6,8 @@ import math
 from collections.abc import Collection, Sequence
 
 from auvdiag_cli.engine.change_check import MIN_JUDGED_S
-from auvdiag_cli.engine.effort_check import rise_range
 from auvdiag_cli.engine.effort_spans import smallest_later_rise, typical_later_threshold
+from auvdiag_cli.engine.effort_words import rise_range
 from auvdiag_cli.engine.envelope import MARGIN
 from auvdiag_cli.engine.judging import own_log_only
 from auvdiag_cli.jobs.budget import BudgetThresholds

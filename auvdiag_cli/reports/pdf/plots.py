@@ -5,7 +5,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import rise_range
+from auvdiag_cli.engine.effort_words import rise_range
 from auvdiag_cli.reports.pdf.style import COLOURS, COMMAND_CYCLE, new_page, seconds_label
 from auvdiag_cli.reports.report import Report
 from auvdiag_cli.reports.series import Series
