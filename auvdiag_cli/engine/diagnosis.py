@@ -54,8 +54,8 @@ from auvdiag_cli.engine.segments import (
     segments_of,
     threshold_matrix,
 )
+from auvdiag_cli.engine.slight_alarm import within_what_it_knows
 from auvdiag_cli.engine.start_check import check_start
-from auvdiag_cli.engine.uncalibrated_alarm import within_what_it_knows
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.actuators import SET_POINT, outing
 from auvdiag_cli.vehicle.profile import Profile

@@ -1,24 +1,22 @@
-"""An alarm of the replay alone on thresholds no calibration set: the replay's g crossed
+"""An alarm too slight for thresholds no calibration set: the replay's g crossed by little
 thresholds that rest on the logs `train` held out, and nothing else the tool judges saw
 anything.
 
 A model used as trained judges by the profile's thresholds, raised by `train` to 1.5 times
-the g of the logs it held out (one, of three or four) where that is more. How far a normal
-log goes beyond the largest g of n logs is unknown until the model is calibrated on normal
-logs (a new one passes the largest of n with a chance of 1 in n + 1 before the margin): on
-a simulated BlueROV2 trained on three missions, two of ten normal paper missions of other
-noise seeds took the heave's g to 1.16 and 1.18 times the threshold so set at the same
-manoeuvre; on a real nano-quadrotor trained on four normal flights (CrazyPAD), two of the
-three others took the forward speed's to 2.38 and 2.65 times it, no other judge departing.
-Such an alarm is not taken for a fault, however far it went: the verdict is undetermined,
-and the report says how far the g went and what would judge it. An alarm the commands
-against the motion, the effort shares, the change test or the start also raise, their event
-begun by its detection, stands; so does one that crossed a threshold the profile set (its
-author's, not a held-out log's: the shipped Twin-Burger's 15 %), and any alarm of a model
-whose thresholds were calibrated (their false-alarm rate is then what calibrate says).
-Where the other judges saw only a later event, the verdict is theirs. No fault of the
-simulated BlueROV2's mission scenarios, weakened thrusters included, was found by the
-replay alone on thresholds `train` raised."""
+the g of the logs it held out (one, of three) where that is more. How far a normal log of
+the same missions goes beyond that one log's g is unknown until the model is calibrated on
+normal logs: on a simulated BlueROV2 trained on three missions, two of ten normal paper
+missions of other noise seeds took the heave's g to 1.16 and 1.18 times the threshold so
+set (20.5 % and 20.9 % against 17.72 %) at the same manoeuvre, and no other judge departed.
+Such an alarm is not taken for a fault: the verdict is undetermined, and the report says
+how far the g went and what would judge it. An alarm the commands against the motion, the
+effort shares, the change test or the start also raise, their event begun by its
+detection, stands; so does one that crossed a threshold the profile set (its author's, not
+a held-out log's: the shipped Twin-Burger's 15 %), and any alarm of a model whose
+thresholds were calibrated (their false-alarm rate is then what calibrate says). Where the
+other judges saw only a later event, the verdict is theirs. No fault of the simulated
+BlueROV2's mission scenarios, weakened thrusters included, was found by the replay alone
+within SLIGHT of its thresholds."""
 
 from dataclasses import replace
 
@@ -32,15 +30,18 @@ from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import ModelCard
 
-REPLAY_ALONE = "an alarm of the replay alone, on thresholds no calibration set"
+# g that stays under this many times its uncalibrated threshold, from the onset on,
+# decides nothing alone.
+SLIGHT = 1.25
+TOO_SLIGHT = "an alarm too slight for thresholds no calibration set"
 
 
 def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
                          judging: Judging, frame: AlignedFrame, profile: Profile) -> Finding:
     """``finding`` where the model can make it: not past the logs it learnt from
-    (`envelope`), not on the replay alone crossing thresholds its held-out logs set
-    (``profile``: as given, its thresholds not the model's, as ``judging``'s are); where
-    other judges alarmed only later, on what they saw (`before_later_judges`)."""
+    (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
+    as given, its thresholds not the model's, as ``judging``'s are); where other judges
+    alarmed only later, on what they saw (`before_later_judges`)."""
     card = judging.model.card
     finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
                                   frame)
@@ -48,13 +49,13 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
     later = later_judges_begin(seen, finding)
     if later is not None:
         return before_later_judges(finding, normal, seen, raised, judging, later)
-    return judged_alone(finding, normal, seen, raised)
+    return beyond_slight(finding, normal, seen, raised)
 
 
 def raised_by_training(profile: Profile, card: ModelCard) -> frozenset[str]:
     """The signals whose threshold the model holds above the profile's in some mode:
     `train` raised it to its held-out logs' g (calibrate's thresholds count too, but a
-    calibrated model's alarms stand)."""
+    calibrated model's alarms are not judged slight)."""
     return frozenset(name for mode, limits in (card.thresholds or {}).items()
                      for name, value in limits.items()
                      if value > profile.thresholds_for(mode).get(name, value))
@@ -91,16 +92,15 @@ def later_judges_begin(seen: Observations, finding: Finding) -> float | None:
 def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
                         raised: frozenset[str], judging: Judging, later_s: float
                         ) -> Finding:
-    """``finding``, or where the replay alone crossed held-out thresholds before the other
-    judges' event begins at ``later_s`` (`alone_on_raised`), the verdict of those judges,
-    noting the alarm not taken: a normal stretch that crossed held-out thresholds takes
-    nothing from a fault seen later (a simulated BlueROV2's heave at 1.04 x its threshold
-    36 s into a dive had named "thruster 2 giving 50 %" a vertical thruster weakened at
-    90 s)."""
-    alone = alone_on_raised(finding, seen, raised, later_s)
-    if alone is None:
+    """``finding``, or where the replay's alarm is slight until the other judges' event
+    begins at ``later_s`` (`slight_peak`), the verdict of those judges alone, noting the
+    alarm not taken: a normal stretch that barely crossed held-out thresholds takes nothing
+    from a fault seen later (a simulated BlueROV2's heave at 1.04 x its threshold 36 s into
+    a dive had named "thruster 2 giving 50 %" a vertical thruster weakened at 90 s)."""
+    slight = slight_peak(finding, seen, raised, later_s)
+    if slight is None:
         return finding
-    name, ratio = alone
+    name, ratio = slight
     normal = normal.noted(_not_taken(finding, name, ratio, f"before {later_s:.1f} s, where "
                                      "the other judges' event begins") + "; the verdict is "
                           "theirs")
@@ -110,12 +110,12 @@ def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
     return apply_other_evidence(seen, normal, judging)
 
 
-def alone_on_raised(finding: Finding, seen: Observations, raised: frozenset[str],
-                    until_s: float = np.inf) -> tuple[str, float] | None:
+def slight_peak(finding: Finding, seen: Observations, raised: frozenset[str],
+                until_s: float = np.inf) -> tuple[str, float] | None:
     """Where ``finding`` is a fault of a model whose thresholds no calibration set and its
-    judged g, from the onset to ``until_s``, is over its thresholds only in signals of
-    ``raised`` (thresholds `train` raised): the signal that went furthest and how far;
-    else None."""
+    judged g stays under SLIGHT times its thresholds from the onset to ``until_s``, over
+    them only in signals of ``raised`` (thresholds `train` raised): the signal that went
+    furthest and how far; else None."""
     model, histories = seen.model, seen.histories
     if (finding.verdict is not Verdict.FAULT or finding.onset_s is None
             or model.thresholds_calibrated or model.false_alarm_rate is not None
@@ -132,7 +132,7 @@ def alone_on_raised(finding: Finding, seen: Observations, raised: frozenset[str]
     peaks = np.nanmax(np.where(np.isfinite(after), after, -np.inf), axis=0)
     furthest = int(np.argmax(peaks))
     crossed = {names[i] for i in np.flatnonzero(peaks >= 1.0)}
-    if not crossed <= raised:
+    if peaks[furthest] >= SLIGHT or not crossed <= raised:
         return None
     return names[furthest], float(peaks[furthest])
 
@@ -144,17 +144,16 @@ def _not_taken(finding: Finding, name: str, ratio: float, until: str = "") -> st
             f"threshold at most, no other judge saw anything{' ' + until if until else ''}, "
             "and the thresholds it crossed "
             "are 1.5 x the g of the logs held out of training, which a normal log may pass "
-            "by any amount; calibrate the model on normal logs (auvdiag calibrate) to judge "
-            "it")
+            "this far; calibrate the model on normal logs (auvdiag calibrate) to judge it")
 
 
-def judged_alone(finding: Finding, normal: Finding, seen: Observations,
-                 raised: frozenset[str]) -> Finding:
-    """``finding``, or where it is a fault the replay alone raised on thresholds `train`
-    raised (`alone_on_raised`), undetermined (``normal``'s notes), saying how far g went and
-    what the alarm named."""
-    alone = alone_on_raised(finding, seen, raised) if others_silent(seen) else None
-    if alone is None:
+def beyond_slight(finding: Finding, normal: Finding, seen: Observations,
+                  raised: frozenset[str]) -> Finding:
+    """``finding``, or where it is a fault raised by the replay alone whose g is slight
+    from the onset on (`slight_peak`), undetermined (``normal``'s notes), saying how far g
+    went and what the alarm named."""
+    slight = slight_peak(finding, seen, raised) if others_silent(seen) else None
+    if slight is None:
         return finding
     return replace(normal, verdict=Verdict.UNDETERMINED, case=None,
-                   undetermined_because=REPLAY_ALONE).noted(_not_taken(finding, *alone))
+                   undetermined_because=TOO_SLIGHT).noted(_not_taken(finding, *slight))
