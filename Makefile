@@ -5,11 +5,11 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-shipped bench-samples bench-silence test model \
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-whole bench-shipped bench-samples bench-silence test model \
 	samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-silence bench-fuzz \
-	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-shipped bench-samples
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-whole bench-shipped bench-samples
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -95,6 +95,11 @@ bench-few:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/few_logs.py > $(OUT)/few_logs.md
 	$(PYTHON) benchmarks/readme.py few_logs $(OUT)/few_logs.md
+
+bench-whole:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/whole_tool_crazypad.py > $(OUT)/whole_tool_crazypad.md
+	$(PYTHON) benchmarks/readme.py whole_tool_crazypad $(OUT)/whole_tool_crazypad.md
 
 # What the project ships, rebuilt from simulated dives (scripts/shipped.py):
 # `make model PROFILE=three_thruster` (twin_burger by default), `make samples`.
