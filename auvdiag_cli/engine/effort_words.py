@@ -5,7 +5,7 @@ from collections.abc import Sequence
 from typing import Protocol
 
 
-class ActuatorEffort(Protocol):
+class SaidEffort(Protocol):
     """What is said of one actuator's effort (`effort_check.ActuatorEffort`)."""
 
     @property
@@ -33,7 +33,7 @@ class ActuatorEffort(Protocol):
     def smallest_rise_shown(self) -> float | None: ...
 
 
-def carries(actuator: ActuatorEffort) -> str:
+def carries(actuator: SaidEffort) -> str:
     """How much more of the effort a suspect carries: than on normal logs over the whole log;
     where its group changed within the log, first since then against before."""
     a = actuator
@@ -46,7 +46,7 @@ def carries(actuator: ActuatorEffort) -> str:
             f"normal logs: {figures})")
 
 
-def smallest_rise_shown(actuators: Sequence[ActuatorEffort]) -> str:
+def smallest_rise_shown(actuators: Sequence[SaidEffort]) -> str:
     """What the normal logs let this log's shares show: with few of them, a weakness must
     be large to stand out."""
     by_group: dict[str, list[float]] = {}
