@@ -1,9 +1,11 @@
 """A weakness the effort shares show over a whole log names the part where the motion
-departed and no single fault explains it. A real nano-quadrotor with a cut propeller (CrazyPAD,
-trained on four normal flights) had its shares match motor 3 weak (0.99) over the whole
-flight, while the replay's alarm on its forward speed, which no hypothesis explained, left
-the verdict "component not identified": the effort alone, with the replay quiet, names it."""
+departed and no single fault explains it, and tells apart the pattern table's candidates.
+A real nano-quadrotor with a cut propeller (CrazyPAD, trained on four normal flights) had
+its shares match motor 3 weak (0.99) over the whole flight, while the replay's alarm on its
+forward speed, which no hypothesis explained, left the verdict "component not identified":
+the effort alone, with the replay quiet, names it."""
 
+from dataclasses import replace
 from types import SimpleNamespace
 from typing import cast
 
@@ -15,6 +17,7 @@ from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.isolation import name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.narrowing import narrowed
 from auvdiag_cli.engine.results import Finding, Verdict
 
 JUDGING = cast(Judging, SimpleNamespace(profile=PROFILE, model=None))
@@ -70,3 +73,16 @@ def test_a_change_within_the_log_or_no_effort_alarm_names_no_one():
                                      NONE_EXPLAINS, JUDGING)
         assert finding.component is None and not finding.candidates
         assert "no single-component fault explains it" in finding.notes[-1]
+
+
+def test_the_tables_candidates_are_narrowed_by_a_weakness_over_the_whole_log():
+    """The table reads all four rotors and the gyro (as it did for simulated quadrotors
+    whose rotor 1 gave 80 % of its thrust for a whole flight): the shares over the whole log
+    name the weak one; without an effort alarm all are kept."""
+    finding = replace(_replay_detected(40.0), candidates=(
+        "motor_1", "motor_2", "motor_3", "motor_4", "gyro"), hypotheses=NONE_EXPLAINS)
+    by_shares = narrowed(observed(_rotor_3_weak_throughout(), {}), finding, (), JUDGING)
+    assert by_shares.candidates == ("motor_3",)
+    assert by_shares.notes[-1].endswith("its shares match motor_3 weak alone, over the whole "
+                                        "log")
+    assert narrowed(observed(None, {}), finding, (), JUDGING).candidates == finding.candidates
