@@ -117,27 +117,30 @@ class EffortCheck:
     def judged(self) -> bool:
         return any(a.not_judged is None for a in self.actuators)
 
-    def alone_by(self, time_s: float | None, until_s: float | None = None) -> str | None:
+    @property
+    def clearly_one(self) -> str | None:
         """The one component named, where the shares match its actuator's weakness clearly
-        (`CLEAR_MATCH`) and ``time_s`` (or a moment from it to ``until_s``) lies between the
-        earliest it may have begun (its onset less the error stated) and when it was seen:
-        the same event as one seen then."""
-        if (time_s is None or len(self.named) != 1 or not self.matches
-                or self.matches[0][1] < CLEAR_MATCH or self.onset_s is None
-                or self.alarm_s is None or self.onset_error_s is None):
+        (`CLEAR_MATCH`) and an alarm saw it; else None."""
+        clear = (len(self.named) == 1 and self.matches and self.matches[0][1] >= CLEAR_MATCH
+                 and self.alarm_s is not None)
+        return self.named[0] if clear else None
+
+    def alone_by(self, time_s: float | None, until_s: float | None = None) -> str | None:
+        """`clearly_one`, where ``time_s`` (or a moment from it to ``until_s``) lies between
+        the earliest it may have begun (its onset less the error stated) and when it was
+        seen: the same event as one seen then."""
+        if (time_s is None or self.onset_s is None or self.alarm_s is None
+                or self.onset_error_s is None):
             return None
         end = time_s if until_s is None else until_s
-        return self.named[0] if (self.onset_s - self.onset_error_s <= end
-                                 and time_s <= self.alarm_s) else None
+        return self.clearly_one if (self.onset_s - self.onset_error_s <= end
+                                    and time_s <= self.alarm_s) else None
 
     def throughout(self) -> str | None:
-        """The one component named, where the shares match its actuator's weakness clearly
-        (`CLEAR_MATCH`) over the whole log, against normal logs, with no change within it:
-        a weakness there from the log's start, so there whatever else was seen in it."""
-        if (len(self.named) != 1 or not self.matches or self.matches[0][1] < CLEAR_MATCH
-                or self.onset_error_s is not None or self.alarm_s is None):
-            return None
-        return self.named[0]
+        """`clearly_one`, where the shares departed over the whole log against normal logs
+        with no change within it: a weakness there from the log's start, so there whatever
+        else was seen in it."""
+        return self.clearly_one if self.onset_error_s is None else None
 
     @property
     def suspects(self) -> tuple[ActuatorEffort, ...]:
