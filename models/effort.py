@@ -65,6 +65,7 @@ class EffortGroup:
     # where member k falls short of what it is asked (its roll and pitch factors against
     # k's, from the profile's mix: a quadrotor's diagonal partner eased); None: not known.
     balance: tuple[tuple[float, ...], ...] | None = None
+    driven_alone: bool = False        # a weak member driven harder alone (`shares_rule_out`)
 
     @property
     def projection(self) -> np.ndarray | None:

@@ -172,6 +172,7 @@ class EffortModel:
                     "reach": [list(row) for row in setup.group.reach]}),
                 **({} if setup.group.balance is None else {
                     "balance": [list(row) for row in setup.group.balance]}),
+                "driven_alone": setup.group.driven_alone,
                 "logs": [g.to_json() for g in logs]}
             if fit is None:
                 entry["refused"] = why
@@ -190,7 +191,8 @@ class EffortModel:
             group = EffortGroup(str(g["name"]), tuple(g["members"]),
                                 tuple(float(f) for f in g["factors"]), float(g["min_level"]),
                                 float(g["window_s"]), as_table(g.get("reach")),
-                                as_table(g.get("balance")))
+                                as_table(g.get("balance")),
+                                bool(g.get("driven_alone", False)))
             setups.append(GroupSetup(group, float(g["min_level"]),
                                      np.asarray(g["level_edges"], float), float(g["window_s"]),
                                      bool(g["two_way"])))

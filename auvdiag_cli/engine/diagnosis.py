@@ -286,13 +286,14 @@ def _conclude(seen: Observations, normal: Finding, detection: Detection | None,
         # The change came first: its b and times, named as the replay's alarm would be.
         b = {name: int(name in change.changed) for name in frame.sensor_names}
         onset = int(np.searchsorted(frame.time_s, change.onset_s))
-        test = weigh_hypotheses(judging, frame, matching, thresholds, onset, dms_starts)
+        test = weigh_hypotheses(judging, frame, matching, thresholds, onset, dms_starts,
+                                seen.effort_check)
         return isolate(seen, normal.noted(f"found by the change test: {change.describe()}"),
                        b, change.alarm_s, change.onset_s, test, companion_runs, judging)
     if detection is None:
         return apply_other_evidence(seen, normal, judging)
     test = weigh_hypotheses(judging, frame, matching, thresholds, detection.onset_index,
-                            dms_starts)
+                            dms_starts, seen.effort_check)
     return isolate(seen, normal, detection.b, frame.time_s[detection.alarm_index],
                    frame.time_s[detection.onset_index], test, companion_runs, judging)
 

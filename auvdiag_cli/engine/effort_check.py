@@ -69,6 +69,7 @@ class ActuatorEffort:
     # Where its group changed within the log: its share from the onset on over its share
     # before, less one (a rotor lost in a log's last seconds barely moves the whole log's).
     since_onset: float | None = None
+    driven_alone: bool = False   # its controller drives it alone (`EffortGroup.driven_alone`)
 
     @property
     def driven_harder(self) -> bool:
@@ -359,8 +360,8 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             m, component[m], setup.group.name, round(float(share[k]), 4),
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
             round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None,
-            round(float(rise[k]), 4), None if since is None else round(float(since[k]), 4))
-            for k, m in enumerate(members)]
+            round(float(rise[k]), 4), None if since is None else round(float(since[k]), 4),
+            setup.group.driven_alone) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
     matches = signature_matches(actuators, directions)

@@ -28,9 +28,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match_trials
+from auvdiag_cli.engine.shares_rule_out import ruled_out_by_shares
 from auvdiag_cli.numeric import peak
 from auvdiag_cli.vehicle.actuators import CONTROL_SURFACE, SET_POINT
 from auvdiag_cli.vehicle.profile import Profile
@@ -136,13 +138,25 @@ class _Judge:
 
 
 def weigh_hypotheses(judging: Judging, frame: AlignedFrame, matching: Matching,
-                     thresholds: np.ndarray, onset: int, restarts: Sequence[int]
-                     ) -> HypothesisTest:
+                     thresholds: np.ndarray, onset: int, restarts: Sequence[int],
+                     effort: EffortCheck | None = None) -> HypothesisTest:
+    """Every single-component fault from ``onset``, best first; a weakness the ``effort``
+    shares rule out (`shares_rule_out`) stays, ruled out."""
     judge = _Judge(matching.measured, thresholds, judging, onset)
-    hypotheses = [*_actuator_hypotheses(judging.model, judging.profile, frame, judge,
-                                        restarts),
-                  *_sensor_hypotheses(judging.profile, frame, matching, judge)]
+    actuators = [_unless_the_shares_rule_out(h, effort, float(frame.time_s[onset]))
+                 for h in _actuator_hypotheses(judging.model, judging.profile, frame, judge,
+                                               restarts)]
+    hypotheses = [*actuators, *_sensor_hypotheses(judging.profile, frame, matching, judge)]
     return HypothesisTest(tuple(sorted(hypotheses, key=lambda h: h.peak_g_ratio)))
+
+
+def _unless_the_shares_rule_out(hypothesis: Hypothesis, effort: EffortCheck | None,
+                                onset_s: float) -> Hypothesis:
+    fraction = hypothesis.thrust_fraction
+    why = None if fraction is None else ruled_out_by_shares(
+        effort, hypothesis.component, fraction, onset_s, hypothesis.describe())
+    return hypothesis if why is None else replace(hypothesis, peak_g_ratio=float("inf"),
+                                                  ruled_out=why)
 
 
 def _actuator_hypotheses(model: LoadedModel, profile: Profile, frame: AlignedFrame,

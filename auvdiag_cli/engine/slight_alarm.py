@@ -16,7 +16,15 @@ a held-out log's: the shipped Twin-Burger's 15 %), and any alarm of a model whos
 thresholds were calibrated (their false-alarm rate is then what calibrate says). Where the
 other judges saw only a later event, the verdict is theirs. No fault of the simulated
 BlueROV2's mission scenarios, weakened thrusters included, was found by the replay alone
-within SLIGHT of its thresholds."""
+within SLIGHT of its thresholds.
+
+However far it crossed them, an alarm of the replay alone on such thresholds that no
+single-component fault explains is not taken for a fault either: a normal flight unlike
+those learnt from departs from the model so (CrazyPAD, a model trained on four normal
+flights, its forward-speed threshold raised from the one it held out: two other normal
+flights took it to 2.4 and 2.7 times that, with every rotor's share of the effort in its
+normal band), and an unexplained departure names nothing a user can act on. The verdict is
+undetermined, saying how far g went; a fault a hypothesis explains stands."""
 
 from dataclasses import replace
 
@@ -34,6 +42,7 @@ from models.card import ModelCard
 # decides nothing alone.
 SLIGHT = 1.25
 TOO_SLIGHT = "an alarm too slight for thresholds no calibration set"
+UNEXPLAINED = "an alarm no single fault explains, on thresholds no calibration set"
 
 
 def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
@@ -111,9 +120,9 @@ def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
 
 
 def slight_peak(finding: Finding, seen: Observations, raised: frozenset[str],
-                until_s: float = np.inf) -> tuple[str, float] | None:
+                until_s: float = np.inf, bound: float = SLIGHT) -> tuple[str, float] | None:
     """Where ``finding`` is a fault of a model whose thresholds no calibration set and its
-    judged g stays under SLIGHT times its thresholds from the onset to ``until_s``, over
+    judged g stays under ``bound`` times its thresholds from the onset to ``until_s``, over
     them only in signals of ``raised`` (thresholds `train` raised): the signal that went
     furthest and how far; else None."""
     model, histories = seen.model, seen.histories
@@ -132,15 +141,23 @@ def slight_peak(finding: Finding, seen: Observations, raised: frozenset[str],
     peaks = np.nanmax(np.where(np.isfinite(after), after, -np.inf), axis=0)
     furthest = int(np.argmax(peaks))
     crossed = {names[i] for i in np.flatnonzero(peaks >= 1.0)}
-    if peaks[furthest] >= SLIGHT or not crossed <= raised:
+    if peaks[furthest] >= bound or not crossed <= raised:
         return None
     return names[furthest], float(peaks[furthest])
 
 
+def unexplained(finding: Finding) -> bool:
+    """Whether ``finding`` names nothing and no hypothesis explains it."""
+    test = finding.hypotheses
+    return (finding.component is None and not finding.candidates and test is not None
+            and not any(h.explains for h in test.ranked))
+
+
 def _not_taken(finding: Finding, name: str, ratio: float, until: str = "") -> str:
     named = finding.component or " or ".join(finding.candidates) or "no single component"
+    why = "no single-component fault explains it, " if unexplained(finding) else ""
     return (f"an alarm at {finding.detected_at_s or finding.onset_s:.1f} s (it named {named}) "
-            f"is not taken for a fault: the replay's {name} reached {ratio:.2f} x its "
+            f"is not taken for a fault: {why}the replay's {name} reached {ratio:.2f} x its "
             f"threshold at most, no other judge saw anything{' ' + until if until else ''}, "
             "and the thresholds it crossed "
             "are 1.5 x the g of the logs held out of training, which a normal log may pass "
@@ -150,10 +167,13 @@ def _not_taken(finding: Finding, name: str, ratio: float, until: str = "") -> st
 def beyond_slight(finding: Finding, normal: Finding, seen: Observations,
                   raised: frozenset[str]) -> Finding:
     """``finding``, or where it is a fault raised by the replay alone whose g is slight
-    from the onset on (`slight_peak`), undetermined (``normal``'s notes), saying how far g
-    went and what the alarm named."""
-    slight = slight_peak(finding, seen, raised) if others_silent(seen) else None
+    from the onset on (`slight_peak`), or that no hypothesis explains however far g went,
+    undetermined (``normal``'s notes), saying how far g went and what the alarm named."""
+    alone = unexplained(finding)
+    slight = slight_peak(finding, seen, raised, bound=np.inf if alone else SLIGHT) \
+        if others_silent(seen) else None
     if slight is None:
         return finding
     return replace(normal, verdict=Verdict.UNDETERMINED, case=None,
-                   undetermined_because=TOO_SLIGHT).noted(_not_taken(finding, *slight))
+                   undetermined_because=UNEXPLAINED if alone else TOO_SLIGHT).noted(
+        _not_taken(finding, *slight))

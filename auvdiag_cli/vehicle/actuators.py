@@ -26,9 +26,10 @@ class _Sensor(Protocol):
 # (SET_POINT): it drives the model, but nothing fails in it.
 SET_POINT = "set_point"
 CONTROL_SURFACE = "control_surface"
+ROTOR = "rotor"
 ACTUATOR_KINDS = {
     "thruster": "a damaged or fouled propeller, a weak motor, or a load near it",
-    "rotor": "a damaged propeller or a weak motor",
+    ROTOR: "a damaged propeller or a weak motor",
     CONTROL_SURFACE: "a surface stuck, loose or damaged, or its servo failing",
     "engine": "lost or reduced thrust",
 }
@@ -36,7 +37,7 @@ ACTUATOR_KINDS = {
 
 # What one log of the vehicle is called in messages: a vehicle moved by rotors, surfaces or
 # an engine flies; one moved by thrusters (or whose parts the profile does not say) dives.
-FLYING_KINDS = ("rotor", CONTROL_SURFACE, "engine")
+FLYING_KINDS = (ROTOR, CONTROL_SURFACE, "engine")
 
 
 def outing(kinds: Iterable[str]) -> str:

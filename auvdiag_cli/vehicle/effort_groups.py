@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from auvdiag_cli.vehicle.actuators import SET_POINT
+from auvdiag_cli.vehicle.actuators import ROTOR, SET_POINT
 from auvdiag_cli.vehicle.controller import ControllerSpec
 from auvdiag_cli.vehicle.toml_reader import TableReader
 from auvdiag_errors import ProfileError
@@ -48,7 +48,9 @@ def parse_effort_groups(rows: list[TableReader], kinds: dict[str, str]
         if len(found) > 1 or SET_POINT in found:
             raise ProfileError(f"key '{reader.key('actuators')}' mixes kinds {', '.join(found)}:"
                                " an effort group holds actuators of one kind, never set points")
-        groups.append(group)
+        # A multirotor's controller holds thrust, roll, pitch and yaw: four efforts, which
+        # reach every direction of four rotors and no more.
+        groups.append(replace(group, driven_alone=found == [ROTOR] and len(group.members) == 4))
     return tuple(groups)
 
 
@@ -60,7 +62,8 @@ def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | Non
     """The groups, each with the reach of the controller's mix over its members where that
     misses directions of the group (`models.effort_reach`): the efforts the controller's
     loops drive, each member's factor on them; where it reaches every direction, the balance
-    of the tilting moments (`models.effort_reach.balance`)."""
+    of the tilting moments (`models.effort_reach.balance`), and each member driven alone
+    (`EffortGroup.driven_alone`: without a mix, a quadrotor's four rotors are)."""
     if controller is None:
         return groups
     held = controller.held_efforts
@@ -72,8 +75,9 @@ def with_reach(groups: tuple[EffortGroup, ...], controller: ControllerSpec | Non
         rows = np.array([[controller.mix[m].get(e, 0.0) for e in held] for m in group.members])
         projection = reach(rows)
         if projection is not None:
-            placed.append(replace(group, reach=as_table(projection)))
+            placed.append(replace(group, reach=as_table(projection), driven_alone=False))
             continue
+        group = replace(group, driven_alone=True)
         tilts = balance(np.array([[controller.mix[m].get(e, 0.0) for e in TILTS]
                                   for m in group.members]))
         placed.append(group if tilts is None else replace(group, balance=as_table(tilts)))
