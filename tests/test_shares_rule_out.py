@@ -94,3 +94,16 @@ def test_an_unexplained_alarm_of_uncalibrated_thresholds_is_undetermined_however
     assert beyond_slight(explained, NORMAL, _seen(2.65), RAISED) == explained
     assert beyond_slight(unnamed, NORMAL, _seen(2.65, calibrated=True), RAISED) == unnamed
     assert beyond_slight(unnamed, NORMAL, _seen(2.65), frozenset()) == unnamed
+
+
+def test_the_ranking_keeps_a_weakness_ruled_out_without_its_g():
+    from auvdiag_cli.engine.hypotheses import _unless_the_shares_rule_out
+
+    check = _normal_check()
+    weak = Hypothesis("motor_2", "weakened", 0.85, 0.5, "rotor")
+    ruled = _unless_the_shares_rule_out(weak, check, 10.0)
+    assert ruled.ruled_out is not None and not ruled.explains
+    assert ruled.peak_g_ratio == float("inf")
+    assert _unless_the_shares_rule_out(weak, None, 10.0) == weak
+    sensor = Hypothesis("gyro", "biased", 0.9)
+    assert _unless_the_shares_rule_out(sensor, check, 10.0) == sensor

@@ -62,7 +62,7 @@ def ruled_out_by_shares(effort: EffortCheck | None, component: str, fraction: fl
         return None
     return (f"its share of the effort stayed {departure:+.0%} of normal, where {weakness} "
             f"would have carried about {rise:.0%} more over this log (its controller drives "
-            f"it alone; a rise of {shown:.0%} shows)")
+            f"it alone, and this log's shares show a rise of {shown:.0%} or more)")
 
 
 def _judged_alone(actuator: ActuatorEffort) -> bool:
