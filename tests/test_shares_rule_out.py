@@ -96,6 +96,25 @@ def test_an_unexplained_alarm_of_uncalibrated_thresholds_is_undetermined_however
     assert beyond_slight(unnamed, NORMAL, _seen(2.65), frozenset()) == unnamed
 
 
+def test_an_alarm_only_a_fitted_reading_explains_is_undetermined_too():
+    """A sensor's offset fitted to the log after the onset fits a model's own error as well
+    as a fault: on uncalibrated thresholds it decides nothing; a dead or stuck reading, or
+    a weakness, that explains it does."""
+    def named(*explaining: Hypothesis):
+        return replace(ALARM, component=explaining[0].component, candidates=(
+            explaining[0].component,), hypotheses=HypothesisTest(explaining))
+
+    biased = named(Hypothesis("dvl", "biased", 0.92), Hypothesis("dvl", "drifting", 0.97))
+    judged = beyond_slight(biased, NORMAL, _seen(2.65), RAISED)
+    assert judged.verdict is Verdict.UNDETERMINED and judged.undetermined_because == UNEXPLAINED
+    assert ("(it named dvl) is not taken for a fault: only a reading fitted to the log after "
+            "the onset explains it (dvl biased)") in judged.notes[-1]
+    for real in (Hypothesis("dvl", "dead", 0.5),
+                 Hypothesis("thruster_5", "weakened", 0.6, 0.5, "thruster")):
+        kept = named(real, Hypothesis("dvl", "biased", 0.92))
+        assert beyond_slight(kept, NORMAL, _seen(2.65), RAISED) == kept
+
+
 def test_the_ranking_keeps_a_weakness_ruled_out_without_its_g():
     from auvdiag_cli.engine.hypotheses import _unless_the_shares_rule_out
 
