@@ -52,7 +52,7 @@ def test_a_weakness_the_normal_shares_deny_is_ruled_out_from_early_on():
     check = _normal_check()
     assert check.alarm_s is None and all(a.driven_alone for a in check.actuators)
     why = ruled_out_by_shares(check, "motor_2", 0.5, 10.0, "motor 2 weakened to 50% thrust")
-    assert why is not None and why.startswith("its share of the effort stayed ")
+    assert why is not None and why.startswith("its share of the effort departed ")
     assert "where motor 2 weakened to 50% thrust would have carried about 2" in why
     # From 3 s before the end the shares barely move: nothing is ruled out.
     assert ruled_out_by_shares(check, "motor_2", 0.5, END_S - 3.0, "") is None

@@ -60,7 +60,7 @@ def ruled_out_by_shares(effort: EffortCheck | None, component: str, fraction: fl
     departure, shown = actuator.departure or 0.0, actuator.smallest_rise_shown or 0.0
     if rise <= 0 or departure - rise > -shown:
         return None
-    return (f"its share of the effort stayed {departure:+.0%} of normal, where {weakness} "
+    return (f"its share of the effort departed {departure:+.0%} from normal, where {weakness} "
             f"would have carried about {rise:.0%} more over this log (its controller drives "
             f"it alone, and this log's shares show a rise of {shown:.0%} or more)")
 
