@@ -46,6 +46,9 @@ class ScoringLog:
     commands: np.ndarray
     sensors: np.ndarray
     cuts: tuple[int, ...] = ()
+    # The actuator outputs (`[[outputs]]`), read by the loops that answer their demand
+    # (`models.tracking`); None: the profile has none.
+    outputs: np.ndarray | None = None
 
 
 NAIVE = ("hold", "mean")

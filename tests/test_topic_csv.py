@@ -166,7 +166,8 @@ def test_alfa_flights_read_the_same_from_bag_and_csv_folder(sequence):
     from_bag = read_log(folder / f"{sequence}.bag", profile.sources)
     assert from_csv.format == "topic-csv" and from_bag.format == "bag"
     assert set(from_csv.series) == set(from_bag.series) == {
-        *profile.command_names, *profile.sensor_names, *profile.input_names, CLOCK_REFERENCE}
+        *profile.command_names, *profile.sensor_names, *profile.input_names,
+        *profile.output_names, CLOCK_REFERENCE}
     for name, series in from_bag.series.items():
         other = from_csv.series[name]
         assert np.array_equal(series.times_ns, other.times_ns), name

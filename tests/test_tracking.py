@@ -77,12 +77,12 @@ def test_a_loop_is_judged_below_only():
                          loops=set(names))
     assert check.alarm_s is not None and 70.0 <= check.alarm_s < 72.0
     assert set(check.flagged) == {"yaw_tracking"} and not check.ways
-    assert "yaw_tracking" in check.describe() and "answers slower" in check.describe()
+    assert "yaw_tracking" in check.describe() and "less rate than usual" in check.describe()
 
 
 def test_the_plane_profile_declares_its_roll_loop():
     profile = api.load_profile("arduplane_carbonz")
-    (loop,) = profile.tracking
+    loop = next(spec for spec in profile.tracking if spec.name == "roll_tracking")
     assert (loop.set_point, loop.measured, loop.rate, loop.moved_by) == (
         "roll_sp", "roll", "roll_rate", ("ailerons",))
 
@@ -94,7 +94,7 @@ def test_the_plane_profile_declares_its_roll_loop():
     ({"moved_by": ["propeller"]}, "no actuator or command component")])
 def test_a_loop_that_names_what_the_profile_lacks_is_refused(entry, message):
     data = _plane_document()
-    data["tracking"] = [{**data["tracking"][0], **entry}]
+    data["tracking"] = [{**data["tracking"][0], **entry}, *data["tracking"][1:]]
     with pytest.raises(ProfileError, match=message):
         parse_profile(data, "test")
 
@@ -125,11 +125,12 @@ def test_train_fits_the_plane_profiles_loop_and_says_what_it_fitted():
             measured[:, profile.sensor_names.index(name)] = sensors[:, column]
         logs.append(ScoringLog(f"flight{seed}", drive, measured))
     said: list[str] = []
-    (entry,) = tracking_entry(profile, logs, said.append)
+    (entry,) = tracking_entry(profile, logs, said.append)    # no outputs: no authority loop
     fit = TrackingFit.from_json(entry)
     assert fit.name == "roll_tracking" and 1 <= fit.lag_steps <= 3
     assert fit.typical == pytest.approx(1.2, rel=0.1) and fit.floor < fit.limit
     assert said == [f"the loop roll_tracking: a gain of {fit.typical:.3g} (the rate per unit "
                     f"of error {fit.lag_steps * 0.1:.1f} s before), judged over 10 s windows "
                     f"from an error of {fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left "
-                    "out (saturated)"]
+                    "out (saturated)", "not fitted (the logs never move what they answer): "
+                    "aileron_authority"]

@@ -144,7 +144,8 @@ class ChangeCheck:
                                                  f"{ratios[worst]:.0%} of its threshold)"))
         which = ", ".join(f"{n} {r:.1f}x its threshold" + (
             f" ({self.ways[n]} the prediction)" if n in self.ways else
-            " (the loop answers slower than usual)" if n in self.loops else "")
+            " (the loop gives less rate than usual for what it answers)" if n in self.loops
+            else "")
             for n, r in self.flagged.items())
         return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
                 f"(up to {self.onset_error_s:.1f} s either way), detected at "

@@ -9,6 +9,7 @@ import numpy as np
 
 from auvdiag_cli.engine.change_check import MIN_JUDGED_S, ChangeCheck
 from auvdiag_cli.engine.judging import Judging, not_judged_signals, own_log_only
+from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching
 from models.ahead import MIN_AHEAD_SKILL
 from models.store import LoadedModel
@@ -77,16 +78,17 @@ def _why_not(model: LoadedModel, name: str) -> str:
     return "calibrate set it no threshold"
 
 
-def change_residual(model: LoadedModel, commands: np.ndarray, inputs: np.ndarray | None,
-                    matching: Matching, cuts: Sequence[int] = ()) -> np.ndarray:
+def change_residual(model: LoadedModel, frame: AlignedFrame, matching: Matching,
+                    cuts: Sequence[int] = ()) -> np.ndarray:
     """What the test judges (columns `change_names`): the error of the model's predictor a
-    moment ahead (`models.ahead`; ``inputs``: the measured inputs, None: the profile has
-    none), or the replay's where the model has none (trained before it); then each loop's
-    gain less its typical value."""
+    moment ahead (`models.ahead`, from the log's commands and measured inputs), or the
+    replay's where the model has none (trained before it); then each loop's gain less its
+    typical value (a loop reads the commands and the actuator outputs)."""
     ahead = model.card.ahead
     errors = matching.measured - matching.modelled if ahead is None else ahead.residual(
-        commands, matching.measured, inputs, cuts)
+        frame.commands, matching.measured, frame.inputs if frame.input_names else None, cuts)
     card = model.card
-    gains = [loop.gain(commands, matching.measured, card.command_names, card.sensor_names,
-                       card.dt_s) for loop in card.tracking]
+    read = np.hstack([frame.commands, frame.outputs]) if frame.output_names else frame.commands
+    gains = [loop.gain(read, matching.measured, [*card.command_names, *frame.output_names],
+                       card.sensor_names, card.dt_s) for loop in card.tracking]
     return np.column_stack([errors, *gains]) if gains else errors

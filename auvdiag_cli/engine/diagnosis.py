@@ -192,8 +192,7 @@ def _replay(log: IngestedLog, profile: Profile, model: LoadedModel) -> _Replayed
                   if s.mode == ROUTINE_MODE]
     matching = match(model, frame, judging.full_scale, judging.window, dms_starts)
     return _Replayed(log, judging, segments, dms_starts, matching, change_residual(
-        model, frame.commands, frame.inputs if frame.input_names else None, matching,
-        [*frame.restarts, *dms_starts]))
+        model, frame, matching, [*frame.restarts, *dms_starts]))
 
 
 def change_errors_of(log: IngestedLog, profile: Profile, model: LoadedModel

@@ -40,7 +40,9 @@ def read_for_training(path: Path, profile: Profile, progress: Callable[[str], No
         steps = np.diff(series.times_ns)
         if (steps > 0).any():
             rates[name] = 1e9 / float(np.median(steps[steps > 0]))
-    return ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts)),
+    outputs = frame.outputs if frame.output_names else None
+    return ReadLog(ScoringLog(path.name, frame.drive, frame.sensors, tuple(frame.restarts),
+                              outputs),
                    relation_log(log, profile), rates, frame.flat_inputs)
 
 
@@ -93,10 +95,13 @@ def split_in_time(log: ScoringLog) -> tuple[ScoringLog, ScoringLog]:
     """The log up to where 1 - HELD_OUT_FRACTION of its usable (operating, complete) steps
     lie, and the rest."""
     cut = split_point(np.isfinite(log.sensors).all(axis=1), HELD_OUT_FRACTION)
+    outputs = log.outputs
     head = ScoringLog(log.name, log.commands[:cut], log.sensors[:cut],
-                      tuple(c for c in log.cuts if c < cut))
+                      tuple(c for c in log.cuts if c < cut),
+                      None if outputs is None else outputs[:cut])
     tail = ScoringLog(f"{log.name} (last {HELD_OUT_FRACTION:.0%})", log.commands[cut:],
-                      log.sensors[cut:], tuple(c - cut for c in log.cuts if c > cut))
+                      log.sensors[cut:], tuple(c - cut for c in log.cuts if c > cut),
+                      None if outputs is None else outputs[cut:])
     return head, tail
 
 

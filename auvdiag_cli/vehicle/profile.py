@@ -305,7 +305,8 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         actuators=actuators,
         tracking=parse_tracking(_rows(top, "tracking"), [c.name for c in commands], sensor_names,
                                 {a.name for a in actuators}
-                                | {c.component for c in commands + outputs}),
+                                | {c.component for c in commands + outputs},
+                                [o.name for o in outputs]),
     )
     top.check_all_read()
     return profile
