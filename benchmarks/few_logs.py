@@ -23,7 +23,10 @@ from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 if TYPE_CHECKING:
+    from auvdiag_cli.simulator.run import SimulatedDive
     from auvdiag_cli.vehicle.profile import Profile
     from models.store import LoadedModel
 
@@ -37,12 +40,16 @@ FAULT_FROM_S = 60.0
 # Each actuator weakened this far from FAULT_FROM_S, flown with these seeds.
 WEAKENED, WEAKENED_SEEDS = 0.7, tuple(range(21, 31))
 # Each actuator failing late in its mission, judged as trained: (what, thrust kept, onset
-# from the mission's length without the fault). A rotor that stops seconds before the log
-# ends is how a crash ends a log.
-NEVER_S, MID_FLIGHT_SEED = 1e6, 41
-MID_FLIGHT = (("stopped 3 s before the mission's end", 0.0, lambda end: end - 3.0),
+# from the mission flown without the fault). A rotor or a thruster that stops seconds before
+# it last works hard (the last LAST_WORK_S over which it gives its mean thrust over the
+# mission or more): how a crash ends a log, where the part still works to the end, and no
+# stop while it idles (a ROV's horizontal thrusters holding station at a mission's end),
+# which changes nothing any log could show.
+NEVER_S, MID_FLIGHT_SEED, LAST_WORK_S, WORKING_SHARE = 1e6, 41, 3.0, 1.0
+MID_FLIGHT = ((f"stopped {LAST_WORK_S:g} s before it last works at its mean thrust", 0.0,
+               lambda dive, column: _last_work_s(dive, column)),
               (f"weakened to {WEAKENED:.0%} two thirds of the way through", WEAKENED,
-               lambda end: 2 * end / 3))
+               lambda dive, column: 2 * dive.duration_s / 3))
 
 
 def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
@@ -66,15 +73,25 @@ def _weakened(vehicle: str) -> dict[str, str]:
     return {name: part for name, part in _faults(vehicle).items() if name.endswith("-weak")}
 
 
-def _mission_s(vehicle: str, scenario: str) -> float:
-    """How long the scenario's mission lasts flown without its fault."""
+def _fault_free(vehicle: str, scenario: str) -> "SimulatedDive":
+    """The scenario's mission flown without its fault."""
     from auvdiag_cli import api
     from auvdiag_cli.simulator.run import simulate
     from auvdiag_cli.simulator.scenarios import get_scenario
 
     profile = api.load_profile(vehicle)
-    return simulate(get_scenario(scenario, profile, NEVER_S), profile,
-                    MID_FLIGHT_SEED).duration_s
+    return simulate(get_scenario(scenario, profile, NEVER_S), profile, MID_FLIGHT_SEED)
+
+
+def _last_work_s(dive: "SimulatedDive", column: str) -> float:
+    """The start of the last LAST_WORK_S over which the truth's thrust ``column`` averages
+    at least WORKING_SHARE of its mean (in size) over the whole mission."""
+    times = dive.truth["t_s"].to_numpy()
+    thrust = np.abs(dive.truth[column].to_numpy())
+    span = max(1, round(LAST_WORK_S / float(np.median(np.diff(times)))))
+    over_span = np.convolve(thrust, np.ones(span) / span, mode="valid")
+    working = np.flatnonzero(over_span >= WORKING_SHARE * thrust.mean())
+    return float(times[working[-1]]) if working.size else dive.duration_s - LAST_WORK_S
 
 
 def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
@@ -90,7 +107,9 @@ def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
         named, errors, delays, said = 0, [], [], Counter[str]()
         weakened = _weakened(vehicle)
         for name, part in weakened.items():
-            onset_s = round(at(_mission_s(vehicle, name)), 1)
+            # The truth's thrusts are in command order; a part is its command's component.
+            column = f"thrust_{[c.component for c in profile.commands].index(part)}_n"
+            onset_s = round(at(_fault_free(vehicle, name), column), 1)
             diagnosis = api.diagnose(_flown(work, vehicle, fmt, name, MID_FLIGHT_SEED,
                                             severity, onset_s), profile, model)
             seen = (diagnosis.verdict.value == "fault"

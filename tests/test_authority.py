@@ -145,3 +145,11 @@ def test_train_fits_the_authority_from_the_logs_outputs():
                                                                          said.append)}
     assert said[-1] == ("not fitted (the logs never move what they answer): "
                         "aileron_authority")
+
+
+def test_inspect_says_which_loop_reads_an_output():
+    from auvdiag_cli.jobs.inspect import on_grid
+
+    profile = api.load_profile("arduplane_carbonz")
+    assert on_grid("aileron_left", 3.0, profile) == (
+        "held: the last output at each 0.1 s step, read for the loop aileron_authority only")

@@ -57,7 +57,11 @@ def on_grid(name: str, rate_hz: float | None, profile: Profile) -> str:
     if name in profile.command_names:
         return f"held: the last command at each {step}"
     if name in profile.output_names:
-        return f"held: the last output at each {step}, read for the effort check only"
+        readers = [f"the loop {loop.name}" for loop in profile.tracking if name in loop.drive]
+        if any(name in group.members for group in profile.effort_groups):
+            readers.insert(0, "the effort check")
+        read = " and ".join(readers) or "nothing (no effort group or loop names it)"
+        return f"held: the last output at each {step}, read for {read} only"
     if name == CLOCK_REFERENCE:
         return "the UTC time the log carries: where its clock is off, it dates the log"
     if name not in profile.sensor_names + profile.input_names:
