@@ -2,13 +2,14 @@
 what the controller asks of it, read from the output further from neutral, fitted on normal
 logs, falling where the part loses authority whether the surface or its output stuck."""
 
+import csv
 import json
 
 import numpy as np
 import pytest
+from shared_data import SHARED_DATA
 
-from auvdiag_cli import api
-from auvdiag_cli.vehicle.profile import parse_profile, profile_text
+from auvdiag_cli.vehicle.profile import Profile, parse_profile, profile_text
 from auvdiag_errors import ProfileError
 from models.skill import ScoringLog
 from models.tracking import TrackingFit, TrackingSpec, demand, fit_tracking
@@ -89,18 +90,33 @@ def test_a_trimmed_part_keeps_its_authority_where_little_is_asked():
 
 
 def _plane_document() -> dict:
+    """`arduplane_carbonz` with the ailerons' authority: the two aileron outputs (ALFA's
+    `rc/out` channels 5 and 6, PWM about 1500 us) and the loop on their demand."""
     import tomllib
     from pathlib import Path
 
-    return tomllib.loads(profile_text(Path("arduplane_carbonz"))[0])
+    data = tomllib.loads(profile_text(Path("arduplane_carbonz"))[0])
+    data["outputs"] = [{"name": name, "component": "ailerons", "kind": "control_surface",
+                        "unit": "1"} for name in OUTPUTS]
+    data["tracking"].append({"name": "aileron_authority", "drive": list(OUTPUTS),
+                             "rate": "roll_rate", "moved_by": ["ailerons"], "window_s": 5.0})
+    for channel, name in enumerate(OUTPUTS, start=4):
+        data["sources"]["ros"]["signals"][name] = {
+            "topic": "/mavros/rc/out", "field": f"channels[{channel}]", "scale": 0.002,
+            "offset": -3.0}
+    return data
 
 
-def test_the_plane_profile_judges_the_ailerons_authority_from_their_outputs():
-    profile = api.load_profile("arduplane_carbonz")
-    loop = next(spec for spec in profile.tracking if spec.drive)
-    assert loop.drive == ("aileron_left", "aileron_right") and loop.rate == "roll_rate"
-    assert loop.moved_by == ("ailerons",) and set(loop.drive) <= set(profile.output_names)
-    assert not set(loop.drive) & set(profile.drive_names)    # the model is not driven by them
+@pytest.fixture(scope="module")
+def plane() -> Profile:
+    return parse_profile(_plane_document(), "plane with the ailerons' authority")
+
+
+def test_a_plane_profile_reads_the_ailerons_authority_from_their_outputs(plane):
+    loop = next(spec for spec in plane.tracking if spec.drive)
+    assert loop.drive == OUTPUTS and loop.rate == "roll_rate" and loop.window_s == 5.0
+    assert loop.moved_by == ("ailerons",) and set(loop.drive) <= set(plane.output_names)
+    assert not set(loop.drive) & set(plane.drive_names)    # the model is not driven by them
 
 
 @pytest.mark.parametrize(("entry", "message"), [
@@ -117,23 +133,22 @@ def test_a_drive_loop_the_profile_cannot_read_is_refused(entry, message):
         parse_profile(data, "test")
 
 
-def test_train_fits_the_authority_from_the_logs_outputs():
+def test_train_fits_the_authority_from_the_logs_outputs(plane):
     """`train`'s loops read each log's actuator outputs beside its drive; a log without
     them leaves the loop unfitted, and `train` says so."""
     from auvdiag_cli.jobs.tracking_fit import tracking_entry
 
-    profile = api.load_profile("arduplane_carbonz")
     rng = np.random.default_rng(4)
     logs, bare = [], []
     for seed in range(3):
         outputs, rate = _flight(200, seed)
-        drive = rng.normal(0, 0.1, (len(rate), len(profile.drive_names)))
-        measured = rng.normal(0, 0.1, (len(rate), len(profile.sensor_names)))
-        measured[:, profile.sensor_names.index("roll_rate")] = rate[:, 0]
+        drive = rng.normal(0, 0.1, (len(rate), len(plane.drive_names)))
+        measured = rng.normal(0, 0.1, (len(rate), len(plane.sensor_names)))
+        measured[:, plane.sensor_names.index("roll_rate")] = rate[:, 0]
         logs.append(ScoringLog(f"flight{seed}", drive, measured, outputs=outputs))
         bare.append(ScoringLog(f"flight{seed}", drive, measured))
     said: list[str] = []
-    entries = {e["name"]: TrackingFit.from_json(e) for e in tracking_entry(profile, logs,
+    entries = {e["name"]: TrackingFit.from_json(e) for e in tracking_entry(plane, logs,
                                                                             said.append)}
     fit = entries["aileron_authority"]
     assert fit.typical == pytest.approx(1.0, rel=0.1) and 1 <= fit.lag_steps <= 3
@@ -141,15 +156,50 @@ def test_train_fits_the_authority_from_the_logs_outputs():
                f"per unit of aileron_left or aileron_right asked {fit.lag_steps * DT:.1f} s "
                "before" in line and "from a demand of" in line for line in said)
     said.clear()
-    assert "aileron_authority" not in {e["name"] for e in tracking_entry(profile, bare,
+    assert "aileron_authority" not in {e["name"] for e in tracking_entry(plane, bare,
                                                                          said.append)}
     assert said[-1] == ("not fitted (the logs never move what they answer): "
                         "aileron_authority")
 
 
-def test_inspect_says_which_loop_reads_an_output():
+def test_inspect_says_which_loop_reads_an_output(plane):
     from auvdiag_cli.jobs.inspect import on_grid
 
-    profile = api.load_profile("arduplane_carbonz")
-    assert on_grid("aileron_left", 3.0, profile) == (
+    assert on_grid("aileron_left", 3.0, plane) == (
         "held: the last output at each 0.1 s step, read for the loop aileron_authority only")
+
+
+ALFA = SHARED_DATA / "alfa"
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_stuck_aileron_lowers_the_ailerons_authority_on_real_flights(plane):
+    """Fitted on ALFA's normal flights: where the autopilot holds the failed aileron's
+    output at neutral, the other output carries the demand, and from the first roll asked
+    after the failure the same demand brings about two thirds of the rate it brought
+    before (the right aileron: a roll asked within 1 s; the left: 9 s after)."""
+    from auvdiag_cli.engine.ingest import ingest
+    from auvdiag_cli.jobs.tracking_fit import tracking_entry
+    from auvdiag_cli.jobs.training_logs import read_for_training
+
+    with (ALFA / "labels.csv").open(newline="") as stream:
+        rows = {row["sequence"]: row for row in csv.DictReader(stream)}
+    normal = [read_for_training(ALFA / name, plane, lambda _: None).scoring
+              for name, row in rows.items() if row["kind"] == "normal"]
+    (entry,) = [e for e in tracking_entry(plane, normal) if e["name"] == "aileron_authority"]
+    fit = TrackingFit.from_json(entry)
+    assert 0 <= fit.lag_steps <= 10 and fit.window_steps == 50 and fit.typical > 0
+    for name, first_roll_s in (("carbonZ_2018-09-11-17-55-30_1_right_aileron_failure", 1.0),
+                               ("carbonZ_2018-09-11-17-55-30_2_left_aileron_failure", 9.0)):
+        log = ingest(ALFA / name, plane)
+        frame = log.frame
+        gain = fit.gain(np.hstack([frame.commands, frame.outputs]), frame.sensors,
+                        [*frame.command_names, *frame.output_names], frame.sensor_names,
+                        frame.dt_s) + fit.typical
+        onset = (int(rows[name]["onset_time_ns"]) - log.signals.start_ns) / 1e9
+        before = gain[(frame.time_s > 20) & (frame.time_s < onset)]
+        after = gain[(frame.time_s > onset + first_roll_s)
+                     & (frame.time_s < onset + first_roll_s + 10)]
+        assert np.isfinite(after).sum() > 50, name
+        assert np.nanmedian(after) < 0.75 * np.nanmedian(before), name
+        assert np.nanmedian(after) < np.nanpercentile(before, 10), name

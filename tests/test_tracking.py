@@ -125,12 +125,11 @@ def test_train_fits_the_plane_profiles_loop_and_says_what_it_fitted():
             measured[:, profile.sensor_names.index(name)] = sensors[:, column]
         logs.append(ScoringLog(f"flight{seed}", drive, measured))
     said: list[str] = []
-    (entry,) = tracking_entry(profile, logs, said.append)    # no outputs: no authority loop
+    (entry,) = tracking_entry(profile, logs, said.append)
     fit = TrackingFit.from_json(entry)
     assert fit.name == "roll_tracking" and 1 <= fit.lag_steps <= 3
     assert fit.typical == pytest.approx(1.2, rel=0.1) and fit.floor < fit.limit
     assert said == [f"the loop roll_tracking: a gain of {fit.typical:.3g} (the rate per unit "
                     f"of error {fit.lag_steps * 0.1:.1f} s before), judged over 10 s windows "
                     f"from an error of {fit.floor:.3g} rms, errors beyond {fit.limit:.3g} left "
-                    "out (saturated)", "not fitted (the logs never move what they answer): "
-                    "aileron_authority"]
+                    "out (saturated)"]
