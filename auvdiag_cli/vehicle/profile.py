@@ -206,7 +206,8 @@ def _rows(top: TableReader, key: str) -> list[TableReader]:
 
 def _signals(top: TableReader, actuators: tuple[Actuator, ...]
              ) -> tuple[tuple[Command, ...], tuple[Sensor, ...], tuple[Input, ...],
-                        tuple[Command, ...]]:
+                        tuple[Command, ...], set[str]]:
+    """The commands, sensors, inputs and outputs, and what may move a signal (`moved_by`)."""
     commands = tuple(_command(r, (*ACTUATOR_KINDS, SET_POINT)) for r in top.items("commands"))
     outputs = tuple(_command(r, tuple(ACTUATOR_KINDS)) for r in _rows(top, "outputs"))
     movers = {a.name for a in actuators} | {c.component for c in commands + outputs}
@@ -230,7 +231,7 @@ def _signals(top: TableReader, actuators: tuple[Actuator, ...]
     if OPERATING in signal_names:
         raise ProfileError(f"signal name {OPERATING!r} is reserved for the operating flag "
                            "([sources.FAMILY] operating = {...})")
-    return commands, sensors, inputs, outputs
+    return commands, sensors, inputs, outputs, movers
 
 
 def _thresholds(table: TableReader, sensor_names: list[str]) -> dict[str, dict[str, float]]:
@@ -254,7 +255,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     top = TableReader(data, "")
     vehicle = top.sub("vehicle")
     actuators = parse_actuators(top.items("actuators")) if "actuators" in data else ()
-    commands, sensors, inputs, outputs = _signals(top, actuators)
+    commands, sensors, inputs, outputs, movers = _signals(top, actuators)
     sensor_names = [s.name for s in sensors]
     # A log may lack a measured input or an actuator output: the model then holds the input
     # at its typical value, and the effort check says it cannot judge.
@@ -304,9 +305,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
         outputs=outputs,
         actuators=actuators,
         tracking=parse_tracking(_rows(top, "tracking"), [c.name for c in commands], sensor_names,
-                                {a.name for a in actuators}
-                                | {c.component for c in commands + outputs},
-                                [o.name for o in outputs]),
+                                movers, [o.name for o in outputs]),
     )
     top.check_all_read()
     return profile
