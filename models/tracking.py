@@ -122,7 +122,9 @@ def _error_and_rate(spec: TrackingSpec | TrackingFit, commands: np.ndarray,
                     sensor_names: Sequence[str], dt_s: float) -> tuple[np.ndarray, np.ndarray]:
     names = list(command_names)
     if spec.drive:
-        error = demand(commands[:, [names.index(n) for n in spec.drive]])
+        # A log read without the outputs (a profile that lacks them) leaves it unjudged.
+        read = [names.index(n) for n in spec.drive if n in names]
+        error = demand(commands[:, read]) if read else np.full(len(commands), np.nan)
     else:
         assert spec.set_point is not None and spec.measured is not None
         error = (commands[:, names.index(spec.set_point)]

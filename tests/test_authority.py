@@ -76,6 +76,12 @@ def test_the_authority_halves_where_a_surface_sticks_whichever_way_its_output_re
     assert np.nanmedian(after) == pytest.approx(0.5, rel=0.1)
 
 
+def test_a_log_read_without_the_outputs_leaves_the_authority_unjudged():
+    fit = _fit()
+    _, rate = _flight(100, 11)
+    assert np.isnan(fit.gain(np.zeros((len(rate), 1)), rate, ("roll_sp",), SENSORS, DT)).all()
+
+
 def test_a_trimmed_part_keeps_its_authority_where_little_is_asked():
     """A demand offset by the part's trim is judged by how the rate follows its changes:
     straight flight (little asked beyond the trim) is not read as lost authority."""
