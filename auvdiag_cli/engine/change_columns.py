@@ -88,7 +88,6 @@ def change_residual(model: LoadedModel, frame: AlignedFrame, matching: Matching,
     errors = matching.measured - matching.modelled if ahead is None else ahead.residual(
         frame.commands, matching.measured, frame.inputs if frame.input_names else None, cuts)
     card = model.card
-    read = np.hstack([frame.commands, frame.outputs]) if frame.output_names else frame.commands
-    gains = [loop.gain(read, matching.measured, [*card.command_names, *frame.output_names],
+    gains = [loop.gain(frame.efforts, matching.measured, [*card.command_names, *frame.output_names],
                        card.sensor_names, card.dt_s) for loop in card.tracking]
     return np.column_stack([errors, *gains]) if gains else errors
