@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from models.chi_square import largest_spread_factor
+from models.sign_test import median_lower_bound
 from models.student_t import quantile
 
 LEVEL_BINS = 3                # operating conditions of a one-way group (rotors): the level's
@@ -347,12 +348,12 @@ class Thresholds:
 
 
 def widening(fit: GroupFit) -> float:
-    """≥ 1: how much wider the group's normal logs, each judged by the others, scattered
-    than Student's t says (median |z| against its quartile). Each group's own: one group
-    whose logs scatter more says nothing of another's (a vectored ROV's vertical pair
-    widened its horizontal thrusters' thresholds too, and hid weaknesses there)."""
-    return max(1.0, float(np.median(np.abs(fit.loo_z)))
-               / quantile(0.75, max(1.0, fit.logs - 2.0)))
+    """≥ 1: how much wider the group's normal logs, each judged by the others, scatter than
+    t says (median |z| against t's quartile), where even its lower confidence bound passes
+    the quartile (a handful of logs pass it by chance one time in three). Each group's own."""
+    scatter, reference = np.abs(fit.loo_z).ravel(), quantile(0.75, max(1.0, fit.logs - 2))
+    bound = median_lower_bound(scatter, fit.logs * max(1, len(fit.group.members) - 1))
+    return 1.0 if bound is None or bound <= reference else float(np.median(scatter)) / reference
 
 
 def weakness_directions(members: int) -> np.ndarray:
@@ -370,11 +371,10 @@ def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None
     """Per member, the smallest rise of its share (relative to its normal share: ``shares``,
     or the normal logs' mean) that the whole-log test judges over ``span_s`` steady seconds
     (None: the normal logs' typical steady time), the others' shares falling alike (one
-    weak member). ``logs``: were the
-    spread, as measured, known from that many normal logs (its degrees of freedom and the
-    new log's share of the uncertainty in the normal shares scale with them): what more
-    normal logs would buy. With three or four logs the Student-t threshold is wide; this
-    says how wide in terms a user can weigh ("a motor carrying 14 % more than its share")."""
+    weak member). ``logs``: were the spread, as measured, known from that many normal logs
+    (its degrees of freedom and the new log's share of the uncertainty in the normal shares
+    scale with them): what more normal logs would buy. With three or four logs the Student-t
+    threshold is wide; this says how wide in a user's terms (a motor's share 14 % up)."""
     n = fit.logs if logs is None else logs
     # The normal logs' scatter beyond t (`widening`) stays as measured on the logs there are.
     dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)

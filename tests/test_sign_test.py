@@ -1,0 +1,58 @@
+"""The lower confidence bound of a median (the sign test) and what it changes in the effort
+check: four normal logs scattered as Student's t says leave the thresholds as t gives them,
+while logs scattered far wider still widen them."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from models.effort import EffortGroup, GroupFit, GroupLog, fit_group, widening
+from models.sign_test import lower_rank, median_lower_bound
+from models.student_t import quantile
+
+
+def test_the_rank_is_the_binomials():
+    # P(Binomial(12, 1/2) <= 3) = 299/4096 = 0.073, <= 4: 794/4096 = 0.194
+    assert lower_rank(12) == 4
+    assert lower_rank(6) == 1           # 1/64 below the smallest; 7/64 below the second
+    assert lower_rank(3) == 0           # 1/8: three values cannot bound it at 90 %
+    assert median_lower_bound(np.arange(3.0), 3) is None
+
+
+def test_the_bound_lies_below_the_median_as_often_as_it_says():
+    rng = np.random.default_rng(3)
+    below = [median_lower_bound(rng.standard_normal(12) + 1.0, 12) for _ in range(4000)]
+    share = np.mean([b is not None and b <= 1.0 for b in below])
+    assert 0.90 <= share <= 0.96        # 1 - 0.073, the exact coverage of rank 4 of 12
+
+
+def _fit(rng: np.random.Generator, logs: int, offset_sd: float) -> GroupFit:
+    members = 4
+    group = EffortGroup("rotors", tuple(f"motor_{i}" for i in range(members)), (1.0,) * members)
+    summaries = []
+    for i in range(logs):
+        offset = rng.normal(0.0, offset_sd, members)
+        share = 1.0 + offset - offset.mean()
+        summaries.append(GroupLog(f"log{i}", 24.0, 100 * share[None, :], np.array([100.0]),
+                                  np.full(members, 0.02 ** 2), 8))
+    return fit_group(group, summaries, 0.1, 3.0)
+
+
+def test_four_logs_scattered_as_t_says_keep_t_thresholds():
+    rng = np.random.default_rng(11)
+    fits = [_fit(rng, 4, 0.03) for _ in range(60)]
+    median_based = [float(np.median(np.abs(f.loo_z))) for f in fits]
+    # The median alone passes t's quartile on a good share of such choices by chance …
+    assert np.mean(np.array(median_based) > quantile(0.75, 2)) > 0.1
+    # … which widened their thresholds; its lower bound passes it on hardly any.
+    assert np.mean([widening(f) > 1.0 for f in fits]) <= 0.05
+
+
+def test_logs_scattered_far_wider_than_t_says_widen_it():
+    rng = np.random.default_rng(12)
+    fit = _fit(rng, 8, 0.03)
+    wide = replace(fit, loo_z=3 * fit.loo_z)
+    # widened by the whole of the median's excess, not only by its lower bound's
+    assert widening(wide) == pytest.approx(np.median(np.abs(wide.loo_z)) / quantile(0.75, 6))
+    assert widening(wide) > 1.5
