@@ -242,8 +242,9 @@ def _conditions(two_way: bool, fit: GroupFit | None) -> str:
 
 FAULT_FROM_S = 60.0     # the weak scenarios' fault begins here
 NEVER_S = 1e6           # a fault from here: the mission flown without it
-# A weakness that begins late: this much thrust kept from this long before the mission's end;
-# and an actuator that stops a few seconds before the log ends, as in a crash.
+# A weakness that begins late: this much thrust kept from this long before the actuator last
+# works at its mean thrust; and one that stops a few seconds before that, as in a crash
+# (a crash ends a log with its parts at work, not idling at a mission's end).
 LATE_FRACTION, LATE_BEFORE_END_S = 0.7, (10.0, 20.0)
 STOPPED_BEFORE_END_S = (1.5, 3.0, 5.0)
 # Per actuator named alone: its onset and detection after the fault began, and the error
@@ -268,7 +269,7 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
             timed = len(times)
             for component in components:
                 check = _judge(model, profile, _simulated(
-                    profile, f"mission-{component.replace('_', '-')}-weak", 201, work,
+                    profile, _weak(component), 201, work,
                     fraction))
                 named = set(check.named)
                 mark = "-"
@@ -300,21 +301,29 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
             "|---" * (len(components) + 2) + "|", *rows, "", _timing(times), "", *late]
 
 
+def _weak(component: str) -> str:
+    """The scenario of ``component`` weakened."""
+    return f"mission-{component.replace('_', '-')}-weak"
+
+
 def _late(profile: Profile, model: EffortModel, components: list[str], work: Path,
           fraction: float, befores_end_s: tuple[float, ...]) -> list[str]:
     """Each actuator keeping ``fraction`` of its thrust from each of ``befores_end_s``
-    before the end of the mission (flown without it): named alone, the true onset within
-    the error stated, the detection after it (never before)."""
+    before it last works at its mean thrust (`SimulatedDive.last_works_s`, on the mission
+    flown without the fault): named alone, the true onset within the error stated, the
+    detection after it (never before)."""
+    from auvdiag_cli.simulator.run import simulate
+    from auvdiag_cli.simulator.scenarios import get_scenario
+
     lines = []
+    fault_free = {c: simulate(get_scenario(_weak(c), profile, NEVER_S), profile, 201)
+                  for c in components}
     for before_end in befores_end_s:
         named = held = 0
         delays, errors = [], []
-        end_s = 0.0
-        for component in components:
-            name = f"mission-{component.replace('_', '-')}-weak"
-            end_s = len(_simulated(profile, name, 201, work, fraction, NEVER_S).commands) * (
-                profile.dt_s)
-            onset_s = end_s - before_end
+        for actuator, component in enumerate(components):
+            name = _weak(component)
+            onset_s = round(fault_free[component].last_works_s(actuator, before_end), 1)
             check = _judge(model, profile, _simulated(profile, name, 201, work, fraction,
                                                       onset_s))
             if set(check.named) != {component} or check.alarm_s is None or (
@@ -328,10 +337,11 @@ def _late(profile: Profile, model: EffortModel, components: list[str], work: Pat
         timing = (f"; the true onset within the error stated in {held} of {named} (stated "
                   f"error median {np.median(errors):.1f} s), detected {np.median(delays):.1f} s "
                   f"after it (median; worst {max(delays):.1f} s)" if delays and errors else "")
-        what = (f"Stopped {before_end:g} s before the mission's end (as in a crash)"
-                if fraction == 0 else
-                f"Weakened to {fraction:.0%} {before_end:g} s before the mission's end")
-        lines.append(f"- {what} ({end_s:.0f} s): named alone, seen after it began, in "
+        what = (f"Stopped {before_end:g} s before it last works at its mean thrust (as in "
+                "a crash)" if fraction == 0 else
+                f"Weakened to {fraction:.0%} {before_end:g} s before it last works at its mean "
+                "thrust")
+        lines.append(f"- {what}: named alone, seen after it began, in "
                      f"{named} of {len(components)}{timing}.")
     return lines
 
@@ -348,7 +358,7 @@ def _seeds(profile: Profile, model: EffortModel, components: list[str], work: Pa
         named[component] = 0
         for seed in SEEDS:
             check = _judge(model, profile, _simulated(
-                profile, f"mission-{component.replace('_', '-')}-weak", seed, work,
+                profile, _weak(component), seed, work,
                 LATE_FRACTION))
             if check.named == (component,):
                 named[component] += 1

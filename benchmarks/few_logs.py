@@ -23,8 +23,6 @@ from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 if TYPE_CHECKING:
     from auvdiag_cli.simulator.run import SimulatedDive
     from auvdiag_cli.vehicle.profile import Profile
@@ -45,11 +43,11 @@ WEAKENED, WEAKENED_SEEDS = 0.7, tuple(range(21, 31))
 # mission or more): how a crash ends a log, where the part still works to the end, and no
 # stop while it idles (a ROV's horizontal thrusters holding station at a mission's end),
 # which changes nothing any log could show.
-NEVER_S, MID_FLIGHT_SEED, LAST_WORK_S, WORKING_SHARE = 1e6, 41, 3.0, 1.0
+NEVER_S, MID_FLIGHT_SEED, LAST_WORK_S = 1e6, 41, 3.0
 MID_FLIGHT = ((f"stopped {LAST_WORK_S:g} s before it last works at its mean thrust", 0.0,
-               lambda dive, column: _last_work_s(dive, column)),
+               lambda dive, actuator: dive.last_works_s(actuator, LAST_WORK_S)),
               (f"weakened to {WEAKENED:.0%} two thirds of the way through", WEAKENED,
-               lambda dive, column: 2 * dive.duration_s / 3))
+               lambda dive, actuator: 2 * dive.duration_s / 3))
 
 
 def _flown(work: Path, vehicle: str, fmt: str, scenario: str, seed: int,
@@ -83,17 +81,6 @@ def _fault_free(vehicle: str, scenario: str) -> "SimulatedDive":
     return simulate(get_scenario(scenario, profile, NEVER_S), profile, MID_FLIGHT_SEED)
 
 
-def _last_work_s(dive: "SimulatedDive", column: str) -> float:
-    """The start of the last LAST_WORK_S over which the truth's thrust ``column`` averages
-    at least WORKING_SHARE of its mean (in size) over the whole mission."""
-    times = dive.truth["t_s"].to_numpy()
-    thrust = np.abs(dive.truth[column].to_numpy())
-    span = max(1, round(LAST_WORK_S / float(np.median(np.diff(times)))))
-    over_span = np.convolve(thrust, np.ones(span) / span, mode="valid")
-    working = np.flatnonzero(over_span >= WORKING_SHARE * thrust.mean())
-    return float(times[working[-1]]) if working.size else dive.duration_s - LAST_WORK_S
-
-
 def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
     """Each actuator failing late in a mission (`MID_FLIGHT`), judged by the model as
     trained: named (a fault of that part detected after it began), the onset's error and
@@ -108,8 +95,8 @@ def _mid_flight(work: Path, vehicle: str, fmt: str) -> list[str]:
         weakened = _weakened(vehicle)
         for name, part in weakened.items():
             # The truth's thrusts are in command order; a part is its command's component.
-            column = f"thrust_{[c.component for c in profile.commands].index(part)}_n"
-            onset_s = round(at(_fault_free(vehicle, name), column), 1)
+            actuator = [c.component for c in profile.commands].index(part)
+            onset_s = round(at(_fault_free(vehicle, name), actuator), 1)
             diagnosis = api.diagnose(_flown(work, vehicle, fmt, name, MID_FLIGHT_SEED,
                                             severity, onset_s), profile, model)
             seen = (diagnosis.verdict.value == "fault"

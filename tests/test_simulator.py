@@ -75,6 +75,19 @@ def test_paper_mission_ends_a_right_turn_just_before_the_fault(dive_cache):
     assert truth.loc[110.0, "yaw_rate_rps"] > 0.1
 
 
+def test_a_thruster_last_works_before_the_vehicle_settles(dive_cache):
+    dive = dive_cache("paper-normal", 11)
+    truth = dive.truth.set_index("t_s")
+    for actuator in range(2):
+        thrust = truth[f"thrust_{actuator}_n"].abs()
+        start = dive.last_works_s(actuator, 3.0)
+        # the last 3 s at its mean thrust or more, and none later
+        assert thrust.loc[start:start + 3.0].mean() >= 0.95 * thrust.mean()
+        later = thrust.loc[start + 0.5:]
+        assert later.rolling(30).mean().max() < thrust.mean()
+        assert start < dive.duration_s - 3.0
+
+
 def test_unknown_scenario_lists_the_known_ones():
     with pytest.raises(KeyError, match="paper-flow-sensor-covered"):
         get_scenario("nonsense", load_profile())

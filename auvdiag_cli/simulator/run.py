@@ -54,6 +54,19 @@ class SimulatedDive:
     def duration_s(self) -> float:
         return float(self.truth["t_s"].iloc[-1])
 
+    def last_works_s(self, actuator: int, span_s: float) -> float:
+        """The start of the last ``span_s`` over which the actuator's true thrust averages
+        at least its mean over the mission (in size): where a fault that begins ``span_s``
+        before it last works still has work to show on. A fault's time before the log's
+        end says little: a ROV's horizontal thrusters hold station at a mission's end on a
+        few hundredths of a newton, and a stop there changes nothing any log could show."""
+        times = self.truth["t_s"].to_numpy()
+        thrust = np.abs(self.truth[f"thrust_{actuator}_n"].to_numpy())
+        steps = max(1, round(span_s / float(np.median(np.diff(times)))))
+        over_span = np.convolve(thrust, np.ones(steps) / steps, mode="valid")
+        working = np.flatnonzero(over_span >= thrust.mean())
+        return float(times[working[-1]]) if working.size else self.duration_s - span_s
+
 
 class _Noise:
     """Pre-drawn noise so the tick loop stays cheap."""
