@@ -6,7 +6,9 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from quad_effort import quad_commands, quad_model
 
+from auvdiag_cli.reports.training import effort_lines
 from models.effort import EffortGroup, GroupFit, GroupLog, fit_group, widening
 from models.sign_test import lower_rank, median_lower_bound
 from models.student_t import quantile
@@ -56,3 +58,15 @@ def test_logs_scattered_far_wider_than_t_says_widen_it():
     # widened by the whole of the median's excess, not only by its lower bound's
     assert widening(wide) == pytest.approx(np.median(np.abs(wide.loo_z)) / quantile(0.75, 6))
     assert widening(wide) > 1.5
+
+
+def test_the_training_report_says_when_the_logs_scatter_wider_than_t():
+    rng = np.random.default_rng(5)
+    model = quad_model([quad_commands(rng, 1 + rng.normal(0, 0.03, 4)) for _ in range(8)])
+    fit = model.fits[0]
+    assert fit is not None and widening(fit) == 1.0
+    assert "wide as Student's t says" not in effort_lines(model)[0]
+    wide = replace(fit, loo_z=3 * fit.loo_z)
+    (line,) = effort_lines(replace(model, fits=(wide,)))
+    assert (f"they scatter {widening(wide):.2f} times as wide as Student's t says, past "
+            "chance, and the threshold is widened as much") in line

@@ -16,7 +16,7 @@ from auvdiag_cli.jobs.train import TrainingResult
 from auvdiag_cli.reports.sentences import by_reason
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused, StartReference
-from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise
+from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise, widening
 from models.effort_model import EffortModel, GroupSetup
 from models.fast import NETWORK
 from models.relation_forms import Relations
@@ -202,7 +202,8 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"{', by level' if fit.conditioned else ''}): share {parts}; driven harder past "
             f"z {effort.thresholds.whole_log(fit):.2f} (false alarms budgeted at "
             f"{effort.false_alarm_rate:.1%} of normal logs; each normal log judged by the "
-            f"others: largest z {float(fit.loo_z.max()):.2f}); changed within a log past z "
+            f"others: largest z {float(fit.loo_z.max()):.2f}{_scatter(fit)}); changed within "
+            "a log past z "
             f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s):.2f} "
             f"(a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
             f"on {fit.within_dof:.0f} degrees of freedom)"
@@ -221,6 +222,14 @@ def _smallest(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, dt_s: fl
             "halfway through such a log, about "
             f"{rise_range(list(smallest_later_rise(setup, fit, thresholds, dt_s)))} more from "
             "then on (against the log's own first half)")
+
+
+def _scatter(fit: GroupFit) -> str:
+    """Where the normal logs scatter wider than Student's t says, past what chance gives."""
+    factor = widening(fit)
+    return "" if factor <= 1.0 else (
+        f"; they scatter {factor:.2f} times as wide as Student's t says, past chance, and "
+        "the threshold is widened as much")
 
 
 def _alike(fit: GroupFit) -> str:
