@@ -353,7 +353,7 @@ def widening(fit: GroupFit) -> float:
     the quartile (a handful of logs pass it by chance one time in three). Each group's own."""
     scatter, reference = np.abs(fit.loo_z).ravel(), quantile(0.75, max(1.0, fit.logs - 2))
     bound = median_lower_bound(scatter, fit.logs * max(1, len(fit.group.members) - 1))
-    return 1.0 if bound is None or bound <= reference else float(np.median(scatter)) / reference
+    return 1.0 if bound is None or bound <= reference else float(np.nanmedian(scatter)) / reference
 
 
 def weakness_directions(members: int) -> np.ndarray:

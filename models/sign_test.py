@@ -29,8 +29,10 @@ def median_lower_bound(values: np.ndarray, free: int,
     """A value the true median of ``values`` exceeds with ``confidence``: the order statistic
     of `lower_rank` among ``free`` independent values, read at the same fraction of
     ``values`` (more of them than are free where they are tied, as shares that average to
-    one are). None: too few free values to bound it."""
+    one are); values that are not finite say nothing. None: too few free values to bound
+    it."""
     rank = lower_rank(free, confidence)
-    if rank == 0 or not len(values):
+    finite = np.asarray(values, float)[np.isfinite(values)]
+    if rank == 0 or not len(finite):
         return None
-    return float(np.quantile(np.asarray(values, float), (rank - 1) / max(1, free - 1)))
+    return float(np.quantile(finite, (rank - 1) / max(1, free - 1)))

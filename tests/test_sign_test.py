@@ -20,6 +20,9 @@ def test_the_rank_is_the_binomials():
     assert lower_rank(6) == 1           # 1/64 below the smallest; 7/64 below the second
     assert lower_rank(3) == 0           # 1/8: three values cannot bound it at 90 %
     assert median_lower_bound(np.arange(3.0), 3) is None
+    # values that are not finite say nothing: bounded on the others, or not at all
+    assert median_lower_bound(np.array([np.nan, *np.arange(1.0, 13.0)]), 12) == 4.0
+    assert median_lower_bound(np.full(12, np.nan), 12) is None
 
 
 def test_the_bound_lies_below_the_median_as_often_as_it_says():
@@ -55,6 +58,9 @@ def test_logs_scattered_far_wider_than_t_says_widen_it():
     rng = np.random.default_rng(12)
     fit = _fit(rng, 8, 0.03)
     wide = replace(fit, loo_z=3 * fit.loo_z)
+    unjudged = wide.loo_z.copy()
+    unjudged[0, 0] = np.nan        # a log whose share could not be judged
+    assert np.isfinite(widening(replace(wide, loo_z=unjudged)))
     # widened by the whole of the median's excess, not only by its lower bound's
     assert widening(wide) == pytest.approx(np.median(np.abs(wide.loo_z)) / quantile(0.75, 6))
     assert widening(wide) > 1.5
