@@ -245,8 +245,8 @@ NEVER_S = 1e6           # a fault from here: the mission flown without it
 # A weakness that begins late: this much thrust kept from this long before the actuator last
 # works at its mean thrust; and one that stops a few seconds before that, as in a crash
 # (a crash ends a log with its parts at work, not idling at a mission's end).
-LATE_FRACTION, LATE_BEFORE_END_S = 0.7, (10.0, 20.0)
-STOPPED_BEFORE_END_S = (1.5, 3.0, 5.0)
+LATE_FRACTION, LATE_BEFORE_LAST_WORK_S = 0.7, (10.0, 20.0)
+STOPPED_BEFORE_LAST_WORK_S = (1.5, 3.0, 5.0)
 # Per actuator named alone: its onset and detection after the fault began, and the error
 # it stated of the onset (None: it found the whole log departing).
 Timing = tuple[float, float, float | None]
@@ -283,8 +283,8 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                 cells.append(mark)
             rows.append(f"| {fraction:.0%} | " + " | ".join(cells)
                         + f" | {_row_timing(times[timed:])} |")
-        late = [*_late(profile, model, components, work, LATE_FRACTION, LATE_BEFORE_END_S),
-                *_late(profile, model, components, work, 0.0, STOPPED_BEFORE_END_S),
+        late = [*_late(profile, model, components, work, LATE_FRACTION, LATE_BEFORE_LAST_WORK_S),
+                *_late(profile, model, components, work, 0.0, STOPPED_BEFORE_LAST_WORK_S),
                 _seeds(profile, model, components, work)]
     alarms = sum(bool(c.suspects) for c in normal)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}"
@@ -307,8 +307,8 @@ def _weak(component: str) -> str:
 
 
 def _late(profile: Profile, model: EffortModel, components: list[str], work: Path,
-          fraction: float, befores_end_s: tuple[float, ...]) -> list[str]:
-    """Each actuator keeping ``fraction`` of its thrust from each of ``befores_end_s``
+          fraction: float, befores_s: tuple[float, ...]) -> list[str]:
+    """Each actuator keeping ``fraction`` of its thrust from each of ``befores_s``
     before it last works at its mean thrust (`SimulatedDive.last_works_s`, on the mission
     flown without the fault): named alone, the true onset within the error stated, the
     detection after it (never before)."""
@@ -318,12 +318,12 @@ def _late(profile: Profile, model: EffortModel, components: list[str], work: Pat
     lines = []
     fault_free = {c: simulate(get_scenario(_weak(c), profile, NEVER_S), profile, 201)
                   for c in components}
-    for before_end in befores_end_s:
+    for before_s in befores_s:
         named = held = 0
         delays, errors = [], []
         for actuator, component in enumerate(components):
             name = _weak(component)
-            onset_s = round(fault_free[component].last_works_s(actuator, before_end), 1)
+            onset_s = round(fault_free[component].last_works_s(actuator, before_s), 1)
             check = _judge(model, profile, _simulated(profile, name, 201, work, fraction,
                                                       onset_s))
             if set(check.named) != {component} or check.alarm_s is None or (
@@ -337,9 +337,9 @@ def _late(profile: Profile, model: EffortModel, components: list[str], work: Pat
         timing = (f"; the true onset within the error stated in {held} of {named} (stated "
                   f"error median {np.median(errors):.1f} s), detected {np.median(delays):.1f} s "
                   f"after it (median; worst {max(delays):.1f} s)" if delays and errors else "")
-        what = (f"Stopped {before_end:g} s before it last works at its mean thrust (as in "
+        what = (f"Stopped {before_s:g} s before it last works at its mean thrust (as in "
                 "a crash)" if fraction == 0 else
-                f"Weakened to {fraction:.0%} {before_end:g} s before it last works at its mean "
+                f"Weakened to {fraction:.0%} {before_s:g} s before it last works at its mean "
                 "thrust")
         lines.append(f"- {what}: named alone, seen after it began, in "
                      f"{named} of {len(components)}{timing}.")
