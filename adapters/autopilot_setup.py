@@ -95,34 +95,41 @@ def _setup(texts: list[str], parameters: dict[str, float], mav_type: int | None
     return AutopilotSetup(vehicle, ", ".join(evidence), frame, by_frame or by_type, parameters)
 
 
-def _text(raw: bytes) -> str:
+def text_of(raw: bytes) -> str:
     return raw.split(b"\0", 1)[0].decode("utf-8", "replace").strip()
 
 
-def _dataflash_records(index: RecordIndex, name: str, types: str) -> list[bytes]:
-    """The payloads (after the time word) of every record of ``name`` whose format starts
-    with ``types``."""
+def dataflash_records(index: RecordIndex, name: str, types: str) -> list[tuple[int, bytes]]:
+    """(time in µs or `NO_TIME`/`BAD_TIME`, the payload after the time word) of every record
+    of ``name`` whose format starts with ``types`` (a 64-bit time first), in file order."""
     found = [t for t, f in index.formats.items() if f.name == name and f.types.startswith(types)]
-    payloads = []
-    for type_id in found:
-        length = index.formats[type_id].length
-        for position in index.of_type(type_id):
-            start = int(index.offsets[position])
-            payloads.append(bytes(index.data[start + 3 + 8:start + length]))
-    return payloads
+    positions = np.sort(np.concatenate([index.of_type(t) for t in found] or
+                                       [np.zeros(0, np.int64)]))
+    records = []
+    for position in positions:
+        start = int(index.offsets[position])
+        length = index.formats[int(index.type_ids[position])].length
+        records.append((int(index.times_us[position]),
+                        bytes(index.data[start + 3 + 8:start + length])))
+    return records
 
 
 def _dataflash_texts(index: RecordIndex) -> list[str]:
-    return [_text(p[:DATAFLASH_TEXT]) for p in _dataflash_records(index, "MSG", "QZ")]
+    return [dataflash_text(p) for _, p in dataflash_records(index, "MSG", "QZ")]
+
+
+def dataflash_text(payload: bytes) -> str:
+    """A MSG record's text."""
+    return text_of(payload[:DATAFLASH_TEXT])
 
 
 def dataflash_parameters(index: RecordIndex) -> dict[str, float]:
     """Every parameter a DataFlash log wrote (PARM), by name."""
     parameters = {}
-    for payload in _dataflash_records(index, "PARM", "QNf"):
+    for _, payload in dataflash_records(index, "PARM", "QNf"):
         (value,) = struct.unpack_from("<f", payload, DATAFLASH_NAME)
         if np.isfinite(value):
-            parameters[_text(payload[:DATAFLASH_NAME])] = float(value)
+            parameters[text_of(payload[:DATAFLASH_NAME])] = float(value)
     return parameters
 
 
@@ -136,6 +143,7 @@ class TlogPayloads:
         frames = index.offsets + TLOG_TIME_LENGTH
         self.sysids = np.where(version == 2, self.data[frames + 5],
                                self.data[frames + 3]).astype(int)
+        self.times_us = index.times_us
 
     def of(self, msgid: int, size: int) -> list[tuple[int, bytes]]:
         """(system id, payload padded to ``size``: MAVLink 2 drops trailing zeros) of every
@@ -143,6 +151,11 @@ class TlogPayloads:
         return [(int(self.sysids[k]), bytes(self.data[self.starts[k]:self.starts[k] + min(
             int(self.lengths[k]), size)]).ljust(size, b"\0"))
             for k in np.flatnonzero(self.msgid == msgid)]
+
+    def times_of(self, msgid: int) -> list[int]:
+        """The receive time (µs, or `BAD_TIME`) of every frame of ``msgid``, as `of` lists
+        them."""
+        return [int(t) for t in self.times_us[self.msgid == msgid]]
 
 
 def autopilot_heartbeats(index: RecordIndex) -> Counter[tuple[int, int]]:
@@ -155,12 +168,12 @@ def autopilot_heartbeats(index: RecordIndex) -> Counter[tuple[int, int]]:
 def _tlog_contents(index: RecordIndex) -> tuple[list[str], dict[str, float], int | None]:
     """(STATUSTEXT texts, PARAM_VALUE parameters, the autopilot's MAV_TYPE)."""
     frames = TlogPayloads(index)
-    texts = [_text(raw[1:]) for _, raw in frames.of(STATUSTEXT, STATUSTEXT_LENGTH)]
+    texts = [text_of(raw[1:]) for _, raw in frames.of(STATUSTEXT, STATUSTEXT_LENGTH)]
     parameters = {}
     for _, raw in frames.of(PARAM_VALUE, PARAM_VALUE_LENGTH):
         (value,) = struct.unpack_from("<f", raw)
         if np.isfinite(value):
-            parameters[_text(raw[8:24])] = float(value)
+            parameters[text_of(raw[8:24])] = float(value)
     heard = autopilot_heartbeats(index)
     types: Counter[int] = Counter()
     for (_, mav_type), count in heard.items():

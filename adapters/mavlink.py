@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from adapters.autopilot_messages import dataflash_messages, tlog_messages
 from adapters.collect import INSTANCE_FIELDS, ColumnSource, SignalCollector
 from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
@@ -48,8 +49,10 @@ class TlogAdapter:
             collector.notes.append(f"{dropped} MAVLink frames failed their checksum and were "
                                    "left out")
         first_us = index.span_us[0]
-        return _finish(collector, "tlog", None if first_us is None else first_us * 1000,
-                       index, "MAVLink")
+        signals = _finish(collector, "tlog", None if first_us is None else first_us * 1000,
+                          index, "MAVLink")
+        signals.autopilot_messages = tlog_messages(index)
+        return signals
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         return _inventory("tlog", index_file(path, "tlog", _message_names()), "MAVLink")
@@ -71,7 +74,9 @@ class DataflashAdapter:
                 raise LogError(path, f"{topic} records carry no TimeUS (or TimeMS), so they "
                                      "cannot be placed in time")
             _add_timed(collector, topic, times_us, rows, divisors)
-        return _finish(collector, "bin", None, index, "DataFlash")
+        signals = _finish(collector, "bin", None, index, "DataFlash")
+        signals.autopilot_messages = dataflash_messages(index)
+        return signals
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         return _inventory("bin", index_file(path, "bin"), "DataFlash")

@@ -145,6 +145,18 @@ class Damage:
     at_byte: int | None = None    # offset in the (storage) file where the damage begins
 
 
+@dataclass(frozen=True)
+class AutopilotMessage:
+    """A text the vehicle's own software logged (ArduPilot's STATUSTEXT or MSG, an error
+    record, PX4's logged messages), at a time on the log's clock."""
+
+    time_ns: int
+    text: str
+    # MAVLink's MAV_SEVERITY (syslog's levels): 0 emergency … 4 warning … 7 debug; None where
+    # the log does not say (a DataFlash MSG record).
+    severity: int | None = None
+
+
 @dataclass(frozen=True, eq=False)
 class Series:
     """One signal: ``values`` (float64) at ``times_ns`` (int64), in the log's order."""
@@ -180,6 +192,7 @@ class Signals:
     damage: Damage | None = None          # None: the whole file was read
     messages_read: int = 0                # messages of the profile's topics
     namespace: str = ""                   # the ROS namespace the topics were read under
+    autopilot_messages: list[AutopilotMessage] = field(default_factory=list)
 
     def cropped(self, start_ns: int | None, end_ns: int | None) -> "Signals":
         """The part of the log from ``start_ns`` to ``end_ns`` (None: its own start or end),
@@ -190,4 +203,6 @@ class Signals:
             self, start_ns=low, end_ns=high,
             series={name: s.where((s.times_ns >= low) & (s.times_ns <= high))
                     for name, s in self.series.items()},
-            markers=[m for m in self.markers if low <= m.time_ns <= high])
+            markers=[m for m in self.markers if low <= m.time_ns <= high],
+            autopilot_messages=[m for m in self.autopilot_messages
+                                if low <= m.time_ns <= high])

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from adapters.autopilot_messages import ulog_messages
 from adapters.collect import ColumnSource, SignalCollector
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
@@ -77,7 +78,8 @@ def _through_pyulog(path: Path, topics: set[str] | None) -> DecodedUlog:
                           cut_at=framing.cut_at, last_us=int(ulog.last_timestamp))
     for data in ulog.data_list:
         decoded.topics.setdefault(data.name, []).append(Instance(data.multi_id, data.data))
-    decoded.logged = [(int(m.timestamp), m.message) for m in ulog.logged_messages]
+    decoded.logged = [(int(m.timestamp), m.message, int(m.log_level))
+                      for m in ulog.logged_messages]
     decoded.dropouts_ms = [int(d.duration) for d in ulog.dropouts]
     return decoded
 
@@ -108,11 +110,13 @@ class UlogAdapter:
             times_ns, columns = _topic_columns(decoded.topics[topic])
             collector.add_columns(topic, times_ns, _column_source(columns), tuple(columns))
         if LOGGING_TOPIC in collector.topics:
-            for time_us, text in decoded.logged:
+            for time_us, text, _ in decoded.logged:
                 collector.add(LOGGING_TOPIC, time_us * 1000, {"message": text})
         _note_damage(decoded, collector)
-        return collector.finish("ulog", decoded.start_us * 1000, decoded.last_us * 1000,
-                                dict.fromkeys(decoded.topics, "ULog"))
+        signals = collector.finish("ulog", decoded.start_us * 1000, decoded.last_us * 1000,
+                                   dict.fromkeys(decoded.topics, "ULog"))
+        signals.autopilot_messages = ulog_messages(decoded.logged)
+        return signals
 
     def inventory(self, path: Path, fmt: str) -> LogInventory:
         decoded = decoded_ulog(path, None)

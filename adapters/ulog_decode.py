@@ -56,7 +56,7 @@ class Instance:
 class DecodedUlog:
     start_us: int
     topics: dict[str, list[Instance]] = field(default_factory=dict)
-    logged: list[tuple[int, str]] = field(default_factory=list)      # (µs, text)
+    logged: list[tuple[int, str, int]] = field(default_factory=list)   # (µs, text, level)
     dropouts_ms: list[int] = field(default_factory=list)
     corrupt: bool = False          # messages were skipped
     cut_at: int | None = None      # the file ends inside the message starting here
@@ -174,7 +174,7 @@ def decode_ulog(data: Any, wanted: set[str] | None) -> DecodedUlog:
             subscriptions[msg_id] = subscription
         elif kind == 76 and length >= 9:                                # L
             decoded.logged.append((struct.unpack_from("<Q", data, at + 4)[0],
-                                   _text(data[at + 12:end])))
+                                   _text(data[at + 12:end]), data[at + 3]))
         elif kind == 79 and length >= 2:                                # O
             decoded.dropouts_ms.append(struct.unpack_from("<H", data, at + 3)[0])
         at = end

@@ -84,7 +84,8 @@ def test_every_field_matches_pyulog(tmp_path, damaged, capsys):
     assert "wheels[1].axis.z" in decoded.topics["sample"][0].columns
     assert "_padding1[2]" in decoded.topics["sample"][0].columns      # kept, as pyulog does
     assert not any(n.startswith("_padding2") for n in decoded.topics["sample"][0].columns)
-    assert decoded.logged == [(int(m.timestamp), m.message) for m in reference.logged_messages]
+    assert decoded.logged == [(int(m.timestamp), m.message, int(m.log_level))
+                              for m in reference.logged_messages]
     assert decoded.dropouts_ms == [d.duration for d in reference.dropouts] == [35]
     assert (decoded.start_us, decoded.last_us) == (reference.start_timestamp,
                                                    reference.last_timestamp)

@@ -46,6 +46,7 @@ class AuditRecord:
     effort_onset_s: float | None = None
     effort_detected_at_s: float | None = None
     recommended_dms: tuple[str, ...] = ()
+    autopilot_alarms: tuple[str, ...] = ()   # trouble the vehicle's own software reported
     model: str | None = None             # the model's name
     model_path: str | None = None
     log_sha256: str | None = None
@@ -116,6 +117,8 @@ class AuditRecord:
             effort_detected_at_s=None if effort is None else effort.alarm_s,
             recommended_dms=() if report.active_diagnosis is None
             else report.active_diagnosis.recommended_dms,
+            autopilot_alarms=() if report.autopilot is None
+            else tuple(a.text for a in report.autopilot.alarms),
             model=report.model.name, model_path=report.model.path,
             log_sha256=stamp.log_sha256, result_file=stamp.result_file, seconds=stamp.seconds,
             bits={str(k): int(v) for k, v in report.b.items()},

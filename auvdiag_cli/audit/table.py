@@ -18,7 +18,7 @@ FIXED_COLUMNS = ["log", "format", "vehicle", "fleet_vehicle", "start_time_utc", 
                  "worst_g_ratio", "worst_g_signal", "segments", "routine_segments",
                  "substituted_signal", "weakened_thrust_fraction", "driven_harder",
                  "worst_effort_ratio", "worst_effort_actuator", "effort_onset_s",
-                 "effort_detected_at_s", "recommended_dms",
+                 "effort_detected_at_s", "recommended_dms", "autopilot_alarms",
                  "model", "error", "log_sha256", "result_file", "seconds"]
 
 
@@ -44,7 +44,8 @@ def table_row(record: AuditRecord) -> dict[str, object]:
         "worst_effort_actuator": record.worst_effort_actuator,
         "effort_onset_s": record.effort_onset_s,
         "effort_detected_at_s": record.effort_detected_at_s,
-        "recommended_dms": ";".join(record.recommended_dms), "model": record.model,
+        "recommended_dms": ";".join(record.recommended_dms),
+        "autopilot_alarms": ";".join(record.autopilot_alarms), "model": record.model,
         "error": record.error, "log_sha256": record.log_sha256,
         "result_file": record.result_file, "seconds": record.seconds}
     row |= {f"b_{name}": bit for name, bit in record.bits.items()}

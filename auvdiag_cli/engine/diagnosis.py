@@ -252,7 +252,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                                      *(a.kind for a in profile.actuators)])),
         effort_check=_check_effort(log, segments, judging, notes),
         change_check=change_check,
-        set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT))
+        set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT),
+        autopilot=log.autopilot_said)
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
                      case=_normal_case(profile), notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,

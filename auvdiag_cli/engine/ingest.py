@@ -4,6 +4,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from adapters import Signals, read_log
+from auvdiag_cli.engine.autopilot_words import AutopilotSaid, said_while_operating
 from auvdiag_cli.engine.flat_signals import (
     ABSENT,
     flat_input_notes,
@@ -20,6 +21,12 @@ from auvdiag_errors import LogError, LogNotOperating
 class IngestedLog:
     signals: Signals
     frame: AlignedFrame
+
+    @property
+    def autopilot_said(self) -> AutopilotSaid | None:
+        """What the vehicle's own software said while it operated."""
+        return said_while_operating(self.signals.autopilot_messages, self.signals.start_ns,
+                                    self.frame.time_s, self.frame.operating)
 
 
 # A stretch of a log on its own clock, in ns: (start, end), None for open at that end.

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun
+from auvdiag_cli.engine.autopilot_words import AutopilotSaid
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.change_columns import judged_by
 from auvdiag_cli.engine.command_check import CommandCheck
@@ -86,6 +87,7 @@ class Observations:
     effort_check: EffortCheck | None = None     # each actuator's share of its group's effort
     change_check: ChangeCheck | None = None     # the log against its own beginning
     set_points: tuple[str, ...] = ()            # commands that are set points, no actuator
+    autopilot: AutopilotSaid | None = None      # what the vehicle's own software said
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -248,6 +248,26 @@ class MethodPart:
 
 
 @dataclass(frozen=True, kw_only=True)
+class AlarmPart:
+    """A text of trouble the vehicle's own software wrote, as often as it repeated it."""
+
+    text: str
+    severity: int | None = None        # MAV_SEVERITY, 0 emergency … 4 warning; None: unsaid
+    first_s: float
+    last_s: float
+    times: int = 1
+
+
+@dataclass(frozen=True, kw_only=True)
+class AutopilotPart:
+    """What the vehicle's own software said while it operated (null: the log keeps none)."""
+
+    summary: str
+    alarms: tuple[AlarmPart, ...] = ()
+    other_messages: int = 0
+
+
+@dataclass(frozen=True, kw_only=True)
 class Report:
     schema_version: int = SCHEMA_VERSION
     tool: str = ""
@@ -281,6 +301,7 @@ class Report:
     actuators: ActuatorsPart | None = None
     active_diagnosis: ActivePart | None = None
     substitution: SubstitutionPart | None = None
+    autopilot: AutopilotPart | None = None
     model: ModelPart = field(default_factory=ModelPart)
     method: MethodPart = field(default_factory=MethodPart)
     notes: tuple[str, ...] = ()

@@ -11,11 +11,19 @@ from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.hypotheses import Hypothesis
-from auvdiag_cli.engine.results import EPOCH_CLOCK_NS, PAPER_ASSUMPTIONS, Diagnosis, SegmentResult
+from auvdiag_cli.engine.results import (
+    EPOCH_CLOCK_NS,
+    PAPER_ASSUMPTIONS,
+    Diagnosis,
+    SegmentResult,
+    Verdict,
+)
 from auvdiag_cli.engine.substitution import Substitution
 from auvdiag_cli.reports.report import (
     ActivePart,
     ActuatorsPart,
+    AlarmPart,
+    AutopilotPart,
     BudgetPart,
     ChangePart,
     ClosedLoopPart,
@@ -104,11 +112,22 @@ def build_report(diagnosis: Diagnosis) -> Report:
                                         b=dict(e.b), tested=tuple(e.tested), faulty=e.faulty)
                            for e in d.active.evidence),
             recommended_dms=tuple(d.active.recommended_dms), conflict=d.active.conflict),
-        substitution=_substitution(d.substitution), model=_model(d),
+        substitution=_substitution(d.substitution), autopilot=_autopilot(d), model=_model(d),
         method=MethodPart(g=G_FORMULA, window_samples=d.window_samples,
                           decision_window_s=d.decision_window_s,
                           assumptions=tuple(PAPER_ASSUMPTIONS)),
         notes=tuple(d.notes))
+
+
+def _autopilot(diagnosis: Diagnosis) -> AutopilotPart | None:
+    said = diagnosis.autopilot
+    if said is None:
+        return None
+    fault = diagnosis.verdict == Verdict.FAULT
+    return AutopilotPart(
+        summary=said.describe(fault, diagnosis.onset_s), other_messages=said.other_messages,
+        alarms=tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
+                               last_s=a.last_s, times=a.times) for a in said.alarms))
 
 
 def _model(diagnosis: Diagnosis) -> ModelPart:

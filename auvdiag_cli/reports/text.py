@@ -28,6 +28,8 @@ def summary_lines(report: Report) -> list[str]:
         lines += _fault_lines(r)
     else:
         lines.append("verdict: " + verdict_title(r))
+    if r.autopilot is not None:
+        lines.append(f"  autopilot: {r.autopilot.summary}")
     if coverage is not None:
         lines.append(f"  coverage: {coverage.engine().describe()}")
     lines += [f"  {who}: {why}" for who, why in by_reason(r.not_judged)]

@@ -34,6 +34,8 @@ def summary_facts(report: Report) -> list[tuple[str, str]]:
                   if report.component else f"b = {b} fits no row"))
     if report.hypotheses:
         facts.append(("Hypotheses", hypotheses_sentence(report.hypotheses)))
+    if report.autopilot:
+        facts.append(("Autopilot said", report.autopilot.summary))
     if report.coverage:
         facts.append(("Judged", report.coverage.summary))
     if report.not_judged:

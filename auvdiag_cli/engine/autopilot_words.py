@@ -1,0 +1,97 @@
+"""What the vehicle's own software said while it operated (`adapters.autopilot_messages`),
+beside the diagnosis: an autopilot that wrote "Potential Thrust Loss (3)" or "Leak
+Detected" has judged the log too, and a report that found nothing there must say so. The
+words never change the verdict; they are lined up with it."""
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from adapters.signals import AutopilotMessage
+
+WARNING_SEVERITY = 4          # MAV_SEVERITY_WARNING: this and the more severe are trouble
+# The words of a disarm ("Crash: Disarming") come as the operating time ends.
+AFTER_OPERATING_S = 2.0
+# For texts kept without a severity (a DataFlash MSG record): words of ArduPilot's and PX4's
+# warnings, and words of a warning that clears.
+TROUBLE = re.compile(r"thrust loss|crash|leak|failsafe|fail|emergency|error|glitch|lost|"
+                     r"unhealthy|vibration|battery|variance|critical|parachute|collision|"
+                     r"fence breach", re.IGNORECASE)
+CLEARED = re.compile(r"\b(cleared|resolved|restored|recovered)\b", re.IGNORECASE)
+SHOWN = 3                     # alarms a sentence quotes; the report lists them all
+
+
+def is_alarm(message: AutopilotMessage) -> bool:
+    if CLEARED.search(message.text):
+        return False
+    if message.severity is not None:
+        return message.severity <= WARNING_SEVERITY
+    return TROUBLE.search(message.text) is not None
+
+
+@dataclass(frozen=True)
+class SaidAlarm:
+    """One text of trouble, as often as the autopilot repeated it."""
+
+    text: str
+    severity: int | None
+    first_s: float               # seconds from the log's start
+    last_s: float
+    times: int
+
+
+@dataclass(frozen=True)
+class AutopilotSaid:
+    alarms: tuple[SaidAlarm, ...]      # by first time
+    other_messages: int                # what it said while operating that reports no trouble
+
+    def describe(self, fault: bool, onset_s: float | None) -> str:
+        if not self.alarms:
+            return "no warning or error while the vehicle operated" + (
+                f" ({self.other_messages} other message(s))" if self.other_messages else "")
+        quoted = "; ".join(_quoted(a, onset_s if fault else None)
+                           for a in self.alarms[:SHOWN])
+        more = (f"; and {len(self.alarms) - SHOWN} more in the report"
+                if len(self.alarms) > SHOWN else "")
+        if fault:
+            return quoted + more
+        return (f"reported trouble this diagnosis did not find: {quoted}{more}: look at the "
+                "log there")
+
+
+def _quoted(alarm: SaidAlarm, onset_s: float | None) -> str:
+    when = f"at {alarm.first_s:.1f} s"
+    if onset_s is not None:
+        gap = alarm.first_s - onset_s
+        when = (f"{abs(gap):.1f} s {'after' if gap >= 0 else 'before'} the onset "
+                f"({alarm.first_s:.1f} s)")
+    repeated = f", {alarm.times} times to {alarm.last_s:.1f} s" if alarm.times > 1 else ""
+    return f'"{alarm.text}" {when}{repeated}'
+
+
+def said_while_operating(messages: Sequence[AutopilotMessage], start_ns: int,
+                         time_s: np.ndarray, operating: np.ndarray) -> AutopilotSaid | None:
+    """The log's messages from while the vehicle operated (``operating`` on the grid
+    ``time_s``, seconds from ``start_ns``), or up to `AFTER_OPERATING_S` after; None where
+    the log holds none at all (a format without them)."""
+    if not messages:
+        return None
+    operating_s = time_s[operating] if operating.size == time_s.size else time_s
+    alarms: dict[str, SaidAlarm] = {}
+    others = 0
+    for message in sorted(messages, key=lambda m: m.time_ns):
+        at_s = (message.time_ns - start_ns) / 1e9
+        last = np.searchsorted(operating_s, at_s, side="right") - 1
+        if last < 0 or at_s - operating_s[last] > AFTER_OPERATING_S:
+            continue
+        if not is_alarm(message):
+            others += 1
+            continue
+        seen = alarms.get(message.text)
+        alarms[message.text] = (
+            SaidAlarm(message.text, message.severity, round(at_s, 3), round(at_s, 3), 1)
+            if seen is None else SaidAlarm(seen.text, seen.severity, seen.first_s,
+                                           round(at_s, 3), seen.times + 1))
+    return AutopilotSaid(tuple(alarms.values()), others)
