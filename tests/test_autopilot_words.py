@@ -14,6 +14,7 @@ import pytest
 from helpers import diagnose_json
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega
+from test_mcap_export import read_back
 from typer.testing import CliRunner
 
 from adapters import read_log
@@ -21,7 +22,9 @@ from adapters.autopilot_messages import error_text, ulog_messages
 from adapters.signals import AutopilotMessage
 from auvdiag_cli.cli import app
 from auvdiag_cli.engine.autopilot_words import is_alarm, said_while_operating
+from auvdiag_cli.fuzz.mutations import mutate
 from auvdiag_cli.vehicle.profile import load_profile
+from auvdiag_errors import AuvdiagError
 
 SAMPLES = Path(__file__).resolve().parents[1] / "sample_logs"
 ERR_TYPE = 200
@@ -138,7 +141,8 @@ def test_a_normal_verdict_says_what_the_autopilot_reported_that_it_did_not_find(
                                 [(80.0, THRUST_LOSS), (81.0, THRUST_LOSS)], [(80.0, 25, 1)])
     at_s = 80.0 - _first_record_us(log) / 1e6
     result = CliRunner().invoke(app, ["diagnose", str(log), "--json", str(tmp_path / "d.json"),
-                                      "--pdf", str(tmp_path / "d.pdf")])
+                                      "--pdf", str(tmp_path / "d.pdf"),
+                                      "--mcap", str(tmp_path / "d.mcap")])
     assert result.exit_code == 0, result.output
     report = json.loads((tmp_path / "d.json").read_text())
     assert report["verdict"] == "normal"
@@ -152,6 +156,11 @@ def test_a_normal_verdict_says_what_the_autopilot_reported_that_it_did_not_find(
     assert result.stdout.splitlines()[2].startswith(f"  autopilot: {said}")
     first = " ".join(pypdf.PdfReader(tmp_path / "d.pdf").pages[0].extract_text().split())
     assert f"Autopilot said: {said}" in first
+    # In Foxglove's Log panel, at the time the autopilot first said it, on the log's clock.
+    messages, _ = read_back(tmp_path / "d.mcap")
+    events = {body["message"]: t for t, body in messages["/auvdiag/events"]}
+    assert events[f"the autopilot said: {THRUST_LOSS} (2 times to {at_s + 1:.1f} s)"] == (
+        pytest.approx(80e9, abs=1e6))
 
 
 def test_a_fault_lines_the_autopilots_words_up_with_its_onset(tmp_path):
@@ -182,3 +191,31 @@ def test_an_audit_row_lists_the_trouble_the_autopilot_reported(tmp_path):
     assert rows.loc[str(fleet / "said.bin"), "autopilot_alarms"] == (
         f"{THRUST_LOSS};ERR leak failsafe: occurred")
     assert pd.isna(rows.loc[str(fleet / "quiet.bin"), "autopilot_alarms"])
+
+
+@pytest.mark.parametrize("suffix", ["bin", "tlog"])
+def test_damaged_words_are_read_or_refused_in_one_line(tmp_path, suffix):
+    """The texts and error records come from untrusted bytes: damaged anywhere (the fuzzer's
+    mutations), a log is read or refused as a log error, never crashes the reader."""
+    if suffix == "bin":
+        source = _with_dataflash_words(SAMPLES / "mission-large-ccw.bin", tmp_path / "w.bin",
+                                       [(t, THRUST_LOSS) for t in (5.0, 6.0)],
+                                       [(t, 25, 1) for t in (5.0, 6.0)])
+    else:
+        source = SAMPLES / "mission-fast-ccw.tlog"
+    data = source.read_bytes()
+    # The words sit at the file's end (bin) or its start (the tlog's banner): damage there.
+    region = data[-2000:] if suffix == "bin" else data[:20000]
+    sources = load_profile(Path("twin_burger")).sources
+    read = 0
+    for seed in range(150):
+        damaged, _ = mutate(region, seed)
+        log = tmp_path / f"damaged.{suffix}"
+        log.write_bytes(data[:-2000] + damaged if suffix == "bin" else damaged + data[20000:])
+        try:
+            signals = read_log(log, sources)
+        except AuvdiagError:
+            continue
+        read += 1
+        assert all(isinstance(m.text, str) for m in signals.autopilot_messages)
+    assert read > 20

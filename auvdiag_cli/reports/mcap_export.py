@@ -107,6 +107,10 @@ def _events(report: Report) -> Iterator[tuple[float, int, str]]:
     if report.detected_at_s is not None:
         found.append((report.detected_at_s, LOG_LEVEL_WARNING,
                       f"fault detected: {report.named or 'component not identified'}"))
+    if report.autopilot is not None:
+        found += [(a.first_s, LOG_LEVEL_WARNING, f"the autopilot said: {a.text}"
+                   + (f" ({a.times} times to {a.last_s:.1f} s)" if a.times > 1 else ""))
+                  for a in report.autopilot.alarms]
     yield from sorted(found)
 
 
