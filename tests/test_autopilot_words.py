@@ -132,6 +132,12 @@ def test_only_trouble_said_while_operating_is_kept_and_repeats_are_grouped():
     assert said_while_operating([], 0, time_s, operating) is None
     assert not is_alarm(AutopilotMessage(0, "EKF3 IMU0 is using GPS", 6))
     assert is_alarm(AutopilotMessage(0, "Lost manual control"))
+    # ArduCopter's thrust-loss check names a motor by its number: lined up with the verdict's.
+    assert said.describe(True, 11.0, "motor_3").endswith(
+        "Crash: Disarming\" 9.5 s after the onset (20.5 s): the autopilot's thrust-loss check "
+        "names motor 3 too")
+    assert said.describe(True, 11.0, "motor_1").endswith("names motor 3, not motor 1")
+    assert said.describe(True, 11.0, None).endswith("after the onset (20.5 s)")
     assert ulog_messages([(5, "Motor failure detected", ord("2"))]) == [
         AutopilotMessage(5000, "Motor failure detected", 2)]
 

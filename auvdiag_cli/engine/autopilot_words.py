@@ -21,6 +21,9 @@ TROUBLE = re.compile(r"thrust loss|crash|leak|failsafe|fail|emergency|error|glit
                      r"fence breach", re.IGNORECASE)
 CLEARED = re.compile(r"\b(cleared|resolved|restored|recovered)\b", re.IGNORECASE)
 SHOWN = 3                     # alarms a sentence quotes; the report lists them all
+# ArduCopter's thrust-loss check names the motor it drives to full output to make up for a
+# lost one, by its motor number: the actuator a profile names motor_N.
+THRUST_LOSS = re.compile(r"thrust loss \((\d+)\)", re.IGNORECASE)
 
 
 def is_alarm(message: AutopilotMessage) -> bool:
@@ -47,7 +50,14 @@ class AutopilotSaid:
     alarms: tuple[SaidAlarm, ...]      # by first time
     other_messages: int                # what it said while operating that reports no trouble
 
-    def describe(self, fault: bool, onset_s: float | None) -> str:
+    @property
+    def motors_named(self) -> tuple[str, ...]:
+        """The actuators the autopilot's own thrust-loss check named (motor_N)."""
+        found = (THRUST_LOSS.search(a.text) for a in self.alarms)
+        return tuple(dict.fromkeys(f"motor_{m.group(1)}" for m in found if m))
+
+    def describe(self, fault: bool, onset_s: float | None, component: str | None = None
+                 ) -> str:
         if not self.alarms:
             return "no warning or error while the vehicle operated" + (
                 f" ({self.other_messages} other message(s))" if self.other_messages else "")
@@ -56,9 +66,20 @@ class AutopilotSaid:
         more = (f"; and {len(self.alarms) - SHOWN} more in the report"
                 if len(self.alarms) > SHOWN else "")
         if fault:
-            return quoted + more
+            return quoted + more + _agreement(self.motors_named, component)
         return (f"reported trouble this diagnosis did not find: {quoted}{more}: look at the "
                 "log there")
+
+
+def _agreement(named: tuple[str, ...], component: str | None) -> str:
+    """Whether the autopilot's thrust-loss check named the part the diagnosis names."""
+    if not named or component is None:
+        return ""
+    if component in named:
+        return f": the autopilot's thrust-loss check names {component.replace('_', ' ')} too"
+    return (f": the autopilot's thrust-loss check names "
+            f"{' and '.join(n.replace('_', ' ') for n in named)}, not "
+            f"{component.replace('_', ' ')}")
 
 
 def _quoted(alarm: SaidAlarm, onset_s: float | None) -> str:

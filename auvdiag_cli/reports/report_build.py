@@ -125,7 +125,8 @@ def _autopilot(diagnosis: Diagnosis) -> AutopilotPart | None:
         return None
     fault = diagnosis.verdict == Verdict.FAULT
     return AutopilotPart(
-        summary=said.describe(fault, diagnosis.onset_s), other_messages=said.other_messages,
+        summary=said.describe(fault, diagnosis.onset_s, diagnosis.component),
+        other_messages=said.other_messages,
         alarms=tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
                                last_s=a.last_s, times=a.times) for a in said.alarms))
 
