@@ -225,3 +225,27 @@ def test_damaged_words_are_read_or_refused_in_one_line(tmp_path, suffix):
         read += 1
         assert all(isinstance(m.text, str) for m in signals.autopilot_messages)
     assert read > 20
+
+
+def test_train_and_calibrate_warn_of_a_normal_log_the_autopilot_found_trouble_in(tmp_path):
+    from auvdiag_cli import api
+    from auvdiag_cli.jobs.training_logs import read_for_training
+
+    log = _with_dataflash_words(SAMPLES / "mission-large-ccw.bin", tmp_path / "said.bin",
+                                [(80.0, "Leak Detected")], [])
+    profile = load_profile(Path("twin_burger"))
+    said: list[str] = []
+    read_for_training(log, profile, said.append)
+    at_s = 80.0 - _first_record_us(log) / 1e6
+    warning = (f'warning: said.bin: the autopilot reported trouble while it operated: "Leak '
+               f'Detected" at {at_s:.1f} s: a log given as normal should hold no fault '
+               "(--healthy keeps only a log's healthy part)")
+    assert said == [warning]
+    # Its healthy part alone holds none.
+    said.clear()
+    read_for_training(log, profile, said.append, part=(None, 70_000_000_000))
+    assert said == []
+    calibrating: list[str] = []
+    api.calibrate([log, SAMPLES / "mission-large-ccw.bin"], profile,
+                  api.load_model(None, profile), progress=calibrating.append)
+    assert calibrating.count(warning) == 1

@@ -56,19 +56,32 @@ class AutopilotSaid:
         found = (THRUST_LOSS.search(a.text) for a in self.alarms)
         return tuple(dict.fromkeys(f"motor_{m.group(1)}" for m in found if m))
 
+    def quoted(self, onset_s: float | None = None) -> str:
+        """The first texts of trouble, each with its time (from the onset where given)."""
+        return "; ".join(_quoted(a, onset_s) for a in self.alarms[:SHOWN]) + (
+            f"; and {len(self.alarms) - SHOWN} more" if len(self.alarms) > SHOWN else "")
+
     def describe(self, fault: bool, onset_s: float | None, component: str | None = None
                  ) -> str:
         if not self.alarms:
             return "no warning or error while the vehicle operated" + (
                 f" ({self.other_messages} other message(s))" if self.other_messages else "")
-        quoted = "; ".join(_quoted(a, onset_s if fault else None)
-                           for a in self.alarms[:SHOWN])
-        more = (f"; and {len(self.alarms) - SHOWN} more in the report"
-                if len(self.alarms) > SHOWN else "")
+        quoted = self.quoted(onset_s if fault else None)
+        more = " in the report" if len(self.alarms) > SHOWN else ""
         if fault:
             return quoted + more + _agreement(self.motors_named, component)
         return (f"reported trouble this diagnosis did not find: {quoted}{more}: look at the "
                 "log there")
+
+
+def trouble_in_normal_log(name: str, said: AutopilotSaid | None) -> str | None:
+    """The warning for a log given as normal in which the autopilot reported trouble while
+    it operated (None where it reported none)."""
+    if said is None or not said.alarms:
+        return None
+    return (f"warning: {name}: the autopilot reported trouble while it operated: "
+            f"{said.quoted()}: a log given as normal should hold no fault (--healthy keeps "
+            "only a log's healthy part)")
 
 
 def _agreement(named: tuple[str, ...], component: str | None) -> str:

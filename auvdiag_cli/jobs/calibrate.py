@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from auvdiag_cli.digest import log_digest
+from auvdiag_cli.engine.autopilot_words import trouble_in_normal_log
 from auvdiag_cli.engine.change_check import STRIDE_STEPS
 from auvdiag_cli.engine.change_columns import change_judged
 from auvdiag_cli.engine.change_signatures import judged_within
@@ -153,6 +154,10 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = model.with_entries(thresholds=profile.thresholds)
     diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
+    for path, diagnosis in zip(normal_logs, diagnoses, strict=True):
+        trouble = trouble_in_normal_log(path.name, diagnosis.autopilot)
+        if trouble:
+            progress(trouble)
     in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
                                                       diagnoses)
     judged = replay_judged(model, profile)

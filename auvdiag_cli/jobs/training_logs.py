@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from auvdiag_cli.engine.autopilot_words import trouble_in_normal_log
 from auvdiag_cli.engine.flat_signals import held_at, typical_inputs
 from auvdiag_cli.engine.ingest import WHOLE, Part, ingest
 from auvdiag_cli.jobs.healthy import NO_HEALTHY_PARTS, HealthyParts, announce_healthy_parts
@@ -35,6 +36,9 @@ def read_for_training(path: Path, profile: Profile, progress: Callable[[str], No
     frame = log.frame
     for note in frame.slow_commands:
         progress(f"warning: {path.name}: {note}")
+    trouble = trouble_in_normal_log(path.name, log.autopilot_said)
+    if trouble:
+        progress(trouble)
     rates = {}
     for name, series in log.signals.series.items():
         steps = np.diff(series.times_ns)
