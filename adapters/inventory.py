@@ -2,6 +2,8 @@
 
 from dataclasses import dataclass, field
 
+from adapters.signals import AutopilotMessage
+
 
 @dataclass(frozen=True)
 class TopicInfo:
@@ -20,6 +22,8 @@ class LogInventory:
     end_ns: int | None
     topics: list[TopicInfo]
     notes: list[str] = field(default_factory=list)
+    # What the vehicle's own software said, over the whole log (formats that keep it).
+    autopilot_messages: list[AutopilotMessage] = field(default_factory=list)
 
     @property
     def duration_s(self) -> float | None:

@@ -138,7 +138,8 @@ def _inventory(fmt: str, scan: RecordIndex, kind: str) -> LogInventory:
                      + ", ".join(f"{name} {n}" for name, n in failed.items()))
     return LogInventory(fmt, None if first_us is None else first_us * 1000,
                         None if last_us is None else last_us * 1000,
-                        [topic for topic, _ in described], notes)
+                        [topic for topic, _ in described], notes,
+                        tlog_messages(scan) if fmt == "tlog" else dataflash_messages(scan))
 
 
 def _topic_info(scan: RecordIndex, fmt: str, kind: str, name: str, count: int

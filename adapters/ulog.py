@@ -132,7 +132,7 @@ class UlogAdapter:
                                     ("message",)))
         notes = [DAMAGE_TEXT] if decoded.corrupt else []
         return LogInventory("ulog", decoded.start_us * 1000, decoded.last_us * 1000, topics,
-                            notes)
+                            notes, ulog_messages(decoded.logged))
 
 DEFINITION_KINDS = b"BFIMPQ"     # flag bits, formats, info, parameters
 DATA_KINDS = b"ALC"              # subscriptions and text messages begin the data section

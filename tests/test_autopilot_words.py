@@ -162,6 +162,10 @@ def test_a_normal_verdict_says_what_the_autopilot_reported_that_it_did_not_find(
     assert result.stdout.splitlines()[2].startswith(f"  autopilot: {said}")
     first = " ".join(pypdf.PdfReader(tmp_path / "d.pdf").pages[0].extract_text().split())
     assert f"Autopilot said: {said}" in first
+    # `inspect` says it over the whole log, before any model is chosen.
+    shown = CliRunner().invoke(app, ["inspect", str(log)])
+    assert (f'  autopilot reported trouble: "{THRUST_LOSS}" at 80.0 s, 2 times to 81.0 s; '
+            '"ERR thrust loss check: occurred" at 80.0 s') in shown.stdout.splitlines()
     # In Foxglove's Log panel, at the time the autopilot first said it, on the log's clock.
     messages, _ = read_back(tmp_path / "d.mcap")
     events = {body["message"]: t for t, body in messages["/auvdiag/events"]}

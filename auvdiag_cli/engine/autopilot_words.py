@@ -4,7 +4,7 @@ Detected" has judged the log too, and a report that found nothing there must say
 words never change the verdict; they are lined up with it."""
 
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -110,15 +110,26 @@ def said_while_operating(messages: Sequence[AutopilotMessage], start_ns: int,
     """The log's messages from while the vehicle operated (``operating`` on the grid
     ``time_s``, seconds from ``start_ns``), or up to `AFTER_OPERATING_S` after; None where
     the log holds none at all (a format without them)."""
+    operating_s = time_s[operating] if operating.size == time_s.size else time_s
+
+    def while_operating(at_s: float) -> bool:
+        last = np.searchsorted(operating_s, at_s, side="right") - 1
+        return bool(last >= 0 and at_s - operating_s[last] <= AFTER_OPERATING_S)
+
+    return said_in(messages, start_ns, while_operating)
+
+
+def said_in(messages: Sequence[AutopilotMessage], start_ns: int,
+            kept: Callable[[float], bool] = lambda _: True) -> AutopilotSaid | None:
+    """The messages at the times ``kept`` takes (seconds from ``start_ns``; all by default),
+    each text of trouble once with how often it was said; None where there are none."""
     if not messages:
         return None
-    operating_s = time_s[operating] if operating.size == time_s.size else time_s
     alarms: dict[str, SaidAlarm] = {}
     others = 0
     for message in sorted(messages, key=lambda m: m.time_ns):
         at_s = (message.time_ns - start_ns) / 1e9
-        last = np.searchsorted(operating_s, at_s, side="right") - 1
-        if last < 0 or at_s - operating_s[last] > AFTER_OPERATING_S:
+        if not kept(at_s):
             continue
         if not is_alarm(message):
             others += 1

@@ -3,6 +3,7 @@
 import textwrap
 
 from adapters import TopicInfo
+from auvdiag_cli.engine.autopilot_words import said_in
 from auvdiag_cli.engine.results import EPOCH_CLOCK_NS
 from auvdiag_cli.jobs.inspect import Inspection
 from auvdiag_cli.reports.json_report import utc_text, verdict_title
@@ -167,6 +168,11 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     setup = inspection.autopilot
     if setup is not None:
         lines.append(f"  vehicle   {setup.vehicle or 'not said'} ({setup.evidence})")
+    said = said_in(inv.autopilot_messages, inv.start_ns or 0)
+    if said is not None:
+        lines.append("  autopilot " + (f"reported trouble: {said.quoted()}" if said.alarms
+                                       else f"no warning or error ({said.other_messages} "
+                                       "message(s))"))
     lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'mean rate':>9}")
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
