@@ -160,8 +160,11 @@ def test_a_normal_verdict_says_what_the_autopilot_reported_that_it_did_not_find(
             f"2 times to {at_s + 1:.1f} s")
     assert autopilot["summary"].startswith(said)
     assert result.stdout.splitlines()[2].startswith(f"  autopilot: {said}")
-    first = " ".join(pypdf.PdfReader(tmp_path / "d.pdf").pages[0].extract_text().split())
-    assert f"Autopilot said: {said}" in first
+    pages = [" ".join(page.extract_text().split())
+             for page in pypdf.PdfReader(tmp_path / "d.pdf").pages]
+    assert f"Autopilot said: {said}" in pages[0]
+    # The time-history pages mark when it said it.
+    assert all("the autopilot reported trouble" in page for page in pages[1:])
     # `inspect` says it over the whole log, before any model is chosen.
     shown = CliRunner().invoke(app, ["inspect", str(log)])
     assert (f'  autopilot reported trouble: "{THRUST_LOSS}" at 80.0 s, 2 times to 81.0 s; '

@@ -28,6 +28,10 @@ def _mark_events(ax: "Axes", report: Report, label: bool) -> None:
                              (report.detected_at_s, COLOURS["alarm"], "detected")):
         if at is not None:
             ax.axvline(at, color=colour, ls="--", lw=1.0, label=text if label else None)
+    said = report.autopilot.alarms if report.autopilot is not None else ()
+    for number, alarm in enumerate(said):
+        ax.axvline(alarm.first_s, color=COLOURS["autopilot"], ls=":", lw=1.0,
+                   label="the autopilot reported trouble" if label and not number else None)
 
 
 def _figure_legend(figure: "Figure", axes: list["Axes"]) -> None:

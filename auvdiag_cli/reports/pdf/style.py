@@ -20,6 +20,7 @@ COLOURS = {
     "threshold": "#c62828",
     "alarm": "#c62828",              # b = 1, detection
     "onset": "#6a1b9a",
+    "autopilot": "#37474f",          # a text of trouble the vehicle's own software wrote
     "dms": "#9e9e9e",                # DMS segments
     "closed_loop": "#00838f",
     "healthy": "#2e7d32",            # the model of the healthy vehicle from the onset
