@@ -153,11 +153,7 @@ def calibrate(model: LoadedModel, profile: Profile, normal_logs: Sequence[Path],
     digests = [log_digest(p) for p in normal_logs]
     # Judge the calibration logs without any earlier calibration: raw g is what counts.
     base = model.with_entries(thresholds=profile.thresholds)
-    diagnoses = [diagnose_ingested(log, profile, base) for log in ingested]
-    for path, diagnosis in zip(normal_logs, diagnoses, strict=True):
-        trouble = trouble_in_normal_log(path.name, diagnosis.autopilot)
-        if trouble:
-            progress(trouble)
+    diagnoses = _diagnosed(normal_logs, ingested, profile, base, progress)
     in_sample, widening, per_log, labels = _g_per_log(model, profile, normal_logs, digests,
                                                       diagnoses)
     judged = replay_judged(model, profile)
@@ -280,6 +276,18 @@ def _apply_budget(model: LoadedModel, profile: Profile, budget: FalseAlarmBudget
         model.update_entries(command_relations=with_command_thresholds(
             relations, fitted.thresholds("command"), profile.command_names))
     return fitted
+
+
+def _diagnosed(paths: Sequence[Path], logs: Sequence[IngestedLog], profile: Profile,
+               model: LoadedModel, progress: Callable[[str], None]) -> list[Diagnosis]:
+    """Each normal log diagnosed, with a warning for each in which the autopilot reported
+    trouble while it operated."""
+    diagnoses = [diagnose_ingested(log, profile, model) for log in logs]
+    for path, diagnosis in zip(paths, diagnoses, strict=True):
+        trouble = trouble_in_normal_log(path.name, diagnosis.autopilot)
+        if trouble:
+            progress(trouble)
+    return diagnoses
 
 
 def _with_budget(modes: Sequence[ModeCalibration], fitted: BudgetThresholds,
