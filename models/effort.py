@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from models.chi_square import largest_spread_factor
+from models.effort_directions import judged_directions
 from models.sign_test import median_lower_bound
 from models.student_t import quantile
 
@@ -356,15 +357,6 @@ def widening(fit: GroupFit) -> float:
     return 1.0 if bound is None or bound <= reference else float(np.nanmedian(scatter)) / reference
 
 
-def weakness_directions(members: int) -> np.ndarray:
-    """(members, members): row i, the unit direction in which member i's weakness moves the
-    group's departures: its own share up, the others' down alike (they average to one)."""
-    if members < 2:
-        return np.eye(members)
-    directions = np.eye(members) - 1.0 / members
-    return np.asarray(directions / np.linalg.norm(directions, axis=1, keepdims=True))
-
-
 def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None,
                   span_s: float | None = None, shares: np.ndarray | None = None
                   ) -> np.ndarray:
@@ -390,7 +382,7 @@ def rise_judged(z_threshold: float, sigma: np.ndarray, shares: np.ndarray) -> np
     members = len(sigma)
     # Member i's share up by r, the others' down by r / (m - 1): its statistic is linear in r.
     pattern = (np.eye(members) * members - 1.0) / max(1, members - 1)
-    per_unit = np.einsum("ij,ij->i", pattern / sigma, weakness_directions(members))
+    per_unit = np.einsum("ij,ij->i", pattern / sigma, judged_directions(members))
     return np.asarray(z_threshold / per_unit / shares)
 
 

@@ -25,7 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from models.effort import EffortGroup, weakness_directions
+from models.effort import EffortGroup
+from models.effort_directions import weakness_directions
 
 REACH_TOLERANCE = 1e-9     # of the largest singular value: a direction the mix cannot drive
 

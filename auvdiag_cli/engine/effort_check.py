@@ -38,9 +38,9 @@ from models.effort import (
     Thresholds,
     expected_share,
     smallest_rise,
-    weakness_directions,
     window_shares,
 )
+from models.effort_directions import judged_directions, weakness_directions
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
 
@@ -252,7 +252,7 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
     window = setup.window_steps(dt_s)
     spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
-    toward = weakness_directions(len(setup.group.members))
+    toward = judged_directions(len(setup.group.members))
     # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
     # window (a sixth of a typical log); each start still has a window of the log before it
     # and WINDOWS_AFTER_START after it, and the threshold allows for every start tried.
