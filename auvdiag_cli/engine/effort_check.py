@@ -5,9 +5,9 @@ which the controller hides from the motion. A share that falls while another ris
 normalisation (the shares of a group average to one), never a fault of its own.
 
 Each test judges, per actuator, the group's departures (each in units of its σ) projected
-on that actuator's signature (`models.effort.weakness_directions`): a weak actuator's own
-share rises while the others fall, and the projection gathers both, where its own
-departure alone would leave the others' evidence out. Two tests share the false-alarm
+on that actuator's signature (`models.effort_directions.judged_directions`): a weak
+actuator's own share rises while the others fall; the departures sum to zero, so the
+projection is scaled to the unit variance Student's t assumes. Two tests share the false-alarm
 budget: the departure over the whole log's steady time from the normal logs' share, and
 (for a fault that begins during the log) the departure of the span from each later start
 to the end from the log's own span before that start. The second is blind to the log's own
