@@ -256,3 +256,24 @@ def test_train_and_calibrate_warn_of_a_normal_log_the_autopilot_found_trouble_in
     api.calibrate([log, SAMPLES / "mission-large-ccw.bin"], profile,
                   api.load_model(None, profile), progress=calibrating.append)
     assert calibrating.count(warning) == 1
+
+
+def test_a_px4_logs_messages_keep_their_level_and_reach_the_report(make_log, tmp_path):
+    """PX4 logs its messages with a syslog level ('2' critical); the simulated dive's own
+    (its segment markers) are informational, so only the critical one is trouble."""
+    source = make_log("paper-normal", 11, "ulog")
+    profile = load_profile()
+    start_ns = read_log(source, profile.sources).start_ns
+    said_us = start_ns // 1000 + 50_000_000
+    text = b"Motor failure detected"
+    payload = bytes([ord("2")]) + struct.pack("<Q", said_us) + text
+    log = tmp_path / "said.ulg"
+    log.write_bytes(source.read_bytes() + struct.pack("<HB", len(payload), ord("L")) + payload)
+    messages = read_log(log, profile.sources).autopilot_messages
+    assert (said_us * 1000, "Motor failure detected", 2) in [
+        (m.time_ns, m.text, m.severity) for m in messages]
+    assert all(m.severity == 6 for m in messages if m.text != "Motor failure detected")
+    code, report = diagnose_json(log)
+    assert code == 0
+    assert [(a["text"], a["severity"], a["first_s"]) for a in report["autopilot"]["alarms"]] == [
+        ("Motor failure detected", 2, 50.0)]
