@@ -204,6 +204,12 @@ def test_an_audit_row_lists_the_trouble_the_autopilot_reported(tmp_path):
     assert rows.loc[str(fleet / "said.bin"), "autopilot_alarms"] == (
         f"{THRUST_LOSS};ERR leak failsafe: occurred")
     assert pd.isna(rows.loc[str(fleet / "quiet.bin"), "autopilot_alarms"])
+    # The fleet summary lists the log whose autopilot reported what the diagnosis did not find.
+    summary = " ".join(" ".join(page.extract_text().split()) for page in
+                       pypdf.PdfReader(tmp_path / "out" / "audit.pdf").pages)
+    assert ("Trouble the autopilot reported that the diagnosis did not find said.bin (normal): "
+            f"{THRUST_LOSS}; ERR leak failsafe: occurred") in summary
+    assert "quiet.bin (normal)" not in summary
 
 
 @pytest.mark.parametrize("suffix", ["bin", "tlog"])

@@ -63,6 +63,12 @@ def summary_lines(rows: Sequence[AuditRecord], skipped: Sequence[tuple[Path, str
             when = "" if r.onset_s is None else f", onset {r.onset_s:.1f} s"
             lines += paragraph(f"{Path(r.log).name}: {what}{when}", family="monospace",
                                size=8.5)
+    unseen = [r for r in rows if r.autopilot_alarms and _verdict(r) != "fault"]
+    if unseen:
+        lines += heading("Trouble the autopilot reported that the diagnosis did not find")
+        for r in unseen:
+            lines += paragraph(f"{Path(r.log).name} ({_verdict(r)}): "
+                               + "; ".join(r.autopilot_alarms), family="monospace", size=8.5)
     errors = [r for r in rows if r.error]
     if errors:
         lines += heading("Logs that could not be analysed")
