@@ -11,7 +11,9 @@ import numpy as np
 
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
-from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve
+from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
+from adapters.ros_words import WordsRead
+from adapters.ros_words import as_text as _text  # one reading of a logged text
 from adapters.signals import (
     Damage,
     FieldSource,
@@ -100,10 +102,8 @@ def _resolves(message: Any, path: str) -> bool:
     return True
 
 
-def _text(value: Any) -> str:
-    if isinstance(value, bytes):
-        value = value.split(b"\0", 1)[0].decode("utf-8", "replace")
-    return str(value).rstrip("\0").strip()
+def _field_of(message: Any, path: str) -> Any:
+    return field_getter(path)(message)
 
 
 class SignalCollector:
@@ -117,6 +117,7 @@ class SignalCollector:
         self.path, self.sources = path, sources
         self.wanted = sources.wanted
         self.extractors = [_Extractor(name, source) for name, source in self.wanted.items()]
+        self.words = WordsRead()
         self._apply(Resolution(normalised(sources.namespace or ROOT),
                                {topic: topic for topic in sources.topics}))
         self.namespace_fixed = False      # set once the log's topics decided the namespace
@@ -160,7 +161,9 @@ class SignalCollector:
             self.by_topic.setdefault(self.names[extractor.source.topic], []).append(extractor)
         segment = self.sources.segment
         self.segment_topic = None if segment is None else self.names[segment.topic]
-        self.log_names = set(self.names.values())
+        self.word_topics = {word.topic if word.at_root else under(self.namespace, word.topic):
+                            word for word in self.sources.words}
+        self.log_names = set(self.names.values()) | self.word_topics.keys()
 
     @property
     def topics(self) -> set[str]:
@@ -202,11 +205,24 @@ class SignalCollector:
         segment = self.sources.segment
         if segment is not None and self.segment_topic == topic:
             paths.append(segment.field)
+        word = self.word_topics.get(topic)
+        if word is not None:
+            paths += [word.text, word.level, *([word.node] if word.node else [])]
         return list(dict.fromkeys(paths))
+
+    def _only_words(self, topic: str) -> bool:
+        """The topic is read for what the vehicle's software said, and for nothing else (its
+        messages are not counted among the profile's)."""
+        return topic in self.word_topics and topic not in self.by_topic \
+            and topic != self.segment_topic
 
     def add(self, topic: str, time_ns: int, message: Any) -> None:
         if not self.accepts_time(time_ns):
             return
+        if topic in self.word_topics:
+            self.words.add_message(self.word_topics[topic], time_ns, message, _field_of)
+            if self._only_words(topic):
+                return
         self.count += 1
         segment = self.sources.segment
         if segment is not None and topic == self.segment_topic and self.segment_get is not None:
@@ -235,6 +251,10 @@ class SignalCollector:
         message types into arrays). Same result as `add` per message. ``fields``: the
         paths these messages offer (for errors, and to find sensor instances)."""
         rows = times_ns.size
+        if topic in self.word_topics:
+            self.words.add_columns(self.word_topics[topic], times_ns, column)
+            if self._only_words(topic):
+                return
         self.count += rows
         segment = self.sources.segment
         if segment is not None and topic == self.segment_topic:
@@ -340,7 +360,7 @@ class SignalCollector:
                        end_ns=0 if last is None else last,
                        series=series, markers=self.markers, topics=topics, notes=self.notes,
                        damage=self.damage, messages_read=self.count,
-                       namespace=self.namespace)
+                       namespace=self.namespace, autopilot_messages=self.words.messages())
 
     def _use_fallbacks(self) -> None:
         """A signal without a message of its own source takes its fallback's samples."""

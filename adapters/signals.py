@@ -63,7 +63,7 @@ class SegmentSource:
     prefix: str = ""
 
 
-_Source = TypeVar("_Source", FieldSource, SegmentSource)
+_Source = TypeVar("_Source", FieldSource, SegmentSource, "WordSource")
 
 # The reserved signal that says when the vehicle is operating (armed, under way): where a
 # profile names one, only that time is trained on and judged.
@@ -90,6 +90,21 @@ def fallback_name(signal: str) -> str:
 
 
 @dataclass(frozen=True)
+class WordSource:
+    """A topic on which the vehicle's software logs texts (`adapters.ros_words`): the field
+    paths of the text, of its level and of who said it."""
+
+    topic: str
+    text: str
+    level: str
+    node: str | None = None
+    at_root: bool = False              # global (``/rosout``): never under a namespace
+    # (level as logged, MAVLink severity or None); None: the level is MAVLink's severity.
+    severities: tuple[tuple[int, int | None], ...] | None = None
+    only_without: str | None = None    # read only where this topic gave no message
+
+
+@dataclass(frozen=True)
 class LogSources:
     """What an adapter must extract: one source per signal, plus the segment markers (and for
     CSV logs, the time column)."""
@@ -106,6 +121,8 @@ class LogSources:
     # Signals a log may lack (a profile's measured inputs, which the model can hold at their
     # typical value): no topic, column or message of theirs is no error.
     optional: frozenset[str] = frozenset()
+    # What the vehicle's software said, read where the log holds it (ROS: `/rosout`).
+    words: tuple[WordSource, ...] = ()
 
     @property
     def wanted(self) -> dict[str, FieldSource]:
@@ -120,7 +137,8 @@ class LogSources:
 
         return replace(self, signals={n: moved(s) for n, s in self.signals.items()},
                        fallbacks={n: moved(s) for n, s in self.fallbacks.items()},
-                       segment=None if self.segment is None else moved(self.segment))
+                       segment=None if self.segment is None else moved(self.segment),
+                       words=tuple(w if w.at_root else moved(w) for w in self.words))
 
     @property
     def topics(self) -> set[str]:

@@ -273,7 +273,7 @@ def parse_profile(data: dict[str, Any], source_path: str) -> Profile:
     dms_table = top.sub("dms") if "dms" in data else TableReader({}, "dms")
     dms = {name: _dms(dms_table.sub(name), name, len(commands)) for name in dms_table.names()}
     sources_table = top.sub("sources")
-    sources = {family: log_sources(sources_table.sub(family), signal_names, optional)
+    sources = {family: log_sources(sources_table.sub(family), signal_names, optional, family)
                for family in sources_table.names()}
     navigation = _navigation(top.sub("navigation"), sensor_names) if "navigation" in data \
         else None

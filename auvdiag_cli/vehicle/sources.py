@@ -4,6 +4,7 @@ and a CSV clock."""
 
 from collections.abc import Sequence
 
+from adapters.ros_words import ROS_WORD_SOURCES
 from adapters.signals import (
     CLOCK_REFERENCE,
     OPERATING,
@@ -65,9 +66,10 @@ def _operating(reader: TableReader) -> tuple[FieldSource, FieldSource | None]:
     return _field_source(rows[0]), _field_source(rows[1]) if len(rows) == 2 else None
 
 
-def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence[str] = ()
-                ) -> LogSources:
-    """The family's sources of ``signal_names``; a log may lack those of ``optional``."""
+def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence[str] = (),
+                family: str = "") -> LogSources:
+    """The family's sources of ``signal_names``; a log may lack those of ``optional``. A
+    ROS log's own words (`/rosout`, mavros' status texts) are read wherever it has them."""
     signals_table = reader.sub("signals")
     signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
     fallbacks = {}
@@ -93,4 +95,5 @@ def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence
                                f"{', '.join(TIME_UNITS)}, got {time.unit!r}")
     # ROS: the namespace the topics are under ("" the root); found from the log if unset.
     namespace = reader.get("namespace", str, None)
-    return LogSources(signals, segment, time, fallbacks, namespace, frozenset(optional))
+    return LogSources(signals, segment, time, fallbacks, namespace, frozenset(optional),
+                      words=ROS_WORD_SOURCES if family == "ros" else ())

@@ -60,17 +60,22 @@ class ExtraTopic:
     msgtype: str
     times_ns: Sequence[int]
     build: Callable[[Any, int], Any]
+    definition: str | None = None      # the type's .msg text, where the type store lacks it
 
 
 class RosMessages:
     """Builds and serialises the dive's messages with a rosbags type store."""
 
-    def __init__(self, ros1: bool, topics: dict[str, str]) -> None:
-        from rosbags.typesys import Stores, get_typestore
+    def __init__(self, ros1: bool, topics: dict[str, str], extra: Sequence[ExtraTopic] = ()
+                 ) -> None:
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
         self.ros1 = ros1
         self.topics = topics
         self.store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+        for topic in extra:
+            if topic.definition is not None:
+                self.store.register(get_types_from_msg(topic.definition, topic.msgtype))
         self.types = self.store.types
         self.sequence = 0
 
@@ -157,7 +162,7 @@ def _all_topics(profile: Profile, extra: Sequence[ExtraTopic]) -> list[tuple[str
 def write_rosbag(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
                  extra: Sequence[ExtraTopic] = ()) -> None:
     """ROS 1 bag (``bag``, lz4 chunks) or ROS 2 bag (``db3``; ``ros2-mcap`` with zstd chunks)."""
-    messages = RosMessages(fmt == "bag", ros_topics(profile))
+    messages = RosMessages(fmt == "bag", ros_topics(profile), extra)
     writer = _open_rosbag_writer(path, fmt)
     with writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=messages.store)
@@ -189,7 +194,7 @@ def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
     """Standalone MCAP, profile ros2: ros2msg schemas and CDR messages, zstd chunks."""
     from mcap.writer import CompressionType, Writer
 
-    messages = RosMessages(False, ros_topics(profile))
+    messages = RosMessages(False, ros_topics(profile), extra)
     with path.open("wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="auvdiag simulate")

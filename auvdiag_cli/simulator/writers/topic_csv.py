@@ -32,20 +32,19 @@ def _flattened(value: Any, prefix: str) -> Iterator[tuple[str, Any]]:
 
 
 def export_topic_csvs(bag: Path, folder: Path) -> None:
-    """Every topic of the ROS 1 ``bag`` as ``folder/<folder name>-<topic>.csv``."""
-    from rosbags.rosbag1 import Reader
-    from rosbags.typesys import Stores, get_typestore
+    """Every topic of the ROS 1 ``bag`` as ``folder/<folder name>-<topic>.csv``, each message
+    decoded by the definition the bag carries (as `rostopic echo -p` does)."""
+    from rosbags.highlevel import AnyReader
 
-    store = get_typestore(Stores.ROS1_NOETIC)
     folder.mkdir(parents=True)
-    with Reader(bag) as reader:
+    with AnyReader([bag]) as reader:
         for connection in reader.connections:
             name = connection.topic.strip("/").replace("/", "-")
             with (folder / f"{folder.name}-{name}.csv").open("w", newline="") as stream:
                 out = csv.writer(stream)
                 header_written = False
                 for _, time_ns, raw in reader.messages(connections=[connection]):
-                    message = store.deserialize_ros1(raw, connection.msgtype)
+                    message = reader.deserialize(raw, connection.msgtype)
                     cells = list(_flattened(message, "field"))
                     if not header_written:
                         out.writerow(["%time", *(column for column, _ in cells)])

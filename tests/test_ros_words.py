@@ -1,0 +1,178 @@
+"""A ROS vehicle's own words: its nodes' `/rosout` log messages (ROS 1 and ROS 2 levels) and
+its autopilot's status texts as mavros republishes them, read from every ROS log format as
+the real writers (rosbags, mcap, a `rostopic echo -p` export) write them, and lined up with
+the diagnosis like ArduPilot's own texts."""
+
+import json
+from pathlib import Path
+
+import pytest
+from helpers import diagnose_json
+
+from adapters import read_log
+from adapters.ros_words import ROSOUT, STATUSTEXT, WordsRead, severity
+from auvdiag_cli.engine.autopilot_words import is_alarm, said_in
+from auvdiag_cli.simulator.writers import ExtraTopic, write_log
+
+ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "topic-csv")
+STATUSTEXT_DEFINITION = """std_msgs/Header header
+uint8 severity
+string text
+"""
+# (seconds into the dive, ROS 1 level, node, text)
+NODE_SAYS = ((5.0, 2, "/mission", "starting the mission"),
+             (20.0, 4, "/robot_state_publisher", "TF_REPEATED_DATA ignoring data"),
+             (30.0, 4, "/dvl_driver", "DVL lost bottom lock"),
+             (31.0, 4, "/dvl_driver", "DVL lost bottom lock"),
+             (40.0, 8, "/thruster_driver", "thruster 2 not responding"),
+             (45.0, 1, "/thruster_driver", "debug counter 12"))
+ROS2_LEVEL = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
+AUTOPILOT_SAYS = ((12.0, 6, "Mission: 1 WP"), (50.0, 2, "Leak Detected"))
+# As read: (whole seconds into the log, "node: text", MAVLink severity).
+NODE_WORDS = [(5, "/mission: starting the mission", 6),
+              (20, "/robot_state_publisher: TF_REPEATED_DATA ignoring data", None),
+              (30, "/dvl_driver: DVL lost bottom lock", None),
+              (31, "/dvl_driver: DVL lost bottom lock", None),
+              (40, "/thruster_driver: thruster 2 not responding", 3),
+              (45, "/thruster_driver: debug counter 12", 7)]
+
+
+def _node_log(start_ns: int, ros1: bool, topic: str = "/rosout") -> ExtraTopic:
+    def build(types, index):
+        _, level, node, text = NODE_SAYS[index]
+        if ros1:
+            return types["rosgraph_msgs/msg/Log"](
+                header=types["std_msgs/msg/Header"](
+                    seq=index, stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+                    frame_id=""),
+                level=level, name=node, msg=text, file="", function="", line=0, topics=[])
+        return types["rcl_interfaces/msg/Log"](
+            stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+            level=ROS2_LEVEL[level], name=node, msg=text, file="", function="", line=0)
+
+    return ExtraTopic(topic, "rosgraph_msgs/msg/Log" if ros1 else "rcl_interfaces/msg/Log",
+                      [start_ns + int(said[0] * 1e9) for said in NODE_SAYS], build)
+
+
+def _status_texts(start_ns: int, ros1: bool, namespace: str = "") -> ExtraTopic:
+    def build(types, index):
+        header = (types["std_msgs/msg/Header"](
+            seq=index, stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+            frame_id="") if ros1 else types["std_msgs/msg/Header"](
+            stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""))
+        _, level, text = AUTOPILOT_SAYS[index]
+        return types["mavros_msgs/msg/StatusText"](header=header, severity=level, text=text)
+
+    return ExtraTopic(f"{namespace}/mavros/statustext/recv", "mavros_msgs/msg/StatusText",
+                      [start_ns + int(said[0] * 1e9) for said in AUTOPILOT_SAYS], build,
+                      STATUSTEXT_DEFINITION)
+
+
+def _write(dive, profile, path: Path, fmt: str, extra_of, namespace: str = "") -> Path:
+    ros1 = fmt in ("bag", "topic-csv")
+    write_log(dive, profile, path, fmt, extra_of(dive.start_ns, ros1), namespace)
+    return path
+
+
+def _said(signals) -> list[tuple[float, str, int | None]]:
+    return [(round((m.time_ns - signals.start_ns) / 1e9), m.text, m.severity)
+            for m in signals.autopilot_messages]
+
+
+@pytest.mark.parametrize("fmt", ROS_FORMATS)
+def test_node_and_autopilot_words_read_from_every_ros_format(fmt, tmp_path, dive_cache,
+                                                              profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / f"said.{fmt}", fmt,
+                 lambda start, ros1: [_node_log(start, ros1), _status_texts(start, ros1)])
+    read = read_log(log, profile.sources)
+    plain = read_log(_write(dive, profile, tmp_path / f"plain.{fmt}", fmt,
+                            lambda start, ros1: []), profile.sources)
+    assert _said(plain) == [] and read.messages_read == plain.messages_read
+    assert _said(read) == sorted([*NODE_WORDS, (12, "Mission: 1 WP", 6),
+                                  (50, "Leak Detected", 2)])
+    # A node's WARN is trouble only where its words say so; ERROR and the autopilot's
+    # CRITICAL are; the routine transform warning, INFO and DEBUG are not.
+    said = said_in(read.autopilot_messages, read.start_ns, lambda at_s: True)
+    assert said is not None
+    assert [(a.text, a.times) for a in said.alarms] == [
+        ("/dvl_driver: DVL lost bottom lock", 2),
+        ("/thruster_driver: thruster 2 not responding", 1), ("Leak Detected", 1)]
+    assert said.other_messages == 4
+
+
+def test_rosout_aggregated_is_read_only_where_rosout_is_not(tmp_path, dive_cache, profile):
+    dive = dive_cache("paper-normal", 11)
+    both = read_log(_write(dive, profile, tmp_path / "both.bag", "bag", lambda start, ros1: [
+        _node_log(start, ros1), _node_log(start, ros1, "/rosout_agg")]), profile.sources)
+    assert len(both.autopilot_messages) == len(NODE_SAYS)
+    only = read_log(_write(dive, profile, tmp_path / "agg.bag", "bag", lambda start, ros1: [
+        _node_log(start, ros1, "/rosout_agg")]), profile.sources)
+    assert _said(only) == _said(both)
+
+
+def test_status_texts_are_read_under_the_vehicles_namespace(tmp_path, dive_cache, profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / "rov2.bag", "bag", lambda start, ros1: [
+        _node_log(start, ros1), _status_texts(start, ros1, "/rov2")], "/rov2")
+    read = read_log(log, profile.sources)
+    assert read.namespace == "/rov2"
+    texts = [m.text for m in read.autopilot_messages]
+    assert "Leak Detected" in texts and "/dvl_driver: DVL lost bottom lock" in texts
+
+
+def test_a_rosout_of_another_type_says_nothing_and_the_log_still_reads(tmp_path, dive_cache,
+                                                                       profile):
+    dive = dive_cache("paper-normal", 11)
+
+    def strings(start, ros1):
+        return [ExtraTopic("/rosout", "std_msgs/msg/String", [start + 10**9],
+                           lambda types, index: types["std_msgs/msg/String"](data="hello"))]
+
+    read = read_log(_write(dive, profile, tmp_path / "odd.bag", "bag", strings),
+                    profile.sources)
+    assert read.autopilot_messages == [] and read.series
+
+
+def test_levels_map_to_mavlink_severities():
+    assert [severity(ROSOUT, level) for level in (1, 2, 4, 8, 16)] == [7, 6, None, 3, 2]
+    assert [severity(ROSOUT, level) for level in (10, 20, 30, 40, 50)] == [7, 6, None, 3, 2]
+    assert [severity(ROSOUT, level) for level in (0, 3, "x", None)] == [None] * 4
+    assert [severity(STATUSTEXT, level) for level in (0, 4, 7, 8)] == [0, 4, 7, None]
+    words = WordsRead()
+    words.add(ROSOUT, 5, b"thruster 1 overheating\0junk", 8, b"/esc\0")
+    words.add(ROSOUT, 1, "   ", 8, "/esc")                # nothing said
+    assert [(m.text, m.severity) for m in words.messages()] == [
+        ("/esc: thruster 1 overheating", 3)]
+    assert is_alarm(words.messages()[0])
+
+
+def test_a_normal_dive_says_what_the_vehicle_reported_beside_its_verdict(
+        tmp_path, dive_cache, profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / "said.bag", "bag",
+                 lambda start, ros1: [_node_log(start, ros1), _status_texts(start, ros1)])
+    status, report = diagnose_json(log)
+    assert status == 0 and report["verdict"] == "normal", json.dumps(report)[:400]
+    part = report["autopilot"]
+    assert part["summary"].startswith("reported trouble this diagnosis did not find: "
+                                      '"/dvl_driver: DVL lost bottom lock"')
+    assert [a["text"] for a in part["alarms"]] == [
+        "/dvl_driver: DVL lost bottom lock", "/thruster_driver: thruster 2 not responding",
+        "Leak Detected"]
+
+
+@pytest.mark.parametrize("fmt", ("bag", "ros2-mcap"))
+def test_a_log_cut_short_keeps_the_words_before_the_damage(fmt, tmp_path, dive_cache,
+                                                           profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / f"said.{fmt}", fmt,
+                 lambda start, ros1: [_node_log(start, ros1)])
+    storage = next(log.glob("*.mcap")) if log.is_dir() else log
+    data = storage.read_bytes()
+    storage.write_bytes(data[:len(data) * 2 // 3])
+    read = read_log(log, profile.sources)
+    assert read.damage is not None
+    said = _said(read)
+    assert said and said == NODE_WORDS[:len(said)]
+    assert max(at for at, _, _ in said) <= (read.end_ns - read.start_ns) / 1e9 + 1
