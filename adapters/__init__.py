@@ -2,6 +2,7 @@
 reader is imported only when a log of that format is read."""
 
 from collections.abc import Mapping
+from dataclasses import replace
 from functools import cache
 from importlib import import_module
 from pathlib import Path
@@ -9,6 +10,7 @@ from typing import Protocol, cast
 
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import KNOWN_FORMATS, recognise
+from adapters.ros_words import words_among
 from adapters.signals import FieldSource, LogSources, SegmentMarker, SegmentSource, Signals
 from auvdiag_errors import LogError
 
@@ -92,4 +94,21 @@ def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:
 def inventory(path: Path) -> tuple[LogInventory, str]:
     """What the log at ``path`` holds, and the profile family that maps its signals."""
     adapter, fmt = _find_adapter(path)
-    return adapter.inventory(path, fmt), adapter.family
+    contents = adapter.inventory(path, fmt)
+    if adapter.family == "ros":
+        contents = _with_ros_words(path, contents)
+    return contents, adapter.family
+
+
+def _with_ros_words(path: Path, contents: LogInventory) -> LogInventory:
+    """A ROS log's own words (`adapters.ros_words`), which its index does not hold: read
+    from their topics alone, under whatever namespace they are; none where they do not
+    read."""
+    words = words_among(topic.name for topic in contents.topics)
+    if not words:
+        return contents
+    try:
+        said = read_log(path, {"ros": LogSources({}, namespace="", words=words)})
+    except LogError:
+        return contents
+    return replace(contents, autopilot_messages=said.autopilot_messages)

@@ -4,7 +4,8 @@ mavros republishes them (`mavros/statustext/recv`, with MAVLink's severity). Rea
 the profile's signals wherever a ROS log holds them; a message that does not read says
 nothing, and none makes a log unreadable."""
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from dataclasses import replace
 from typing import Any
 
 from adapters.signals import AutopilotMessage, WordSource
@@ -23,6 +24,17 @@ ROSOUT_AGGREGATED = WordSource("/rosout_agg", "msg", "level", node="name", at_ro
 STATUSTEXT = WordSource("/mavros/statustext/recv", "text", "severity")
 ROS_WORD_SOURCES = (ROSOUT, ROSOUT_AGGREGATED, STATUSTEXT)
 MAVLINK_SEVERITIES = range(8)
+
+
+def words_among(topics: Iterable[str]) -> tuple[WordSource, ...]:
+    """The sources of words among a log's ``topics``, each under the name the log gives it
+    (a vehicle's namespace included)."""
+    found = []
+    for topic in topics:
+        for source in ROS_WORD_SOURCES:
+            if topic == source.topic or (not source.at_root and topic.endswith(source.topic)):
+                found.append(replace(source, topic=topic, at_root=True))
+    return tuple(found)
 
 
 def severity(source: WordSource, level: Any) -> int | None:

@@ -8,9 +8,11 @@ from pathlib import Path
 
 import pytest
 from helpers import diagnose_json
+from typer.testing import CliRunner
 
 from adapters import read_log
 from adapters.ros_words import ROSOUT, STATUSTEXT, WordsRead, severity
+from auvdiag_cli.cli import app
 from auvdiag_cli.engine.autopilot_words import is_alarm, said_in
 from auvdiag_cli.simulator.writers import ExtraTopic, write_log
 
@@ -176,3 +178,15 @@ def test_a_log_cut_short_keeps_the_words_before_the_damage(fmt, tmp_path, dive_c
     said = _said(read)
     assert said and said == NODE_WORDS[:len(said)]
     assert max(at for at, _, _ in said) <= (read.end_ns - read.start_ns) / 1e9 + 1
+
+
+def test_inspect_quotes_what_the_vehicle_said_under_its_namespace(tmp_path, dive_cache,
+                                                                   profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / "rov2.db3", "db3", lambda start, ros1: [
+        _node_log(start, ros1), _status_texts(start, ros1, "/rov2")], "/rov2")
+    shown = CliRunner().invoke(app, ["inspect", str(log)])
+    assert shown.exit_code == 0, shown.output
+    assert ('  autopilot reported trouble: "/dvl_driver: DVL lost bottom lock" at 30.0 s, '
+            '2 times to 31.0 s; "/thruster_driver: thruster 2 not responding" at 40.0 s; '
+            '"Leak Detected" at 50.0 s') in shown.output
