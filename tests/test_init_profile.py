@@ -1,7 +1,9 @@
 """`auvdiag init-profile`: a starting profile drafted from a log loads, and every signal it
 proposes resolves on that log; what the log cannot tell is marked CHECK."""
 
+import math
 import tomllib
+import warnings
 from pathlib import Path
 
 import pytest
@@ -47,6 +49,19 @@ def test_a_log_with_nothing_that_moves_is_one_line(tmp_path):
     log.write_text("time,pwm1,depth\n" + "".join(f"{t},1100,0.5\n" for t in range(50)))
     result = runner.invoke(app, ["init-profile", str(log)])
     assert result.exit_code == 2 and "found no command" in result.output
+
+
+def test_a_field_of_huge_values_is_drafted_without_a_warning(tmp_path):
+    # A damaged log's field read as ±1e300 (found by fuzzing a db3): its spread overflowed
+    # and NumPy printed a warning among the command's output.
+    log = tmp_path / "huge.csv"
+    log.write_text("time,pwm1,yaw_rate\n" + "".join(
+        f"{t / 10},{1e300 if t % 2 else -1e300},{math.sin(t / 10):.3f}\n" for t in range(200)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = runner.invoke(app, ["init-profile", str(log)])
+    assert result.exit_code == 0, result.output
+    assert "pwm1" in result.output and "yaw_rate" in result.output
 
 
 @pytest.mark.shared_data("ardusub")

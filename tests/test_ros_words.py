@@ -10,17 +10,16 @@ import pytest
 from helpers import diagnose_json
 from typer.testing import CliRunner
 
-from adapters import read_log
+from adapters import inventory, read_log
 from adapters.ros_words import ROSOUT, STATUSTEXT, WordsRead, severity
 from auvdiag_cli.cli import app
 from auvdiag_cli.engine.autopilot_words import is_alarm, said_in
+from auvdiag_cli.fuzz.mutations import mutate
 from auvdiag_cli.simulator.writers import ExtraTopic, write_log
+from auvdiag_cli.simulator.writers.ros import node_log, status_texts
+from auvdiag_errors import LogError
 
 ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "topic-csv")
-STATUSTEXT_DEFINITION = """std_msgs/Header header
-uint8 severity
-string text
-"""
 # (seconds into the dive, ROS 1 level, node, text)
 NODE_SAYS = ((5.0, 2, "/mission", "starting the mission"),
              (20.0, 4, "/robot_state_publisher", "TF_REPEATED_DATA ignoring data"),
@@ -28,7 +27,6 @@ NODE_SAYS = ((5.0, 2, "/mission", "starting the mission"),
              (31.0, 4, "/dvl_driver", "DVL lost bottom lock"),
              (40.0, 8, "/thruster_driver", "thruster 2 not responding"),
              (45.0, 1, "/thruster_driver", "debug counter 12"))
-ROS2_LEVEL = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
 AUTOPILOT_SAYS = ((12.0, 6, "Mission: 1 WP"), (50.0, 2, "Leak Detected"))
 # As read: (whole seconds into the log, "node: text", MAVLink severity).
 NODE_WORDS = [(5, "/mission: starting the mission", 6),
@@ -40,34 +38,14 @@ NODE_WORDS = [(5, "/mission: starting the mission", 6),
 
 
 def _node_log(start_ns: int, ros1: bool, topic: str = "/rosout") -> ExtraTopic:
-    def build(types, index):
-        _, level, node, text = NODE_SAYS[index]
-        if ros1:
-            return types["rosgraph_msgs/msg/Log"](
-                header=types["std_msgs/msg/Header"](
-                    seq=index, stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
-                    frame_id=""),
-                level=level, name=node, msg=text, file="", function="", line=0, topics=[])
-        return types["rcl_interfaces/msg/Log"](
-            stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
-            level=ROS2_LEVEL[level], name=node, msg=text, file="", function="", line=0)
-
-    return ExtraTopic(topic, "rosgraph_msgs/msg/Log" if ros1 else "rcl_interfaces/msg/Log",
-                      [start_ns + int(said[0] * 1e9) for said in NODE_SAYS], build)
+    return node_log(topic, ros1, [(start_ns + int(at_s * 1e9), level, node, text)
+                                  for at_s, level, node, text in NODE_SAYS])
 
 
 def _status_texts(start_ns: int, ros1: bool, namespace: str = "") -> ExtraTopic:
-    def build(types, index):
-        header = (types["std_msgs/msg/Header"](
-            seq=index, stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
-            frame_id="") if ros1 else types["std_msgs/msg/Header"](
-            stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0), frame_id=""))
-        _, level, text = AUTOPILOT_SAYS[index]
-        return types["mavros_msgs/msg/StatusText"](header=header, severity=level, text=text)
-
-    return ExtraTopic(f"{namespace}/mavros/statustext/recv", "mavros_msgs/msg/StatusText",
-                      [start_ns + int(said[0] * 1e9) for said in AUTOPILOT_SAYS], build,
-                      STATUSTEXT_DEFINITION)
+    return status_texts(f"{namespace}/mavros/statustext/recv", ros1,
+                        [(start_ns + int(at_s * 1e9), level, text)
+                         for at_s, level, text in AUTOPILOT_SAYS])
 
 
 def _write(dive, profile, path: Path, fmt: str, extra_of, namespace: str = "") -> Path:
@@ -190,3 +168,30 @@ def test_inspect_quotes_what_the_vehicle_said_under_its_namespace(tmp_path, dive
     assert ('  autopilot reported trouble: "/dvl_driver: DVL lost bottom lock" at 30.0 s, '
             '2 times to 31.0 s; "/thruster_driver: thruster 2 not responding" at 40.0 s; '
             '"Leak Detected" at 50.0 s') in shown.output
+
+
+@pytest.mark.parametrize(("fmt", "stored"), [("db3", "*.db3"), ("topic-csv", "*-rosout.csv")])
+def test_damage_where_the_words_lie_is_read_or_refused_as_a_log_error(fmt, stored, tmp_path,
+                                                                      dive_cache, profile):
+    # Where the words are stored as they are (not in compressed chunks, which the format
+    # campaigns damage whole).
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / f"said.{fmt}", fmt,
+                 lambda start, ros1: [_node_log(start, ros1), _status_texts(start, ros1)])
+    storage = next(log.glob(stored))
+    whole = storage.read_bytes()
+    at = whole.find(b"thruster 2 not responding")
+    assert at > 0
+    low, high = max(0, at - 512), at + 512
+    outcomes = {"read": 0, "refused": 0}
+    for seed in range(100):
+        damaged, _ = mutate(whole[low:high], seed)
+        storage.write_bytes(whole[:low] + damaged + whole[high:])
+        try:
+            inventory(log)
+            read_log(log, profile.sources)
+            outcomes["read"] += 1
+        except LogError as error:
+            assert "\n" not in str(error) and str(log) in str(error)
+            outcomes["refused"] += 1
+    assert outcomes["read"] > 0, outcomes

@@ -184,6 +184,13 @@ def _holds_its_value(series: np.ndarray) -> bool:
     return finite.size > 2 and float(np.mean(np.diff(finite) == 0)) >= HELD_SHARE
 
 
+def _moves(series: np.ndarray) -> bool:
+    """Whether the field takes two values or more (its spread would overflow on a damaged
+    log's huge ones)."""
+    finite = series[np.isfinite(series)]
+    return finite.size >= 2 and bool(finite.max() > finite.min())
+
+
 def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn | None,
                setup: AutopilotSetup | None, every_field: bool = False,
                guess_commands: bool = False, closed_loop: bool = False
@@ -202,7 +209,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     command_values: list[np.ndarray] = []
     for key, (kind, source) in raw.items():
         series = values.get(key)
-        if series is None or series.size < 2 or not np.nanstd(series) > 0:
+        if series is None or not _moves(series):
             continue                                   # not in the log, or never moves
         name = _signal_name(source.topic, source.field)
         channel = output_channel(source) if kind == "command" else None

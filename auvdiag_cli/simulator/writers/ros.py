@@ -208,3 +208,44 @@ def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns, sequence=sequence)
         writer.finish()
+
+
+# A node's log levels, ROS 1's (rosgraph_msgs/Log) as ROS 2 numbers them (rcl_interfaces).
+ROS2_LEVELS = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
+STATUSTEXT_TYPE = "mavros_msgs/msg/StatusText"
+STATUSTEXT_DEFINITION = "std_msgs/Header header\nuint8 severity\nstring text\n"
+
+
+def _header(types: Any, ros1: bool, index: int) -> Any:
+    stamp = types["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    return (types["std_msgs/msg/Header"](seq=index, stamp=stamp, frame_id="") if ros1
+            else types["std_msgs/msg/Header"](stamp=stamp, frame_id=""))
+
+
+def node_log(topic: str, ros1: bool, said: Sequence[tuple[int, int, str, str]]) -> ExtraTopic:
+    """Nodes' log messages on ``topic`` (`/rosout`): (receive time ns, ROS 1 level, node,
+    text) each, as ROS 1 (rosgraph_msgs/Log) or ROS 2 (rcl_interfaces/msg/Log) logs them."""
+    def build(types: Any, index: int) -> Any:
+        _, level, node, text = said[index]
+        if ros1:
+            return types["rosgraph_msgs/msg/Log"](
+                header=_header(types, ros1, index), level=level, name=node, msg=text, file="",
+                function="", line=0, topics=[])
+        return types["rcl_interfaces/msg/Log"](
+            stamp=types["builtin_interfaces/msg/Time"](sec=0, nanosec=0),
+            level=ROS2_LEVELS[level], name=node, msg=text, file="", function="", line=0)
+
+    return ExtraTopic(topic, "rosgraph_msgs/msg/Log" if ros1 else "rcl_interfaces/msg/Log",
+                      [at for at, *_ in said], build)
+
+
+def status_texts(topic: str, ros1: bool, said: Sequence[tuple[int, int, str]]) -> ExtraTopic:
+    """An autopilot's texts as mavros republishes them (``topic``: its statustext/recv):
+    (receive time ns, MAVLink severity, text) each."""
+    def build(types: Any, index: int) -> Any:
+        _, severity, text = said[index]
+        return types[STATUSTEXT_TYPE](header=_header(types, ros1, index), severity=severity,
+                                      text=text)
+
+    return ExtraTopic(topic, STATUSTEXT_TYPE, [at for at, *_ in said], build,
+                      STATUSTEXT_DEFINITION)
