@@ -192,10 +192,10 @@ def test_bluerov2_dead_vertical_thruster_on_a_mission_shows_in_the_roll(tmp_path
 
 
 def test_formats_a_profile_cannot_write_are_refused(tmp_path):
-    code, output = run("simulate", "paper-normal", "--profile", "bluerov2", "--format", "bag",
-                       "-o", str(tmp_path / "x.bag"))
+    code, output = run("simulate", "paper-normal", "--profile", "bluerov2", "--format", "bin",
+                       "-o", str(tmp_path / "x.bin"))
     assert code == 2
-    assert "no [sources.ros] table" in output
+    assert "no [sources.dataflash] table" in output
 
 
 def test_twin_burger_model_is_refused_for_another_vehicle(tmp_path):

@@ -12,10 +12,27 @@ from typing import Any
 import numpy as np
 
 from adapters.fieldpath import parse_field_path
+from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
 from auvdiag_cli.vehicle.profile import Profile
 
+# mavros's messages (mavros_msgs, not in rosbags' type stores): what an ArduPilot vehicle's
+# bag holds, as its .msg files define them (constants left out).
+MAVROS_DEFINITIONS = {
+    "mavros_msgs/msg/RCOut": "std_msgs/Header header\nuint16[] channels\n",
+    "mavros_msgs/msg/VFR_HUD": "std_msgs/Header header\nfloat32 airspeed\nfloat32 groundspeed\n"
+                               "int16 heading\nfloat32 throttle\nfloat32 altitude\n"
+                               "float32 climb\n",
+    "mavros_msgs/msg/State": "std_msgs/Header header\nbool connected\nbool armed\nbool guided\n"
+                             "bool manual_input\nstring mode\nuint8 system_status\n",
+    "mavros_msgs/msg/StatusText": "std_msgs/Header header\nuint8 severity\nstring text\n",
+    "mavros_msgs/msg/DebugValue": "std_msgs/Header header\nint32 index\nstring name\n"
+                                  "float32 value_float\nint32 value_int\nfloat32[] data\n"
+                                  "uint8 type\n",
+}
+STATUSTEXT_TYPE = "mavros_msgs/msg/StatusText"
+MAV_SEVERITY_INFO = 6          # a segment marker's status text: news, not trouble
 # The message type a topic carries, from the first step of the field paths read on it.
 TYPES_BY_FIELD = {
     "twist": "geometry_msgs/msg/TwistStamped",
@@ -23,7 +40,13 @@ TYPES_BY_FIELD = {
     "linear_acceleration": "sensor_msgs/msg/Imu",
     "vector": "geometry_msgs/msg/Vector3Stamped",
     "point": "geometry_msgs/msg/PointStamped",
+    "channels": "mavros_msgs/msg/RCOut",
+    "climb": "mavros_msgs/msg/VFR_HUD",
+    "armed": "mavros_msgs/msg/State",
+    "value_float": "mavros_msgs/msg/DebugValue",
 }
+SEGMENT_TYPES = {"data": "std_msgs/msg/String", "text": STATUSTEXT_TYPE}
+STATE_PERIOD_NS = 1_000_000_000      # mavros publishes the vehicle's state once a second
 NUMPY_TYPES = {"float64": np.float64, "float32": np.float32, "int8": np.int8, "int16": np.int16,
                "int32": np.int32, "int64": np.int64, "uint8": np.uint8, "uint16": np.uint16,
                "uint32": np.uint32, "uint64": np.uint64, "byte": np.uint8, "char": np.uint8,
@@ -47,7 +70,11 @@ def ros_topics(profile: Profile) -> dict[str, str]:
         if topics.setdefault(source.topic, msgtype) != msgtype:
             raise ValueError(f"cannot write {source.topic}: its fields need two message types")
     if sources.segment is not None:
-        topics[sources.segment.topic] = "std_msgs/msg/String"
+        field = str(parse_field_path(sources.segment.field)[0])
+        if field not in SEGMENT_TYPES:
+            raise ValueError(f"cannot write segment markers on {sources.segment.topic}: no "
+                             f"known message type has the text field {field!r}")
+        topics[sources.segment.topic] = SEGMENT_TYPES[field]
     return topics
 
 
@@ -60,22 +87,19 @@ class ExtraTopic:
     msgtype: str
     times_ns: Sequence[int]
     build: Callable[[Any, int], Any]
-    definition: str | None = None      # the type's .msg text, where the type store lacks it
 
 
 class RosMessages:
     """Builds and serialises the dive's messages with a rosbags type store."""
 
-    def __init__(self, ros1: bool, topics: dict[str, str], extra: Sequence[ExtraTopic] = ()
-                 ) -> None:
+    def __init__(self, ros1: bool, topics: dict[str, str]) -> None:
         from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
         self.ros1 = ros1
         self.topics = topics
         self.store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
-        for topic in extra:
-            if topic.definition is not None:
-                self.store.register(get_types_from_msg(topic.definition, topic.msgtype))
+        for msgtype, definition in MAVROS_DEFINITIONS.items():
+            self.store.register(get_types_from_msg(definition, msgtype))
         self.types = self.store.types
         self.sequence = 0
 
@@ -104,8 +128,12 @@ class RosMessages:
             self._stamp(message.header, record.time_ns, record.topic.strip("/").split("/")[0])
         if record.text is not None:
             _assign(message, record.text[0], record.text[1])
+            if hasattr(message, "severity"):
+                message.severity = MAV_SEVERITY_INFO
         for path, raw in record.fields:
             _assign(message, path, raw)
+        for path, text in record.where:
+            _assign(message, path, text)
         return message
 
     def _stamp(self, header: Any, time_ns: int, frame: str) -> None:
@@ -122,7 +150,10 @@ class RosMessages:
         serialize = self.store.serialize_ros1 if self.ros1 else self.store.serialize_cdr
 
         def dive_messages() -> Iterator[tuple[int, str, bytes]]:
-            for record in dive_records(dive, profile, "ros"):
+            records = heapq.merge(dive_records(dive, profile, "ros"),
+                                  _operating_records(dive, profile),
+                                  key=lambda record: record.time_ns)
+            for record in records:
                 yield (record.time_ns, record.topic,
                        bytes(serialize(self.build(record), self.topics[record.topic])))
 
@@ -135,8 +166,21 @@ class RosMessages:
                                key=lambda item: item[0])
 
 
+def _operating_records(dive: SimulatedDive, profile: Profile) -> list[Record]:
+    """The flag the profile's operating source reads (mavros's state: armed), once a second
+    over the dive: operating throughout."""
+    source = family_sources(profile, "ros").signals.get(OPERATING)
+    if source is None:
+        return []
+    raw = float(source.bits or next((r for r, meaning in source.values if meaning), 1))
+    return [Record(dive.start_ns + k * STATE_PERIOD_NS, source.topic, ((source.field, raw),),
+                   source.where)
+            for k in range(int(dive.duration_s) + 1)]
+
+
 def _assign(message: Any, path: str, value: float | str) -> None:
-    """Set the field at ``path``, growing a sequence that is too short for its index."""
+    """Set the field at ``path``, growing a sequence that is too short for its index; a
+    number stored in an integer or a flag as the log would (rounded, true where not 0)."""
     steps = parse_field_path(path)
     parent = message
     for step, following in itertools.pairwise(steps):
@@ -150,7 +194,11 @@ def _assign(message: Any, path: str, value: float | str) -> None:
         parent = child
     last = steps[-1]
     if isinstance(last, int):
+        if isinstance(parent, np.ndarray) and parent.dtype.kind in "iu":
+            value = round(float(value))
         parent[last] = value
+    elif isinstance(getattr(parent, last), bool):
+        setattr(parent, last, bool(value))
     else:
         setattr(parent, last, value)
 
@@ -162,7 +210,7 @@ def _all_topics(profile: Profile, extra: Sequence[ExtraTopic]) -> list[tuple[str
 def write_rosbag(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
                  extra: Sequence[ExtraTopic] = ()) -> None:
     """ROS 1 bag (``bag``, lz4 chunks) or ROS 2 bag (``db3``; ``ros2-mcap`` with zstd chunks)."""
-    messages = RosMessages(fmt == "bag", ros_topics(profile), extra)
+    messages = RosMessages(fmt == "bag", ros_topics(profile))
     writer = _open_rosbag_writer(path, fmt)
     with writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=messages.store)
@@ -194,7 +242,7 @@ def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
     """Standalone MCAP, profile ros2: ros2msg schemas and CDR messages, zstd chunks."""
     from mcap.writer import CompressionType, Writer
 
-    messages = RosMessages(False, ros_topics(profile), extra)
+    messages = RosMessages(False, ros_topics(profile))
     with path.open("wb") as stream:
         writer = Writer(stream, compression=CompressionType.ZSTD)
         writer.start(profile="ros2", library="auvdiag simulate")
@@ -212,8 +260,6 @@ def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
 
 # A node's log levels, ROS 1's (rosgraph_msgs/Log) as ROS 2 numbers them (rcl_interfaces).
 ROS2_LEVELS = {1: 10, 2: 20, 4: 30, 8: 40, 16: 50}
-STATUSTEXT_TYPE = "mavros_msgs/msg/StatusText"
-STATUSTEXT_DEFINITION = "std_msgs/Header header\nuint8 severity\nstring text\n"
 
 
 def _header(types: Any, ros1: bool, index: int) -> Any:
@@ -247,5 +293,4 @@ def status_texts(topic: str, ros1: bool, said: Sequence[tuple[int, int, str]]) -
         return types[STATUSTEXT_TYPE](header=_header(types, ros1, index), severity=severity,
                                       text=text)
 
-    return ExtraTopic(topic, STATUSTEXT_TYPE, [at for at, *_ in said], build,
-                      STATUSTEXT_DEFINITION)
+    return ExtraTopic(topic, STATUSTEXT_TYPE, [at for at, *_ in said], build)

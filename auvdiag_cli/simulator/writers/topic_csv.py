@@ -27,6 +27,8 @@ def _flattened(value: Any, prefix: str) -> Iterator[tuple[str, Any]]:
     elif isinstance(value, (list, tuple, np.ndarray)):
         for index, item in enumerate(value):
             yield from _flattened(item, f"{prefix}{index}")
+    elif isinstance(value, (bool, np.bool_)):
+        yield prefix, int(value)             # rostopic echo -p writes a flag as 1 or 0
     else:
         yield prefix, value
 
