@@ -65,7 +65,7 @@ def test_inspect_lists_a_log_holding_none_of_the_signals(make_log, elsewhere_pro
 
 
 def test_inspect_without_a_mapping_for_the_format_lists_the_log(make_log):
-    result = run("inspect", make_log("paper-normal", 11, "bag"), "--profile", "bluerov2")
+    result = run("inspect", make_log("paper-normal", 11, "bag"), "--profile", "arducopter_quad")
     assert result.exit_code == 2
     assert "/imu/data" in result.stdout and "no [sources.ros] mapping" in result.stdout
 
