@@ -12,7 +12,7 @@ import numpy as np
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter
 from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
-from adapters.ros_words import WordsRead
+from adapters.ros_words import WordsRead, word_paths
 from adapters.ros_words import as_text as _text  # one reading of a logged text
 from adapters.signals import (
     Damage,
@@ -207,7 +207,7 @@ class SignalCollector:
             paths.append(segment.field)
         word = self.word_topics.get(topic)
         if word is not None:
-            paths += [word.text, word.level, *([word.node] if word.node else [])]
+            paths += word_paths(word)
         return list(dict.fromkeys(paths))
 
     def _only_words(self, topic: str) -> bool:

@@ -102,6 +102,10 @@ class WordSource:
     # (level as logged, MAVLink severity or None); None: the level is MAVLink's severity.
     severities: tuple[tuple[int, int | None], ...] | None = None
     only_without: str | None = None    # read only where this topic gave no message
+    # The array of statuses each message holds (diagnostic_msgs/DiagnosticArray `status`):
+    # text, level and node are then paths within each status, and only a status that
+    # worsens is news (None: one text a message).
+    statuses: str | None = None
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ from auvdiag_cli.cli import app
 from auvdiag_cli.engine.autopilot_words import is_alarm, said_in
 from auvdiag_cli.fuzz.mutations import mutate
 from auvdiag_cli.simulator.writers import ExtraTopic, write_log
-from auvdiag_cli.simulator.writers.ros import node_log, status_texts
+from auvdiag_cli.simulator.writers.ros import hardware_status, node_log, status_texts
 from auvdiag_errors import LogError
 
 ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "topic-csv")
@@ -195,3 +195,43 @@ def test_damage_where_the_words_lie_is_read_or_refused_as_a_log_error(fmt, store
             assert "\n" not in str(error) and str(log) in str(error)
             outcomes["refused"] += 1
     assert outcomes["read"] > 0, outcomes
+
+
+def _hardware(start_ns: int, ros1: bool, topic: str = "/diagnostics") -> ExtraTopic:
+    """A battery monitor warning all along (set up wrong), and a DVL whose status worsens
+    at 30 s and 40 s and recovers at 50 s; the thrusters' driver falls silent at 60 s."""
+    def statuses(at_s: float) -> list[tuple[int, str, str]]:
+        dvl = ((0, "no fault") if at_s < 30 or at_s >= 50 else
+               (1, "bottom lock lost") if at_s < 40 else (2, "no data"))
+        return [(1, "mavros: Battery", "Low voltage"), (dvl[0], "dvl: status", dvl[1]),
+                *([(0, "thrusters", "ok")] if at_s < 60 else [(3, "thrusters", "stale")])]
+
+    return hardware_status(topic, ros1, [(start_ns + int(at_s * 1e9), statuses(at_s))
+                                         for at_s in range(0, 70)])
+
+
+HARDWARE_WORDS = [(30, "dvl: status: bottom lock lost", None), (40, "dvl: status: no data", 3),
+                  (60, "thrusters: stale", 4)]
+
+
+@pytest.mark.parametrize("fmt", ROS_FORMATS)
+def test_a_hardware_status_that_worsens_is_news_one_that_stands_is_not(fmt, tmp_path,
+                                                                       dive_cache, profile):
+    dive = dive_cache("paper-normal", 11)
+    log = _write(dive, profile, tmp_path / f"hw.{fmt}", fmt,
+                 lambda start, ros1: [_hardware(start, ros1)])
+    read = read_log(log, profile.sources)
+    assert _said(read) == HARDWARE_WORDS
+    said = said_in(read.autopilot_messages, read.start_ns)
+    assert said is not None and [a.text for a in said.alarms] == [
+        "dvl: status: bottom lock lost", "dvl: status: no data", "thrusters: stale"]
+
+
+def test_the_aggregated_statuses_are_read_only_where_the_plain_ones_are_not(
+        tmp_path, dive_cache, profile):
+    dive = dive_cache("paper-normal", 11)
+    both = read_log(_write(dive, profile, tmp_path / "both.bag", "bag", lambda start, ros1: [
+        _hardware(start, ros1), _hardware(start, ros1, "/diagnostics_agg")]), profile.sources)
+    only = read_log(_write(dive, profile, tmp_path / "agg.bag", "bag", lambda start, ros1: [
+        _hardware(start, ros1, "/diagnostics_agg")]), profile.sources)
+    assert _said(both) == _said(only) == HARDWARE_WORDS

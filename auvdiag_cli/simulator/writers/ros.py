@@ -294,3 +294,19 @@ def status_texts(topic: str, ros1: bool, said: Sequence[tuple[int, int, str]]) -
                                       text=text)
 
     return ExtraTopic(topic, STATUSTEXT_TYPE, [at for at, *_ in said], build)
+
+
+def hardware_status(topic: str, ros1: bool,
+                    said: Sequence[tuple[int, Sequence[tuple[int, str, str]]]]) -> ExtraTopic:
+    """The hardware's status as diagnostic_updater publishes it on ``topic``
+    (`/diagnostics`): (receive time ns, [(level, name, message) of each status]) each."""
+    def build(types: Any, index: int) -> Any:
+        _, statuses = said[index]
+        status = types["diagnostic_msgs/msg/DiagnosticStatus"]
+        return types["diagnostic_msgs/msg/DiagnosticArray"](
+            header=_header(types, ros1, index),
+            status=[status(level=level, name=name, message=message, hardware_id="", values=[])
+                    for level, name, message in statuses])
+
+    return ExtraTopic(topic, "diagnostic_msgs/msg/DiagnosticArray", [at for at, _ in said],
+                      build)
