@@ -170,17 +170,20 @@ def test_inspect_quotes_what_the_vehicle_said_under_its_namespace(tmp_path, dive
             '"Leak Detected" at 50.0 s') in shown.output
 
 
-@pytest.mark.parametrize(("fmt", "stored"), [("db3", "*.db3"), ("topic-csv", "*-rosout.csv")])
-def test_damage_where_the_words_lie_is_read_or_refused_as_a_log_error(fmt, stored, tmp_path,
-                                                                      dive_cache, profile):
+@pytest.mark.parametrize(("fmt", "stored", "said"), [
+    ("db3", "*.db3", b"thruster 2 not responding"), ("db3", "*.db3", b"bottom lock lost"),
+    ("topic-csv", "*-rosout.csv", b"thruster 2 not responding"),
+    ("topic-csv", "*-diagnostics.csv", b"bottom lock lost")])
+def test_damage_where_the_words_lie_is_read_or_refused_as_a_log_error(
+        fmt, stored, said, tmp_path, dive_cache, profile):
     # Where the words are stored as they are (not in compressed chunks, which the format
     # campaigns damage whole).
     dive = dive_cache("paper-normal", 11)
-    log = _write(dive, profile, tmp_path / f"said.{fmt}", fmt,
-                 lambda start, ros1: [_node_log(start, ros1), _status_texts(start, ros1)])
+    log = _write(dive, profile, tmp_path / f"said.{fmt}", fmt, lambda start, ros1: [
+        _node_log(start, ros1), _status_texts(start, ros1), _hardware(start, ros1)])
     storage = next(log.glob(stored))
     whole = storage.read_bytes()
-    at = whole.find(b"thruster 2 not responding")
+    at = whole.find(said)
     assert at > 0
     low, high = max(0, at - 512), at + 512
     outcomes = {"read": 0, "refused": 0}
