@@ -63,7 +63,7 @@ def severity(source: WordSource, level: Any) -> int | None:
     """The message's level as MAVLink's severity (None: not one the source defines)."""
     try:
         number = int(level)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return None
     if source.severities is None:
         return number if number in MAVLINK_SEVERITIES else None

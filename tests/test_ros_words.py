@@ -117,7 +117,8 @@ def test_a_rosout_of_another_type_says_nothing_and_the_log_still_reads(tmp_path,
 def test_levels_map_to_mavlink_severities():
     assert [severity(ROSOUT, level) for level in (1, 2, 4, 8, 16)] == [7, 6, None, 3, 2]
     assert [severity(ROSOUT, level) for level in (10, 20, 30, 40, 50)] == [7, 6, None, 3, 2]
-    assert [severity(ROSOUT, level) for level in (0, 3, "x", None)] == [None] * 4
+    assert [severity(ROSOUT, level) for level in (0, 3, "x", None, float("inf"),
+                                                  float("nan"))] == [None] * 6
     assert [severity(STATUSTEXT, level) for level in (0, 4, 7, 8)] == [0, 4, 7, None]
     words = WordsRead()
     words.add(ROSOUT, 5, b"thruster 1 overheating\0junk", 8, b"/esc\0")
