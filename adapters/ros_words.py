@@ -28,6 +28,7 @@ STATUSTEXT = WordSource("/mavros/statustext/recv", "text", "severity")
 # A hardware status's level (diagnostic_msgs/DiagnosticStatus: OK, WARN, ERROR, STALE: no
 # news from it) as MAVLink's severity; WARN, as a node's, by its words.
 STATUS_LEVELS = ((0, 6), (1, None), (2, 3), (3, 4))
+OK_LEVEL = 0
 DIAGNOSTICS = WordSource("/diagnostics", "message", "level", node="name", at_root=True,
                          severities=STATUS_LEVELS, statuses="status")
 # The aggregator's hierarchy of the same statuses.
@@ -89,14 +90,15 @@ class WordsRead:
                    severity(source, level))
 
     def _said(self, source: WordSource, time_ns: int, text: str, speaker: str,
-              level: int | None) -> None:
+              level: int | None, standing: bool = False) -> None:
         if text:
             self.by_source.setdefault(source, []).append(AutopilotMessage(
-                time_ns, f"{speaker}: {text}" if speaker else text, level))
+                time_ns, f"{speaker}: {text}" if speaker else text, level, standing))
 
     def add_status(self, source: WordSource, time_ns: int, text: Any, level: Any,
                    node: Any) -> None:
-        """One status of a status array: news only where it is worse than it last was."""
+        """One status of a status array: news only where it is worse than it last was; one
+        already wrong at its first report stands from the log's start."""
         try:
             number = int(level)
         except (TypeError, ValueError, OverflowError):
@@ -104,9 +106,9 @@ class WordsRead:
         speaker = as_text(node)
         before = self.status_levels.get((source, speaker))
         self.status_levels[source, speaker] = number
-        if before is not None and number > before:
+        if number > (OK_LEVEL if before is None else before):
             self._said(source, time_ns, as_text(text) or "(no message)", speaker,
-                       severity(source, number))
+                       severity(source, number), standing=before is None)
 
     def add_message(self, source: WordSource, time_ns: int, message: Any,
                     get: Callable[[Any, str], Any]) -> None:

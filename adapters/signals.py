@@ -177,6 +177,9 @@ class AutopilotMessage:
     # MAVLink's MAV_SEVERITY (syslog's levels): 0 emergency … 4 warning … 7 debug; None where
     # the log does not say (a DataFlash MSG record).
     severity: int | None = None
+    # A status already wrong at its first report (a hardware status of a ROS log): how the
+    # log began, not an event of it.
+    standing: bool = False
 
 
 @dataclass(frozen=True, eq=False)

@@ -131,16 +131,21 @@ def test_levels_map_to_mavlink_severities():
 def test_a_normal_dive_says_what_the_vehicle_reported_beside_its_verdict(
         tmp_path, dive_cache, profile):
     dive = dive_cache("paper-normal", 11)
-    log = _write(dive, profile, tmp_path / "said.bag", "bag",
-                 lambda start, ros1: [_node_log(start, ros1), _status_texts(start, ros1)])
+    log = _write(dive, profile, tmp_path / "said.bag", "bag", lambda start, ros1: [
+        _node_log(start, ros1), _status_texts(start, ros1), _hardware(start, ros1)])
     status, report = diagnose_json(log)
     assert status == 0 and report["verdict"] == "normal", json.dumps(report)[:400]
     part = report["autopilot"]
     assert part["summary"].startswith("reported trouble this diagnosis did not find: "
                                       '"/dvl_driver: DVL lost bottom lock"')
+    assert part["summary"].endswith('; already so when the log began: '
+                                    '"mavros: Battery: Low voltage"')
     assert [a["text"] for a in part["alarms"]] == [
-        "/dvl_driver: DVL lost bottom lock", "/thruster_driver: thruster 2 not responding",
-        "Leak Detected"]
+        "/dvl_driver: DVL lost bottom lock", "dvl: status: bottom lock lost",
+        "/thruster_driver: thruster 2 not responding", "dvl: status: no data",
+        "Leak Detected", "thrusters: stale"]
+    assert [(a["text"], a["first_s"]) for a in part["standing"]] == [
+        ("mavros: Battery: Low voltage", 0.0)]
 
 
 @pytest.mark.parametrize("fmt", ("bag", "ros2-mcap"))
@@ -225,10 +230,15 @@ def test_a_hardware_status_that_worsens_is_news_one_that_stands_is_not(fmt, tmp_
     log = _write(dive, profile, tmp_path / f"hw.{fmt}", fmt,
                  lambda start, ros1: [_hardware(start, ros1)])
     read = read_log(log, profile.sources)
-    assert _said(read) == HARDWARE_WORDS
-    said = said_in(read.autopilot_messages, read.start_ns)
+    assert _said(read) == [(0, "mavros: Battery: Low voltage", None), *HARDWARE_WORDS]
+    said = said_in(read.autopilot_messages, read.start_ns, lambda at_s: at_s > 10)
     assert said is not None and [a.text for a in said.alarms] == [
         "dvl: status: bottom lock lost", "dvl: status: no data", "thrusters: stale"]
+    # The battery monitor's warning stands from the first report, operating or not.
+    assert [(a.text, a.first_s) for a in said.standing] == [
+        ("mavros: Battery: Low voltage", 0.0)]
+    assert said.describe(False, None).endswith(
+        '; already so when the log began: "mavros: Battery: Low voltage"')
 
 
 def test_the_aggregated_statuses_are_read_only_where_the_plain_ones_are_not(
@@ -238,4 +248,5 @@ def test_the_aggregated_statuses_are_read_only_where_the_plain_ones_are_not(
         _hardware(start, ros1), _hardware(start, ros1, "/diagnostics_agg")]), profile.sources)
     only = read_log(_write(dive, profile, tmp_path / "agg.bag", "bag", lambda start, ros1: [
         _hardware(start, ros1, "/diagnostics_agg")]), profile.sources)
-    assert _said(both) == _said(only) == HARDWARE_WORDS
+    assert _said(both) == _said(only) == [(0, "mavros: Battery: Low voltage", None),
+                                          *HARDWARE_WORDS]

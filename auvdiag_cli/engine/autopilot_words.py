@@ -21,6 +21,7 @@ TROUBLE = re.compile(r"thrust loss|crash|leak|failsafe|fail|emergency|error|glit
                      r"fence breach", re.IGNORECASE)
 CLEARED = re.compile(r"\b(cleared|resolved|restored|recovered)\b", re.IGNORECASE)
 SHOWN = 3                     # alarms a sentence quotes; the report lists them all
+SEVERITY_WORDS = {0: "emergency", 1: "alert", 2: "critical", 3: "error", 4: "warning"}
 # ArduCopter's thrust-loss check names the motor it drives to full output to make up for a
 # lost one, by its motor number: the actuator a profile names motor_N.
 THRUST_LOSS = re.compile(r"thrust loss \((\d+)\)", re.IGNORECASE)
@@ -49,6 +50,9 @@ class SaidAlarm:
 class AutopilotSaid:
     alarms: tuple[SaidAlarm, ...]      # by first time
     other_messages: int                # what it said while operating that reports no trouble
+    # Statuses already wrong at their first report (`AutopilotMessage.standing`): how the
+    # log began, whether the vehicle operated then or not; never taken for news of it.
+    standing: tuple[SaidAlarm, ...] = ()
 
     @property
     def motors_named(self) -> tuple[str, ...]:
@@ -63,6 +67,9 @@ class AutopilotSaid:
 
     def describe(self, fault: bool, onset_s: float | None, component: str | None = None
                  ) -> str:
+        return self._news(fault, onset_s, component) + self._standing()
+
+    def _news(self, fault: bool, onset_s: float | None, component: str | None) -> str:
         if not self.alarms:
             return "no warning or error while the vehicle operated" + (
                 f" ({self.other_messages} other message(s))" if self.other_messages else "")
@@ -72,6 +79,15 @@ class AutopilotSaid:
             return quoted + more + _agreement(self.motors_named, component)
         return (f"reported trouble this diagnosis did not find: {quoted}{more}: look at the "
                 "log there")
+
+    def _standing(self) -> str:
+        if not self.standing:
+            return ""
+        listed = ", ".join(f'"{a.text}"' + (f" ({SEVERITY_WORDS[a.severity]})"
+                                             if a.severity in SEVERITY_WORDS else "")
+                           for a in self.standing[:SHOWN])
+        more = f" and {len(self.standing) - SHOWN} more" if len(self.standing) > SHOWN else ""
+        return f"; already so when the log began: {listed}{more}"
 
 
 def trouble_in_normal_log(name: str, said: AutopilotSaid | None) -> str | None:
@@ -126,9 +142,14 @@ def said_in(messages: Sequence[AutopilotMessage], start_ns: int,
     if not messages:
         return None
     alarms: dict[str, SaidAlarm] = {}
+    standing: list[SaidAlarm] = []
     others = 0
     for message in sorted(messages, key=lambda m: m.time_ns):
         at_s = (message.time_ns - start_ns) / 1e9
+        if message.standing:
+            standing.append(SaidAlarm(message.text, message.severity, round(at_s, 3),
+                                      round(at_s, 3), 1))
+            continue
         if not kept(at_s):
             continue
         if not is_alarm(message):
@@ -139,4 +160,4 @@ def said_in(messages: Sequence[AutopilotMessage], start_ns: int,
             SaidAlarm(message.text, message.severity, round(at_s, 3), round(at_s, 3), 1)
             if seen is None else SaidAlarm(seen.text, seen.severity, seen.first_s,
                                            round(at_s, 3), seen.times + 1))
-    return AutopilotSaid(tuple(alarms.values()), others)
+    return AutopilotSaid(tuple(alarms.values()), others, tuple(standing))

@@ -265,6 +265,7 @@ class AutopilotPart:
     summary: str
     alarms: tuple[AlarmPart, ...] = ()
     other_messages: int = 0
+    standing: tuple[AlarmPart, ...] = ()     # statuses already wrong when the log began
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -6,6 +6,7 @@ import math
 from datetime import UTC, datetime
 
 from auvdiag_cli import __version__
+from auvdiag_cli.engine.autopilot_words import SaidAlarm
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.closed_loop import ClosedLoopReplay
 from auvdiag_cli.engine.command_check import CommandCheck
@@ -124,11 +125,14 @@ def _autopilot(diagnosis: Diagnosis) -> AutopilotPart | None:
     if said is None:
         return None
     fault = diagnosis.verdict == Verdict.FAULT
+    def parts(alarms: tuple[SaidAlarm, ...]) -> tuple[AlarmPart, ...]:
+        return tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
+                               last_s=a.last_s, times=a.times) for a in alarms)
+
     return AutopilotPart(
         summary=said.describe(fault, diagnosis.onset_s, diagnosis.component),
-        other_messages=said.other_messages,
-        alarms=tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
-                               last_s=a.last_s, times=a.times) for a in said.alarms))
+        other_messages=said.other_messages, alarms=parts(said.alarms),
+        standing=parts(said.standing))
 
 
 def _model(diagnosis: Diagnosis) -> ModelPart:
