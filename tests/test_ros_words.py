@@ -174,6 +174,12 @@ def test_inspect_quotes_what_the_vehicle_said_under_its_namespace(tmp_path, dive
     assert ('  autopilot reported trouble: "/dvl_driver: DVL lost bottom lock" at 30.0 s, '
             '2 times to 31.0 s; "/thruster_driver: thruster 2 not responding" at 40.0 s; '
             '"Leak Detected" at 50.0 s') in shown.output
+    standing = _write(dive, profile, tmp_path / "standing.db3", "db3",
+                      lambda start, ros1: [_hardware(start, ros1)])
+    shown = CliRunner().invoke(app, ["inspect", str(standing)])
+    assert ('reported trouble: "dvl: status: bottom lock lost" at 30.0 s; "dvl: status: no '
+            'data" at 40.0 s; "thrusters: stale" at 60.0 s; already so when the log began: '
+            '"mavros: Battery: Low voltage"') in shown.output
 
 
 @pytest.mark.parametrize(("fmt", "stored", "said"), [

@@ -67,7 +67,7 @@ class AutopilotSaid:
 
     def describe(self, fault: bool, onset_s: float | None, component: str | None = None
                  ) -> str:
-        return self._news(fault, onset_s, component) + self._standing()
+        return self._news(fault, onset_s, component) + self.standing_text()
 
     def _news(self, fault: bool, onset_s: float | None, component: str | None) -> str:
         if not self.alarms:
@@ -80,7 +80,8 @@ class AutopilotSaid:
         return (f"reported trouble this diagnosis did not find: {quoted}{more}: look at the "
                 "log there")
 
-    def _standing(self) -> str:
+    def standing_text(self) -> str:
+        """The statuses already wrong when the log began, as a clause to append."""
         if not self.standing:
             return ""
         listed = ", ".join(f'"{a.text}"' + (f" ({SEVERITY_WORDS[a.severity]})"

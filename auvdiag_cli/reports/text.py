@@ -172,7 +172,7 @@ def inspection_lines(inspection: Inspection) -> list[str]:
     if said is not None:
         lines.append("  autopilot " + (f"reported trouble: {said.quoted()}" if said.alarms
                                        else f"no warning or error ({said.other_messages} "
-                                       "message(s))"))
+                                       "message(s))") + said.standing_text())
     lines.append(f"  {'topic / message':<32} {'type':<34} {'count':>8} {'mean rate':>9}")
     for topic in inv.topics:
         rate = f"{topic.count / duration:.1f} Hz" if duration else ""
