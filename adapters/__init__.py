@@ -25,6 +25,7 @@ __all__ = [
     "detect_format",
     "inventory",
     "read_log",
+    "with_ros_words",
 ]
 
 
@@ -94,16 +95,13 @@ def read_log(path: Path, sources: Mapping[str, LogSources]) -> Signals:
 def inventory(path: Path) -> tuple[LogInventory, str]:
     """What the log at ``path`` holds, and the profile family that maps its signals."""
     adapter, fmt = _find_adapter(path)
-    contents = adapter.inventory(path, fmt)
-    if adapter.family == "ros":
-        contents = _with_ros_words(path, contents)
-    return contents, adapter.family
+    return adapter.inventory(path, fmt), adapter.family
 
 
-def _with_ros_words(path: Path, contents: LogInventory) -> LogInventory:
-    """A ROS log's own words (`adapters.ros_words`), which its index does not hold: read
-    from their topics alone, under whatever namespace they are; none where they do not
-    read."""
+def with_ros_words(path: Path, contents: LogInventory) -> LogInventory:
+    """``contents`` (a ROS log's inventory) with the log's own words (`adapters.ros_words`),
+    which its index does not hold: read from their topics alone, under whatever namespace
+    they are; none where they do not read. Only for showing them: it decodes those topics."""
     words = words_among(topic.name for topic in contents.topics)
     if not words:
         return contents

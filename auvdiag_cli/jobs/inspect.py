@@ -4,7 +4,15 @@ import difflib
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-from adapters import FieldSource, LogInventory, LogSources, Signals, inventory, read_log
+from adapters import (
+    FieldSource,
+    LogInventory,
+    LogSources,
+    Signals,
+    inventory,
+    read_log,
+    with_ros_words,
+)
 from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.signals import CLOCK_REFERENCE
 from auvdiag_cli.engine.log_clock import clock_gap, utc_offset_ns
@@ -112,6 +120,8 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     """Inventory the log, then read each of the profile's signals that its topics offer
     (None: describe the log only, its span from a column named like a clock for a CSV)."""
     contents, family = inventory(path)
+    if family == "ros":
+        contents = with_ros_words(path, contents)
     setup = autopilot_setup(path, family)
     if profile is None:
         return _described_only(path, family, contents, setup)

@@ -125,14 +125,15 @@ def _autopilot(diagnosis: Diagnosis) -> AutopilotPart | None:
     if said is None:
         return None
     fault = diagnosis.verdict == Verdict.FAULT
-    def parts(alarms: tuple[SaidAlarm, ...]) -> tuple[AlarmPart, ...]:
-        return tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
-                               last_s=a.last_s, times=a.times) for a in alarms)
-
     return AutopilotPart(
         summary=said.describe(fault, diagnosis.onset_s, diagnosis.component),
-        other_messages=said.other_messages, alarms=parts(said.alarms),
-        standing=parts(said.standing))
+        other_messages=said.other_messages, alarms=_alarm_parts(said.alarms),
+        standing=_alarm_parts(said.standing))
+
+
+def _alarm_parts(alarms: tuple[SaidAlarm, ...]) -> tuple[AlarmPart, ...]:
+    return tuple(AlarmPart(text=a.text, severity=a.severity, first_s=a.first_s,
+                           last_s=a.last_s, times=a.times) for a in alarms)
 
 
 def _model(diagnosis: Diagnosis) -> ModelPart:

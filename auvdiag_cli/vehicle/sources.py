@@ -69,7 +69,8 @@ def _operating(reader: TableReader) -> tuple[FieldSource, FieldSource | None]:
 def log_sources(reader: TableReader, signal_names: list[str], optional: Sequence[str] = (),
                 family: str = "") -> LogSources:
     """The family's sources of ``signal_names``; a log may lack those of ``optional``. A
-    ROS log's own words (`/rosout`, mavros' status texts) are read wherever it has them."""
+    ROS log's own words (`/rosout`, mavros' status texts, `/diagnostics`) are read
+    wherever it has them."""
     signals_table = reader.sub("signals")
     signals = {name: _field_source(signals_table.sub(name)) for name in signal_names}
     fallbacks = {}
