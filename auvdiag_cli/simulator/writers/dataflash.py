@@ -7,7 +7,12 @@ from pathlib import Path
 
 from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
+from auvdiag_cli.simulator.writers.records import (
+    Record,
+    dive_records,
+    family_sources,
+    operating_raw,
+)
 from auvdiag_cli.vehicle.profile import Profile
 
 HEADER = b"\xa3\x95"
@@ -90,8 +95,7 @@ def _armed(profile: Profile) -> Record | None:
     source = family_sources(profile, "dataflash").signals.get(OPERATING)
     if source is None:
         return None
-    raw = source.bits or next((r for r, meaning in source.values if meaning), 1)
-    return Record(0, source.topic, ((source.field, float(raw)),), source.where)
+    return Record(0, source.topic, ((source.field, operating_raw(source)),), source.where)
 
 
 def write_dataflash(dive: SimulatedDive, profile: Profile, path: Path) -> None:

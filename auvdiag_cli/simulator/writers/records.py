@@ -26,6 +26,12 @@ def raw_value(source: FieldSource, value: float) -> float:
     return (value - source.offset) / source.scale
 
 
+def operating_raw(source: FieldSource) -> float:
+    """The raw value that says "operating" to the profile's operating source (its bit, the
+    listed value that means it, else 1)."""
+    return float(source.bits or next((r for r, meaning in source.values if meaning), 1))
+
+
 def family_sources(profile: Profile, family: str) -> LogSources:
     sources = profile.sources.get(family)
     if sources is None:

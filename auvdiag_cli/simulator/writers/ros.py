@@ -14,7 +14,12 @@ import numpy as np
 from adapters.fieldpath import parse_field_path
 from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import Record, dive_records, family_sources
+from auvdiag_cli.simulator.writers.records import (
+    Record,
+    dive_records,
+    family_sources,
+    operating_raw,
+)
 from auvdiag_cli.vehicle.profile import Profile
 
 # mavros's messages (mavros_msgs, not in rosbags' type stores): what an ArduPilot vehicle's
@@ -172,7 +177,7 @@ def _operating_records(dive: SimulatedDive, profile: Profile) -> list[Record]:
     source = family_sources(profile, "ros").signals.get(OPERATING)
     if source is None:
         return []
-    raw = float(source.bits or next((r for r, meaning in source.values if meaning), 1))
+    raw = operating_raw(source)
     return [Record(dive.start_ns + k * STATE_PERIOD_NS, source.topic, ((source.field, raw),),
                    source.where)
             for k in range(int(dive.duration_s) + 1)]
