@@ -10,7 +10,8 @@ import pytest
 
 from auvdiag_cli.fuzz.mutations import MUTATIONS, mutate
 
-FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv")
+FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv",
+           "bag+words", "db3+words", "ros2-mcap+words", "mcap+words", "topic-csv+words")
 
 
 def test_mutations_are_reproducible_and_damage_the_bytes():
@@ -39,6 +40,25 @@ def test_seeded_campaign_over_every_format_has_no_defect(tmp_path):
               for kind in ("read", "rejected")}
     assert totals["read"] > 20 and totals["rejected"] > 20     # the damage was real
     assert max(s["peak_rss_mb"] for s in report["seeds"].values()) < 1024
+
+
+def test_a_ros_seed_with_words_carries_them_and_damages_them(tmp_path):
+    from adapters import read_log
+    from auvdiag_cli.fuzz.seeds import simulated_seeds
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    profile = load_profile()
+    seeds = simulated_seeds(tmp_path, profile, ("bag", "bag+words", "topic-csv+words"))
+    said = {seed.name: read_log(seed.path, profile.sources).autopilot_messages for seed in seeds}
+    assert not said["bag"]
+    for name in ("bag+words", "topic-csv+words"):
+        texts = {m.text for m in said[name]}
+        assert "/dvl_driver: DVL lost bottom lock" in texts and "PreArm: check 3" in texts
+        assert {m.text for m in said[name] if m.standing} == {"battery: low voltage",
+                                                               "leak: sensor"}
+    assert seeds[2].storage.name.endswith("-rosout.csv")      # the words are what is damaged
+    with pytest.raises(ValueError, match="only a ROS format"):
+        simulated_seeds(tmp_path / "tlog", profile, ("tlog+words",))
 
 
 HARNESS_SCRIPT = textwrap.dedent("""

@@ -20,7 +20,8 @@ def _arguments(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--first-case", type=int, default=0, help="number of the first case")
     parser.add_argument("--formats", default=None,
                         help="simulated seed logs to write, comma-separated ('' for none; "
-                             "default: every format the simulator writes)")
+                             "default: every format the simulator writes, and each ROS "
+                             "format again with its software's words: bag+words, ...)")
     parser.add_argument("--seed-log", type=Path, action="append", default=[],
                         help="a real log to damage as well (repeatable)")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
@@ -37,8 +38,7 @@ def main(argv: list[str] | None = None) -> int:
     import tempfile
 
     from auvdiag_cli.fuzz.harness import Case, Limits, exercise, run_cases, summarise
-    from auvdiag_cli.fuzz.seeds import real_seed, simulated_seeds
-    from auvdiag_cli.simulator.writers import LOG_FORMATS
+    from auvdiag_cli.fuzz.seeds import SEED_FORMATS, real_seed, simulated_seeds
     from auvdiag_cli.vehicle.profile import load_profile
     from auvdiag_errors import AuvdiagError
     from models.store import load_model
@@ -51,7 +51,7 @@ def main(argv: list[str] | None = None) -> int:
                                  "time_limit_s": limits.time_s,
                                  "memory_limit_mb": limits.memory_mb, "seeds": {}}
     with tempfile.TemporaryDirectory(prefix="auvdiag-seeds-") as folder:
-        formats = LOG_FORMATS if options.formats is None else tuple(
+        formats = SEED_FORMATS if options.formats is None else tuple(
             f for f in options.formats.split(",") if f)
         try:
             seeds = simulated_seeds(Path(folder), profile, formats)

@@ -1,6 +1,9 @@
 """Valid logs for the fuzzer to damage: one short simulated dive written in every format the
 tool reads, by the same writers (rosbags, mcap, the MAVLink and DataFlash writers) as the
-test suite uses, plus any real logs a user adds."""
+test suite uses, plus any real logs a user adds. Each ROS format is written a second time
+with the vehicle's software talking beside the dive (`/rosout`, mavros status texts,
+`/diagnostics`: "bag+words"), so that damage lands in what those readers decode too; the
+plain seeds stay as they were, and the cases found on them replay as they did."""
 
 import copy
 import shutil
@@ -10,11 +13,16 @@ from pathlib import Path
 from adapters import detect_format
 from auvdiag_cli.simulator.run import SimulatedDive, Stream, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import LOG_FORMATS, write_log
+from auvdiag_cli.simulator.writers import LOG_FORMATS, ExtraTopic, write_log
+from auvdiag_cli.simulator.writers.ros import hardware_status, node_log, status_texts
 from auvdiag_cli.vehicle.profile import Profile
 
 SEED_SCENARIO = "routine-flow-sensor-dead"   # markers, DMS segments and a fault: many paths
 SEED_SECONDS = 40.0
+WITH_WORDS = "+words"
+ROS_SEED_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "topic-csv")
+SEED_FORMATS = (*LOG_FORMATS, *(fmt + WITH_WORDS for fmt in ROS_SEED_FORMATS))
+WORDS_TOPIC = "/rosout"      # a per-topic CSV folder's file that is damaged: the nodes' words
 
 
 @dataclass(frozen=True)
@@ -50,26 +58,55 @@ def _cropped(dive: SimulatedDive, seconds: float) -> SimulatedDive:
     return short
 
 
-def _storage(path: Path) -> Path:
-    """The file that is damaged: a ROS 2 bag's storage, a per-topic CSV folder's largest
-    topic."""
+def _storage(path: Path, topic: str | None = None) -> Path:
+    """The file that is damaged: a ROS 2 bag's storage, a per-topic CSV folder's file of
+    ``topic`` (None: its largest)."""
     if path.is_dir():
         files = sorted(path.iterdir())
         storage = [p for p in files if p.suffix in (".db3", ".mcap")]
-        return storage[0] if storage else max(files, key=lambda p: p.stat().st_size)
+        named = [p for p in files if topic is not None
+                 and p.stem.endswith(topic.replace("/", "-"))]
+        return (storage or named or [max(files, key=lambda p: p.stat().st_size)])[0]
     return path
 
 
-def simulated_seeds(folder: Path, profile: Profile, formats: tuple[str, ...] = LOG_FORMATS
+def software_words(start_ns: int, seconds: float, ros1: bool) -> list[ExtraTopic]:
+    """What a vehicle's software says over ``seconds`` from ``start_ns``: its nodes at every
+    level twice a second, the autopilot's texts at every severity, and three hardware
+    statuses once a second, one wrong from the start, one worsening, one recovering."""
+    def at(step_s: float) -> list[int]:
+        return [start_ns + int(k * step_s * 1e9) for k in range(int(seconds / step_s))]
+
+    levels, nodes = (1, 2, 4, 8, 16), ("/dvl_driver", "/thruster_driver", "/mission")
+    texts = ("DVL lost bottom lock", "thruster 2 not responding", "waypoint 3 reached")
+    statuses = [(time_ns, [(2, "battery", "low voltage"), (min(3, k // 10), "sonar", "link"),
+                           (max(0, 2 - k // 10), "leak", "sensor")])
+                for k, time_ns in enumerate(at(1.0))]
+    return [node_log("/rosout", ros1, [(time_ns, levels[k % 5], nodes[k % 3], texts[k % 3])
+                                       for k, time_ns in enumerate(at(0.5))]),
+            status_texts("/mavros/statustext/recv", ros1,
+                         [(time_ns, k % 8, f"PreArm: check {k}")
+                          for k, time_ns in enumerate(at(2.0))]),
+            hardware_status("/diagnostics", ros1, statuses)]
+
+
+def simulated_seeds(folder: Path, profile: Profile, formats: tuple[str, ...] = SEED_FORMATS
                     ) -> list[SeedLog]:
-    """One seed per format, written under ``folder``."""
+    """One seed per format (a ROS format's name + ``WITH_WORDS``: with `software_words`),
+    written under ``folder``."""
     dive = _cropped(simulate(get_scenario(SEED_SCENARIO, profile), profile, 7), SEED_SECONDS)
     seeds = []
-    for fmt in formats:
-        path = folder / (f"seed.{fmt}" if fmt in ("bag", "mcap", "tlog", "bin")
-                         else f"seed-{fmt}")
-        write_log(dive, profile, path, fmt)
-        seeds.append(SeedLog(fmt, path, _storage(path)))
+    for name in formats:
+        fmt, _, words = name.partition(WITH_WORDS[0])
+        if words and fmt not in ROS_SEED_FORMATS:
+            raise ValueError(f"{name}: only a ROS format carries words")
+        tag = "-words" if words else ""
+        path = folder / (f"seed{tag}.{fmt}" if fmt in ("bag", "mcap", "tlog", "bin")
+                         else f"seed-{fmt}{tag}")
+        extra = software_words(dive.start_ns, SEED_SECONDS, fmt in ("bag", "topic-csv")) \
+            if words else []
+        write_log(dive, profile, path, fmt, extra)
+        seeds.append(SeedLog(name, path, _storage(path, WORDS_TOPIC if words else None)))
     return seeds
 
 
