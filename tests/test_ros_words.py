@@ -15,7 +15,7 @@ from adapters.ros_words import ROSOUT, STATUSTEXT, WordsRead, severity
 from auvdiag_cli.cli import app
 from auvdiag_cli.engine.autopilot_words import is_alarm, said_in
 from auvdiag_cli.fuzz.mutations import mutate
-from auvdiag_cli.simulator.writers import ExtraTopic, write_log
+from auvdiag_cli.simulator.writers import ROS1_FORMATS, ExtraTopic, write_log
 from auvdiag_cli.simulator.writers.ros import hardware_status, node_log, status_texts
 from auvdiag_errors import LogError
 
@@ -49,7 +49,7 @@ def _status_texts(start_ns: int, ros1: bool, namespace: str = "") -> ExtraTopic:
 
 
 def _write(dive, profile, path: Path, fmt: str, extra_of, namespace: str = "") -> Path:
-    ros1 = fmt in ("bag", "topic-csv")
+    ros1 = fmt in ROS1_FORMATS
     write_log(dive, profile, path, fmt, extra_of(dive.start_ns, ros1), namespace)
     return path
 

@@ -13,7 +13,7 @@ from pathlib import Path
 from adapters import detect_format
 from auvdiag_cli.simulator.run import SimulatedDive, Stream, simulate
 from auvdiag_cli.simulator.scenarios import get_scenario
-from auvdiag_cli.simulator.writers import LOG_FORMATS, ExtraTopic, write_log
+from auvdiag_cli.simulator.writers import LOG_FORMATS, ROS1_FORMATS, ExtraTopic, write_log
 from auvdiag_cli.simulator.writers.ros import hardware_status, node_log, status_texts
 from auvdiag_cli.vehicle.profile import Profile
 
@@ -97,13 +97,13 @@ def simulated_seeds(folder: Path, profile: Profile, formats: tuple[str, ...] = S
     dive = _cropped(simulate(get_scenario(SEED_SCENARIO, profile), profile, 7), SEED_SECONDS)
     seeds = []
     for name in formats:
-        fmt, _, words = name.partition(WITH_WORDS[0])
+        fmt, words = name.removesuffix(WITH_WORDS), name.endswith(WITH_WORDS)
         if words and fmt not in ROS_SEED_FORMATS:
             raise ValueError(f"{name}: only a ROS format carries words")
         tag = "-words" if words else ""
         path = folder / (f"seed{tag}.{fmt}" if fmt in ("bag", "mcap", "tlog", "bin")
                          else f"seed-{fmt}{tag}")
-        extra = software_words(dive.start_ns, SEED_SECONDS, fmt in ("bag", "topic-csv")) \
+        extra = software_words(dive.start_ns, SEED_SECONDS, fmt in ROS1_FORMATS) \
             if words else []
         write_log(dive, profile, path, fmt, extra)
         seeds.append(SeedLog(name, path, _storage(path, WORDS_TOPIC if words else None)))

@@ -18,9 +18,12 @@ from auvdiag_cli.simulator.writers.topic_csv import write_topic_csvs
 from auvdiag_cli.simulator.writers.ulog import write_ulog
 from auvdiag_cli.vehicle.profile import Profile
 
-__all__ = ["LOG_FORMATS", "ExtraTopic", "write_log"]
+__all__ = ["LOG_FORMATS", "ROS1_FORMATS", "ExtraTopic", "write_log"]
 
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv")
+# Whose messages are ROS 1's (a per-topic CSV folder: `rostopic echo -p` of a ROS 1 bag):
+# extra topics for them are built with ROS 1's types.
+ROS1_FORMATS = ("bag", "topic-csv")
 
 
 def write_log(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
