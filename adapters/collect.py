@@ -3,7 +3,7 @@
 import operator
 from array import array
 from collections.abc import Callable, Iterable, Sequence
-from functools import partial
+from functools import cached_property, partial
 from pathlib import Path
 from typing import Any
 
@@ -44,8 +44,12 @@ ColumnSource = Callable[[str], np.ndarray]
 class _Extractor:
     def __init__(self, name: str, source: FieldSource) -> None:
         self.name, self.source = name, source
-        self.get: Callable[[Any], Any] = field_getter(source.field)
         self.where = [(key, field_getter(key), value) for key, value in source.where]
+
+    @cached_property
+    def get(self) -> Callable[[Any], Any]:
+        """Made at the first message read whole (a CSV column is a name, not a path)."""
+        return field_getter(self.source.field)
 
     def matches(self, message: Any) -> bool:
         return all(_text(get(message)) == value for key, get, value in self.where
@@ -127,7 +131,6 @@ class SignalCollector:
         self.times: dict[str, array[int]] = {name: array("q") for name in self.wanted}
         self.values: dict[str, array[float]] = {name: array("d") for name in self.wanted}
         self.markers: list[SegmentMarker] = []
-        self.segment_get = field_getter(sources.segment.field) if sources.segment else None
         self.count = 0
         self.notes: list[str] = []
         self.damage: Damage | None = None
@@ -163,12 +166,8 @@ class SignalCollector:
         self.segment_topic = None if segment is None else self.names[segment.topic]
         self.word_topics = {word.topic if word.at_root else under(self.namespace, word.topic):
                             word for word in self.sources.words}
-        self.log_names = set(self.names.values()) | self.word_topics.keys()
-
-    @property
-    def topics(self) -> set[str]:
-        """The log's names of the topics to read."""
-        return self.log_names
+        # The log's names of the topics to read.
+        self.topics: set[str] = set(self.names.values()) | self.word_topics.keys()
 
     def resolve_topics(self, available: Iterable[str]) -> None:
         """The log's topics, known before reading (an index, a summary): the namespace the
@@ -183,8 +182,8 @@ class SignalCollector:
         index): a profile topic is read under the first name it shows up with, at the root
         or under the namespace the first namespaced one showed (`require_topics` checks
         the choice against all of the log's topics at the end)."""
-        if topic in self.log_names or self.namespace_fixed or topic in self.refused:
-            return topic in self.log_names
+        if topic in self.topics or self.namespace_fixed or topic in self.refused:
+            return topic in self.topics
         for wanted in self.sources.topics - self.claimed:
             suffix = "/" + wanted.lstrip("/")
             namespace = normalised(topic[:-len(suffix)]) if topic.endswith(suffix) else None
@@ -225,8 +224,8 @@ class SignalCollector:
                 return
         self.count += 1
         segment = self.sources.segment
-        if segment is not None and topic == self.segment_topic and self.segment_get is not None:
-            text = _text(self.segment_get(message))
+        if segment is not None and topic == self.segment_topic:
+            text = _text(_field_of(message, segment.field))
             if text.startswith(segment.prefix):
                 self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):

@@ -27,6 +27,15 @@ def parse_field_path(path: str) -> tuple[str | int, ...]:
     return tuple(steps)
 
 
+def is_field_path(path: str) -> bool:
+    """Whether ``path`` parses (a damaged log's field names may not)."""
+    try:
+        parse_field_path(path)
+    except ValueError:
+        return False
+    return True
+
+
 def field_getter(path: str) -> Callable[[Any], Any]:
     """Return a function that extracts ``path`` from a message object or a mapping."""
     steps = parse_field_path(path)

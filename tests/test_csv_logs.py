@@ -83,6 +83,42 @@ def test_a_missing_column_names_it_and_the_closest(make_log, tmp_path):
     assert "closest first: flow_m_s" in line
 
 
+def test_columns_named_with_units_and_dashes_are_read_drafted_and_trained_on(make_log,
+                                                                          tmp_path):
+    """A CSV column is a name, not a field path: "flow (m/s)" and "thr-0 (cmd)" read as
+    the plain names do, from a hand-written profile and from `init-profile`'s draft."""
+    renamed = {"flow_mps": "flow (m/s)", "thruster_0": "thr-0 [cmd]"}
+    logs = []
+    for seed in (11, 12):
+        text = make_log("paper-normal", seed, "csv").read_text()
+        header, rest = text.split("\n", 1)
+        for old, new in renamed.items():
+            assert old in header.split(",")
+            header = header.replace(old, new)
+        logs.append(tmp_path / f"dive{seed}.csv")
+        logs[-1].write_text(header + "\n" + rest)
+    profile = tmp_path / "units.toml"
+    text = PROFILE
+    for old, new in renamed.items():
+        text = text.replace(f'column = "{old}"', f'column = "{new}"')
+    profile.write_text(text)
+    runner = CliRunner()
+    shown = runner.invoke(app, ["inspect", str(logs[0]), "--profile", str(profile)])
+    assert shown.exit_code == 0, shown.output
+    assert re.search(r"ok\s+flow\s+flow \(m/s\)", shown.output)
+    trained = runner.invoke(app, ["train", *map(str, logs), "--profile", str(profile),
+                                  "--output", str(tmp_path / "model"), "--iterations-scale",
+                                  "0.05", "--keep-unskilled"])
+    assert trained.exit_code == 0, trained.output
+    drafted = runner.invoke(app, ["init-profile", str(logs[0]), "-o",
+                                  str(tmp_path / "draft.toml")])
+    assert drafted.exit_code == 0, drafted.output
+    assert 'column = "flow (m/s)"' in (tmp_path / "draft.toml").read_text()
+    checked = runner.invoke(app, ["inspect", str(logs[0]), "--profile",
+                                  str(tmp_path / "draft.toml")])
+    assert checked.exit_code == 0 and "flow (m/s)" in checked.output, checked.output
+
+
 def test_csv_is_recognised_by_content_not_by_name(make_log, tmp_path):
     from adapters import detect_format
     from auvdiag_errors import LogError

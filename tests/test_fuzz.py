@@ -133,6 +133,7 @@ def test_an_error_must_be_one_line_naming_the_file(monkeypatch, tmp_path, profil
     ("bin", 1826),    # an FMT record naming one column twice: the dtype raised ValueError
     ("bin", 4856),    # an alarm on the last sample put the onset one step after the log
     ("bin", 4963),    # an MSG format without its Message column: the marker field raised
+    ("bin", 894),     # a column name damaged into "C\x13": init-profile drafted it, unparsed
     ("db3", 712),     # a damaged timestamp cell read as text: the span query raised
     ("db3", 2154),    # a record declaring a huge blob: sqlite's "out of memory" escaped
     ("db3", 6365),    # a topic name that is not UTF-8: the text conversion raised

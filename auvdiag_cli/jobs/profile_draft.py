@@ -15,6 +15,7 @@ import numpy as np
 from adapters import LogInventory, inventory, read_log
 from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.csv_log import csv_rows
+from adapters.fieldpath import is_field_path
 from adapters.recognise import is_number
 from adapters.signals import FieldSource, LogSources, TimeColumn
 from auvdiag_cli.jobs.autopilot_outputs import (
@@ -92,7 +93,10 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
         if topic.count < 2:
             continue
         where = tuple((key, values[0]) for key, values in topic.instances if len(values) > 1)
-        fields = topic.fields or ((topic.name,) if family == "csv" else ())
+        # A CSV column is a name, whatever it holds; other fields are paths into a message
+        # (a damaged log's field names may not be).
+        fields = (topic.fields or (topic.name,)) if family == "csv" else [
+            field for field in topic.fields if is_field_path(field)]
         for field in fields:
             command = COMMAND_NAME.search(field) or (
                 family == "ros" and COMMAND_TOPIC.search(topic.name))

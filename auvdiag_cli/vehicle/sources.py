@@ -4,6 +4,7 @@ and a CSV clock."""
 
 from collections.abc import Sequence
 
+from adapters.fieldpath import parse_field_path
 from adapters.ros_words import ROS_WORD_SOURCES
 from adapters.signals import (
     CLOCK_REFERENCE,
@@ -29,12 +30,26 @@ def _topic(reader: TableReader) -> str:
 
 
 def _field(reader: TableReader) -> str:
-    return str(reader.get("column" if "column" in reader.table else "field", str))
+    """A CSV `column` is a name, whatever it holds ("depth (m)"); any other source's
+    `field` a path into its message (`twist.linear.x`, `channels[2]`), checked here."""
+    if "column" in reader.table:
+        return str(reader.get("column", str))
+    return _path(reader, "field", reader.get("field", str))
+
+
+def _path(reader: TableReader, key: str, path: str) -> str:
+    try:
+        parse_field_path(path)
+    except ValueError as error:
+        raise ProfileError(f"key '{reader.key(key)}': {error}") from None
+    return path
 
 
 def _field_source(entry: TableReader) -> FieldSource:
     matched = entry.sub("where") if "where" in entry.table else None
-    where = {} if matched is None else {name: matched.table[name] for name in matched.names()}
+    paths = "column" not in entry.table          # a CSV filters on other columns by name
+    where = {} if matched is None else {_path(matched, name, name) if paths else name:
+                                        matched.table[name] for name in matched.names()}
     return FieldSource(
         _topic(entry), _field(entry), entry.get("scale", float, 1.0),
         entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
