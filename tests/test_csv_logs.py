@@ -85,9 +85,10 @@ def test_a_missing_column_names_it_and_the_closest(make_log, tmp_path):
 
 def test_columns_named_with_units_and_dashes_are_read_drafted_and_trained_on(make_log,
                                                                           tmp_path):
-    """A CSV column is a name, not a field path: "flow (m/s)" and "thr-0 (cmd)" read as
-    the plain names do, from a hand-written profile and from `init-profile`'s draft."""
-    renamed = {"flow_mps": "flow (m/s)", "thruster_0": "thr-0 [cmd]"}
+    """A CSV column is a name, not a field path: "flow (m/s)" and "thr-0 [cmd]" read as
+    the plain names do, from a hand-written profile and from `init-profile`'s draft, which
+    takes "time (s)" for the clock and its unit from the brackets."""
+    renamed = {"time_s": "time (s)", "flow_mps": "flow (m/s)", "thruster_0": "thr-0 [cmd]"}
     logs = []
     for seed in (11, 12):
         text = make_log("paper-normal", seed, "csv").read_text()
@@ -113,7 +114,9 @@ def test_columns_named_with_units_and_dashes_are_read_drafted_and_trained_on(mak
     drafted = runner.invoke(app, ["init-profile", str(logs[0]), "-o",
                                   str(tmp_path / "draft.toml")])
     assert drafted.exit_code == 0, drafted.output
-    assert 'column = "flow (m/s)"' in (tmp_path / "draft.toml").read_text()
+    draft = (tmp_path / "draft.toml").read_text()
+    assert 'column = "flow (m/s)"' in draft and 'time = { column = "time (s)", unit = "s" }' \
+        in draft
     checked = runner.invoke(app, ["inspect", str(logs[0]), "--profile",
                                   str(tmp_path / "draft.toml")])
     assert checked.exit_code == 0 and "flow (m/s)" in checked.output, checked.output

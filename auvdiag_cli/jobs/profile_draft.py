@@ -52,7 +52,9 @@ SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_vel
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
                           r"^EKF_|^REQUEST_|^PARAM)", re.IGNORECASE)
-TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)$", re.IGNORECASE)
+# A clock's column, its unit perhaps beside it as CSV exports write it ("time (s)", "t [ms]").
+TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
+                       r"(\s*[(\[]\s*(s|ms|us|ns)\s*[)\]])?$", re.IGNORECASE)
 MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
 HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
@@ -131,7 +133,7 @@ def guess_time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
     return TimeColumn(named[0], _clock_unit(named[0], numbers))
 
 
-UNIT_SUFFIX = re.compile(r"_(s|ms|us|ns)$", re.IGNORECASE)
+UNIT_SUFFIX = re.compile(r"(?:_|[(\[])\s*(s|ms|us|ns)\s*[)\]]?$", re.IGNORECASE)
 SECONDS_PER = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 
 
