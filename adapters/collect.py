@@ -44,12 +44,15 @@ ColumnSource = Callable[[str], np.ndarray]
 class _Extractor:
     def __init__(self, name: str, source: FieldSource) -> None:
         self.name, self.source = name, source
-        self.where = [(key, field_getter(key), value) for key, value in source.where]
 
+    # Made at the first message read whole: a CSV column is a name, not a path.
     @cached_property
     def get(self) -> Callable[[Any], Any]:
-        """Made at the first message read whole (a CSV column is a name, not a path)."""
         return field_getter(self.source.field)
+
+    @cached_property
+    def where(self) -> list[tuple[str, Callable[[Any], Any], str]]:
+        return [(key, field_getter(key), value) for key, value in self.source.where]
 
     def matches(self, message: Any) -> bool:
         return all(_text(get(message)) == value for key, get, value in self.where
@@ -166,8 +169,7 @@ class SignalCollector:
         self.segment_topic = None if segment is None else self.names[segment.topic]
         self.word_topics = {word.topic if word.at_root else under(self.namespace, word.topic):
                             word for word in self.sources.words}
-        # The log's names of the topics to read.
-        self.topics: set[str] = set(self.names.values()) | self.word_topics.keys()
+        self.topics: set[str] = set(self.names.values()) | self.word_topics.keys()  # log's names
 
     def resolve_topics(self, available: Iterable[str]) -> None:
         """The log's topics, known before reading (an index, a summary): the namespace the
