@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from adapters.fieldpath import join_step
+
 # How deep nested ROS messages are listed, and how many entries a message shows.
 MAX_DEPTH = 4
 MAX_LISTED = 12
@@ -59,7 +61,8 @@ def ros_field_paths(typestore: Any, msgtype: str, prefix: str = "", depth: int =
 
 
 def object_field_paths(message: Any, prefix: str = "", depth: int = 0) -> list[str]:
-    """Paths of a decoded message object (dataclass-like or a mapping)."""
+    """Paths of a decoded message object (dataclass-like or a mapping); a key that is not a
+    plain name quoted (`adapters.fieldpath.join_step`)."""
     if isinstance(message, dict):
         items = list(message.items())
     elif hasattr(message, "__dataclass_fields__"):
@@ -67,16 +70,33 @@ def object_field_paths(message: Any, prefix: str = "", depth: int = 0) -> list[s
     elif hasattr(message, "__slots__"):
         items = [(name, getattr(message, name, None)) for name in message.__slots__]
     else:
-        return [prefix.rstrip(".")] if prefix else []
+        return [prefix] if prefix else []
     paths: list[str] = []
     for name, value in items:
         if str(name).startswith("_"):
             continue
+        path = join_step(prefix, str(name))
         if isinstance(value, list | tuple | np.ndarray) and len(value):
-            name, value = f"{name}[0]", value[0]
+            path, value = f"{path}[0]", value[0]
         if depth < MAX_DEPTH and (isinstance(value, dict) or hasattr(value, "__dataclass_fields__")
                                   or hasattr(value, "__slots__")):
-            paths += object_field_paths(value, f"{prefix}{name}.", depth + 1)
+            paths += object_field_paths(value, path, depth + 1)
         else:
-            paths.append(f"{prefix}{name}")
+            paths.append(path)
+    return paths
+
+
+def json_schema_paths(schema: Any, prefix: str = "", depth: int = 0) -> list[str]:
+    """Every value's path in a JSON Schema of an object (an MCAP channel's ``jsonschema``):
+    its properties, nested objects followed, an array shown by its first item."""
+    if not isinstance(schema, dict):
+        return []
+    while schema.get("type") == "array" and isinstance(schema.get("items"), dict):
+        prefix, schema = f"{prefix}[0]", schema["items"]
+    properties = schema.get("properties")
+    if not isinstance(properties, dict) or depth >= MAX_DEPTH:
+        return [prefix] if prefix else []
+    paths: list[str] = []
+    for name, inner in properties.items():
+        paths += json_schema_paths(inner, join_step(prefix, str(name)), depth + 1)
     return paths

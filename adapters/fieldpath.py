@@ -1,30 +1,56 @@
-"""Resolve a field path such as ``twist.linear.x`` or ``data[1]`` on a decoded message."""
+"""Resolve a field path such as ``twist.linear.x``, ``data[1]`` or ``rotors["motor-1"]`` on a
+decoded message. A key that is not a plain name (a JSON message's ``motor-1``, ``rpm 2``) is
+written quoted in brackets, as a JSON string."""
 
+import json
 import re
 from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
-_STEP = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)|\[(\d+)\]")
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_INDEX = re.compile(r"\[(\d+)\]")
+_KEY = re.compile(r'\[("(?:[^"\\]|\\.)*")\]')
+
+
+def _bracket(path: str, at: int) -> tuple[str | int, int] | None:
+    """The ``[2]`` or ``["key"]`` step at ``at`` and where it ends, or None."""
+    index = _INDEX.match(path, at)
+    if index:
+        return int(index.group(1)), index.end()
+    key = _KEY.match(path, at)
+    if key:
+        try:
+            return str(json.loads(key.group(1))), key.end()
+        except ValueError:
+            return None
+    return None
 
 
 @lru_cache(maxsize=256)
 def parse_field_path(path: str) -> tuple[str | int, ...]:
-    """Split a dotted path with list indices into attribute names and integer indices."""
+    """Split a path into attribute names or keys (str) and list indices (int): names joined
+    by dots, each step followed by any ``[index]`` or ``["key"]``; a path may begin with a
+    bracketed key."""
     steps: list[str | int] = []
-    for part in path.split("."):
-        if not part:
-            raise ValueError(f"empty step in field path {path!r}")
-        matched_to = 0
-        for match in _STEP.finditer(part):
-            if match.start() != matched_to:
-                break
-            name, index = match.groups()
-            steps.append(name if name is not None else int(index))
-            matched_to = match.end()
-        if matched_to != len(part):
-            raise ValueError(f"cannot parse field path {path!r} near {part[matched_to:]!r}")
-    return tuple(steps)
+    at = 0
+    while True:
+        name = _NAME.match(path, at)
+        if name:
+            steps.append(name.group())
+            at = name.end()
+        elif not (at == 0 and path.startswith('["')):
+            if at == len(path) or path[at] == ".":
+                raise ValueError(f"empty step in field path {path!r}")
+            raise ValueError(f"cannot parse field path {path!r} near {path[at:]!r}")
+        while (bracket := _bracket(path, at)) is not None:
+            steps.append(bracket[0])
+            at = bracket[1]
+        if at == len(path):
+            return tuple(steps)
+        if path[at] != ".":
+            raise ValueError(f"cannot parse field path {path!r} near {path[at:]!r}")
+        at += 1
 
 
 def is_field_path(path: str) -> bool:
@@ -34,6 +60,14 @@ def is_field_path(path: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def join_step(prefix: str, name: str) -> str:
+    """``prefix`` followed by the step ``name``: dotted where it is a plain name, else quoted
+    in brackets (``rotors["motor-1"]``)."""
+    if _NAME.fullmatch(name):
+        return f"{prefix}.{name}" if prefix else name
+    return f"{prefix}[{json.dumps(name)}]"
 
 
 def field_getter(path: str) -> Callable[[Any], Any]:
@@ -50,4 +84,3 @@ def field_getter(path: str) -> Callable[[Any], Any]:
         return value
 
     return get
-

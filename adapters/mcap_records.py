@@ -84,10 +84,12 @@ def records_in(chunk: Any, data: np.ndarray) -> Iterator[Any]:
 
 
 def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
-    """Field paths of each ros2msg schema (others, e.g. JSON, list none)."""
+    """Field paths of each ros2msg or JSON Schema schema (others list none)."""
+    import json
+
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-    from adapters.fieldnames import ros_field_paths
+    from adapters.fieldnames import json_schema_paths, ros_field_paths
 
     store, fields = get_typestore(Stores.EMPTY), {}
     for schema_id, schema in schemas.items():
@@ -95,7 +97,9 @@ def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
             if schema.encoding == "ros2msg":
                 store.register(get_types_from_msg(schema.data.decode(), schema.name))
                 fields[schema_id] = tuple(ros_field_paths(store, schema.name))
-        except Exception:  # a definition rosbags cannot parse lists no fields
+            elif schema.encoding == "jsonschema":
+                fields[schema_id] = tuple(json_schema_paths(json.loads(schema.data)))
+        except Exception:  # a definition that cannot be parsed lists no fields
             continue
     return fields
 

@@ -53,6 +53,33 @@ def test_field_paths():
         parse_field_path("twist..x")
 
 
+@pytest.mark.parametrize(("path", "steps"), [
+    ('rotors["motor-1"]', ("rotors", "motor-1")),
+    ('["rpm 2"]', ("rpm 2",)),
+    ('["pos.x"][0].value', ("pos.x", 0, "value")),
+    ('a["say \\"hi\\""]', ("a", 'say "hi"')),
+])
+def test_a_key_that_is_no_plain_name_is_quoted_in_brackets(path, steps):
+    """A JSON message's keys may hold dashes, spaces or dots: written as JSON strings in
+    brackets, they are one step each, and `join_step` writes them back so."""
+    from adapters.fieldpath import join_step
+
+    assert parse_field_path(path) == steps
+    message = {"rotors": {"motor-1": 0.5}, "rpm 2": 3, "pos.x": [{"value": 7}],
+               "a": {'say "hi"': 1}}
+    assert field_getter(path)(message) is not None
+    written = ""
+    for step in steps:
+        written = f"{written}[{step}]" if isinstance(step, int) else join_step(written, step)
+    assert parse_field_path(written) == steps
+
+
+@pytest.mark.parametrize("path", ['a.["b"]', 'a["b"', 'a[b]', '["b"]x', "a.", ".a", ""])
+def test_a_malformed_quoted_step_is_refused(path):
+    with pytest.raises(ValueError, match="field path"):
+        parse_field_path(path)
+
+
 def test_unresolvable_field_names_the_file(make_log, profile):
     from dataclasses import replace
 

@@ -264,3 +264,55 @@ def test_a_speed_is_drafted_in_metres_per_second_and_a_turn_rate_in_radians(tmp_
     text = draft_profile(log)
     units = {sensor["name"]: sensor["unit"] for sensor in tomllib.loads(text)["sensors"]}
     assert units.get("yawspeed") == "rad/s" and units.get("groundspeed") == "m/s", text
+
+
+def _json_mcap(path: Path) -> Path:
+    """A JSON-encoded MCAP as Foxglove's tools write it (a JSON Schema per channel), whose
+    keys hold a dash, a space and a quote."""
+    import json
+
+    from mcap.writer import Writer
+
+    schema = {"type": "object", "properties": {
+        "motor-1": {"type": "number"}, "rpm 2": {"type": "number"},
+        'the "depth"': {"type": "object", "properties": {"value": {"type": "number"}}}}}
+    with path.open("wb") as stream:
+        writer = Writer(stream)
+        writer.start(profile="", library="test")
+        channel = writer.register_channel("/state", "json", writer.register_schema(
+            "Thrusters", "jsonschema", json.dumps(schema).encode()))
+        for k in range(400):
+            time_ns = 1_700_000_000_000_000_000 + k * 100_000_000
+            message = {"motor-1": math.sin(k / 20), "rpm 2": math.cos(k / 30),
+                       'the "depth"': {"value": k / 10}}
+            writer.add_message(channel, log_time=time_ns, publish_time=time_ns,
+                               data=json.dumps(message).encode())
+        writer.finish()
+    return path
+
+
+def test_json_keys_that_are_no_plain_names_are_listed_drafted_and_read(tmp_path):
+    """`inspect` lists a JSON channel's fields from its schema, a key that is no plain name
+    quoted in brackets; the draft writes them as valid TOML and reads every one."""
+    from adapters import read_log
+    from auvdiag_cli.vehicle.profile import load_profile
+
+    log = _json_mcap(tmp_path / "state.mcap")
+    shown = runner.invoke(app, ["inspect", str(log)])
+    assert shown.exit_code == 0, shown.output
+    assert 'fields    ["motor-1"], ["rpm 2"], ["the \\"depth\\""].value' in shown.output
+    text = _draft_and_inspect(log, tmp_path / "draft.toml")
+    assert 'motor_1 = { topic = "/state", field = "[\\"motor-1\\"]" }' in text
+    signals = read_log(log, load_profile(tmp_path / "draft.toml").sources).series
+    assert signals["motor_1"].values[20] == pytest.approx(math.sin(1.0))
+    assert signals["the_depth_value"].values[-1] == pytest.approx(39.9)
+
+
+def test_a_csv_column_named_with_quotes_is_drafted_as_valid_toml(tmp_path):
+    log = tmp_path / "quoted.csv"
+    log.write_text('time,pwm1,"depth ""m"""\n' + "".join(
+        f"{t / 10},{1500 + round(100 * math.sin(t / 10))},{math.sin(t / 7):.3f}\n"
+        for t in range(300)))
+    text = _draft_and_inspect(log, tmp_path / "draft.toml")
+    assert 'depth_m = { column = "depth \\"m\\"" }' in text
+    assert tomllib.loads(text)["sources"]["csv"]["signals"]["depth_m"]["column"] == 'depth "m"'

@@ -1,6 +1,7 @@
 """The text of a profile `auvdiag init-profile` drafts: each proposed signal with what the
 user must check, the tables a profile needs, and where each signal lives in the log."""
 
+import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -14,6 +15,7 @@ from adapters.signals import CLOCK_REFERENCE, OPERATING, FieldSource, TimeColumn
 # it drives a model of the closed loop, but it is no actuator.
 SET_POINT_NAME = re.compile(r"(commanded|desired|^des|setpoint|set_point|target)",
                             re.IGNORECASE)
+BARE_KEY = re.compile(r"[A-Za-z0-9_-]+")
 NEUTRAL = 1e-3            # a command this small is at rest
 
 
@@ -50,17 +52,29 @@ def is_set_point(proposal: Proposal) -> bool:
         SET_POINT_NAME.search(proposal.source.field.rsplit(".", 1)[-1]))
 
 
+def quoted(text: str) -> str:
+    """``text`` as a TOML basic string: a log's names may hold quotes, backslashes or
+    control characters (JSON's escapes are TOML's; TOML also refuses a raw DEL)."""
+    return json.dumps(text).replace("\x7f", "\\u007f")
+
+
+def toml_key(text: str) -> str:
+    """``text`` as a TOML key: bare where TOML allows it."""
+    return text if BARE_KEY.fullmatch(text) else quoted(text)
+
+
 def entry(source: FieldSource, family: str) -> str:
     key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
         else "topic"
-    parts = [f'{key} = "{source.topic}"'] if family == "csv" else [
-        f'{key} = "{source.topic}"', f'field = "{source.field}"']
+    parts = [f"{key} = {quoted(source.topic)}"] if family == "csv" else [
+        f"{key} = {quoted(source.topic)}", f"field = {quoted(source.field)}"]
     if source.scale != 1.0:
         parts.append(f"scale = {source.scale:g}")
     if source.offset:
         parts.append(f"offset = {source.offset:g}")
     if source.where:
-        parts.append("where = { " + ", ".join(f'{k} = "{v}"' for k, v in source.where) + " }")
+        parts.append("where = { " + ", ".join(f"{toml_key(k)} = {quoted(str(v))}"
+                                             for k, v in source.where) + " }")
     if source.bits:
         parts.append(f"bits = {source.bits}")
     if source.changes_only:
@@ -92,11 +106,12 @@ def _groups_and_loops(groups: list[DraftGroup], loops: Sequence[tuple[str, str, 
 
 
 def _header(path: Path, name: str, vehicle_said: str) -> list[str]:
-    said = f": {vehicle_said}".replace('"', "'") if vehicle_said else ""
+    said = f": {vehicle_said}" if vehicle_said else ""
     return [f"# Starting profile written by `auvdiag init-profile` from {path.name}.",
             "# Every signal below is in that log and varies there. Lines marked CHECK are",
             "# what the log cannot tell: read them before you train.", "",
-            "[vehicle]", f'name = "{name}"', f'description = "drafted from {path.name}{said}"',
+            "[vehicle]", f"name = {quoted(name)}",
+            f"description = {quoted(f'drafted from {path.name}{said}')}",
             "dt_s = 0.1            # CHECK: the model step; not below the command rate", ""]
 
 
@@ -125,14 +140,16 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
         table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"
         lines += [table, f'name = "{proposal.name}"',
                   f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
-                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.field}')}",
+                  ""]
     for proposal in sensors:
         lines += ["[[sensors]]", f'name = "{proposal.name}"',
                   f'component = "{proposal.name}_sensor"   # CHECK: the part that fails',
                   f'unit = "{proposal.unit}"   # CHECK: {proposal.check}',
                   f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
                   "percentile",
-                  f'description = "{proposal.source.topic} {proposal.source.field}"', ""]
+                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.field}')}",
+                  ""]
     lines += _groups_and_loops(groups, loops)
     names = [p.name for p in sensors]
     lines += ["[matching]", "window_samples = 20", "decision_window_s = 3.0",
