@@ -161,7 +161,7 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
               "b = { " + ", ".join(f"{n} = 0" for n in names) + " }", "components = []", "",
               f"[sources.{family}]"]
     if time is not None:
-        lines.append(f'time = {{ column = "{time.column}", unit = "{time.unit}" }}'
+        lines.append(f'time = {{ column = {quoted(time.column)}, unit = "{time.unit}" }}'
                      "   # CHECK: the clock's unit")
     if operating is not None:
         lines.append(f"{OPERATING} = {entry(operating, family)}   # armed flag")

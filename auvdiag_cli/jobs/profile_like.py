@@ -8,6 +8,7 @@ from pathlib import Path
 
 from adapters import read_log
 from adapters.fieldnames import closest_first
+from auvdiag_cli.jobs.draft_text import quoted
 from auvdiag_cli.jobs.inspect import SignalResolution, inspect_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile, profile_text
 from auvdiag_errors import LogError, UsageError
@@ -33,7 +34,8 @@ def _moved(text: str, family: str, name: str, old: str, new: str) -> str:
         raise UsageError(f"cannot find the mapping of {name} in [sources.{family}]")
     lines = text.splitlines()
     key = "column" if family == "csv" else "field"
-    lines[number] = lines[number].replace(f'{key} = "{old}"', f'{key} = "{new}"')
+    for written in (quoted(old), f"'{old}'"):      # a basic or a literal TOML string
+        lines[number] = lines[number].replace(f"{key} = {written}", f"{key} = {quoted(new)}")
     return "\n".join(lines) + "\n"
 
 
