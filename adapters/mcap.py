@@ -14,7 +14,9 @@ from adapters.mcap_records import (
     ChannelRouter,
     Progress,
     decompressed,
+    json_message_fields,
     records_in,
+    sampled_json_fields,
     schema_fields,
     walk_records,
 )
@@ -115,9 +117,13 @@ class McapAdapter:
             if summary is not None and summary.statistics is not None:
                 stats = summary.statistics
                 fields = schema_fields(summary.schemas)
+                unlisted = {c.id for c in summary.channels.values()
+                            if c.message_encoding == "json" and not fields.get(c.schema_id)}
+                sampled = sampled_json_fields(stream, path.stat().st_size, unlisted) \
+                    if unlisted else {}
                 topics = [TopicInfo(c.topic, _schema_name(summary.schemas, c.schema_id),
                                     stats.channel_message_counts.get(c.id, 0),
-                                    fields.get(c.schema_id, ()))
+                                    fields.get(c.schema_id) or sampled.get(c.id, ()))
                           for c in summary.channels.values()]
                 return LogInventory("mcap", stats.message_start_time, stats.message_end_time,
                                     sorted(topics, key=lambda t: t.name))
@@ -224,6 +230,8 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
 
     schemas: dict[int, Any] = {}
     channels: dict[int, tuple[str, int]] = {}
+    json_channels: set[int] = set()
+    sampled: dict[tuple[str, int], tuple[str, ...]] = {}   # a JSON channel's first message
     counts: dict[int, int] = {}
     first = last = None
     notes: list[str] = []
@@ -234,8 +242,13 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
                 schemas[record.id] = record
             elif isinstance(record, Channel):
                 channels[record.id] = (record.topic, record.schema_id)
+                if record.message_encoding == "json":
+                    json_channels.add(record.id)
             elif isinstance(record, Message):
                 counts[record.channel_id] = counts.get(record.channel_id, 0) + 1
+                key = channels.get(record.channel_id)
+                if record.channel_id in json_channels and key and key not in sampled:
+                    sampled[key] = json_message_fields(record.data)
                 first = record.log_time if first is None else min(first, record.log_time)
                 last = record.log_time if last is None else max(last, record.log_time)
     except Exception as error:  # truncated or damaged: report what was readable
@@ -247,6 +260,7 @@ def _scanned_inventory(stream: BinaryIO, size: int) -> LogInventory:
         key = channels.get(channel_id, (f"channel {channel_id}", -1))
         totals[key] = totals.get(key, 0) + count
     fields = schema_fields(schemas)
-    topics = [TopicInfo(t, _schema_name(schemas, s), c, fields.get(s, ()))
+    topics = [TopicInfo(t, _schema_name(schemas, s), c,
+                        fields.get(s) or sampled.get((t, s), ()))
               for (t, s), c in sorted(totals.items())]
     return LogInventory("mcap", first, last, topics, notes)

@@ -104,6 +104,42 @@ def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
     return fields
 
 
+# How many records a walk for JSON channels' first messages reads at most (the first
+# chunk usually holds every channel's first message).
+JSON_SAMPLE_RECORDS = 10_000
+
+
+def json_message_fields(message: bytes) -> tuple[str, ...]:
+    """The field paths of one JSON message (none where it is not a JSON object)."""
+    import json
+
+    from adapters.fieldnames import object_field_paths
+
+    try:
+        decoded = json.loads(message)
+    except (ValueError, RecursionError):   # not JSON, or nested past Python's stack
+        return ()
+    return tuple(object_field_paths(decoded)) if isinstance(decoded, dict) else ()
+
+
+def sampled_json_fields(stream: BinaryIO, size: int, channels: set[int]
+                        ) -> dict[int, tuple[str, ...]]:
+    """Field paths of JSON ``channels`` whose schema lists none, from the first message of
+    each that the first JSON_SAMPLE_RECORDS records of the file hold."""
+    from mcap.records import Message
+
+    found: dict[int, tuple[str, ...]] = {}
+    stream.seek(0)
+    with contextlib.suppress(Exception):     # a damaged file lists what it could
+        for count, record in enumerate(walk_records(stream, size, Progress())):
+            if count >= JSON_SAMPLE_RECORDS or not channels - found.keys():
+                break
+            if isinstance(record, Message) and record.channel_id in channels \
+                    and record.channel_id not in found:
+                found[record.channel_id] = json_message_fields(record.data)
+    return found
+
+
 class Progress:
     """How far a walk got (the byte after the last whole record), and the chunks it had to
     leave out because their contents were damaged while the file's framing held."""

@@ -266,9 +266,9 @@ def test_a_speed_is_drafted_in_metres_per_second_and_a_turn_rate_in_radians(tmp_
     assert units.get("yawspeed") == "rad/s" and units.get("groundspeed") == "m/s", text
 
 
-def _json_mcap(path: Path) -> Path:
-    """A JSON-encoded MCAP as Foxglove's tools write it (a JSON Schema per channel), whose
-    keys hold a dash, a space and a quote."""
+def _json_mcap(path: Path, described: bool = True, statistics: bool = True) -> Path:
+    """A JSON-encoded MCAP as Foxglove's tools write it (a JSON Schema per channel; or an
+    empty one), whose keys hold a dash, a space and a quote."""
     import json
 
     from mcap.writer import Writer
@@ -276,8 +276,10 @@ def _json_mcap(path: Path) -> Path:
     schema = {"type": "object", "properties": {
         "motor-1": {"type": "number"}, "rpm 2": {"type": "number"},
         'the "depth"': {"type": "object", "properties": {"value": {"type": "number"}}}}}
+    if not described:
+        schema = {}
     with path.open("wb") as stream:
-        writer = Writer(stream)
+        writer = Writer(stream, use_statistics=statistics)
         writer.start(profile="", library="test")
         channel = writer.register_channel("/state", "json", writer.register_schema(
             "Thrusters", "jsonschema", json.dumps(schema).encode()))
@@ -291,13 +293,17 @@ def _json_mcap(path: Path) -> Path:
     return path
 
 
-def test_json_keys_that_are_no_plain_names_are_listed_drafted_and_read(tmp_path):
-    """`inspect` lists a JSON channel's fields from its schema, a key that is no plain name
-    quoted in brackets; the draft writes them as valid TOML and reads every one."""
+@pytest.mark.parametrize(("described", "statistics"), [(True, True), (False, True),
+                                                       (False, False)])
+def test_json_keys_that_are_no_plain_names_are_listed_drafted_and_read(tmp_path, described,
+                                                                      statistics):
+    """`inspect` lists a JSON channel's fields from its schema (or, where that lists none,
+    from its first message; with the file's statistics or by a scan), a key that is no
+    plain name quoted in brackets; the draft writes them as valid TOML and reads each."""
     from adapters import read_log
     from auvdiag_cli.vehicle.profile import load_profile
 
-    log = _json_mcap(tmp_path / "state.mcap")
+    log = _json_mcap(tmp_path / "state.mcap", described, statistics)
     shown = runner.invoke(app, ["inspect", str(log)])
     assert shown.exit_code == 0, shown.output
     assert 'fields    ["motor-1"], ["rpm 2"], ["the \\"depth\\""].value' in shown.output
