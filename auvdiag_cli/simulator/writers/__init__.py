@@ -20,7 +20,8 @@ from auvdiag_cli.vehicle.profile import Profile
 
 __all__ = ["LOG_FORMATS", "ROS1_FORMATS", "ExtraTopic", "write_log"]
 
-LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "csv", "topic-csv")
+LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "tlog", "bin", "ulog", "csv",
+               "topic-csv")
 # Whose messages are ROS 1's (a per-topic CSV folder: `rostopic echo -p` of a ROS 1 bag):
 # extra topics for them are built with ROS 1's types.
 ROS1_FORMATS = ("bag", "topic-csv")
@@ -54,8 +55,8 @@ def _write(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
            extra: Sequence[ExtraTopic]) -> None:
     if fmt in ("bag", "db3", "ros2-mcap"):
         write_rosbag(dive, profile, path, fmt, extra)
-    elif fmt == "mcap":
-        write_mcap(dive, profile, path, extra)
+    elif fmt in ("mcap", "json-mcap"):
+        write_mcap(dive, profile, path, extra, json_encoded=fmt == "json-mcap")
     elif fmt == "tlog":
         write_tlog(dive, profile, path)
     elif fmt == "csv":

@@ -1,9 +1,11 @@
 """ROS logs the way the profile's `[sources.ros]` table says the vehicle records them: ROS 1
-bag, ROS 2 bag (sqlite3, mcap) through rosbags, and standalone MCAP (ros2 CDR) through the
-mcap library. Each topic's message type follows from the field paths read on it."""
+bag, ROS 2 bag (sqlite3, mcap) through rosbags, and standalone MCAP (ros2 CDR, or JSON)
+through the mcap library. Each topic's message type follows from the field paths read on it."""
 
+import dataclasses
 import heapq
 import itertools
+import json
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -150,9 +152,13 @@ class RosMessages:
             header.seq = self.sequence
 
     def serialised(self, dive: SimulatedDive, profile: Profile,
-                   extra: Sequence[ExtraTopic] = ()) -> Iterator[tuple[int, str, bytes]]:
-        """(receive time ns, topic, serialised bytes) in time order."""
-        serialize = self.store.serialize_ros1 if self.ros1 else self.store.serialize_cdr
+                   extra: Sequence[ExtraTopic] = (),
+                   encode: Callable[[Any, str], bytes] | None = None
+                   ) -> Iterator[tuple[int, str, bytes]]:
+        """(receive time ns, topic, serialised bytes) in time order; ``encode`` (a message,
+        its type -> bytes): by default ROS 1's serialisation or CDR."""
+        serialize = encode or (self.store.serialize_ros1 if self.ros1
+                               else self.store.serialize_cdr)
 
         def dive_messages() -> Iterator[tuple[int, str, bytes]]:
             records = heapq.merge(dive_records(dive, profile, "ros"),
@@ -208,7 +214,7 @@ def _assign(message: Any, path: str, value: float | str) -> None:
         setattr(parent, last, value)
 
 
-def _all_topics(profile: Profile, extra: Sequence[ExtraTopic]) -> list[tuple[str, str]]:
+def all_topics(profile: Profile, extra: Sequence[ExtraTopic]) -> list[tuple[str, str]]:
     return [*ros_topics(profile).items(), *((e.topic, e.msgtype) for e in extra)]
 
 
@@ -219,7 +225,7 @@ def write_rosbag(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
     writer = _open_rosbag_writer(path, fmt)
     with writer:
         connections = {topic: writer.add_connection(topic, msgtype, typestore=messages.store)
-                       for topic, msgtype in _all_topics(profile, extra)}
+                       for topic, msgtype in all_topics(profile, extra)}
         for time_ns, topic, data in messages.serialised(dive, profile, extra):
             writer.write(connections[topic], time_ns, data)
 
@@ -243,24 +249,62 @@ def _open_rosbag_writer(path: Path, fmt: str) -> Any:
 
 
 def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
-               extra: Sequence[ExtraTopic] = ()) -> None:
-    """Standalone MCAP, profile ros2: ros2msg schemas and CDR messages, zstd chunks."""
+               extra: Sequence[ExtraTopic] = (), json_encoded: bool = False) -> None:
+    """Standalone MCAP: profile ros2, ros2msg schemas and CDR messages in zstd chunks; or
+    (``json_encoded``, as Foxglove's tools and many vehicles without ROS write it) each
+    message as a JSON object with a JSON Schema per channel, in lz4 chunks."""
     from mcap.writer import CompressionType, Writer
 
     messages = RosMessages(False, ros_topics(profile))
     with path.open("wb") as stream:
-        writer = Writer(stream, compression=CompressionType.ZSTD)
-        writer.start(profile="ros2", library="auvdiag simulate")
+        writer = Writer(stream, compression=CompressionType.LZ4 if json_encoded
+                        else CompressionType.ZSTD)
+        writer.start(profile="" if json_encoded else "ros2", library="auvdiag simulate")
         channels = {}
-        for topic, msgtype in _all_topics(profile, extra):
-            text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
-            schema = writer.register_schema(msgtype, "ros2msg", text.encode())
-            channels[topic] = writer.register_channel(topic, "cdr", schema)
-        ordered = messages.serialised(dive, profile, extra)
+        for topic, msgtype in all_topics(profile, extra):
+            if json_encoded:
+                schema = writer.register_schema(msgtype, "jsonschema", json.dumps(
+                    json_schema(messages.store, msgtype)).encode())
+            else:
+                text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
+                schema = writer.register_schema(msgtype, "ros2msg", text.encode())
+            channels[topic] = writer.register_channel(topic, "json" if json_encoded else "cdr",
+                                                      schema)
+        ordered = messages.serialised(dive, profile, extra, encode=(
+            lambda message, _: json.dumps(plain(message)).encode()) if json_encoded else None)
         for sequence, (time_ns, topic, data) in enumerate(ordered):
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns, sequence=sequence)
         writer.finish()
+
+
+def plain(value: Any) -> Any:
+    """A ROS message as JSON holds it: objects, lists, numbers and strings."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, list | tuple):
+        return [plain(item) for item in value]
+    return value
+
+
+def json_schema(store: Any, msgtype: str) -> dict[str, Any]:
+    """The JSON Schema of a ROS message type as `plain` writes it."""
+    from rosbags.typesys.base import Nodetype
+
+    def of(node: int, desc: Any) -> dict[str, Any]:
+        if node == Nodetype.BASE:
+            return {"type": {"string": "string", "bool": "boolean"}.get(desc[0], "number")}
+        if node == Nodetype.NAME:
+            return json_schema(store, desc)
+        return {"type": "array", "items": of(*desc[0])}
+
+    _, fields = store.fielddefs[msgtype]
+    return {"type": "object", "properties": {name: of(node, desc)
+                                             for name, (node, desc) in fields}}
 
 
 # A node's log levels, ROS 1's (rosgraph_msgs/Log) as ROS 2 numbers them (rcl_interfaces).
