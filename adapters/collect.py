@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
-from adapters.fieldpath import field_getter
+from adapters.fieldpath import field_getter, field_of, resolves
 from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
 from adapters.ros_words import WordsRead, word_paths
 from adapters.ros_words import as_text as _text  # one reading of a logged text
@@ -56,7 +56,7 @@ class _Extractor:
 
     def matches(self, message: Any) -> bool:
         return all(_text(get(message)) == value for key, get, value in self.where
-                   if not _before_instances(key, value, partial(_resolves, message, key)))
+                   if not _before_instances(key, value, partial(resolves, message, key)))
 
     def filters(self, fields: Sequence[str]) -> list[tuple[str, str]]:
         """The `where` conditions messages with these fields are filtered on: none on an
@@ -99,18 +99,6 @@ def _with_state_before(flag: Series, start_ns: int) -> Series:
         return flag
     return Series(np.concatenate(([start_ns], flag.times_ns)).astype(np.int64),
                   np.concatenate(([float(flag.values[0] == 0)], flag.values)), flag.name)
-
-
-def _resolves(message: Any, path: str) -> bool:
-    try:
-        field_getter(path)(message)
-    except (AttributeError, IndexError, KeyError, TypeError, ValueError):
-        return False
-    return True
-
-
-def _field_of(message: Any, path: str) -> Any:
-    return field_getter(path)(message)
 
 
 class SignalCollector:
@@ -221,13 +209,13 @@ class SignalCollector:
         if not self.accepts_time(time_ns):
             return
         if topic in self.word_topics:
-            self.words.add_message(self.word_topics[topic], time_ns, message, _field_of)
+            self.words.add_message(self.word_topics[topic], time_ns, message, field_of)
             if self._only_words(topic):
                 return
         self.count += 1
         segment = self.sources.segment
         if segment is not None and topic == self.segment_topic:
-            text = _text(_field_of(message, segment.field))
+            text = _text(field_of(message, segment.field))
             if text.startswith(segment.prefix):
                 self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
@@ -236,8 +224,10 @@ class SignalCollector:
                     continue
                 value = float(extractor.get(message))
             except (AttributeError, IndexError, KeyError, TypeError, ValueError):
+                if self.sources.tentative:
+                    continue
                 wrong = next((key for key, _ in extractor.source.where
-                              if not _resolves(message, key)), extractor.source.field)
+                              if not resolves(message, key)), extractor.source.field)
                 raise LogError(self.path, unresolved(
                     topic, wrong, extractor.name, object_field_paths(message))) from None
             converted = float(extractor.source.convert(np.float64(value)))
@@ -278,9 +268,13 @@ class SignalCollector:
                 keep = extractor.rows_matching(column, rows, fields) if filters else slice(None)
                 numbers = column(extractor.source.field)[keep]
             except (IndexError, KeyError, TypeError, ValueError):
+                if self.sources.tentative:
+                    continue
                 raise LogError(self.path, unresolved(topic, wanted, extractor.name,
                                                      fields)) from None
             if numbers.dtype.kind not in "biuf":
+                if self.sources.tentative:
+                    continue
                 raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
                                           f"holds {numbers.dtype}, not numbers")
             if filters and not numbers.size and rows:

@@ -84,3 +84,16 @@ def field_getter(path: str) -> Callable[[Any], Any]:
         return value
 
     return get
+
+
+def field_of(message: Any, path: str) -> Any:
+    return field_getter(path)(message)
+
+
+def resolves(message: Any, path: str) -> bool:
+    """Whether ``message`` has a value at ``path``."""
+    try:
+        field_of(message, path)
+    except (AttributeError, IndexError, KeyError, TypeError, ValueError):
+        return False
+    return True

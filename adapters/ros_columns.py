@@ -325,8 +325,13 @@ class TopicBatches:
         msgtype = self.msgtypes[topic]
         try:
             reader = ColumnReader(batch, msgtype, self.typestore)
-            columns = {path: reader.column(path)
-                       for path in self.collector.field_paths(topic)}
+            columns = {}
+            for path in self.collector.field_paths(topic):
+                try:
+                    columns[path] = reader.column(path)
+                except (KeyError, IndexError):
+                    if not self.collector.sources.tentative:
+                        raise      # read one by one, for the error naming the field
         except (NotColumnar, KeyError, IndexError):
             self._add_one_by_one(topic, msgtype, batch)
             return

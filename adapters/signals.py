@@ -127,6 +127,9 @@ class LogSources:
     optional: frozenset[str] = frozenset()
     # What the vehicle's software said, read where the log holds it (ROS: `/rosout`).
     words: tuple[WordSource, ...] = ()
+    # Sources tried on a log (a draft's): one whose field a message lacks, or holds no
+    # number at, reads nothing there, where a profile's would be an error.
+    tentative: bool = False
 
     @property
     def wanted(self) -> dict[str, FieldSource]:

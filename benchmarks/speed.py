@@ -240,6 +240,7 @@ def main() -> None:
     report: dict = {"date": str(date.today()), "machine": platform.machine(),
                     "cores": os.cpu_count(), "python": platform.python_version()}
     report["startup"] = {what: in_child("startup", what)["seconds"] for what in ("cli", "torch")}
+    in_child("replay")    # compiles the kernel into numba's cache where a fresh copy has none
     report["replay"] = in_child("replay")
     report["formats"] = {}
     for fmt, path in paths.items():

@@ -322,3 +322,23 @@ def test_a_csv_column_named_with_quotes_is_drafted_as_valid_toml(tmp_path):
     text = _draft_and_inspect(log, tmp_path / "draft.toml")
     assert 'depth_m = { column = "depth \\"m\\"" }' in text
     assert tomllib.loads(text)["sources"]["csv"]["signals"]["depth_m"]["column"] == 'depth "m"'
+
+
+@pytest.mark.parametrize("fmt", ["bag", "db3", "ros2-mcap"])
+def test_the_draft_reads_the_log_once(make_log, monkeypatch, fmt):
+    """Fields the log does not fill (a command array's elements past its length, an empty
+    sequence's first element) read nothing in the one pass; they cost a pass each before,
+    which on a long log is minutes."""
+    import auvdiag_cli.jobs.profile_draft as draft
+
+    reads = []
+
+    def counted(*args, **kwargs):
+        reads.append(args[0])
+        return read_log(*args, **kwargs)
+
+    read_log = draft.read_log
+    monkeypatch.setattr(draft, "read_log", counted)
+    text = draft.draft_profile(make_log("paper-normal", 11, fmt), "once")
+    assert len(reads) == 1
+    assert all(f'[[commands]]\nname = "{name}"' in text for name in ("data_0", "data_1"))

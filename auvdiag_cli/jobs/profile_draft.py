@@ -165,10 +165,11 @@ def _clock_unit(name: str, numbers: np.ndarray) -> str:
 
 def _read_each(path: Path, family: str, sources: dict[str, FieldSource],
                time: TimeColumn | None) -> dict[str, np.ndarray]:
-    """The values of every source that reads on this log (one pass; one by one only when
-    some source fails)."""
+    """The values of every source that reads on this log, in one pass (a source the log
+    does not fill reads nothing); one by one only where the log refuses them together."""
     def read(chosen: dict[str, FieldSource]) -> dict[str, np.ndarray]:
-        signals = read_log(path, {family: LogSources(chosen, time=time)})
+        signals = read_log(path, {family: LogSources(
+            chosen, time=time, optional=frozenset(chosen), tentative=True)})
         return {name: series.values for name, series in signals.series.items()}
 
     try:
