@@ -8,6 +8,7 @@ from pathlib import Path
 
 from adapters import read_log
 from adapters.fieldnames import closest_first
+from adapters.signals import FieldSource
 from auvdiag_cli.jobs.draft_text import quoted
 from auvdiag_cli.jobs.inspect import SignalResolution, inspect_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile, profile_text
@@ -39,21 +40,33 @@ def _moved(text: str, family: str, name: str, old: str, new: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _refit(path: Path, profile: Profile, family: str, signal: SignalResolution,
-           fields: tuple[str, ...]) -> str | None:
-    """The closest field of the signal's message type that reads on this log, or None."""
+def _refits(path: Path, profile: Profile, family: str,
+            unread: list[tuple[SignalResolution, tuple[str, ...]]]) -> dict[str, str | None]:
+    """Per signal that did not resolve (with the fields of its message type), the closest
+    of those fields that reads on this log, or None: every candidate tried in one pass."""
     sources = profile.sources[family]
-    for candidate in closest_first(signal.field, fields)[:CANDIDATES_TRIED]:
-        source = replace(sources.signals[signal.name], field=candidate)
-        if family == "csv":
-            source = replace(source, topic=candidate)
+    tried: dict[str, list[tuple[str, str]]] = {}      # signal -> (read as, candidate)
+    candidates = {}
+    for signal, fields in unread:
+        for rank, field in enumerate(closest_first(signal.field, fields)[:CANDIDATES_TRIED]):
+            source = replace(sources.signals[signal.name], field=field)
+            name = f"{signal.name}:{rank}"
+            candidates[name] = replace(source, topic=field) if family == "csv" else source
+            tried.setdefault(signal.name, []).append((name, field))
+    def reads(chosen: dict[str, FieldSource], together: bool) -> set[str] | None:
+        """Which of ``chosen`` read on the log (None: the log refuses them)."""
         try:
-            read_log(path, {family: replace(sources, signals={signal.name: source},
-                                            segment=None)})
+            return set(read_log(path, {family: replace(
+                sources, signals=chosen, segment=None, optional=frozenset(chosen),
+                tentative=together)}).series)
         except LogError:
-            continue
-        return candidate
-    return None
+            return None
+
+    read = reads(candidates, True) if candidates else set()
+    if read is None:        # refused together (instances to choose from): one at a time
+        read = {name for name, source in candidates.items() if reads({name: source}, False)}
+    return {signal.name: next((field for name, field in tried.get(signal.name, ())
+                               if name in read), None) for signal, _ in unread}
 
 
 def draft_like(path: Path, like: Path) -> str:
@@ -67,11 +80,11 @@ def draft_like(path: Path, like: Path) -> str:
                          f"for {inspection.inventory.format} logs; draft without --like")
     fields = {t.name: t.fields or (t.name,) for t in inspection.inventory.topics}
     changes, lost = [], []
-    for signal in inspection.signals:
-        if signal.resolved:
-            continue
-        candidate = _refit(path, profile, family, signal,
-                           fields.get(signal.topic, tuple(fields) if family == "csv" else ()))
+    unread = [(signal, fields.get(signal.topic, tuple(fields) if family == "csv" else ()))
+              for signal in inspection.signals if not signal.resolved]
+    refits = _refits(path, profile, family, unread)
+    for signal, _ in unread:
+        candidate = refits[signal.name]
         if candidate is None:
             lost.append(f"{signal.name} ({signal.problem})")
             continue
