@@ -82,6 +82,27 @@ def test_the_check_dates_the_change_within_a_window_and_names_the_signal():
     assert "(below the prediction)" in check.describe()
 
 
+@pytest.mark.parametrize("drift_from_s", [20.0, 25.0])
+def test_a_change_begun_within_the_reference_may_be_dated_back_to_the_log_start(drift_from_s):
+    """A drift that began before the test could judge (in the log's first 30 s, its
+    reference; an engine losing thrust): seen once judging begins, its stated onset
+    reaches back to the log's start, where it may lie, and the words say so; a drift that
+    begins after the reference is dated within it as before."""
+    def drifting(start_s: float) -> ChangeCheck:
+        residual = _noise(90.0)
+        time_s = np.arange(residual.shape[0]) * DT_S
+        residual[:, 1] += np.where(time_s >= start_s, 0.3 * (time_s - start_s), 0.0)
+        return _checked(residual)
+
+    check = drifting(drift_from_s)
+    assert check.alarm_s is not None and check.since_judged
+    assert check.onset_s - check.onset_error_s <= 0.0 and drift_from_s <= check.alarm_s
+    assert "or earlier (its sum ran from the first step judged" in check.describe()
+    later = drifting(60.0)
+    assert later.alarm_s is not None and not later.since_judged
+    assert 30.0 < later.onset_s - later.onset_error_s <= 60.0
+
+
 def test_a_window_judged_every_step_sees_a_change_sooner_than_windows_side_by_side():
     residual = _noise(120.0, seed=1)
     residual[803:, 0] -= 3.0                  # 0.3 s into a window of the row side by side

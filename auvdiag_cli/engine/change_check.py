@@ -95,6 +95,7 @@ class ChangeCheck:
     alarm_s: float | None = None       # the first step over a threshold
     onset_s: float | None = None       # where, in the run that crossed, it most likely began
     onset_error_s: float = 0.0         # give or take
+    since_judged: bool = False         # its sum ran from the first step judged (`check_change`)
     # Signal -> its statistic over its threshold within a window from the alarm (the larger
     # of the two, at its highest there).
     flagged: Mapping[str, float] = field(default_factory=dict)
@@ -147,9 +148,11 @@ class ChangeCheck:
             " (the loop gives less rate than usual for what it answers)" if n in self.loops
             else "")
             for n, r in self.flagged.items())
-        return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s "
-                f"(up to {self.onset_error_s:.1f} s either way), detected at "
-                f"{self.alarm_s:.1f} s: {which}")
+        since = (f"or earlier (its sum ran from the first step judged, {self.judged_from_s:.1f}"
+                 " s: it may lie in the reference)" if self.since_judged else
+                 f"(up to {self.onset_error_s:.1f} s either way)")
+        return (f"changed against the log's own beginning from ~{self.onset_s:.1f} s {since}, "
+                f"detected at {self.alarm_s:.1f} s: {which}")
 
 
 def _running(values: np.ndarray) -> np.ndarray:
@@ -342,8 +345,7 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     scale (``scales``, `change_statistics`), and the signatures of the ``actuators`` over
     them and ``within_signatures`` (judged only there) that have one; the ``loops`` and the
     signals ``below_only`` judged below their prediction (or usual gain) only; a window
-    judged every ``stride`` steps (None: windows side by side, as models calibrated before
-    judged them)."""
+    judged every ``stride`` steps (None: side by side, as older models were calibrated)."""
     limited = {name for limits in thresholds.values() for name in limits}   # with a threshold
     judged = [i for i, name in enumerate(names) if name in limited or name in within_signatures]
     found = [s for s in signatures(actuators, [names[i] for i in judged]) if s.name in limited]
@@ -384,11 +386,15 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # window judged every step, some phase's sum nearly always holds some). The error spans
     # the onset up to the alarm, a window at least.
     error = max(window * dt_s, float(time_s[at]) - onset)
+    # A sum run from the first step judged: the change may lie in the reference, unseen.
+    since_judged = run <= int(started[0])
+    error = max(error, onset - float(time_s[0])) if since_judged else error
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     flagged = _flagged(combined, names_judged, at, window)
     moved = [n for n in names_judged if n in names and (n in flagged or evidence[n] > 0)]
     ways = shift_ways(residual, names, [n for n in moved if n not in check.loops], first, at)
     return replace(check, alarm_s=round(float(time_s[at]), 3), onset_s=round(onset, 3),
-                   onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways)
+                   onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways,
+                   since_judged=since_judged)
 
