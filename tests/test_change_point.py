@@ -36,6 +36,15 @@ def test_a_change_after_the_last_start_reaches_to_when_it_was_seen_never_past_it
     assert _span(z, seen_s=58.5) == pytest.approx((54.0, 58.5))
 
 
+def test_a_change_at_the_first_start_tried_may_lie_back_to_the_logs_start():
+    """The first start tried has a span before it to be judged against: where the change
+    is likeliest there, it may have begun anywhere in that span, back to the log's start
+    (without the start given, a stride before)."""
+    z = 10.0 - STARTS / 10.0                          # falling from the first start, 10 s
+    assert _span(z, seen_s=20.0)[0] == pytest.approx(8.0)
+    assert likely_span(z, STARTS, 0, STRIDE, 20.0, from_s=0.0)[0] == pytest.approx(0.0)
+
+
 def test_a_change_after_a_gap_in_steady_time_may_lie_anywhere_in_the_gap():
     """The starts are a stride apart in steady time: where the group idled from 30 s to 40 s
     (no start there), a change first seen from 40 s may have begun at any time after 30 s."""

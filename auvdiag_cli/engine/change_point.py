@@ -39,7 +39,7 @@ def held_over(running: np.ndarray, threshold: float, hold: int) -> int:
 
 
 def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: float,
-                seen_s: float) -> tuple[float, float]:
+                seen_s: float, from_s: float | None = None) -> tuple[float, float]:
     """(earliest, latest): where a change point may lie, from a statistic ``z`` per start
     tried (at ``start_times``, ``best`` the largest): over the starts whose statistic comes
     within CHANGE_POINT_CHI2 of the best's, and on to the starts either side that fall
@@ -47,12 +47,15 @@ def likely_span(z: np.ndarray, start_times: np.ndarray, best: int, stride_s: flo
     within, and where the starts are spaced in some other time than the log's (the steady
     time of the effort check), a gap between two is part of the span. Where the last start
     tried comes within, the change may lie after it, up to ``seen_s``, when it was seen:
-    it began before that. A stride either side of the best at least."""
+    it began before that; where the first comes within, it may lie before it, back to
+    ``from_s`` (the log's start: the first start tried has a span before it to judge
+    against). A stride either side of the best at least."""
     floor = math.sqrt(max(float(z[best]) ** 2 - CHANGE_POINT_CHI2, 0.0))
     likely = np.flatnonzero(z >= floor)
     first, last = int(likely.min()), int(likely.max())
     at = float(start_times[best])
-    earliest = float(start_times[first - 1]) if first > 0 else at - stride_s
+    earliest = float(start_times[first - 1]) if first > 0 else min(
+        at - stride_s, at if from_s is None else from_s)
     latest = seen_s if last == len(z) - 1 else float(start_times[last + 1])
     return min(earliest, at - stride_s), min(max(latest, at + stride_s), max(seen_s, at))
 

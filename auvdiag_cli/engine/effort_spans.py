@@ -84,7 +84,7 @@ def date_change(spans: Spans, direction: np.ndarray, times: np.ndarray, window: 
     z = _changed_to_end(spans, starts, direction)
     best = int(np.argmax(z))
     earliest, latest = likely_span(z, times[starts], best, stride * spans.dt_s,
-                                   float(times[alarm]))
+                                   float(times[alarm]), float(times[0]))
     error = max(stride * spans.dt_s, float(times[starts[best]]) - earliest,
                 latest - float(times[starts[best]]))
     # Within a stride either side of the best start, every step: the grid dates a change
