@@ -128,6 +128,8 @@ class ChangePart:
     alarm_s: float | None = None
     onset_s: float | None = None
     onset_error_s: float | None = None
+    # The change's sum ran from the first step judged: it may lie in the reference.
+    onset_in_reference: bool = False
     flagged: Numbers = field(default_factory=dict)
     carried: Numbers = field(default_factory=dict)
     # Each flagged signal -> the way it moved from the onset ("above", "below" the prediction).

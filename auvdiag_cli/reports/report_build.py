@@ -226,7 +226,8 @@ def _change_check(check: ChangeCheck | None) -> ChangePart | None:
         summary=check.describe(), judged=check.judged, judged_from_s=check.judged_from_s,
         thresholds={s: dict(v) for s, v in check.thresholds.items()},
         peaks={s: dict(v) for s, v in check.peaks.items()}, alarm_s=check.alarm_s,
-        onset_s=check.onset_s, onset_error_s=check.onset_error_s, flagged=dict(check.flagged),
+        onset_s=check.onset_s, onset_error_s=check.onset_error_s,
+        onset_in_reference=check.since_judged, flagged=dict(check.flagged),
         carried=dict(check.evidence), ways=dict(check.ways))
 
 
