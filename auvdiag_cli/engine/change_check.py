@@ -20,18 +20,16 @@ carried on from the window a whole window before it ("sum"):
 
 so that a shift that lasts (an engine that stopped pushing, a surface that stuck) builds
 up even when no single window stands out, while noise within the allowance does not. Each
-way (z and S+ above the prediction, −z and S− below it) is first divided by how far
-normal logs typically go that way (`WayScales`, set by calibrate): a failure pushes a
-signal one way, and where normal operation goes further the other way, that way no longer
-sets the threshold of both. Where
-the profile says which way a part's weakening moves several signals, their signed sum is
-judged as one more signal, one-sided (`change_signatures`). A
-signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
-are set by `auvdiag calibrate` from the largest of each statistic on normal logs, like the
-other judges; a model without them does not run the test. The onset is found in two
-steps: the run of windows whose sum went beyond the allowance up to the alarm (back to
-where the strongest signal's sum last left zero), then within it the step where that
-signal's residual most likely shifted; the stated error spans from there to the alarm. The
+way (z and S+ above the prediction, −z and S− below it) is first divided by how far normal
+logs typically go that way (`WayScales`, set by calibrate): a failure pushes a signal one
+way, and where normal operation goes further the other way, that way no longer sets the
+threshold of both. Where the profile says which way a part's weakening moves several
+signals, their signed sum is judged as one more signal, one-sided (`change_signatures`).
+A signal is judged once the reference holds `REFERENCE_MIN_S` of residuals. The thresholds
+are set by `auvdiag calibrate` from the largest of each statistic on normal logs; a model
+without them does not run the test. The onset: the run of windows whose sum went beyond
+the allowance up to the alarm (back to where the strongest signal's sum last left zero),
+then within it the step where that signal's residual most likely shifted (`_dated`). The
 signals that crossed within a window of the alarm name the part.
 """
 
@@ -46,16 +44,14 @@ from auvdiag_cli.vehicle.actuators import Actuator
 
 REFERENCE_MIN_S = 30.0        # the log's own residuals needed before it is judged
 # A signal the normal logs let the test judge for less than this, all together, gets no
-# threshold from calibrate (`jobs.change_calibration.enough_judged`): as long as the
-# reference every log is judged against.
+# threshold from calibrate (`jobs.change_calibration.enough_judged`).
 MIN_JUDGED_S = REFERENCE_MIN_S
 # k: a window mean within one spread of its reference adds nothing; a shift of two spreads
 # adds one a window.
 DRIFT_ALLOWANCE = 1.0
 # A window is judged every this many steps, each against the windows before it that do
-# not overlap it: a change is seen as soon as a window's worth of it is in, not only at
-# the next of a fixed row of windows (up to a window later). Model files calibrated
-# before record none and are judged with windows side by side, as their thresholds were set.
+# not overlap it: a change is seen once a window's worth of it is in, not at the next of a
+# fixed row of windows (models calibrated before record none: windows side by side).
 STRIDE_STEPS = 1
 WINDOW, SUM = "window", "sum"
 STATISTICS = (WINDOW, SUM)
@@ -109,9 +105,8 @@ class ChangeCheck:
     ways: Mapping[str, str] = field(default_factory=dict)
     # The loops judged (`models.tracking`): their gain, judged below its usual value only.
     loops: tuple[str, ...] = ()
-    # Per step, each of ``ratio_names`` (the signals and signatures with a threshold) over
-    # its threshold, the larger of the two statistics (NaN before it is judged): what the
-    # report draws.
+    # Per step, each of ``ratio_names`` (signals and signatures with a threshold) over its
+    # threshold, the larger of the two statistics (NaN before judged): what the report draws.
     ratio_names: tuple[str, ...] = ()
     ratios: np.ndarray | None = field(default=None, compare=False, repr=False)
 
@@ -311,6 +306,18 @@ def _run_start(sums: np.ndarray, at: int, window: int, stride: int) -> int:
     return max(end - window + 1, 0)
 
 
+def _dated(time_s: np.ndarray, first: int, run: int, at: int, judged_from: int,
+           window_s: float) -> tuple[float, float, bool]:
+    """(onset_s, its error, whether it may lie in the reference). The run's start alone
+    would date the change to noise that lingered in the sum (with a window judged every
+    step, some phase's sum nearly always holds some): the error spans the onset up to the
+    alarm, a window at least, and back to the log's start where the sum ran from the first
+    step judged (the change may lie in the reference, where nothing could show it)."""
+    onset, since_judged = float(time_s[first]), run <= judged_from
+    return onset, max(window_s, float(time_s[at]) - onset,
+                      onset - float(time_s[0]) if since_judged else 0.0), since_judged
+
+
 def _flagged(ratios: np.ndarray, names: Sequence[str], at: int, window: int
              ) -> dict[str, float]:
     """Each signal over its threshold within a window from the alarm at step ``at``, at
@@ -371,8 +378,8 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     if not over.size:
         return check
     at = int(over[0])
-    # The signal furthest over its threshold at the alarm dates the change: one that
-    # crossed after it may have moved later (the vehicle's answer).
+    # The signal furthest over its threshold at the alarm dates the change (one that crossed
+    # after it may have moved later: the vehicle's answer).
     strongest = int(np.nanargmax(combined[at]))
     # From where the strongest signal's sum last left zero: the first window of the run that
     # went beyond the allowance, even where a later window alone crossed (a failure takes a
@@ -381,20 +388,13 @@ def check_change(residual: np.ndarray, names: Sequence[str],
     # Within that run, where the strongest signal's own residual shifted: the onset.
     first = run if strongest >= len(judged) else \
         shift_start(residual[:, judged[strongest]], run, at)
-    onset = float(time_s[first])
-    # The run's start alone would date the change to noise that lingered in the sum (with a
-    # window judged every step, some phase's sum nearly always holds some). The error spans
-    # the onset up to the alarm, a window at least.
-    error = max(window * dt_s, float(time_s[at]) - onset)
-    # A sum run from the first step judged: the change may lie in the reference, unseen.
-    since_judged = run <= int(started[0])
-    error = max(error, onset - float(time_s[0])) if since_judged else error
+    onset, error, since_judged = _dated(time_s, first, run, at, int(started[0]), window * dt_s)
     evidence = {n: round(float(v), 3)
                 for n, v in zip(names_judged, _carried(combined, run, at), strict=True)}
     flagged = _flagged(combined, names_judged, at, window)
     moved = [n for n in names_judged if n in names and (n in flagged or evidence[n] > 0)]
     ways = shift_ways(residual, names, [n for n in moved if n not in check.loops], first, at)
     return replace(check, alarm_s=round(float(time_s[at]), 3), onset_s=round(onset, 3),
-                   onset_error_s=round(error, 3), flagged=flagged, evidence=evidence, ways=ways,
-                   since_judged=since_judged)
+                   onset_error_s=round(error, 3), flagged=flagged, evidence=evidence,
+                   ways=ways, since_judged=since_judged)
 
