@@ -222,7 +222,10 @@ class SignalCollector:
             try:
                 if extractor.where and not extractor.matches(message):
                     continue
-                value = float(extractor.get(message))
+                raw = extractor.get(message)
+                if raw is None:          # a JSON message's null: no reading at this time
+                    continue
+                value = float(raw)
             except (AttributeError, IndexError, KeyError, TypeError, ValueError):
                 if self.sources.tentative:
                     continue

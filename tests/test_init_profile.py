@@ -268,7 +268,8 @@ def test_a_speed_is_drafted_in_metres_per_second_and_a_turn_rate_in_radians(tmp_
 
 def _json_mcap(path: Path, described: bool = True, statistics: bool = True) -> Path:
     """A JSON-encoded MCAP as Foxglove's tools write it (a JSON Schema per channel; or an
-    empty one), whose keys hold a dash, a space and a quote."""
+    empty one), whose keys hold a dash, a space and a quote, and one of whose values is
+    now and then null."""
     import json
 
     from mcap.writer import Writer
@@ -286,7 +287,7 @@ def _json_mcap(path: Path, described: bool = True, statistics: bool = True) -> P
         for k in range(400):
             time_ns = 1_700_000_000_000_000_000 + k * 100_000_000
             message = {"motor-1": math.sin(k / 20), "rpm 2": math.cos(k / 30),
-                       'the "depth"': {"value": k / 10}}
+                       'the "depth"': {"value": None if k % 50 == 7 else k / 10}}
             writer.add_message(channel, log_time=time_ns, publish_time=time_ns,
                                data=json.dumps(message).encode())
         writer.finish()
@@ -299,7 +300,8 @@ def test_json_keys_that_are_no_plain_names_are_listed_drafted_and_read(tmp_path,
                                                                       statistics):
     """`inspect` lists a JSON channel's fields from its schema (or, where that lists none,
     from its first message; with the file's statistics or by a scan), a key that is no
-    plain name quoted in brackets; the draft writes them as valid TOML and reads each."""
+    plain name quoted in brackets; the draft writes them as valid TOML and reads each (a
+    null: no reading then, where it stopped the read before)."""
     from adapters import read_log
     from auvdiag_cli.vehicle.profile import load_profile
 
@@ -312,6 +314,7 @@ def test_json_keys_that_are_no_plain_names_are_listed_drafted_and_read(tmp_path,
     signals = read_log(log, load_profile(tmp_path / "draft.toml").sources).series
     assert signals["motor_1"].values[20] == pytest.approx(math.sin(1.0))
     assert signals["the_depth_value"].values[-1] == pytest.approx(39.9)
+    assert len(signals["the_depth_value"]) == 392 and len(signals["motor_1"]) == 400
 
 
 def test_a_csv_column_named_with_quotes_is_drafted_as_valid_toml(tmp_path):
