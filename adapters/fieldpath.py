@@ -67,7 +67,7 @@ def join_step(prefix: str, name: str) -> str:
     in brackets (``rotors["motor-1"]``)."""
     if _NAME.fullmatch(name):
         return f"{prefix}.{name}" if prefix else name
-    return f"{prefix}[{json.dumps(name)}]"
+    return f"{prefix}[{json.dumps(name, ensure_ascii=False)}]"
 
 
 def field_getter(path: str) -> Callable[[Any], Any]:
