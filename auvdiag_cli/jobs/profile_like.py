@@ -53,6 +53,7 @@ def _refits(path: Path, profile: Profile, family: str,
             name = f"{signal.name}:{rank}"
             candidates[name] = replace(source, topic=field) if family == "csv" else source
             tried.setdefault(signal.name, []).append((name, field))
+
     def reads(chosen: dict[str, FieldSource], together: bool) -> set[str] | None:
         """Which of ``chosen`` read on the log (None: the log refuses them)."""
         try:
