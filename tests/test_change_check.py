@@ -731,3 +731,28 @@ def test_the_plane_judges_what_only_its_engine_moves_below_the_prediction_only()
     assert all(profile.sensor(name).moved_by == ("engine",) for name in below)
     engine = next(a for a in profile.actuators if a.name == "engine")
     assert all(dict(engine.weakened)[name] == -1 for name in below)   # the way its loss moves them
+
+
+def test_a_failure_within_the_reference_is_reported_as_possibly_earlier(calibrated, tmp_path):
+    """The flow sensor dies 29 s into a dive whose every signal only the change test judges:
+    seen once judging begins, at about 31 s; the onset the summary and the JSON report give
+    may lie earlier, in the reference, and they say so."""
+    from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.text import summary_lines
+    from auvdiag_cli.simulator.scenarios import get_scenario
+
+    model, _ = calibrated
+    base = api.load_profile(None)
+    profile = replace(base, sensors=tuple(replace(s, own_log_only="judged against itself")
+                                          for s in base.sensors))
+    log = tmp_path / "early.mcap"
+    api.simulate(get_scenario("mission-flow-sensor-dead", base, 29.0), base, log,
+                 log_format="mcap", seed=7)
+    diagnosis = api.diagnose(log, profile, model)
+    check = diagnosis.change_check
+    assert diagnosis.verdict == "fault" and check is not None and check.since_judged
+    assert diagnosis.onset_s == check.onset_s and check.onset_s - check.onset_error_s < 1.0
+    report = build_report(diagnosis)
+    assert report.change_check is not None and report.change_check.onset_in_reference
+    (onset,) = [line for line in summary_lines(report) if line.startswith("  onset")]
+    assert " or earlier " in onset and onset.endswith(" or more)")

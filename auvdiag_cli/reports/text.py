@@ -70,8 +70,12 @@ def _fault_lines(r: Report) -> list[str]:
     lines = [f"verdict: FAULT: {what}" + (f" (pattern case {r.case})" if r.case is not None
                                          else "")]
     if r.onset_s is not None and r.detected_at_s is not None:
-        lines.append(f"  onset    ~{r.onset_s:.1f} s   detected {r.detected_at_s:.1f} s   "
-                     f"(delay {r.detected_at_s - r.onset_s:.1f} s)")
+        change = r.change_check
+        earlier = change is not None and change.onset_in_reference and \
+            change.onset_s == r.onset_s         # it may lie in what the log is judged against
+        lines.append(f"  onset    ~{r.onset_s:.1f} s{' or earlier' if earlier else ''}   "
+                     f"detected {r.detected_at_s:.1f} s   "
+                     f"(delay {r.detected_at_s - r.onset_s:.1f} s{' or more' if earlier else ''})")
     lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in r.b.items()))
     if r.hypotheses is not None:
         lines.append("  hypotheses: " + hypotheses_sentence(r.hypotheses))
