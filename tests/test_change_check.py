@@ -738,6 +738,7 @@ def test_a_failure_within_the_reference_is_reported_as_possibly_earlier(calibrat
     seen once judging begins, at about 31 s; the onset the summary and the JSON report give
     may lie earlier, in the reference, and they say so."""
     from auvdiag_cli.reports.report_build import build_report
+    from auvdiag_cli.reports.sentences import when_sentence
     from auvdiag_cli.reports.text import summary_lines
     from auvdiag_cli.simulator.scenarios import get_scenario
 
@@ -756,3 +757,4 @@ def test_a_failure_within_the_reference_is_reported_as_possibly_earlier(calibrat
     assert report.change_check is not None and report.change_check.onset_in_reference
     (onset,) = [line for line in summary_lines(report) if line.startswith("  onset")]
     assert " or earlier " in onset and onset.endswith(" or more)")
+    assert " or earlier, detected at " in when_sentence(report)      # the PDF's words

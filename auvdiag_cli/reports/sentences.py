@@ -30,12 +30,22 @@ def seconds(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f} s"
 
 
+def onset_may_be_earlier(report: Report) -> bool:
+    """The verdict's onset is the change test's, which may lie in its reference (the log's
+    beginning it judges the rest against)."""
+    change = report.change_check
+    return change is not None and change.onset_in_reference and change.onset_s == report.onset_s
+
+
 def when_sentence(report: Report) -> str:
     onset, detected = report.onset_s, report.detected_at_s
     if detected is None:
         return "no alarm"
-    delay = "" if onset is None else f" (delay {detected - onset:.1f} s)"
-    return f"onset about {seconds(onset)}, detected at {seconds(detected)}{delay}"
+    earlier = onset_may_be_earlier(report)
+    delay = "" if onset is None else \
+        f" (delay {detected - onset:.1f} s{' or more' if earlier else ''})"
+    return (f"onset about {seconds(onset)}{' or earlier' if earlier else ''}, detected at "
+            f"{seconds(detected)}{delay}")
 
 
 def _hypothesis(h: HypothesisPart, margin: float | None = None) -> str:

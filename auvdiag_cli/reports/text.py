@@ -12,6 +12,7 @@ from auvdiag_cli.reports.sentences import (
     by_reason,
     hypotheses_sentence,
     names,
+    onset_may_be_earlier,
     substitution_facts,
     thrust_kept,
 )
@@ -70,9 +71,7 @@ def _fault_lines(r: Report) -> list[str]:
     lines = [f"verdict: FAULT: {what}" + (f" (pattern case {r.case})" if r.case is not None
                                          else "")]
     if r.onset_s is not None and r.detected_at_s is not None:
-        change = r.change_check
-        earlier = change is not None and change.onset_in_reference and \
-            change.onset_s == r.onset_s         # it may lie in what the log is judged against
+        earlier = onset_may_be_earlier(r)
         lines.append(f"  onset    ~{r.onset_s:.1f} s{' or earlier' if earlier else ''}   "
                      f"detected {r.detected_at_s:.1f} s   "
                      f"(delay {r.detected_at_s - r.onset_s:.1f} s{' or more' if earlier else ''})")
