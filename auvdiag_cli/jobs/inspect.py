@@ -116,6 +116,35 @@ def _described_only(path: Path, family: str, contents: LogInventory,
                       warnings=[] if note is None else [note], autopilot=setup)
 
 
+def _read_each(path: Path, family: str, sources: LogSources
+               ) -> tuple[dict[str, Signals], dict[str, str]]:
+    """(signal -> what read it, signal -> the problem that stopped it): one pass for all
+    signals; on a failure, one for those that read, and one for each that does not, for
+    the problem that names it."""
+    if not sources.signals:
+        return {}, {}
+    try:
+        everything = read_log(path, {family: sources})
+        return {name: everything for name in sources.signals}, {}
+    except LogError:
+        pass
+    try:
+        tried = read_log(path, {family: replace(
+            sources, optional=frozenset(sources.signals), tentative=True)})
+        read = {name: tried for name in sources.signals if name in tried.series}
+    except LogError:
+        read = {}
+    problems: dict[str, str] = {}
+    for name, source in sources.signals.items():
+        try:
+            if name not in read:
+                read[name] = read_log(path, {family: replace(
+                    sources, signals={name: source}, segment=None)})
+        except LogError as error:
+            problems[name] = error.problem
+    return read, problems
+
+
 def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     """Inventory the log, then read each of the profile's signals that its topics offer
     (None: describe the log only, its span from a column named like a clock for a CSV)."""
@@ -133,19 +162,7 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
     shown = {n: s if s.topic in available or n not in sources.fallbacks
              else sources.fallbacks[n] for n, s in sources.signals.items()}
     present = {n: s for n, s in sources.signals.items() if shown[n].topic in available}
-    read: dict[str, Signals] = {}
-    problems: dict[str, str] = {}
-    try:  # one pass for all signals; per signal only to pin down a failure
-        if present:
-            everything = read_log(path, {family: replace(sources, signals=present)})
-            read = {name: everything for name in present}
-    except LogError:
-        for name, source in present.items():
-            try:
-                read[name] = read_log(path, {family: replace(sources, signals={name: source},
-                                                             segment=None)})
-            except LogError as error:
-                problems[name] = error.problem
+    read, problems = _read_each(path, family, replace(sources, signals=present))
     results = []
     for name, source in shown.items():
         series = read[name].series.get(name) if name in read else None
