@@ -77,6 +77,8 @@ def field_getter(path: str) -> Callable[[Any], Any]:
     def get(message: Any) -> Any:
         value = message
         for step in steps:
+            if value is None:        # a JSON null or an unset message on the way: no reading
+                return None
             if isinstance(step, int) or isinstance(value, dict):
                 value = value[step]
             else:

@@ -16,6 +16,7 @@ import numpy as np
 from adapters.collect import SignalCollector
 from adapters.limits import MAX_CHUNK_BYTES
 from adapters.mcap_index import LocatedMessages, chunk_data
+from adapters.protobuf_schema import SchemaError
 from adapters.ros_columns import TopicBatches
 from auvdiag_errors import LogError
 
@@ -38,7 +39,19 @@ def decoder_factories() -> list[Any]:
 
             return json.loads if message_encoding == "json" else None
 
-    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory()]
+    class ProtobufDecoderFactory(DecoderFactory):
+        def decoder_for(self, message_encoding: str, schema: Any
+                        ) -> Callable[[bytes], Any] | None:
+            if message_encoding != "protobuf" or schema is None \
+                    or schema.encoding != "protobuf":
+                return None
+            from adapters.protobuf_decode import decoder
+            from adapters.protobuf_schema import message_types
+
+            return decoder(message_types(schema.data), schema.name)
+
+    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory(),
+            ProtobufDecoderFactory()]
 
 
 def decompressed(chunk: Any) -> bytes:
@@ -84,12 +97,14 @@ def records_in(chunk: Any, data: np.ndarray) -> Iterator[Any]:
 
 
 def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
-    """Field paths of each ros2msg or JSON Schema schema (others list none)."""
+    """Field paths of each ros2msg, JSON Schema or protobuf schema (others list none)."""
     import json
 
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     from adapters.fieldnames import json_schema_paths, ros_field_paths
+    from adapters.protobuf_decode import field_paths
+    from adapters.protobuf_schema import message_types
 
     store, fields = get_typestore(Stores.EMPTY), {}
     for schema_id, schema in schemas.items():
@@ -99,6 +114,8 @@ def schema_fields(schemas: dict[int, Any]) -> dict[int, tuple[str, ...]]:
                 fields[schema_id] = tuple(ros_field_paths(store, schema.name))
             elif schema.encoding == "jsonschema":
                 fields[schema_id] = tuple(json_schema_paths(json.loads(schema.data)))
+            elif schema.encoding == "protobuf":
+                fields[schema_id] = tuple(field_paths(message_types(schema.data), schema.name))
         except Exception:  # a definition that cannot be parsed lists no fields
             continue
     return fields
@@ -245,8 +262,12 @@ class ChannelRouter:
         for factory in self.factories:
             # The vendored ROS 2 definition parser prints to stderr about a schema it cannot
             # parse, and then raises: the exception is what we report.
-            with contextlib.redirect_stderr(io.StringIO()):
-                decoder = factory.decoder_for(channel.message_encoding, schema)
+            try:
+                with contextlib.redirect_stderr(io.StringIO()):
+                    decoder = factory.decoder_for(channel.message_encoding, schema)
+            except SchemaError as error:
+                raise LogError(self.collector.path, f"cannot decode {channel.topic}: "
+                                                    f"{error}") from None
             if decoder is not None:
                 return decoder
         raise LogError(self.collector.path, f"cannot decode {channel.topic}: no decoder for "

@@ -8,9 +8,10 @@ from auvdiag_cli.engine.diagnosis import diagnose
 from auvdiag_errors import LogError
 from models.store import load_model
 
-ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "json-mcap", "tlog", "bin", "ulog"]
-# A JSON-encoded MCAP is an MCAP like any other to the reader.
-READ_AS = {"json-mcap": "mcap"}
+ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
+               "ulog"]
+# A JSON- or Protocol Buffers-encoded MCAP is an MCAP like any other to the reader.
+READ_AS = {"json-mcap": "mcap", "protobuf-mcap": "mcap"}
 # MAVLink and DataFlash carry thruster commands as integer PWM µs (1/400 of full command)
 # and sensor values as float32 (ULog: float32 throughout); ROS formats carry float64.
 G_TOLERANCE = {"tlog": 0.5, "bin": 0.5, "ulog": 0.5}

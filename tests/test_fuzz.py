@@ -10,8 +10,8 @@ import pytest
 
 from auvdiag_cli.fuzz.mutations import MUTATIONS, mutate
 
-FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "tlog", "bin", "ulog", "csv",
-           "topic-csv", "bag+words", "db3+words", "ros2-mcap+words", "mcap+words",
+FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
+           "ulog", "csv", "topic-csv", "bag+words", "db3+words", "ros2-mcap+words", "mcap+words",
            "topic-csv+words")
 
 

@@ -27,8 +27,9 @@ def simulate(
     log_format: Annotated[str, typer.Option(
         "--format", help="Log format: bag (ROS 1), db3 (ROS 2, sqlite3), ros2-mcap (ROS 2, "
                          "mcap storage), mcap (standalone), json-mcap (standalone, JSON "
-                         "messages), tlog (MAVLink), bin (DataFlash), ulog (PX4), csv (the "
-                         "profile's [sources.csv] columns), topic-csv (one CSV per ROS topic)."
+                         "messages), protobuf-mcap (standalone, Protocol Buffers messages), "
+                         "tlog (MAVLink), bin (DataFlash), ulog (PX4), csv (the profile's "
+                         "[sources.csv] columns), topic-csv (one CSV per ROS topic)."
     )] = "ros2-mcap",
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,
     fault_at: Annotated[float | None, typer.Option(

@@ -20,8 +20,10 @@ from auvdiag_cli.vehicle.profile import Profile
 
 __all__ = ["LOG_FORMATS", "ROS1_FORMATS", "ExtraTopic", "write_log"]
 
-LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "tlog", "bin", "ulog", "csv",
-               "topic-csv")
+LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
+               "ulog", "csv", "topic-csv")
+# A standalone MCAP's message encoding, by format.
+_MCAP_ENCODINGS = {"mcap": "cdr", "json-mcap": "json", "protobuf-mcap": "protobuf"}
 # Whose messages are ROS 1's (a per-topic CSV folder: `rostopic echo -p` of a ROS 1 bag):
 # extra topics for them are built with ROS 1's types.
 ROS1_FORMATS = ("bag", "topic-csv")
@@ -55,8 +57,8 @@ def _write(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
            extra: Sequence[ExtraTopic]) -> None:
     if fmt in ("bag", "db3", "ros2-mcap"):
         write_rosbag(dive, profile, path, fmt, extra)
-    elif fmt in ("mcap", "json-mcap"):
-        write_mcap(dive, profile, path, extra, json_encoded=fmt == "json-mcap")
+    elif fmt in _MCAP_ENCODINGS:
+        write_mcap(dive, profile, path, extra, _MCAP_ENCODINGS[fmt])
     elif fmt == "tlog":
         write_tlog(dive, profile, path)
     elif fmt == "csv":

@@ -249,29 +249,33 @@ def _open_rosbag_writer(path: Path, fmt: str) -> Any:
 
 
 def write_mcap(dive: SimulatedDive, profile: Profile, path: Path,
-               extra: Sequence[ExtraTopic] = (), json_encoded: bool = False) -> None:
+               extra: Sequence[ExtraTopic] = (), encoding: str = "cdr") -> None:
     """Standalone MCAP: profile ros2, ros2msg schemas and CDR messages in zstd chunks; or
-    (``json_encoded``, as Foxglove's tools and many vehicles without ROS write it) each
-    message as a JSON object with a JSON Schema per channel, in lz4 chunks."""
+    each message as a JSON object with a JSON Schema per channel (``encoding`` "json"), or
+    as Protocol Buffers with a FileDescriptorSet per channel ("protobuf"), in lz4 chunks, as
+    Foxglove's tools and many vehicles without ROS write them."""
     from mcap.writer import CompressionType, Writer
 
+    from auvdiag_cli.simulator.writers.protobuf import ProtobufTypes, proto_name
+
     messages = RosMessages(False, ros_topics(profile))
+    protobuf = ProtobufTypes(messages.store)
+    schemas: dict[str, Callable[[str], tuple[str, str, bytes]]] = {
+        "cdr": lambda t: (t, "ros2msg", messages.store.generate_msgdef(
+            t, ros_version=2)[0].encode()),
+        "json": lambda t: (t, "jsonschema", json.dumps(json_schema(messages.store, t)).encode()),
+        "protobuf": lambda t: (proto_name(t), "protobuf", protobuf.descriptor_set(t))}
+    encoders: dict[str, Callable[[Any, str], bytes] | None] = {
+        "cdr": None, "json": lambda message, _: json.dumps(plain(message)).encode(),
+        "protobuf": protobuf.encode}
     with path.open("wb") as stream:
-        writer = Writer(stream, compression=CompressionType.LZ4 if json_encoded
-                        else CompressionType.ZSTD)
-        writer.start(profile="" if json_encoded else "ros2", library="auvdiag simulate")
-        channels = {}
-        for topic, msgtype in all_topics(profile, extra):
-            if json_encoded:
-                schema = writer.register_schema(msgtype, "jsonschema", json.dumps(
-                    json_schema(messages.store, msgtype)).encode())
-            else:
-                text, _ = messages.store.generate_msgdef(msgtype, ros_version=2)
-                schema = writer.register_schema(msgtype, "ros2msg", text.encode())
-            channels[topic] = writer.register_channel(topic, "json" if json_encoded else "cdr",
-                                                      schema)
-        ordered = messages.serialised(dive, profile, extra, encode=(
-            lambda message, _: json.dumps(plain(message)).encode()) if json_encoded else None)
+        writer = Writer(stream, compression=CompressionType.ZSTD if encoding == "cdr"
+                        else CompressionType.LZ4)
+        writer.start(profile="ros2" if encoding == "cdr" else "", library="auvdiag simulate")
+        channels = {topic: writer.register_channel(
+            topic, encoding, writer.register_schema(*schemas[encoding](msgtype)))
+            for topic, msgtype in all_topics(profile, extra)}
+        ordered = messages.serialised(dive, profile, extra, encode=encoders[encoding])
         for sequence, (time_ns, topic, data) in enumerate(ordered):
             writer.add_message(channels[topic], log_time=time_ns, data=data,
                                publish_time=time_ns, sequence=sequence)
