@@ -8,7 +8,7 @@ itself capped: a flipped length byte costs a chunk, not the machine's memory."""
 
 import contextlib
 import io
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -39,19 +39,20 @@ def decoder_factories() -> list[Any]:
 
             return json.loads if message_encoding == "json" else None
 
-    class ProtobufDecoderFactory(DecoderFactory):
-        def decoder_for(self, message_encoding: str, schema: Any
-                        ) -> Callable[[bytes], Any] | None:
-            if message_encoding != "protobuf" or schema is None \
-                    or schema.encoding != "protobuf":
-                return None
-            from adapters.protobuf_decode import decoder
-            from adapters.protobuf_schema import message_types
+    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory()]
 
-            return decoder(message_types(schema.data), schema.name)
 
-    return [Ros2DecoderFactory(), Ros1DecoderFactory(), JsonDecoderFactory(),
-            ProtobufDecoderFactory()]
+def protobuf_decoder(channel: Any, schema: Any, paths: Sequence[str]
+                     ) -> Callable[[bytes], Any] | None:
+    """A Protocol Buffers channel's decoder of the fields on ``paths`` (None: the channel
+    is not Protocol Buffers with its FileDescriptorSet)."""
+    if channel.message_encoding != "protobuf" or schema is None \
+            or schema.encoding != "protobuf":
+        return None
+    from adapters.protobuf_decode import decoder
+    from adapters.protobuf_schema import message_types
+
+    return decoder(message_types(schema.data), schema.name, paths)
 
 
 def decompressed(chunk: Any) -> bytes:
@@ -257,17 +258,21 @@ class ChannelRouter:
                 and self._register(schema)):
             self.msgtypes[channel.topic] = schema.name
             return None
+        try:
+            decoder = protobuf_decoder(channel, schema, self.collector.field_paths(
+                channel.topic))
+        except SchemaError as error:
+            raise LogError(self.collector.path, f"cannot decode {channel.topic}: "
+                                                f"{error}") from None
+        if decoder is not None:
+            return decoder
         if self.factories is None:
             self.factories = decoder_factories()
         for factory in self.factories:
             # The vendored ROS 2 definition parser prints to stderr about a schema it cannot
             # parse, and then raises: the exception is what we report.
-            try:
-                with contextlib.redirect_stderr(io.StringIO()):
-                    decoder = factory.decoder_for(channel.message_encoding, schema)
-            except SchemaError as error:
-                raise LogError(self.collector.path, f"cannot decode {channel.topic}: "
-                                                    f"{error}") from None
+            with contextlib.redirect_stderr(io.StringIO()):
+                decoder = factory.decoder_for(channel.message_encoding, schema)
             if decoder is not None:
                 return decoder
         raise LogError(self.collector.path, f"cannot decode {channel.topic}: no decoder for "

@@ -5,7 +5,7 @@ when it was not set. Profiles reach its values by field path as in a JSON messag
 (`pose.position.x`, `motors[2]`, `gains["roll"]`)."""
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from adapters import protobuf_schema as schema
@@ -38,11 +38,45 @@ _DEFAULTS: dict[int, Any] = {schema.STRING: "", schema.BYTES: b"", schema.BOOL: 
                              schema.DOUBLE: 0.0, schema.FLOAT: 0.0}
 
 
-def decoder(types: dict[str, MessageType], type_name: str) -> Callable[[bytes], Any]:
-    """Decodes one message of ``type_name`` (SchemaError where the types lack it)."""
+# The fields to decode, by number, each with the fields of its own message to decode (None:
+# all of them): a log's messages carry far more than a profile reads.
+Wanted = dict[int, "Wanted | None"]
+
+
+def decoder(types: dict[str, MessageType], type_name: str,
+            paths: Sequence[str] | None = None) -> Callable[[bytes], Any]:
+    """Decodes one message of ``type_name`` (SchemaError where the types lack it); with
+    ``paths``, only the fields on them (every field where one of them is not in the type, so
+    that what it lacks can be told with what it has)."""
     message_type = resolve(types, type_name)
     _check_reachable(types, message_type)
-    return lambda data: decode(types, message_type, data, 0)
+    wanted = None if paths is None else wanted_fields(types, message_type, paths)
+    return lambda data: decode(types, message_type, data, 0, wanted)
+
+
+def wanted_fields(types: dict[str, MessageType], root: MessageType,
+                  paths: Sequence[str]) -> Wanted | None:
+    """The fields ``paths`` reach in ``root`` (None where one of them is not there)."""
+    from adapters.fieldpath import parse_field_path
+
+    tree: Wanted = {}
+    for path in paths:
+        node: Wanted | None = tree
+        message_type, steps = root, list(parse_field_path(path))
+        while steps and node is not None:
+            step = steps.pop(0)
+            field = next((f for f in message_type.fields.values() if f.name == step), None)
+            if field is None:
+                return None
+            if field.repeated and steps:
+                steps.pop(0)                  # the element's index, or the map entry's key
+            inner = types.get(field.type_name) if field.kind == schema.MESSAGE else None
+            if inner is None or inner.map_entry or not steps:
+                node[field.number] = None     # the whole field
+                break
+            node = node.setdefault(field.number, {})
+            message_type = inner
+    return tree
 
 
 def _check_reachable(types: dict[str, MessageType], root: MessageType) -> None:
@@ -59,20 +93,26 @@ def _check_reachable(types: dict[str, MessageType], root: MessageType) -> None:
 
 
 def decode(types: dict[str, MessageType], message_type: MessageType, data: bytes,
-           depth: int) -> dict[str, Any]:
+           depth: int, wanted: Wanted | None = None) -> dict[str, Any]:
+    """The message's fields (only those ``wanted``, where given)."""
     if depth > MAX_DEPTH:
         raise WireError(f"messages nested deeper than {MAX_DEPTH}")
     values: dict[str, Any] = {}
     for number, wire, raw in fields(data):
+        if wanted is not None and number not in wanted:
+            continue
         field = message_type.fields.get(number)
         if field is None:
             continue                    # a field this schema does not know: skipped
+        inner = None if wanted is None else wanted[number]
         if field.repeated:
             values.setdefault(field.name, []).extend(
-                _repeated(types, field, wire, raw, depth))
+                _repeated(types, field, wire, raw, depth, inner))
         else:
-            values[field.name] = _value(types, field, wire, raw, depth)
-    return {field.name: _read(types, field, values) for field in message_type.fields.values()}
+            values[field.name] = _value(types, field, wire, raw, depth, inner)
+    kept = message_type.fields.values() if wanted is None else [
+        message_type.fields[number] for number in wanted]
+    return {field.name: _read(types, field, values) for field in kept}
 
 
 def _read(types: dict[str, MessageType], field: FieldType, values: dict[str, Any]) -> Any:
@@ -96,11 +136,11 @@ def _unset(field: FieldType) -> Any:
 
 
 def _repeated(types: dict[str, MessageType], field: FieldType, wire: int,
-              raw: int | bytes, depth: int) -> list[Any]:
+              raw: int | bytes, depth: int, wanted: Wanted | None) -> list[Any]:
     """One occurrence of a repeated field: a value, or a packed run of scalars."""
     packable = field.kind not in (schema.STRING, schema.BYTES, schema.MESSAGE)
     if not (packable and wire == LENGTH_DELIMITED):
-        return [_value(types, field, wire, raw, depth)]
+        return [_value(types, field, wire, raw, depth, wanted)]
     assert isinstance(raw, bytes)
     if field.kind in _FIXED:
         return list(packed_fixed(raw, _FIXED[field.kind][0]))
@@ -108,7 +148,7 @@ def _repeated(types: dict[str, MessageType], field: FieldType, wire: int,
 
 
 def _value(types: dict[str, MessageType], field: FieldType, wire: int, raw: int | bytes,
-           depth: int) -> Any:
+           depth: int, wanted: Wanted | None) -> Any:
     kind = field.kind
     if kind in _VARINT and wire == VARINT:
         assert isinstance(raw, int)
@@ -122,7 +162,7 @@ def _value(types: dict[str, MessageType], field: FieldType, wire: int, raw: int 
             return raw.decode("utf-8", errors="replace")
         if kind == schema.BYTES:
             return raw
-        return decode(types, resolve(types, field.type_name), raw, depth + 1)
+        return decode(types, resolve(types, field.type_name), raw, depth + 1, wanted)
     raise WireError(f"field {field.name!r} (number {field.number}) arrives with wire type "
                     f"{wire}, which its type does not use")
 

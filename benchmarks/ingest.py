@@ -4,7 +4,8 @@ Simulates a one-hour dive (commands 10 Hz, flow 10 Hz, IMU 50 Hz, segment marker
 it in every format, with an unrelated camera topic (incompressible images, --image-gb in
 total) in the ROS formats, then times in fresh processes:
   adapter  auvdiag's adapter reading the profile's signals (read_log);
-  raw      the library alone iterating and decoding the same topics;
+  raw      the library alone iterating and decoding the same topics (for Protocol Buffers
+           MCAP, the protobuf library's parser: a development dependency);
 and reports messages/s of each, their ratio, and each process's peak RSS.
 
 Usage: python benchmarks/ingest.py [--workdir DIR] [--image-gb 1.0] [--keep]
@@ -20,10 +21,11 @@ import tempfile
 import time
 from datetime import date
 from pathlib import Path
+from typing import Any
 
 from bytecode import write_bytecode  # benchmarks/bytecode.py, beside this script
 
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "protobuf-mcap", "tlog", "bin", "ulog"]
 ROS_TOPICS = ["/thrusters/command", "/flow/velocity", "/imu/data", "/diagnosis/sequence"]
 MAVLINK_TYPES = ["SERVO_OUTPUT_RAW", "NAMED_VALUE_FLOAT", "ATTITUDE", "STATUSTEXT"]
 DATAFLASH_TYPES = ["RCOU", "FLOW", "IMU", "MSG"]
@@ -64,7 +66,8 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
     paths = {}
     for fmt in FORMATS:
         path = workdir / {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
-                          "bin": "dive.bin", "ulog": "dive.ulg"}.get(fmt, f"dive_{fmt}")
+                          "bin": "dive.bin", "ulog": "dive.ulg",
+                          "protobuf-mcap": "dive_protobuf.mcap"}.get(fmt, f"dive_{fmt}")
         started = time.perf_counter()
         ros = fmt not in ("tlog", "bin", "ulog")
         write_log(dive, profile, path, fmt, [camera] if ros else [])
@@ -105,6 +108,8 @@ def read_raw(path: Path, fmt: str) -> int:
             mcap_reader = make_reader(stream, decoder_factories=[DecoderFactory()])
             for _ in mcap_reader.iter_decoded_messages(topics=ROS_TOPICS):
                 count += 1
+    elif fmt == "protobuf-mcap":
+        count = _read_protobuf(path)
     elif fmt == "ulog":
         from pyulog import ULog
 
@@ -118,6 +123,28 @@ def read_raw(path: Path, fmt: str) -> int:
                       else DFReader.DFReader_binary(str(path), zero_time_base=True))
         types = MAVLINK_TYPES if fmt == "tlog" else DATAFLASH_TYPES
         while mav_reader.recv_match(type=types, blocking=False) is not None:
+            count += 1
+    return count
+
+
+def _read_protobuf(path: Path) -> int:
+    """The protobuf library's own parser (its C implementation where installed), each
+    channel's message class built from its FileDescriptorSet."""
+    from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
+    from mcap.reader import make_reader
+
+    classes: dict[int, Any] = {}
+    count = 0
+    with path.open("rb") as stream:
+        for schema, _, message in make_reader(stream).iter_messages(topics=ROS_TOPICS):
+            assert schema is not None            # every channel the simulator writes has one
+            if schema.id not in classes:
+                pool = descriptor_pool.DescriptorPool()
+                for file in descriptor_pb2.FileDescriptorSet.FromString(schema.data).file:
+                    pool.Add(file)
+                classes[schema.id] = message_factory.GetMessageClass(
+                    pool.FindMessageTypeByName(schema.name))
+            classes[schema.id].FromString(message.data)
             count += 1
     return count
 

@@ -236,3 +236,23 @@ def test_damaged_bytes_raise_only_the_readers_own_errors():
     with pytest.raises(WireError, match="nested deeper"):
         decoder(message_types(_descriptor_set(node)), "n.Node")(deep)
 
+
+
+def test_only_the_fields_read_are_decoded_and_a_missing_one_is_named(tmp_path):
+    """A channel's decoder decodes only the fields the profile reads (to the same values);
+    a field the type lacks is refused naming the fields it has."""
+    from adapters.protobuf_decode import decoder as make_decoder
+    from auvdiag_errors import LogError
+
+    types = message_types(_descriptor_set(_vehicle_file()))
+    full = make_decoder(types, "vehicle.State")
+    pruned = make_decoder(types, "vehicle.State", ["rate.z", "thrust[1]", 'gains["yaw"]'])
+    for data in _states()[:50]:
+        whole, some = full(data), pruned(data)
+        assert some == {"thrust": whole["thrust"], "rate": {"z": whole["rate"]["z"]},
+                        "gains": whole["gains"]}
+    profile = _state_profile(tmp_path)
+    profile.write_text(profile.read_text().replace('"rate.z" }', '"rate.w" }', 1))
+    with pytest.raises(LogError, match=r"has no field 'rate.w' \(signal flow\); its fields, "
+                                       r"closest first: rate.x, rate.y, rate.z"):
+        read_log(_state_mcap(tmp_path / "state.mcap"), load_profile(profile).sources)

@@ -18,7 +18,9 @@ _BASE = {"float64": (1, "d"), "float32": (2, "f"), "int64": (3, "v"), "uint64": 
          "int32": (5, "v"), "int16": (5, "v"), "int8": (5, "v"), "uint32": (13, "v"),
          "uint16": (13, "v"), "uint8": (13, "v"), "byte": (13, "v"), "char": (13, "v"),
          "bool": (8, "v"), "string": (9, "s")}
-_MESSAGE, _OPTIONAL, _REPEATED = 11, 1, 3
+_MESSAGE, _BYTES, _OPTIONAL, _REPEATED = 11, 12, 1, 3
+# ROS arrays of bytes (an image's pixels) are one `bytes` field, not a number each.
+_OCTETS = ("uint8", "byte", "char")
 
 
 def varint(value: int) -> bytes:
@@ -97,13 +99,15 @@ class ProtobufTypes:
     def _descriptor(self, msgtype: str) -> bytes:
         body = _delimited(1, proto_name(msgtype).split(".")[1].encode())
         for number, name, kind, detail, repeated in self._fields(msgtype):
+            octets = repeated and kind == "BASE" and detail[0] in _OCTETS
             field = _delimited(1, name.encode()) + _key(3, _VARINT) + varint(number)
-            field += _key(4, _VARINT) + varint(_REPEATED if repeated else _OPTIONAL)
+            field += _key(4, _VARINT) + varint(_REPEATED if repeated and not octets
+                                               else _OPTIONAL)
             if kind == "NAME":
                 field += _key(5, _VARINT) + varint(_MESSAGE)
                 field += _delimited(6, f".{proto_name(detail)}".encode())
             else:
-                field += _key(5, _VARINT) + varint(_BASE[detail[0]][0])
+                field += _key(5, _VARINT) + varint(_BYTES if octets else _BASE[detail[0]][0])
             body += _delimited(2, field)
         return body
 
@@ -116,6 +120,9 @@ class ProtobufTypes:
             if kind == "NAME":
                 items = list(value) if repeated else [value]
                 out += b"".join(_delimited(number, self.encode(item, detail)) for item in items)
+            elif repeated and detail[0] in _OCTETS:
+                out += _delimited(number, bytes(np.asarray(value, np.uint8))) if len(value) \
+                    else b""
             elif repeated:
                 out += _repeated(number, _BASE[detail[0]][1], value)
             else:
