@@ -45,10 +45,12 @@ def decoder_factories() -> list[Any]:
 def protobuf_decoder(channel: Any, schema: Any, paths: Sequence[str]
                      ) -> Callable[[bytes], Any] | None:
     """A Protocol Buffers channel's decoder of the fields on ``paths`` (None: the channel
-    is not Protocol Buffers with its FileDescriptorSet)."""
-    if channel.message_encoding != "protobuf" or schema is None \
-            or schema.encoding != "protobuf":
+    is not Protocol Buffers; SchemaError: its schema says nothing of them)."""
+    if channel.message_encoding != "protobuf":
         return None
+    if schema is None or schema.encoding != "protobuf":
+        raise SchemaError("its Protocol Buffers messages come without their FileDescriptorSet "
+                          "(a schema of encoding 'protobuf'), which says what they hold")
     from adapters.protobuf_decode import decoder
     from adapters.protobuf_schema import message_types
 

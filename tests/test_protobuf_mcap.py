@@ -89,13 +89,13 @@ def _descriptor_set(file: descriptor_pb2.FileDescriptorProto) -> bytes:
 
 
 def _state_mcap(path: Path, type_name: str = "vehicle.State",
-                messages: list[bytes] | None = None) -> Path:
+                messages: list[bytes] | None = None, encoding: str = "protobuf") -> Path:
     from mcap.writer import Writer
 
     with path.open("wb") as stream:
         writer = Writer(stream)
         writer.start(profile="", library="test")
-        schema = writer.register_schema(type_name, "protobuf", _descriptor_set(_vehicle_file()))
+        schema = writer.register_schema(type_name, encoding, _descriptor_set(_vehicle_file()))
         channel = writer.register_channel("/state", "protobuf", schema)
         for k, data in enumerate(messages or _states()):
             time_ns = 1_700_000_000_000_000_000 + k * 100_000_000
@@ -176,12 +176,19 @@ def _as_json(value: object) -> object:
     return value
 
 
-def test_a_schema_without_the_type_is_one_line(tmp_path):
-    log = _state_mcap(tmp_path / "state.mcap", type_name="vehicle.Missing")
-    result = runner.invoke(app, ["inspect", str(log), "--profile", str(_state_profile(tmp_path))])
+@pytest.mark.parametrize(("type_name", "encoding", "problem"), [
+    ("vehicle.Missing", "protobuf", "its FileDescriptorSet has no message type "
+                                    "'vehicle.Missing'"),
+    ("vehicle.State", "", "its Protocol Buffers messages come without their "
+                          "FileDescriptorSet")])
+def test_a_schema_that_does_not_say_what_the_messages_hold_is_one_line(tmp_path, type_name,
+                                                                       encoding, problem):
+    log = _state_mcap(tmp_path / "state.mcap", type_name=type_name, encoding=encoding)
+    result = runner.invoke(app, ["diagnose", str(log), "--profile",
+                                 str(_state_profile(tmp_path))])
     assert result.exit_code == 2
-    assert "cannot decode /state: its FileDescriptorSet has no message type " \
-           "'vehicle.Missing'" in result.output
+    assert f"state.mcap: cannot decode /state: {problem}" in result.output
+    assert len(result.output.strip().splitlines()) == 1, result.output
 
 
 def test_a_damaged_message_ends_the_read_there(tmp_path):
