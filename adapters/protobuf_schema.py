@@ -51,41 +51,38 @@ def message_types(descriptor_set: bytes) -> dict[str, MessageType]:
 
 
 def _file_types(file: bytes, types: dict[str, MessageType]) -> None:
-    package, messages, proto3 = "", [], False
-    for number, wire, value in fields(file):
-        if wire != LENGTH_DELIMITED:
-            continue
-        assert isinstance(value, bytes)
-        if number == 2:
-            package = _text(value)
-        elif number == 4:
-            messages.append(value)
-        elif number == 12:
-            proto3 = _text(value) == "proto3"
-    for message in messages:
+    parts = _delimited_fields(file)
+    package, proto3 = _text_of(parts, 2), _text_of(parts, 12) == "proto3"
+    for message in parts.get(4, []):
         _message_types(message, package, proto3, types)
 
 
 def _message_types(message: bytes, scope: str, proto3: bool,
                    types: dict[str, MessageType]) -> None:
-    name, declared, nested, map_entry = "", [], [], False
-    for number, wire, value in fields(message):
-        if wire != LENGTH_DELIMITED:
-            continue
-        assert isinstance(value, bytes)
-        if number == 1:
-            name = _text(value)
-        elif number == 2:
-            declared.append(value)
-        elif number == 3:
-            nested.append(value)
-        elif number == 7:
-            map_entry = any(n == 7 and w == VARINT and v for n, w, v in fields(value))
+    parts = _delimited_fields(message)
+    name = _text_of(parts, 1)
+    map_entry = any(n == 7 and w == VARINT and v
+                    for options in parts.get(7, []) for n, w, v in fields(options))
     full = f"{scope}.{name}" if scope else name
-    parsed = [_field(field, proto3) for field in declared]
+    parsed = [_field(field, proto3) for field in parts.get(2, [])]
     types[full] = MessageType(full, {f.number: f for f in parsed}, map_entry)
-    for inner in nested:
+    for inner in parts.get(3, []):
         _message_types(inner, full, proto3, types)
+
+
+def _delimited_fields(message: bytes) -> dict[int, list[bytes]]:
+    """A message's length-delimited fields (strings, messages) by number, in order."""
+    parts: dict[int, list[bytes]] = {}
+    for number, wire, value in fields(message):
+        if wire == LENGTH_DELIMITED:
+            assert isinstance(value, bytes)
+            parts.setdefault(number, []).append(value)
+    return parts
+
+
+def _text_of(parts: dict[int, list[bytes]], number: int) -> str:
+    """A string field's value (the last given wins, as in the wire format)."""
+    return _text(parts[number][-1]) if number in parts else ""
 
 
 def _field(field: bytes, proto3: bool) -> FieldType:
