@@ -98,9 +98,7 @@ def decode(types: dict[str, MessageType], message_type: MessageType, data: bytes
     if depth > MAX_DEPTH:
         raise WireError(f"messages nested deeper than {MAX_DEPTH}")
     values: dict[str, Any] = {}
-    for number, wire, raw in fields(data):
-        if wanted is not None and number not in wanted:
-            continue
+    for number, wire, raw in fields(data, wanted):
         field = message_type.fields.get(number)
         if field is None:
             continue                    # a field this schema does not know: skipped

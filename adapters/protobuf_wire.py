@@ -6,7 +6,7 @@ and a value: a varint (0), eight bytes (1), a length and that many bytes (2), or
 (5). Groups (3, 4) were deprecated before proto3 and are refused."""
 
 import struct
-from collections.abc import Iterator
+from collections.abc import Container, Iterator
 
 VARINT, FIXED64, LENGTH_DELIMITED, FIXED32 = 0, 1, 2, 5
 _MAX_VARINT_BYTES = 10
@@ -29,9 +29,11 @@ def read_varint(data: bytes, at: int) -> tuple[int, int]:
     raise WireError("a varint runs past its message or past ten bytes")
 
 
-def fields(data: bytes) -> Iterator[tuple[int, int, int | bytes]]:
+def fields(data: bytes, kept: Container[int] | None = None
+           ) -> Iterator[tuple[int, int, int | bytes]]:
     """Each field of a message: (number, wire type, value), the value an int for a varint
-    and the raw bytes otherwise."""
+    and the raw bytes otherwise; with ``kept``, only the fields of those numbers (the others
+    are stepped over, their bounds still checked)."""
     at, end = 0, len(data)
     while at < end:
         key = data[at]           # one byte: most keys, lengths and small values
@@ -41,7 +43,8 @@ def fields(data: bytes) -> Iterator[tuple[int, int, int | bytes]]:
             raise WireError("a field numbered 0")
         if wire == VARINT:
             value, at = read_varint(data, at)
-            yield number, wire, value
+            if kept is None or number in kept:
+                yield number, wire, value
             continue
         if wire == LENGTH_DELIMITED:
             size = data[at] if at < end else 0x80
@@ -52,7 +55,8 @@ def fields(data: bytes) -> Iterator[tuple[int, int, int | bytes]]:
             raise WireError(f"field {number} has wire type {wire} (groups are not read)")
         if size > end - at:
             raise WireError(f"field {number} runs {size - (end - at)} bytes past its message")
-        yield number, wire, data[at:at + size]
+        if kept is None or number in kept:
+            yield number, wire, data[at:at + size]
         at += size
 
 
