@@ -263,3 +263,13 @@ def test_only_the_fields_read_are_decoded_and_a_missing_one_is_named(tmp_path):
     with pytest.raises(LogError, match=r"has no field 'rate.w' \(signal flow\); its fields, "
                                        r"closest first: rate.x, rate.y, rate.z"):
         read_log(_state_mcap(tmp_path / "state.mcap"), load_profile(profile).sources)
+
+
+def test_a_where_filter_reads_an_enum_by_its_number(tmp_path):
+    profile = _state_profile(tmp_path)
+    profile.write_text(profile.read_text().replace(
+        'flow = { topic = "/state", field = "rate.z" }',
+        'flow = { topic = "/state", field = "rate.z", where = { mode = "1" } }'))
+    flow = read_log(_state_mcap(tmp_path / "state.mcap"), load_profile(profile).sources
+                    ).series["flow"]
+    assert len(flow) == MESSAGES // 2 and flow.values[0] == pytest.approx(0.01)
