@@ -55,15 +55,21 @@ class ProtobufTypes:
 
         self.store = store
         self.name = normalize_fieldname
+        self.shapes: dict[str, list[tuple[int, str, str, Any, bool]]] = {}
 
-    def _fields(self, msgtype: str) -> Iterator[tuple[int, str, str, Any, bool]]:
-        """(number, name, ROS kind, detail, repeated) of each field of ``msgtype``."""
-        for number, (name, (node, detail)) in enumerate(self.store.fielddefs[msgtype][1], 1):
-            kind, repeated = node.name, kind_repeats(node.name)
-            if repeated:
-                (element_node, detail), _ = detail
-                kind = element_node.name
-            yield number, self.name(name), kind, detail, repeated
+    def _fields(self, msgtype: str) -> list[tuple[int, str, str, Any, bool]]:
+        """(number, name, ROS kind, detail, repeated) of each field of ``msgtype`` (worked
+        out once a type: every message of it is encoded by them)."""
+        if msgtype not in self.shapes:
+            shape = []
+            for number, (name, (node, detail)) in enumerate(self.store.fielddefs[msgtype][1], 1):
+                kind, repeated = node.name, kind_repeats(node.name)
+                if repeated:
+                    (element_node, detail), _ = detail
+                    kind = element_node.name
+                shape.append((number, self.name(name), kind, detail, repeated))
+            self.shapes[msgtype] = shape
+        return self.shapes[msgtype]
 
     def descriptor_set(self, msgtype: str) -> bytes:
         """The serialised FileDescriptorSet of ``msgtype`` and every type it holds, one file
