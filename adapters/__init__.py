@@ -34,8 +34,8 @@ class Adapter(Protocol):
 
     @property
     def family(self) -> str:
-        """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash``, ``ulog`` or
-        ``csv``."""
+        """Which profile mapping it reads: ``ros``, ``mavlink``, ``dataflash``, ``ulog``,
+        ``moos`` or ``csv``."""
 
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         """``fmt``: what `recognise` said, so that the log is recognised once."""
@@ -55,6 +55,7 @@ _ADAPTERS: dict[str, tuple[str, str]] = {
     "ulog": ("adapters.ulog", "UlogAdapter"),
     "csv": ("adapters.csv_log", "CsvAdapter"),
     "topic-csv": ("adapters.topic_csv", "TopicCsvAdapter"),
+    "alog": ("adapters.moos_alog", "MoosAlogAdapter"),
 }
 
 

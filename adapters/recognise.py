@@ -21,6 +21,7 @@ CSV_SNIFF_BYTES = 8192
 # taken only beside field-path columns (`header.seq`).
 TOPIC_CSV_CLOCKS = {"%time": 1, "Time": 1_000_000_000}
 TOPIC_CSV_FIELD_PREFIX = "field."
+ALOG_LOGSTART = b"%% LOGSTART"          # MOOS pLogger's header line of the log's UNIX start
 
 
 def _recording_order(path: Path) -> list[str | int]:
@@ -144,6 +145,21 @@ def _ulog(path: Path, head: bytes) -> str | None:
     return "ulog" if head.startswith(ULOG_MAGIC) else None
 
 
+def _alog(path: Path, head: bytes) -> str | None:
+    """A pLogger header (``%%`` lines, one of them LOGSTART) or, without one, lines of a
+    time, a variable and a source."""
+    if b"\0" in head:
+        return None
+    lines = head.splitlines()[:40]
+    if any(line.startswith(ALOG_LOGSTART) for line in lines):
+        return "alog"
+    data = [line.split(None, 3) for line in lines if line.strip() and not line.startswith(b"%")]
+    timed = len(data) >= 3 and all(
+        len(parts) >= 3 and is_number(parts[0].decode("ascii", "replace"))
+        and parts[1][:1].isalpha() for parts in data)
+    return "alog" if timed else None
+
+
 def _csv(path: Path, head: bytes) -> str | None:
     """Text whose first line names columns and whose next has as many cells, some numbers."""
     lines = _head_lines(head)
@@ -159,11 +175,13 @@ def _csv(path: Path, head: bytes) -> str | None:
 
 
 # Order matters: a ROS 2 bag's .mcap storage file is claimed as a bag before plain MCAP.
-# CSV last: it is recognised by being text with a header, which the binary formats are not.
+# CSV last: it is recognised by being text with a header, which the binary formats are not
+# (nor a MOOS alog, whose lines are space-separated).
 # Each is given the file and its first CSV_SNIFF_BYTES bytes.
 _RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path, bytes], str | None]], ...] = (
     (("bag", "db3", "ros2-mcap"), _ros_bag), (("mcap",), _mcap), (("tlog",), _tlog),
-    (("bin",), _dataflash), (("ulog",), _ulog), (("csv", "topic-csv"), _csv))
+    (("bin",), _dataflash), (("ulog",), _ulog), (("alog",), _alog),
+    (("csv", "topic-csv"), _csv))
 KNOWN_FORMATS = tuple(fmt for formats, _ in _RECOGNISERS for fmt in formats)
 
 

@@ -278,8 +278,8 @@ def test_a_diagnosis_loads_no_data_frame_library_and_no_compiler_for_a_short_log
     log = shutil.copy(ROOT / "sample_logs" / "mission-large-ccw.bin", tmp_path / "dive.bin")
     unused = ["pandas", "numba", "torch", "matplotlib", "rosbags", "mcap", "adapters.rosbag",
               "adapters.rosbag1_index", "adapters.rosbag2_sqlite", "adapters.mcap",
-              "adapters.ulog", "adapters.csv_log", "auvdiag_cli.audit", "auvdiag_cli.jobs.train",
-              "auvdiag_cli.simulator.writers"]
+              "adapters.ulog", "adapters.csv_log", "adapters.moos_alog", "auvdiag_cli.audit",
+              "auvdiag_cli.jobs.train", "auvdiag_cli.simulator.writers"]
     loaded = subprocess.run(
         [sys.executable, "-c", "import sys; from pathlib import Path; from auvdiag_cli import "
          "api; p = api.load_profile(None); d = api.diagnose(Path(sys.argv[1]), p, "

@@ -28,7 +28,8 @@ def simulate(
         "--format", help="Log format: bag (ROS 1), db3 (ROS 2, sqlite3), ros2-mcap (ROS 2, "
                          "mcap storage), mcap (standalone), json-mcap (standalone, JSON "
                          "messages), protobuf-mcap (standalone, Protocol Buffers messages), "
-                         "tlog (MAVLink), bin (DataFlash), ulog (PX4), csv (the profile's "
+                         "tlog (MAVLink), bin (DataFlash), ulog (PX4), alog (MOOS-IvP "
+                         "pLogger), csv (the profile's "
                          "[sources.csv] columns), topic-csv (one CSV per ROS topic)."
     )] = "ros2-mcap",
     seed: Annotated[int, typer.Option(help="Noise seed.")] = 0,

@@ -8,6 +8,7 @@ from adapters.fieldpath import parse_field_path
 from adapters.ros_words import ROS_WORD_SOURCES
 from adapters.signals import (
     CLOCK_REFERENCE,
+    MOOS_VALUE,
     OPERATING,
     TIME_UNITS,
     FieldSource,
@@ -20,10 +21,12 @@ from auvdiag_errors import ProfileError
 
 
 def _topic(reader: TableReader) -> str:
-    """`topic` (ROS, MCAP) and `message` (MAVLink, DataFlash) are the same key; a CSV
-    `column` is its own topic."""
+    """`topic` (ROS, MCAP), `message` (MAVLink, DataFlash) and `variable` (MOOS) are the
+    same key; a CSV `column` is its own topic."""
     if "column" in reader.table:
         return str(reader.get("column", str))
+    if "variable" in reader.table:
+        return str(reader.get("variable", str))
     if "topic" not in reader.table and "message" in reader.table:
         return str(reader.get("message", str))
     return str(reader.get("topic", str))
@@ -34,6 +37,8 @@ def _field(reader: TableReader) -> str:
     `field` a path into its message (`twist.linear.x`, `channels[2]`), checked here."""
     if "column" in reader.table:
         return str(reader.get("column", str))
+    if "variable" in reader.table:      # a MOOS variable's posting is its `value`
+        return _path(reader, "field", reader.get("field", str, MOOS_VALUE))
     return _path(reader, "field", reader.get("field", str))
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from auvdiag_cli.engine.missions import mission_path
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
+from auvdiag_cli.simulator.writers.alog import write_alog
 from auvdiag_cli.simulator.truth_files import truth_paths
 from auvdiag_cli.simulator.writers.csv_log import write_csv
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
@@ -21,7 +22,7 @@ from auvdiag_cli.vehicle.profile import Profile
 __all__ = ["LOG_FORMATS", "ROS1_FORMATS", "ExtraTopic", "write_log"]
 
 LOG_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
-               "ulog", "csv", "topic-csv")
+               "ulog", "alog", "csv", "topic-csv")
 # A standalone MCAP's message encoding, by format.
 _MCAP_ENCODINGS = {"mcap": "cdr", "json-mcap": "json", "protobuf-mcap": "protobuf"}
 # Whose messages are ROS 1's (a per-topic CSV folder: `rostopic echo -p` of a ROS 1 bag):
@@ -67,6 +68,8 @@ def _write(dive: SimulatedDive, profile: Profile, path: Path, fmt: str,
         write_topic_csvs(dive, profile, path, tuple(extra))
     elif fmt == "ulog":
         write_ulog(dive, profile, path)
+    elif fmt == "alog":
+        write_alog(dive, profile, path)
     else:
         write_dataflash(dive, profile, path)
 
