@@ -21,11 +21,11 @@ import numpy as np
 from adapters.collect import SignalCollector
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import ALOG_LOGSTART as LOGSTART
+from adapters.signals import MOOS_SOURCE as SOURCE
 from adapters.signals import MOOS_VALUE as VALUE
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
 
-SOURCE = "source"       # beside its `value`, the field every posting has: who posted it
 NUMBER_TYPE, TEXT_TYPE = "double", "string"
 WORDS = {"true": 1.0, "false": 0.0}
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="

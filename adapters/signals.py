@@ -71,8 +71,9 @@ OPERATING = "operating"
 # The reserved signal of a UTC time the log carries on messages its own clock stamps (a
 # GPS time reference): where the log's clock is off, its UTC times are set by it.
 CLOCK_REFERENCE = "clock_reference"
-# A MOOS variable's posting, the field a profile reads where it names no key of it.
-MOOS_VALUE = "value"
+# A MOOS variable's posting, the field a profile reads where it names no key of it, and
+# the app that posted it (a `where` keeps one app's postings).
+MOOS_VALUE, MOOS_SOURCE = "value", "source"
 # CSV logs have no topics: a column is both a signal's topic and its field.
 TIME_UNITS = ("s", "ms", "us", "ns", "iso", "hhmmss")
 

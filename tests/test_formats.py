@@ -9,12 +9,14 @@ from auvdiag_errors import LogError
 from models.store import load_model
 
 ALL_FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
-               "ulog"]
+               "ulog", "alog"]
 # A JSON- or Protocol Buffers-encoded MCAP is an MCAP like any other to the reader.
 READ_AS = {"json-mcap": "mcap", "protobuf-mcap": "mcap"}
 # MAVLink and DataFlash carry thruster commands as integer PWM µs (1/400 of full command)
 # and sensor values as float32 (ULog: float32 throughout); ROS formats carry float64.
-G_TOLERANCE = {"tlog": 0.5, "bin": 0.5, "ulog": 0.5}
+# A MOOS alog's times are whole milliseconds, as pLogger writes them: a command posted
+# within a millisecond of a model step can land on the step either side of it.
+G_TOLERANCE = {"tlog": 0.5, "bin": 0.5, "ulog": 0.5, "alog": 1.0}
 
 
 @pytest.fixture(scope="module")
@@ -142,7 +144,7 @@ def test_dataflash_log_without_the_flow_record_names_it(tmp_path, make_log, prof
 
 # The format `auvdiag simulate` writes for each family a profile maps.
 FAMILY_FORMATS = {"dataflash": "bin", "mavlink": "tlog", "ulog": "ulog", "csv": "csv",
-                  "ros": "bag"}
+                  "ros": "bag", "moos": "alog"}
 
 
 def _simulated_families() -> list[tuple[str, str]]:

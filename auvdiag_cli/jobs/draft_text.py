@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from adapters.signals import CLOCK_REFERENCE, OPERATING, FieldSource, TimeColumn
+from adapters.signals import CLOCK_REFERENCE, MOOS_VALUE, OPERATING, FieldSource, TimeColumn
 
 # A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
 # it drives a model of the closed loop, but it is no actuator.
@@ -65,8 +65,10 @@ def toml_key(text: str) -> str:
 
 def entry(source: FieldSource, family: str) -> str:
     key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
-        else "topic"
-    parts = [f"{key} = {quoted(source.topic)}"] if family == "csv" else [
+        else "variable" if family == "moos" else "topic"
+    # A CSV column is its own field; a MOOS variable's posting is its field `value`.
+    bare = family == "csv" or (family == "moos" and source.field == MOOS_VALUE)
+    parts = [f"{key} = {quoted(source.topic)}"] if bare else [
         f"{key} = {quoted(source.topic)}", f"field = {quoted(source.field)}"]
     if source.scale != 1.0:
         parts.append(f"scale = {source.scale:g}")

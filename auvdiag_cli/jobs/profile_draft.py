@@ -17,7 +17,7 @@ from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.csv_log import csv_rows
 from adapters.fieldpath import is_field_path
 from adapters.recognise import is_number
-from adapters.signals import FieldSource, LogSources, TimeColumn
+from adapters.signals import MOOS_SOURCE, MOOS_VALUE, FieldSource, LogSources, TimeColumn
 from auvdiag_cli.jobs.autopilot_outputs import (
     climb_source,
     output_channel,
@@ -51,7 +51,7 @@ SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_vel
                          re.IGNORECASE)
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
-                          r"^EKF_|^REQUEST_|^PARAM)", re.IGNORECASE)
+                          r"^EKF_|^REQUEST_|^PARAM|^DESIRED_)", re.IGNORECASE)
 # A clock's column, its unit perhaps beside it as CSV exports write it ("time (s)", "t [ms]").
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
                        r"(\s*[(\[]\s*(s|ms|us|ns)\s*[)\]])?$", re.IGNORECASE)
@@ -80,6 +80,11 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
     return [group for group in names if frozenset(group) not in identical]
 
 
+def _label(topic: str, field: str, family: str) -> str:
+    """What a field is called: a MOOS variable's own posting goes by the variable's name."""
+    return topic if family == "moos" and field == MOOS_VALUE else field
+
+
 def _signal_name(topic: str, field: str) -> str:
     text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
     return text.lower() or "signal"
@@ -98,10 +103,12 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
         # A CSV column is a name, whatever it holds; other fields are paths into a message
         # (a damaged log's field names may not be).
         fields = (topic.fields or (topic.name,)) if family == "csv" else [
-            field for field in topic.fields if is_field_path(field)]
+            field for field in topic.fields if is_field_path(field)
+            and (family != "moos" or field != MOOS_SOURCE)]
         for field in fields:
-            command = COMMAND_NAME.search(field) or (
-                family == "ros" and COMMAND_TOPIC.search(topic.name))
+            label = _label(topic.name, field, family)
+            command = COMMAND_NAME.search(label) or (
+                family in ("ros", "moos") and COMMAND_TOPIC.search(topic.name))
             if command and (family != "mavlink" or topic.name == "SERVO_OUTPUT_RAW") and (
                     family != "dataflash" or topic.name == "RCOU"):
                 # An array of commands is listed by its first element: try the next ones.
@@ -109,8 +116,8 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                     f"{field[:-3]}[{i}]" for i in range(MAX_ARRAY_COMMANDS)]
                 found += [("command", FieldSource(topic.name, path, where=where))
                           for path in elements]
-            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(field)) and not (
-                    NOT_A_SENSOR.search(field) or NOT_A_SENSOR.search(topic.name)):
+            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(label)) and not (
+                    NOT_A_SENSOR.search(label) or NOT_A_SENSOR.search(topic.name)):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
 
@@ -218,7 +225,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         series = values.get(key)
         if series is None or not _moves(series):
             continue                                   # not in the log, or never moves
-        name = _signal_name(source.topic, source.field)
+        name = _signal_name(source.topic, _label(source.topic, source.field, family))
         channel = output_channel(source) if kind == "command" else None
         paired = paired_unit(source) if closed_loop else None
         if paired is not None:

@@ -8,8 +8,8 @@ from pathlib import Path
 
 from auvdiag_cli.engine.missions import mission_path
 from auvdiag_cli.simulator.run import SimulatedDive, fault_summary
-from auvdiag_cli.simulator.writers.alog import write_alog
 from auvdiag_cli.simulator.truth_files import truth_paths
+from auvdiag_cli.simulator.writers.alog import write_alog
 from auvdiag_cli.simulator.writers.csv_log import write_csv
 from auvdiag_cli.simulator.writers.dataflash import write_dataflash
 from auvdiag_cli.simulator.writers.mavlink import write_tlog
