@@ -14,6 +14,7 @@ short mid-line, bytes that are no text) is left out and counted."""
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,7 @@ from auvdiag_errors import LogError
 
 NUMBER_TYPE, TEXT_TYPE = "double", "string"
 WORDS = {"true": 1.0, "false": 0.0}
+MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damage
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
 
 
@@ -42,10 +44,10 @@ class _Postings:
 
 @dataclass
 class ParsedAlog:
-    """What was read: the header's start (UNIX s; None without one), each wanted variable's
+    """What was read: the header's start (UNIX ns; None without one), each wanted variable's
     postings, every variable's count, the span of the lines' times and the lines left out."""
 
-    logstart_s: float | None
+    logstart_ns: int | None
     postings: dict[str, _Postings]
     counts: dict[str, int]
     first_s: float | None = None
@@ -63,6 +65,15 @@ def _number(text: bytes | str) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def _start_ns(text: bytes) -> int | None:
+    """LOGSTART's UNIX seconds as ns, exactly (a float64 would round today's to 256 ns)."""
+    try:
+        start = Decimal(text.decode("ascii"))
+    except (InvalidOperation, UnicodeDecodeError):
+        return None
+    return int(start * 10**9) if start.is_finite() and 0 <= start < MAX_UNIX_S else None
+
+
 def _lines(path: Path) -> Iterator[bytes]:
     with path.open("rb") as stream:
         yield from stream
@@ -78,8 +89,8 @@ def parse_alog(path: Path, wanted: set[str] | None) -> ParsedAlog:
             parsed.cut_short = True
             break
         if line.startswith(b"%%"):
-            if line.startswith(LOGSTART) and parsed.logstart_s is None:
-                parsed.logstart_s = _number(line[len(LOGSTART):].strip())
+            if line.startswith(LOGSTART) and parsed.logstart_ns is None:
+                parsed.logstart_ns = _start_ns(line[len(LOGSTART):].strip())
             continue
         parts = line.split(None, 3)
         if parts:
@@ -149,7 +160,7 @@ def _column(postings: _Postings, path: str) -> np.ndarray:
 def _clock_ns(parsed: ParsedAlog, times_s: list[float] | float) -> np.ndarray:
     """Seconds since LOGSTART on the log's clock: ns since 1970 (since the log's start
     where the header gives none)."""
-    start_ns = round(parsed.logstart_s * 1e9) if parsed.logstart_s is not None else 0
+    start_ns = parsed.logstart_ns or 0
     return start_ns + np.round(np.asarray(times_s, np.float64) * 1e9).astype(np.int64)
 
 
@@ -166,7 +177,7 @@ def _notes(parsed: ParsedAlog) -> list[str]:
     if parsed.unreadable:
         notes.append(f"{parsed.unreadable} line(s) that do not read as TIME VARIABLE SOURCE "
                      "VALUE left out")
-    if parsed.logstart_s is None:
+    if parsed.logstart_ns is None:
         notes.append("no %% LOGSTART header: times are seconds from the log's start")
     return notes
 
