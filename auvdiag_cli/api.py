@@ -153,7 +153,7 @@ def save_model(model: LoadedModel, directory: Path) -> None:
 
 def log_format(path: Path) -> str:
     """The format of the log at ``path`` by its content (bag, db3, mcap, tlog, bin, ulog,
-    csv, …); a `LogError` naming the file where it is not a log this tool reads."""
+    alog, csv, …); a `LogError` naming the file where it is not a log this tool reads."""
     from adapters import detect_format
 
     return detect_format(path)
@@ -347,7 +347,7 @@ def simulate(scenario: str | Scenario, profile: Profile, output: Path, *,
              start_ns: int | None = None, namespace: str = "") -> SimulatedDive:
     """Fly one of the profile's ``scenarios`` (by name, or a `Scenario` built from the
     simulator's steps) with its [simulation] physics and write it to
-    ``output`` in ``log_format`` (bag, db3, ros2-mcap, mcap, tlog, bin, ulog, csv) with
+    ``output`` in ``log_format`` (bag, db3, ros2-mcap, mcap, tlog, bin, ulog, alog, csv) with
     its ground truth beside it (NAME.truth.json, NAME.truth.csv); an existing ``output``
     is never overwritten: `auvdiag simulate`. ``start_ns``: the log's first clock reading
     (None: 2026-11-22T10:00:00Z); ``namespace``: the ROS namespace the vehicle publishes

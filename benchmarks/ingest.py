@@ -5,7 +5,8 @@ it in every format, with an unrelated camera topic (incompressible images, --ima
 total) in the ROS formats, then times in fresh processes:
   adapter  auvdiag's adapter reading the profile's signals (read_log);
   raw      the library alone iterating and decoding the same topics (for Protocol Buffers
-           MCAP, the protobuf library's parser: a development dependency);
+           MCAP, the protobuf library's parser: a development dependency; for a MOOS alog,
+           pandas' C parser splitting every line, the profile's variables kept);
 and reports messages/s of each, their ratio, and each process's peak RSS.
 
 Usage: python benchmarks/ingest.py [--workdir DIR] [--image-gb 1.0] [--keep]
@@ -25,11 +26,13 @@ from typing import Any
 
 from bytecode import write_bytecode  # benchmarks/bytecode.py, beside this script
 
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "protobuf-mcap", "tlog", "bin", "ulog"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "protobuf-mcap", "tlog", "bin", "ulog", "alog"]
 ROS_TOPICS = ["/thrusters/command", "/flow/velocity", "/imu/data", "/diagnosis/sequence"]
 MAVLINK_TYPES = ["SERVO_OUTPUT_RAW", "NAMED_VALUE_FLOAT", "ATTITUDE", "STATUSTEXT"]
 DATAFLASH_TYPES = ["RCOU", "FLOW", "IMU", "MSG"]
 ULOG_TOPICS = ["actuator_motors", "airspeed", "vehicle_angular_velocity"]
+ALOG_VARIABLES = ["DESIRED_THRUST_L", "DESIRED_THRUST_R", "FLOW_VELOCITY", "IMU_YAW_RATE",
+                  "DMS_SEQUENCE"]
 IMAGE_BYTES = 300_000
 
 
@@ -66,10 +69,10 @@ def make_logs(workdir: Path, image_gb: float) -> dict[str, Path]:
     paths = {}
     for fmt in FORMATS:
         path = workdir / {"bag": "dive.bag", "mcap": "dive.mcap", "tlog": "dive.tlog",
-                          "bin": "dive.bin", "ulog": "dive.ulg",
+                          "bin": "dive.bin", "ulog": "dive.ulg", "alog": "dive.alog",
                           "protobuf-mcap": "dive_protobuf.mcap"}.get(fmt, f"dive_{fmt}")
         started = time.perf_counter()
-        ros = fmt not in ("tlog", "bin", "ulog")
+        ros = fmt not in ("tlog", "bin", "ulog", "alog")
         write_log(dive, profile, path, fmt, [camera] if ros else [])
         size = sum(p.stat().st_size for p in path.rglob("*")) if path.is_dir() else \
             path.stat().st_size
@@ -85,9 +88,10 @@ def read_adapter(path: Path) -> int:
 
     signals = read_log(path, load_profile().sources)
     series = signals.series
-    # thruster_0/1 share one message; count messages, not samples.
-    return len(series["thruster_0"]) + len(series["flow"]) + len(series["yaw_rate"]) + len(
-        signals.markers)
+    # thruster_0/1 share one message (an alog posts each alone); count messages, not samples.
+    commands = len(series["thruster_0"]) + (len(series["thruster_1"])
+                                            if signals.format == "alog" else 0)
+    return commands + len(series["flow"]) + len(series["yaw_rate"]) + len(signals.markers)
 
 
 def read_raw(path: Path, fmt: str) -> int:
@@ -110,6 +114,12 @@ def read_raw(path: Path, fmt: str) -> int:
                 count += 1
     elif fmt == "protobuf-mcap":
         count = _read_protobuf(path)
+    elif fmt == "alog":
+        import pandas as pd
+
+        lines = pd.read_csv(path, sep=r"\s+", comment="%", header=None,
+                            names=["time", "variable", "source", "value"], engine="c")
+        count = int(lines["variable"].isin(ALOG_VARIABLES).sum())
     elif fmt == "ulog":
         from pyulog import ULog
 

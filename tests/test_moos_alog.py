@@ -149,3 +149,29 @@ def test_init_profile_drafts_a_moos_mapping_that_reads_the_log(tmp_path, make_lo
     assert set(profile.sensor_names) == {"flow_velocity", "imu_yaw_rate"}
     signals = read_log(log, profile.sources)
     assert set(signals.series) == {*profile.command_names, *profile.sensor_names}
+
+
+def test_an_audit_walks_plogger_folders_and_judges_each_alog(tmp_path, make_log):
+    """pLogger writes each run into a folder of its own, beside the mission files it
+    copies (`._moos`, `._bhv`): each alog is a log, a damaged one a row with its error."""
+    import csv
+    import shutil
+
+    fleet = tmp_path / "fleet"
+    for name, scenario in (("LOG_A_01_12_2026", "paper-normal"),
+                           ("LOG_B_01_12_2026", "paper-flow-sensor-covered")):
+        folder = fleet / name
+        folder.mkdir(parents=True)
+        shutil.copy(make_log(scenario, 11, "alog"), folder / f"{name}.alog")
+        (folder / f"{name}._moos").write_text("ServerPort = 9000\n", encoding="utf-8")
+    (fleet / "LOG_C_01_12_2026").mkdir()
+    (fleet / "LOG_C_01_12_2026" / "LOG_C.alog").write_bytes(b"\x00\x01 not text")
+    result = CliRunner().invoke(app, ["audit", str(fleet), "--output", str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output          # the damaged one is not analysable
+    with (tmp_path / "out" / "audit.csv").open() as stream:
+        rows = {Path(row["log"]).name: row for row in csv.DictReader(stream)}
+    assert set(rows) == {"LOG_A_01_12_2026.alog", "LOG_B_01_12_2026.alog", "LOG_C.alog"}
+    assert rows["LOG_A_01_12_2026.alog"]["verdict"] == "normal"
+    assert rows["LOG_B_01_12_2026.alog"]["verdict"] == "fault"
+    assert rows["LOG_B_01_12_2026.alog"]["component"] == "flow_sensor"
+    assert "not a log this tool reads" in rows["LOG_C.alog"]["error"]

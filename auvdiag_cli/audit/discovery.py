@@ -13,7 +13,7 @@ from adapters.recognise import topic_csv_files
 from auvdiag_cli.audit.copies import copies
 from auvdiag_errors import LogError, UsageError
 
-LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin"}
+LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin", ".ulg", ".alog"}
 ROS2_METADATA = "metadata.yaml"
 
 

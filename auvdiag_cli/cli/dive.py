@@ -27,8 +27,8 @@ if TYPE_CHECKING:
 def diagnose(
     log: Annotated[Path, typer.Argument(help="Log: ROS 1 .bag, ROS 2 bag directory (or its "
                                              ".db3/.mcap file), standalone .mcap, MAVLink "
-                                             ".tlog, DataFlash .bin, PX4 ULog .ulg or CSV "
-                                             "with a header row.")],
+                                             ".tlog, DataFlash .bin, PX4 ULog .ulg, MOOS-IvP "
+                                             ".alog or CSV with a header row.")],
     model: ModelOption = None,
     profile: ModelProfileOption = None,
     json_path: Annotated[str | None, typer.Option(
