@@ -12,9 +12,11 @@ Only the lines of the profile's variables are decoded; a line that does not read
 short mid-line, bytes that are no text) is left out and counted."""
 
 import math
-from collections.abc import Iterator
+import re
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from decimal import Decimal, InvalidOperation
+from itertools import compress
 from pathlib import Path
 
 import numpy as np
@@ -33,28 +35,49 @@ MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damag
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
 
 
+# Read in blocks of whole lines: a long log never sits in memory at once.
+BLOCK_BYTES = 1 << 24
+TAIL_BYTES = 1 << 16          # a block's last postings are found in this much of its end
+_TOKEN = rb"[^ \t\r\n]+"
+# A line that cannot be a posting: it starts with neither a time nor a header's `%`.
+_NOT_A_POSTING = re.compile(rb"^[^%\s0-9.+-]", re.MULTILINE)
+_LOGSTART_LINE = re.compile(re.escape(LOGSTART) + rb"[ \t]+(" + _TOKEN + rb")", re.MULTILINE)
+
+
+def _posting_line(variables: bytes) -> re.Pattern[bytes]:
+    """A line posting one of ``variables`` (a pattern): its time, variable, source, and
+    value (the rest of the line, perhaps empty, its trailing blanks with it)."""
+    return re.compile(rb"^[ \t]*(" + _TOKEN + rb")[ \t]+(" + variables + rb")[ \t]+("
+                      + _TOKEN + rb")[ \t]*([^\r\n]*)", re.MULTILINE)
+
+
+_ANY_POSTING = _posting_line(_TOKEN)
+
+
 @dataclass
 class _Postings:
-    """One variable's lines: their times (s since LOGSTART), sources and values as text."""
+    """One variable's lines: their times (s since LOGSTART), sources and values as bytes."""
 
-    times_s: list[float] = field(default_factory=list)
-    sources: list[str] = field(default_factory=list)
-    values: list[str] = field(default_factory=list)
+    times_s: np.ndarray
+    sources: list[bytes]
+    values: list[bytes]
 
 
 @dataclass
 class ParsedAlog:
     """What was read: the header's start (UNIX ns; None without one), each wanted variable's
-    postings, every variable's count, the span of the lines' times and the lines left out."""
+    postings, every variable's count (inventory), the span of the lines' times and the
+    lines left out."""
 
-    logstart_ns: int | None
-    postings: dict[str, _Postings]
-    counts: dict[str, int]
+    logstart_ns: int | None = None
+    postings: dict[str, _Postings] = field(default_factory=dict)
+    counts: dict[str, int] = field(default_factory=dict)
     first_s: float | None = None
     last_s: float | None = None
     unreadable: int = 0
     cut_short: bool = False
     posters: dict[str, set[str]] = field(default_factory=dict)   # inventory: who posts each
+    postings_read: int = 0
 
 
 def _number(text: bytes | str) -> float | None:
@@ -74,55 +97,91 @@ def _start_ns(text: bytes) -> int | None:
     return int(start * 10**9) if start.is_finite() and 0 <= start < MAX_UNIX_S else None
 
 
-def _lines(path: Path) -> Iterator[bytes]:
+def _blocks(path: Path, parsed: ParsedAlog) -> Iterator[bytes]:
+    """The file in blocks of whole lines; a last line without its newline was cut short:
+    left out (``parsed.cut_short``)."""
+    rest = b""
     with path.open("rb") as stream:
-        yield from stream
+        while block := stream.read(BLOCK_BYTES):
+            block = rest + block
+            end = block.rfind(b"\n") + 1
+            rest = block[end:]
+            if end:
+                yield block[:end]
+    parsed.cut_short = bool(rest.strip())
+
+
+def _numbers(texts: Sequence[bytes]) -> np.ndarray:
+    """Texts as float64, NaN where one is no finite number (`_reading`: true and false
+    read too)."""
+    try:
+        numbers = np.fromiter(map(float, texts), np.float64, len(texts))
+    except ValueError:
+        numbers = np.array([_reading(text.decode("utf-8", "replace")) for text in texts],
+                           np.float64)
+    numbers[~np.isfinite(numbers)] = np.nan
+    return numbers
 
 
 def parse_alog(path: Path, wanted: set[str] | None) -> ParsedAlog:
-    """The postings of ``wanted`` variables (None: the first of each, and who posts each,
-    for inventory). A last line without its newline was cut short: left out."""
-    parsed = ParsedAlog(None, {}, {})
-    keys = None if wanted is None else {name.encode() for name in wanted}
-    for line in _lines(path):
-        if not line.endswith(b"\n"):
-            parsed.cut_short = True
-            break
-        if line.startswith(b"%%"):
-            if line.startswith(LOGSTART) and parsed.logstart_ns is None:
-                parsed.logstart_ns = _start_ns(line[len(LOGSTART):].strip())
-            continue
-        parts = line.split(None, 3)
-        if parts:
-            _take(parsed, parts, keys)
+    """The postings of ``wanted`` variables (None: every variable's count, first posting
+    and who posts it, for inventory)."""
+    parsed = ParsedAlog()
+    pattern = _ANY_POSTING if wanted is None else _posting_line(b"|".join(
+        re.escape(name.encode()) for name in sorted(wanted, key=len, reverse=True)))
+    found: dict[bytes, list[tuple[bytes, ...]]] = {}
+    for block in _blocks(path, parsed):
+        if parsed.logstart_ns is None and (start := _LOGSTART_LINE.search(block)):
+            parsed.logstart_ns = _start_ns(start.group(1))
+        parsed.unreadable += len(_NOT_A_POSTING.findall(block))
+        _widen(parsed, _numbers(_ends(block)))
+        for line in pattern.findall(block):
+            found.setdefault(line[1], []).append(line)
+    for variable, lines in found.items():
+        _keep(parsed, variable, lines, wanted is None)
     return parsed
 
 
-def _take(parsed: ParsedAlog, parts: list[bytes], keys: set[bytes] | None) -> None:
-    """One line's posting, kept where its variable is wanted."""
-    time_s = _number(parts[0]) if len(parts) >= 3 else None
+def _ends(block: bytes) -> list[bytes]:
+    """The times of a block's first and last postings (pLogger writes in time order)."""
+    first = _ANY_POSTING.search(block)
+    tail = block.rfind(b"\n", 0, max(0, len(block) - TAIL_BYTES)) + 1
+    last = _ANY_POSTING.findall(block, tail)
+    return ([first.group(1)] if first else []) + ([last[-1][0]] if last else [])
+
+
+def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
+          inventory: bool) -> None:
+    """A variable's lines as postings; those whose time does not read are counted."""
+    stamps, _, sources, values = (list(column) for column in zip(*lines, strict=True))
+    times = _numbers(stamps)
+    timed = times >= 0                      # NaN compares false: no time
     try:
-        variable = parts[1].decode("ascii") if time_s is not None and time_s >= 0 else None
+        name = variable.decode("ascii")
     except UnicodeDecodeError:
-        variable = None
-    if time_s is None or variable is None:
-        parsed.unreadable += 1
+        timed[:] = False
+    parsed.unreadable += int(timed.size - np.count_nonzero(timed))
+    if not timed.all():
+        sources, values = (list(compress(column, timed.tolist())) for column in (sources, values))
+        times = times[timed]
+    if not times.size:
         return
-    count = parsed.counts[variable] = parsed.counts.get(variable, 0) + 1
-    parsed.first_s = time_s if parsed.first_s is None else min(parsed.first_s, time_s)
-    parsed.last_s = time_s if parsed.last_s is None else max(parsed.last_s, time_s)
-    source = parts[2].decode("utf-8", "replace")
-    if keys is None:
-        parsed.posters.setdefault(variable, set()).add(source)
-        if count > 1:
-            return
-    elif parts[1] not in keys:
-        return
-    postings = parsed.postings.setdefault(variable, _Postings())
-    postings.times_s.append(time_s)
-    postings.sources.append(source)
-    postings.values.append(parts[3].decode("utf-8", "replace").rstrip("\r\n")
-                           if len(parts) > 3 else "")
+    parsed.counts[name] = times.size
+    _widen(parsed, times)
+    if inventory:
+        parsed.posters[name] = {source.decode("utf-8", "replace") for source in sources}
+        sources, values, times = sources[:1], values[:1], times[:1]
+    parsed.postings_read += times.size
+    parsed.postings[name] = _Postings(times, sources, [value.rstrip() for value in values])
+
+
+def _widen(parsed: ParsedAlog, times_s: np.ndarray) -> None:
+    """The span read so far, widened to these times (those that read)."""
+    times_s = times_s[times_s >= 0]
+    if times_s.size:
+        first, last = float(times_s.min()), float(times_s.max())
+        parsed.first_s = first if parsed.first_s is None else min(parsed.first_s, first)
+        parsed.last_s = last if parsed.last_s is None else max(parsed.last_s, last)
 
 
 def _reading(text: str) -> float:
@@ -144,20 +203,27 @@ def pairs(text: str) -> dict[str, str]:
     return found
 
 
+def _texts(values: list[bytes]) -> list[str]:
+    return [value.decode("utf-8", "replace") for value in values]
+
+
 def _column(postings: _Postings, path: str) -> np.ndarray:
     """One field of every posting: numbers (NaN where a posting holds none), or the texts
     where no posting holds a number (segment labels, `where` on the source)."""
     if path == SOURCE:
-        return np.asarray(postings.sources, object)
-    texts = postings.values if path == VALUE else [
-        pairs(text).get(path, "") for text in postings.values]
-    numbers = np.array([_reading(text) for text in texts], np.float64)
+        return np.asarray(_texts(postings.sources), object)
+    if path == VALUE:
+        numbers = _numbers(postings.values)
+        texts = _texts(postings.values) if np.isnan(numbers).all() else []
+    else:
+        texts = [pairs(text).get(path, "") for text in _texts(postings.values)]
+        numbers = np.array([_reading(text) for text in texts], np.float64)
     if np.isnan(numbers).all() and any(texts):
         return np.asarray(texts, object)
     return numbers
 
 
-def _clock_ns(parsed: ParsedAlog, times_s: list[float] | float) -> np.ndarray:
+def _clock_ns(parsed: ParsedAlog, times_s: np.ndarray | float) -> np.ndarray:
     """Seconds since LOGSTART on the log's clock: ns since 1970 (since the log's start
     where the header gives none)."""
     start_ns = parsed.logstart_ns or 0
@@ -167,7 +233,7 @@ def _clock_ns(parsed: ParsedAlog, times_s: list[float] | float) -> np.ndarray:
 def _fields(postings: _Postings) -> tuple[str, ...]:
     """The paths a profile can name on a variable: its value, its source, and the keys of
     its first text posting."""
-    first = postings.values[0] if postings.values else ""
+    first = postings.values[0].decode("utf-8", "replace") if postings.values else ""
     keys = [key for key in pairs(first) if key not in (VALUE, SOURCE)]
     return (VALUE, SOURCE, *keys)
 
@@ -194,7 +260,7 @@ class MoosAlogAdapter:
     def read(self, path: Path, sources: LogSources, fmt: str) -> Signals:
         collector = SignalCollector(path, sources)
         parsed = parse_alog(path, set(collector.topics))
-        if not parsed.counts:
+        if parsed.first_s is None:
             raise LogError(path, "no line reads as TIME VARIABLE SOURCE VALUE")
         if parsed.cut_short:
             collector.damaged("the log ends inside a line (cut short?): that line is left out")
@@ -216,7 +282,7 @@ class MoosAlogAdapter:
         topics = []
         for variable, count in sorted(parsed.counts.items()):
             postings = parsed.postings[variable]
-            number = not math.isnan(_reading(postings.values[0])) if postings.values else False
+            number = bool(postings.values) and not np.isnan(_numbers(postings.values[:1])[0])
             posters = tuple(sorted(parsed.posters.get(variable, ())))
             topics.append(TopicInfo(variable, NUMBER_TYPE if number else TEXT_TYPE, count,
                                     _fields(postings),
