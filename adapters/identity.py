@@ -1,10 +1,12 @@
 """Which vehicle wrote a log, where the log itself says so: a MAVLink telemetry log's
 autopilot (its system id and vehicle type, from HEARTBEAT; the flight controller's unique
 id from AUTOPILOT_VERSION where it is sent), a DataFlash log's SYSID_THISMAV parameter,
-a ULog's information messages (``sys_uuid``, else ``sys_name``), and the ROS namespace a
-bag's or an MCAP's topics are under. Nothing here raises on a damaged log: what cannot be
+a ULog's information messages (``sys_uuid``, else ``sys_name``), a MOOS alog's community
+(the app name its MOOSDB posts under), and the ROS namespace a bag's or an MCAP's topics
+are under. Nothing here raises on a damaged log: what cannot be
 read says nothing."""
 
+import re
 import struct
 from collections.abc import Collection
 from dataclasses import dataclass
@@ -36,6 +38,11 @@ DEFAULT_ULOG_NAME = "PX4"      # PX4's sys_name unless someone named the vehicle
 ULOG_HEADER_BYTES = 16
 ULOG_INFO = ord("I")
 ULOG_DATA_BEGINS = b"ALCD"     # subscriptions, text and data end the definitions
+# A MOOSDB posts its own variables (DB_TIME, DB_UPTIME, DB_CLIENTS) as MOOSDB_<community>:
+# MOOS-IvP names a vehicle's community after the vehicle. "#1" is MOOS's default.
+MOOSDB_POSTING = re.compile(rb"^[ \t]*[0-9.]+[ \t]+DB_[A-Z_]+[ \t]+MOOSDB_([^ \t\r\n]+)",
+                            re.MULTILINE)
+DEFAULT_COMMUNITY = "#1"
 
 
 @dataclass(frozen=True)
@@ -48,7 +55,8 @@ class LogIdentity:
         """Whether it tells this vehicle from others: a board's unique id, or a system id or
         name someone set (every autopilot leaves the factory as system 1, and PX4 as "PX4")."""
         return "-uid-" in self.vehicle or self.vehicle not in (
-            f"mavlink-{DEFAULT_SYSTEM_ID}", f"ulog-{DEFAULT_ULOG_NAME}")
+            f"mavlink-{DEFAULT_SYSTEM_ID}", f"ulog-{DEFAULT_ULOG_NAME}",
+            f"moos-{DEFAULT_COMMUNITY}")
 
 
 ROS_FORMATS = ("bag", "db3", "ros2-mcap", "mcap")
@@ -61,11 +69,13 @@ def log_identity(path: Path, log_format: str, ros_topics: Collection[str] = (),
     the vehicle (``namespace``: the one the profile fixes, else found)."""
     if log_format in ROS_FORMATS:
         return _namespace_identity(path, log_format, ros_topics, namespace)
-    if log_format not in ("tlog", "bin", "ulog"):
+    if log_format not in ("tlog", "bin", "ulog", "alog"):
         return None
     try:
         with path.open("rb") as stream:
             prefix = stream.read(PREFIX_BYTES)
+        if log_format == "alog":
+            return _moos_identity(prefix)
         if log_format == "tlog":
             return _tlog_identity(index_tlog(prefix, {}))
         if log_format == "ulog":
@@ -128,6 +138,14 @@ def _ulog_identity(info: dict[str, bytes]) -> LogIdentity | None:
         return LogIdentity(f"ulog-{name or 'board'}-uid-{uuid}",
                            f"ULog sys_uuid {uuid}" + (f", sys_name {name}" if name else ""))
     return LogIdentity(f"ulog-{name}", f"ULog sys_name {name}") if name else None
+
+
+def _moos_identity(prefix: bytes) -> LogIdentity | None:
+    found = MOOSDB_POSTING.search(prefix)
+    if found is None:
+        return None
+    community = found.group(1).decode("utf-8", "replace")
+    return LogIdentity(f"moos-{community}", f"MOOSDB community {community} (its DB_ postings)")
 
 
 def _namespace_identity(path: Path, log_format: str, ros_topics: Collection[str],

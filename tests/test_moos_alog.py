@@ -39,6 +39,7 @@ def _write_alog(path: Path, header: bool = True) -> Path:
              "%% FILE OPENED ON  Mon Jun 16 10:00:00 2025",
              f"%% LOGSTART               {LOGSTART_S}", "%" * 40] if header else []
     lines.append(f"{0.05:<14.3f} DEPLOY              pMarineViewer      false")
+    lines.append(f"{0.06:<14.3f} DB_UPTIME           MOOSDB_kayak       0.06")
     lines.append(f"{0.08:<14.3f} DMS_SEQUENCE        pHelmIvP           MISSION")
     for k in range(STEPS):
         t = 0.1 + k * 0.1
@@ -175,3 +176,18 @@ def test_an_audit_walks_plogger_folders_and_judges_each_alog(tmp_path, make_log)
     assert rows["LOG_B_01_12_2026.alog"]["verdict"] == "fault"
     assert rows["LOG_B_01_12_2026.alog"]["component"] == "flow_sensor"
     assert "not a log this tool reads" in rows["LOG_C.alog"]["error"]
+
+
+def test_an_alog_names_its_vehicle_by_its_moos_community(tmp_path):
+    from adapters.identity import log_identity
+
+    log = _write_alog(tmp_path / "LOG_KAYAK.alog")
+    said = log_identity(log, "alog")
+    assert said is not None and said.vehicle == "moos-kayak" and said.distinctive
+    default = tmp_path / "default.alog"
+    default.write_bytes(log.read_bytes().replace(b"MOOSDB_kayak", b"MOOSDB_#1"))
+    unnamed = log_identity(default, "alog")
+    assert unnamed is not None and not unnamed.distinctive          # MOOS's default
+    anonymous = tmp_path / "anonymous.alog"
+    anonymous.write_bytes(log.read_bytes().replace(b"DB_UPTIME", b"UPTIME"))
+    assert log_identity(anonymous, "alog") is None
