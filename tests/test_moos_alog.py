@@ -22,7 +22,7 @@ operating = { variable = "DEPLOY" }
 [sources.moos.signals]
 thruster_0 = { variable = "DESIRED_THRUST_L", scale = 0.01 }
 thruster_1 = { variable = "DESIRED_THRUST_R", scale = 0.01 }
-flow = { variable = "NODE_REPORT_LOCAL", field = "SPD" }
+flow = { variable = "NODE_REPORT", field = "SPD", where = { NAME = "kayak" } }
 yaw_rate = { variable = "IMU_YAW_RATE", where = { source = "iIMU" } }
 """
 
@@ -46,8 +46,10 @@ def _write_alog(path: Path, header: bool = True) -> Path:
         left, right = _thrust(k)
         lines += [f"{t:<14.3f} DESIRED_THRUST_L    pMarinePID         {left!r}",
                   f"{t:<14.3f} DESIRED_THRUST_R    pMarinePID         {right!r}",
-                  f"{t + 0.01:<14.3f} NODE_REPORT_LOCAL   pNodeReporter      "
+                  f"{t + 0.01:<14.3f} NODE_REPORT         pNodeReporter      "
                   f"NAME=kayak,X={k * 0.05:.2f},Y=2.5,SPD={0.01 * k:.2f},HDG=90,TYPE=kayak",
+                  f"{t + 0.015:<14.3f} NODE_REPORT         uFldNodeBroker     "
+                  f"NAME=gilda,X=0,Y=0,SPD=9.99,HDG=0,TYPE=uuv",
                   f"{t + 0.02:<14.3f} IMU_YAW_RATE        iIMU               {0.001 * k!r}",
                   f"{t + 0.03:<14.3f} IMU_YAW_RATE        uSimMarine         {-1.0!r}"]
         if k == 10:
@@ -76,7 +78,7 @@ def test_an_alog_reads_on_its_logstart_clock(tmp_path):
     assert len(thruster) == STEPS
     assert thruster.times_ns[0] == LOGSTART_NS + 100_000_000
     np.testing.assert_allclose(thruster.values, [_thrust(k)[0] / 100 for k in range(STEPS)])
-    # a key of a text posting, and one app's postings of a variable two apps post
+    # a key of one vehicle's text postings, and one app's postings of a variable two post
     np.testing.assert_allclose(signals.series["flow"].values,
                                [round(0.01 * k, 2) for k in range(STEPS)])
     np.testing.assert_allclose(signals.series["yaw_rate"].values,
@@ -112,7 +114,7 @@ def test_an_unknown_app_or_variable_is_one_line_naming_it(tmp_path):
                                        r"its values: .*iIMU"):
         read_log(log, wrong_app.sources)
     profile_path = tmp_path / "missing.toml"
-    _profile(tmp_path, MAPPING.replace('"NODE_REPORT_LOCAL", field = "SPD"',
+    _profile(tmp_path, MAPPING.replace('"NODE_REPORT", field = "SPD", where = { NAME = "kayak" }',
                                        '"NAV_SPEED"'))
     profile_path.write_text((tmp_path / "kayak.toml").read_text(encoding="utf-8"))
     result = CliRunner().invoke(app, ["diagnose", str(log), "--profile", str(profile_path)])
@@ -128,7 +130,7 @@ def test_inspect_lists_each_variable_its_keys_and_who_posts_it(tmp_path):
     topics = {t.name: t for t in contents.topics}
     assert topics["DESIRED_THRUST_L"].type == "double"
     assert topics["DESIRED_THRUST_L"].count == STEPS
-    report = topics["NODE_REPORT_LOCAL"]
+    report = topics["NODE_REPORT"]
     assert report.type == "string"
     assert report.fields == ("value", "source", "NAME", "X", "Y", "SPD", "HDG", "TYPE")
     assert topics["IMU_YAW_RATE"].instances == (("source", ("iIMU", "uSimMarine")),)
