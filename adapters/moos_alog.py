@@ -35,8 +35,9 @@ MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damag
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
 
 
-# Read in blocks of whole lines: a long log never sits in memory at once.
-BLOCK_BYTES = 1 << 24
+# Read in blocks of whole lines (4 MB): a long log never sits in memory at once, and a
+# block's postings, an object each while they are sorted by variable, stay a few tens of MB.
+BLOCK_BYTES = 1 << 22
 TAIL_BYTES = 1 << 16          # a block's last postings are found in this much of its end
 _TOKEN = rb"[^ \t\r\n]+"
 # A line that cannot be a posting: it starts with neither a time nor a header's `%`.
@@ -56,11 +57,30 @@ _ANY_POSTING = _posting_line(_TOKEN)
 
 @dataclass
 class _Postings:
-    """One variable's lines: their times (s since LOGSTART), sources and values as bytes."""
+    """One variable's postings, block by block: their times (s since LOGSTART), and their
+    sources and values, each block's joined by newlines (no posting holds one), so that a
+    long log's postings cost their text, not an object each."""
 
-    times_s: np.ndarray
-    sources: list[bytes]
-    values: list[bytes]
+    times: list[np.ndarray] = field(default_factory=list)
+    source_blocks: list[bytes] = field(default_factory=list)
+    value_blocks: list[bytes] = field(default_factory=list)
+
+    def add(self, times_s: np.ndarray, sources: list[bytes], values: list[bytes]) -> None:
+        self.times.append(times_s)
+        self.source_blocks.append(b"\n".join(sources))
+        self.value_blocks.append(b"\n".join(value.rstrip() for value in values))
+
+    @property
+    def times_s(self) -> np.ndarray:
+        return np.concatenate(self.times)
+
+    @property
+    def sources(self) -> list[bytes]:
+        return [source for block in self.source_blocks for source in block.split(b"\n")]
+
+    @property
+    def values(self) -> list[bytes]:
+        return [value for block in self.value_blocks for value in block.split(b"\n")]
 
 
 @dataclass
@@ -77,7 +97,6 @@ class ParsedAlog:
     unreadable: int = 0
     cut_short: bool = False
     posters: dict[str, set[str]] = field(default_factory=dict)   # inventory: who posts each
-    postings_read: int = 0
 
 
 def _number(text: bytes | str) -> float | None:
@@ -129,16 +148,16 @@ def parse_alog(path: Path, wanted: set[str] | None) -> ParsedAlog:
     parsed = ParsedAlog()
     pattern = _ANY_POSTING if wanted is None else _posting_line(b"|".join(
         re.escape(name.encode()) for name in sorted(wanted, key=len, reverse=True)))
-    found: dict[bytes, list[tuple[bytes, ...]]] = {}
     for block in _blocks(path, parsed):
         if parsed.logstart_ns is None and (start := _LOGSTART_LINE.search(block)):
             parsed.logstart_ns = _start_ns(start.group(1))
         parsed.unreadable += len(_NOT_A_POSTING.findall(block))
         _widen(parsed, _numbers(_ends(block)))
+        found: dict[bytes, list[tuple[bytes, ...]]] = {}
         for line in pattern.findall(block):
             found.setdefault(line[1], []).append(line)
-    for variable, lines in found.items():
-        _keep(parsed, variable, lines, wanted is None)
+        for variable, lines in found.items():
+            _keep(parsed, variable, lines, wanted is None)
     return parsed
 
 
@@ -152,7 +171,8 @@ def _ends(block: bytes) -> list[bytes]:
 
 def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
           inventory: bool) -> None:
-    """A variable's lines as postings; those whose time does not read are counted."""
+    """A variable's lines of a block as postings; those whose time does not read are
+    counted. For inventory, only its first posting is kept."""
     stamps, _, sources, values = (list(column) for column in zip(*lines, strict=True))
     times = _numbers(stamps)
     timed = times >= 0                      # NaN compares false: no time
@@ -166,13 +186,15 @@ def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
         times = times[timed]
     if not times.size:
         return
-    parsed.counts[name] = times.size
+    parsed.counts[name] = parsed.counts.get(name, 0) + times.size
     _widen(parsed, times)
     if inventory:
-        parsed.posters[name] = {source.decode("utf-8", "replace") for source in sources}
+        parsed.posters.setdefault(name, set()).update(
+            source.decode("utf-8", "replace") for source in set(sources))
+        if name in parsed.postings:
+            return
         sources, values, times = sources[:1], values[:1], times[:1]
-    parsed.postings_read += times.size
-    parsed.postings[name] = _Postings(times, sources, [value.rstrip() for value in values])
+    parsed.postings.setdefault(name, _Postings()).add(times, sources, values)
 
 
 def _widen(parsed: ParsedAlog, times_s: np.ndarray) -> None:
@@ -233,7 +255,7 @@ def _clock_ns(parsed: ParsedAlog, times_s: np.ndarray | float) -> np.ndarray:
 def _fields(postings: _Postings) -> tuple[str, ...]:
     """The paths a profile can name on a variable: its value, its source, and the keys of
     its first text posting."""
-    first = postings.values[0].decode("utf-8", "replace") if postings.values else ""
+    first = postings.value_blocks[0].split(b"\n", 1)[0].decode("utf-8", "replace")
     keys = [key for key in pairs(first) if key not in (VALUE, SOURCE)]
     return (VALUE, SOURCE, *keys)
 
@@ -282,7 +304,7 @@ class MoosAlogAdapter:
         topics = []
         for variable, count in sorted(parsed.counts.items()):
             postings = parsed.postings[variable]
-            number = bool(postings.values) and not np.isnan(_numbers(postings.values[:1])[0])
+            number = not np.isnan(_numbers(postings.values[:1])[0])
             posters = tuple(sorted(parsed.posters.get(variable, ())))
             topics.append(TopicInfo(variable, NUMBER_TYPE if number else TEXT_TYPE, count,
                                     _fields(postings),
