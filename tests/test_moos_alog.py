@@ -44,7 +44,9 @@ def _write_alog(path: Path, header: bool = True) -> Path:
     for k in range(STEPS):
         t = 0.1 + k * 0.1
         left, right = _thrust(k)
-        lines += [f"{t:<14.3f} DESIRED_THRUST_L    pMarinePID         {left!r}",
+        lines += [f"{t:<14.3f} DESIRED_RUDDER      pMarinePID         {left - right!r}",
+                  f"{t:<14.3f} DESIRED_SPEED       pHelmIvP           {1.0 + (k > 300)!r}",
+                  f"{t:<14.3f} DESIRED_THRUST_L    pMarinePID         {left!r}",
                   f"{t:<14.3f} DESIRED_THRUST_R    pMarinePID         {right!r}",
                   f"{t + 0.01:<14.3f} NODE_REPORT         pNodeReporter      "
                   f"NAME=kayak,X={k * 0.05:.2f},Y=2.5,SPD={0.01 * k:.2f},HDG=90,TYPE=kayak",
@@ -193,3 +195,16 @@ def test_an_alog_names_its_vehicle_by_its_moos_community(tmp_path):
     anonymous = tmp_path / "anonymous.alog"
     anonymous.write_bytes(log.read_bytes().replace(b"DB_UPTIME", b"UPTIME"))
     assert log_identity(anonymous, "alog") is None
+
+
+def test_init_profile_takes_the_pid_outputs_as_commands_and_no_set_point_as_a_sensor(tmp_path):
+    log = _write_alog(tmp_path / "LOG_KAYAK.alog")
+    draft = tmp_path / "draft.toml"
+    result = CliRunner().invoke(app, ["init-profile", str(log), "--output", str(draft)])
+    assert result.exit_code == 0, result.output
+    profile = load_profile(draft)
+    assert set(profile.command_names) == {"desired_rudder", "desired_thrust_l",
+                                          "desired_thrust_r"}
+    assert "desired_speed" not in profile.sensor_names
+    assert "imu_yaw_rate" in profile.sensor_names
+    assert profile.sources["moos"].signals["imu_yaw_rate"].where == (("source", "iIMU"),)

@@ -46,6 +46,8 @@ COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|c
                           re.IGNORECASE)
 COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU)",
                            re.IGNORECASE)
+# MOOS-IvP's pMarinePID turns the helm's set points into these actuator commands.
+MOOS_COMMAND = re.compile(r"^DESIRED_(THRUST|RUDDER|ELEVATOR)")
 SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_velocity\.[xyz]|"
                          r"^w_|gyro|climb|^CRt$|depth|twist\.linear\.[xyz]|velocity|speed|flow|_rate|rate_)",
                          re.IGNORECASE)
@@ -108,7 +110,8 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
         for field in fields:
             label = _label(topic.name, field, family)
             command = COMMAND_NAME.search(label) or (
-                family in ("ros", "moos") and COMMAND_TOPIC.search(topic.name))
+                family in ("ros", "moos") and COMMAND_TOPIC.search(topic.name)) or (
+                family == "moos" and MOOS_COMMAND.match(label))
             if command and (family != "mavlink" or topic.name == "SERVO_OUTPUT_RAW") and (
                     family != "dataflash" or topic.name == "RCOU"):
                 # An array of commands is listed by its first element: try the next ones.
