@@ -40,15 +40,16 @@ PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
 BLOCK_BYTES = 1 << 22
 TAIL_BYTES = 1 << 16          # a block's last postings are found in this much of its end
 _TOKEN = rb"[^ \t\r\n]+"
+_TIME = rb"[0-9.+-][^ \t\r\n]*"      # what may be a time (checked when converted)
 # A line that cannot be a posting: it starts with neither a time nor a header's `%`.
-_NOT_A_POSTING = re.compile(rb"^[^%\s0-9.+-]", re.MULTILINE)
+_NOT_A_POSTING = re.compile(rb"^[ \t]*[^%\s0-9.+-]", re.MULTILINE)
 _LOGSTART_LINE = re.compile(re.escape(LOGSTART) + rb"[ \t]+(" + _TOKEN + rb")", re.MULTILINE)
 
 
 def _posting_line(variables: bytes) -> re.Pattern[bytes]:
     """A line posting one of ``variables`` (a pattern): its time, variable, source, and
     value (the rest of the line, perhaps empty, its trailing blanks with it)."""
-    return re.compile(rb"^[ \t]*(" + _TOKEN + rb")[ \t]+(" + variables + rb")[ \t]+("
+    return re.compile(rb"^[ \t]*(" + _TIME + rb")[ \t]+(" + variables + rb")[ \t]+("
                       + _TOKEN + rb")[ \t]*([^\r\n]*)", re.MULTILINE)
 
 

@@ -137,6 +137,8 @@ def test_inspect_lists_each_variable_its_keys_and_who_posts_it(tmp_path):
     assert report.fields == ("value", "source", "NAME", "X", "Y", "SPD", "HDG", "TYPE")
     assert topics["IMU_YAW_RATE"].instances == (("source", ("iIMU", "uSimMarine")),)
     assert topics["DEPLOY"].count == 2
+    assert contents.notes == ["1 line(s) that do not read as TIME VARIABLE SOURCE VALUE left "
+                              "out"]                       # the banner's lines are no damage
     result = CliRunner().invoke(app, ["inspect", str(log)])
     assert result.exit_code == 0 and "alog (profile mapping: [sources.moos])" in result.output
 
@@ -147,7 +149,7 @@ def test_init_profile_drafts_a_moos_mapping_that_reads_the_log(tmp_path, make_lo
     result = CliRunner().invoke(app, ["init-profile", str(log), "--output", str(draft)])
     assert result.exit_code == 0, result.output
     text = draft.read_text(encoding="utf-8")
-    assert 'desired_thrust_l = { variable = "DESIRED_THRUST_L" }' in text
+    assert 'desired_thrust_l = { variable = "DESIRED_THRUST_L", scale = 0.01 }' in text
     assert 'imu_yaw_rate = { variable = "IMU_YAW_RATE" }' in text
     profile = load_profile(draft)
     assert profile.command_names == ("desired_thrust_l", "desired_thrust_r")
@@ -207,4 +209,8 @@ def test_init_profile_takes_the_pid_outputs_as_commands_and_no_set_point_as_a_se
                                           "desired_thrust_r"}
     assert "desired_speed" not in profile.sensor_names
     assert "imu_yaw_rate" in profile.sensor_names
-    assert profile.sources["moos"].signals["imu_yaw_rate"].where == (("source", "iIMU"),)
+    sources = profile.sources["moos"]
+    assert sources.signals["imu_yaw_rate"].where == (("source", "iIMU"),)
+    assert sources.signals["operating"].topic == "DEPLOY"
+    assert sources.signals["desired_thrust_l"].scale == 0.01          # percent
+    assert sources.signals["desired_rudder"].scale == pytest.approx(1 / 40)  # degrees

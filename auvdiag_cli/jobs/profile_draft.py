@@ -39,6 +39,7 @@ from auvdiag_cli.jobs.draft_text import (
     render_draft,
     typical_level,
 )
+from auvdiag_cli.jobs.moos_draft import MOOS_DEPLOY, PID_OUTPUT, label, pid_output
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -46,8 +47,6 @@ COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|c
                           re.IGNORECASE)
 COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU)",
                            re.IGNORECASE)
-# MOOS-IvP's pMarinePID turns the helm's set points into these actuator commands.
-MOOS_COMMAND = re.compile(r"^DESIRED_(THRUST|RUDDER|ELEVATOR)")
 SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_velocity\.[xyz]|"
                          r"^w_|gyro|climb|^CRt$|depth|twist\.linear\.[xyz]|velocity|speed|flow|_rate|rate_)",
                          re.IGNORECASE)
@@ -82,11 +81,6 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
     return [group for group in names if frozenset(group) not in identical]
 
 
-def _label(topic: str, field: str, family: str) -> str:
-    """What a field is called: a MOOS variable's own posting goes by the variable's name."""
-    return topic if family == "moos" and field == MOOS_VALUE else field
-
-
 def _signal_name(topic: str, field: str) -> str:
     text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
     return text.lower() or "signal"
@@ -108,10 +102,10 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
             field for field in topic.fields if is_field_path(field)
             and (family != "moos" or field != MOOS_SOURCE)]
         for field in fields:
-            label = _label(topic.name, field, family)
-            command = COMMAND_NAME.search(label) or (
+            named = label(topic.name, field, family)
+            command = COMMAND_NAME.search(named) or (
                 family in ("ros", "moos") and COMMAND_TOPIC.search(topic.name)) or (
-                family == "moos" and MOOS_COMMAND.match(label))
+                family == "moos" and PID_OUTPUT.match(named))
             if command and (family != "mavlink" or topic.name == "SERVO_OUTPUT_RAW") and (
                     family != "dataflash" or topic.name == "RCOU"):
                 # An array of commands is listed by its first element: try the next ones.
@@ -119,8 +113,8 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                     f"{field[:-3]}[{i}]" for i in range(MAX_ARRAY_COMMANDS)]
                 found += [("command", FieldSource(topic.name, path, where=where))
                           for path in elements]
-            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(label)) and not (
-                    NOT_A_SENSOR.search(label) or NOT_A_SENSOR.search(topic.name)):
+            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(named)) and not (
+                    NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
 
@@ -228,7 +222,8 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         series = values.get(key)
         if series is None or not _moves(series):
             continue                                   # not in the log, or never moves
-        name = _signal_name(source.topic, _label(source.topic, source.field, family))
+        called = label(source.topic, source.field, family)
+        name = _signal_name(source.topic, called)
         channel = output_channel(source) if kind == "command" else None
         paired = paired_unit(source) if closed_loop else None
         if paired is not None:
@@ -242,9 +237,10 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         elif kind == "set_point" and paired is not None:
             proposal = set_point_proposal(name, source, *paired)
         elif kind == "command" or guessed:
-            proposal = _command(name, source, series, guessed)
+            proposal = (family == "moos" and pid_output(source, series)) or _command(
+                name, source, series, guessed)
         else:
-            sensors.append(_sensor(name, source, series, paired, setup))
+            sensors.append(_sensor(name, called, source, series, paired, setup))
             continue
         if proposal is not None:
             commands.append(proposal)
@@ -274,13 +270,14 @@ def _command(name: str, source: FieldSource, series: np.ndarray, guessed: bool) 
                     two_way=bool((value < -NEUTRAL).any()))
 
 
-def _sensor(name: str, source: FieldSource, series: np.ndarray,
+def _sensor(name: str, named: str, source: FieldSource, series: np.ndarray,
             paired: tuple[float, str] | None, setup: AutopilotSetup | None) -> Proposal:
-    unit = _sensor_unit(source.field) if paired is None else paired[1]
+    """``named``: what the field is called (`moos_draft.label`)."""
+    unit = _sensor_unit(named) if paired is None else paired[1]
     check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
     if paired is not None:
         source, check = replace(source, scale=paired[0]), "as its set point's"
-    elif not SENSOR_NAME.search(source.field):
+    elif not SENSOR_NAME.search(named):
         check = ("not recognised by its name: keep it only if it measures the "
                  "vehicle's motion (remove battery, position fixes, bookkeeping); " + check)
     if source.field in ("climb", "CRt") and paired is None:
@@ -323,10 +320,12 @@ def _nice(value: float) -> float:
 
 
 def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource | None:
-    """An armed flag, where the log has one ArduPilot-style."""
+    """An armed flag, where the log has one ArduPilot-style, or MOOS-IvP's `DEPLOY`."""
     names = {topic.name for topic in contents.topics}
     if family == "dataflash" and "ARM" in names:
         return FieldSource("ARM", "ArmState", changes_only=True)
+    if family == "moos":
+        return FieldSource(MOOS_DEPLOY, MOOS_VALUE) if MOOS_DEPLOY in names else None
     if family != "mavlink" or "HEARTBEAT" not in names:
         return None
     read = _read_each(path, family, {"type": FieldSource("HEARTBEAT", "type"),
