@@ -8,8 +8,9 @@ text posting of ``KEY=VALUE`` pairs (``{ variable = "NODE_REPORT_LOCAL", field =
 ``where = { source = "pNav" }`` keeps the postings of one app. MOOS has no boolean type:
 ``true`` and ``false`` read as 1 and 0 (``DEPLOY``, ``MOOS_MANUAL_OVERRIDE``).
 
-Only the lines of the profile's variables are decoded; a line that does not read (a log cut
-short mid-line, bytes that are no text) is left out and counted."""
+Only the lines of the profile's variables are decoded; a line that does not read (damaged
+bytes, a time that is no number) is left out and counted, and a last line without its
+newline (a log cut short) is left out and the log read as damaged there."""
 
 import math
 import re
@@ -33,6 +34,7 @@ NUMBER_TYPE, TEXT_TYPE = "double", "string"
 WORDS = {"true": 1.0, "false": 0.0}
 MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damage
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
+CUT_SHORT = "the log ends inside a line (cut short?): that line is left out"
 
 
 # Read in blocks of whole lines (4 MB): a long log never sits in memory at once, and a
@@ -236,8 +238,9 @@ def _column(postings: _Postings, path: str) -> np.ndarray:
     if path == SOURCE:
         return np.asarray(_texts(postings.sources), object)
     if path == VALUE:
-        numbers = _numbers(postings.values)
-        texts = _texts(postings.values) if np.isnan(numbers).all() else []
+        values = postings.values
+        numbers = _numbers(values)
+        texts = _texts(values) if np.isnan(numbers).all() else []
     else:
         texts = [pairs(text).get(path, "") for text in _texts(postings.values)]
         numbers = np.array([_reading(text) for text in texts], np.float64)
@@ -286,7 +289,7 @@ class MoosAlogAdapter:
         if parsed.first_s is None:
             raise LogError(path, "no line reads as TIME VARIABLE SOURCE VALUE")
         if parsed.cut_short:
-            collector.damaged("the log ends inside a line (cut short?): that line is left out")
+            collector.damaged(CUT_SHORT)
         for variable in sorted(collector.topics & parsed.postings.keys()):
             postings = parsed.postings[variable]
 
@@ -311,6 +314,5 @@ class MoosAlogAdapter:
                                     _fields(postings),
                                     ((SOURCE, posters),) if len(posters) > 1 else ()))
         start, end = _span_ns(parsed)
-        notes = _notes(parsed) + (["the log ends inside a line (cut short?): that line is "
-                                   "left out"] if parsed.cut_short else [])
+        notes = _notes(parsed) + ([CUT_SHORT] if parsed.cut_short else [])
         return LogInventory(fmt, start, end, topics, notes)
