@@ -13,7 +13,6 @@ from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter, field_of, resolves
 from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
 from adapters.ros_words import WordsRead, word_paths
-from adapters.ros_words import as_text as _text  # one reading of a logged text
 from adapters.signals import (
     Damage,
     FieldSource,
@@ -21,6 +20,7 @@ from adapters.signals import (
     SegmentMarker,
     Series,
     Signals,
+    as_text,
     fallback_name,
 )
 from adapters.timebase import MAX_TIME_NS, spikes
@@ -55,7 +55,7 @@ class _Extractor:
         return [(key, field_getter(key), value) for key, value in self.source.where]
 
     def matches(self, message: Any) -> bool:
-        return all(_text(get(message)) == value for key, get, value in self.where
+        return all(as_text(get(message)) == value for key, get, value in self.where
                    if not _before_instances(key, value, partial(resolves, message, key)))
 
     def filters(self, fields: Sequence[str]) -> list[tuple[str, str]]:
@@ -70,7 +70,7 @@ class _Extractor:
         keep = np.ones(rows, bool)
         for key, value in self.filters(fields):
             distinct, which = np.unique(column(key), return_inverse=True)
-            keep &= np.array([_text(d) == value for d in distinct.tolist()], bool)[which]
+            keep &= np.array([as_text(d) == value for d in distinct.tolist()], bool)[which]
         return keep
 
     def mixed_instances(self, column: ColumnSource, fields: Sequence[str], keep: Any
@@ -82,7 +82,7 @@ class _Extractor:
             if key in fields and key not in chosen and not self.source.merge_instances:
                 values = np.unique(column(key)[keep])
                 if values.size > 1:
-                    return key, [_text(v) for v in values.tolist()]
+                    return key, [as_text(v) for v in values.tolist()]
         return None
 
 
@@ -215,7 +215,7 @@ class SignalCollector:
         self.count += 1
         segment = self.sources.segment
         if segment is not None and topic == self.segment_topic:
-            text = _text(field_of(message, segment.field))
+            text = as_text(field_of(message, segment.field))
             if text.startswith(segment.prefix):
                 self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
         for extractor in self.by_topic.get(topic, ()):
@@ -225,7 +225,10 @@ class SignalCollector:
                 raw = extractor.get(message)
                 if raw is None:          # a JSON message's null: no reading at this time
                     continue
-                value = float(raw)
+                source = extractor.source
+                # A text is read only through a `values` map (a mode's name).
+                value = raw if source.mapped and isinstance(raw, str | bytes) \
+                    else np.float64(float(raw))
             except (AttributeError, IndexError, KeyError, TypeError, ValueError):
                 if self.sources.tentative:
                     continue
@@ -233,8 +236,8 @@ class SignalCollector:
                               if not resolves(message, key)), extractor.source.field)
                 raise LogError(self.path, unresolved(
                     topic, wrong, extractor.name, object_field_paths(message))) from None
-            converted = float(extractor.source.convert(np.float64(value)))
-            if extractor.source.values and not np.isfinite(converted):
+            converted = float(source.convert(value))
+            if source.mapped and not np.isfinite(converted):
                 continue                  # a value the source's map does not list
             self.times[extractor.name].append(time_ns)
             self.values[extractor.name].append(converted)
@@ -258,7 +261,7 @@ class SignalCollector:
                 raise LogError(self.path, unresolved(topic, segment.field, "segment markers",
                                                      fields)) from None
             for time_ns, raw in zip(times_ns.tolist(), texts, strict=True):
-                text = _text(raw)
+                text = as_text(raw)
                 if text.startswith(segment.prefix):
                     self.markers.append(SegmentMarker(time_ns,
                                                       text[len(segment.prefix):].strip()))
@@ -275,7 +278,7 @@ class SignalCollector:
                     continue
                 raise LogError(self.path, unresolved(topic, wanted, extractor.name,
                                                      fields)) from None
-            if numbers.dtype.kind not in "biuf":
+            if numbers.dtype.kind not in "biuf" and not extractor.source.mapped:
                 if self.sources.tentative:
                     continue
                 raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
@@ -283,7 +286,7 @@ class SignalCollector:
             if filters and not numbers.size and rows:
                 key = filters[0][0]
                 self.filtered_out[extractor.name] = sorted(
-                    {_text(v) for v in np.unique(column(key)).tolist()})
+                    {as_text(v) for v in np.unique(column(key)).tolist()})
             mixed = extractor.mixed_instances(column, fields, keep)
             if mixed is not None:
                 key, instances = mixed
@@ -293,7 +296,7 @@ class SignalCollector:
                                f"{{ {key} = {instances[0]} }} in the profile, or set "
                                "merge_instances = true")
             values, times = extractor.source.convert(numbers), times_ns[keep]
-            if extractor.source.values:       # values the source's map does not list
+            if extractor.source.mapped:       # values the source's map does not list
                 listed = np.isfinite(values)
                 values, times = values[listed], times[listed]
             self.times[extractor.name].frombytes(times.astype(np.int64).tobytes())

@@ -172,6 +172,8 @@ class CsvAdapter:
         optional = {s.topic for s in sources.signals.values()} - required
         parsed, header = _parse(path, sorted(collector.topics), sources.time.column, optional)
         wanted = list(parsed.cells)
+        # Columns read through a `values` map: their texts (a mode's name) are the values.
+        looked_up = {s.topic for s in sources.signals.values() if s.mapped}
         times = _times_ns(parsed.times, sources.time, collector.notes)
         timed = times >= 0
         bad_values = 0
@@ -179,7 +181,7 @@ class CsvAdapter:
             cells = np.asarray(parsed.cells[name], dtype=object)
             present = timed & (cells != "")
             texts = cells[present]
-            if segment is not None and name == segment.topic:
+            if (segment is not None and name == segment.topic) or name in looked_up:
                 collector.add_columns(name, times[present], _constant(texts), header)
                 continue
             readable = np.array([is_number(text) for text in texts.tolist()], bool)

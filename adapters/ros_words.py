@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import replace
 from typing import Any
 
-from adapters.signals import AutopilotMessage, WordSource
+from adapters.signals import AutopilotMessage, WordSource, as_text
 
 # A node's level as MAVLink's severity (syslog's: 2 critical, 3 error, 6 info, 7 debug).
 # WARN stays without one: nodes warn of routine things (a late transform, a dropped
@@ -69,12 +69,6 @@ def severity(source: WordSource, level: Any) -> int | None:
     if source.severities is None:
         return number if number in MAVLINK_SEVERITIES else None
     return dict(source.severities).get(number)
-
-
-def as_text(value: Any) -> str:
-    if isinstance(value, bytes):
-        value = value.split(b"\0", 1)[0].decode("utf-8", "replace")
-    return str(value).rstrip("\0").strip()
 
 
 class WordsRead:

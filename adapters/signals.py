@@ -30,9 +30,16 @@ class FieldSource:
     merge_instances: bool = False     # True: several sensor instances make one signal
     bits: int = 0                     # a flag field: 1 where value & bits, else 0
     changes_only: bool = False        # logged only when it changes (DataFlash ARM events)
-    # Raw (integer) values that count and what each means, e.g. DataFlash EV ids 10 (armed)
-    # -> 1 and 11 (disarmed) -> 0; messages with other values are no sample. Empty: all.
-    values: tuple[tuple[int, float], ...] = ()
+    # Raw values that count and what each means: integers (DataFlash EV ids 10 (armed) -> 1
+    # and 11 (disarmed) -> 0) or texts (a flight mode, MOOS's IVPHELM_STATE = DRIVE); other
+    # values mean ``otherwise``, or are no sample where it is None. Neither: all, as numbers.
+    values: tuple[tuple[int | str, float], ...] = ()
+    otherwise: float | None = None
+
+    @property
+    def mapped(self) -> bool:
+        """Raw values are looked up (`values`, `otherwise`), not scaled: texts are read."""
+        return bool(self.values) or self.otherwise is not None
 
     def convert(self, raw: Any) -> Any:
         """Raw field values (an array, or a NumPy scalar) to the signal's units, or to 0/1
@@ -42,16 +49,43 @@ class FieldSource:
         with np.errstate(invalid="ignore"):
             if self.bits:
                 return ((raw.astype(np.int64) & self.bits) != 0).astype(np.float64)
-            if self.values:
+            if self.mapped:
                 return self._mapped(np.asarray(raw))
             return raw.astype(np.float64) * self.scale + self.offset
 
     def _mapped(self, raw: np.ndarray) -> np.ndarray:
-        """``values`` applied: NaN (no sample) for a raw value it does not list."""
-        out = np.full(raw.shape, np.nan)
+        """``values`` applied, ``otherwise`` (NaN: no sample) for a value it does not list.
+        A text key matches a text as written; an integer key a number, or a text that reads
+        as that number ("10" in a CSV cell). A missing number (NaN) stays no sample."""
+        texts: np.ndarray | None = None
+        if raw.dtype.kind in "OSU":
+            texts = np.array([as_text(v) for v in raw.ravel().tolist()], object)
+            texts = texts.reshape(raw.shape)
+            raw = np.array([_number(text) for text in texts.ravel().tolist()]).reshape(raw.shape)
+        numbers = raw.astype(np.float64)
+        out = np.full(raw.shape, np.nan if self.otherwise is None else self.otherwise)
         for key, meaning in self.values:
-            out[raw == key] = meaning
+            if isinstance(key, int):
+                out[numbers == key] = meaning
+            elif texts is not None:
+                out[texts == key] = meaning
+        if texts is None:
+            out[np.isnan(numbers)] = np.nan
         return out
+
+
+def _number(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        return np.nan
+
+
+def as_text(value: Any) -> str:
+    """One reading of a logged text: bytes decoded up to a NUL, padding stripped."""
+    if isinstance(value, bytes):
+        value = value.split(b"\0", 1)[0].decode("utf-8", "replace")
+    return str(value).rstrip("\0").strip()
 
 
 @dataclass(frozen=True)
@@ -74,6 +108,8 @@ CLOCK_REFERENCE = "clock_reference"
 # A MOOS variable's posting, the field a profile reads where it names no key of it, and
 # the app that posted it (a `where` keeps one app's postings).
 MOOS_VALUE, MOOS_SOURCE = "value", "source"
+# The key of a profile's `values` map that says what every value it does not list means.
+OTHER_VALUES = "*"
 # CSV logs have no topics: a column is both a signal's topic and its field.
 TIME_UNITS = ("s", "ms", "us", "ns", "iso", "hhmmss")
 

@@ -81,12 +81,11 @@ def test_the_pattern_table_is_optional(make_log, profile_without):
 
 
 @pytest.mark.parametrize(("replacement", "message"), [
-    ('values = { ten = 1, 11 = 0 }', "key 'sources.dataflash.operating[1].values' must map "
-                                     "integers"),
+    ('values = {}', "key 'sources.dataflash.operating[1].values' lists no value"),
     ('values = { 10 = "yes", 11 = 0 }', "key 'sources.dataflash.operating[1].values.10' must "
                                         "be a number"),
 ])
-def test_a_value_map_that_is_not_integers_to_numbers_names_its_key(tmp_path, replacement,
+def test_a_value_map_that_lists_nothing_or_no_number_names_its_key(tmp_path, replacement,
                                                                    message):
     from importlib import resources
 

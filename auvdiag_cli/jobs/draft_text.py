@@ -9,7 +9,14 @@ from pathlib import Path
 
 import numpy as np
 
-from adapters.signals import CLOCK_REFERENCE, MOOS_VALUE, OPERATING, FieldSource, TimeColumn
+from adapters.signals import (
+    CLOCK_REFERENCE,
+    MOOS_VALUE,
+    OPERATING,
+    OTHER_VALUES,
+    FieldSource,
+    TimeColumn,
+)
 
 # A controller's set point (mavros nav_info `commanded`, ArduPilot ATT `DesRoll`, `des_x`):
 # it drives a model of the closed loop, but it is no actuator.
@@ -81,6 +88,12 @@ def entry(source: FieldSource, family: str) -> str:
         parts.append(f"bits = {source.bits}")
     if source.changes_only:
         parts.append("changes_only = true")
+    if source.mapped:
+        meanings = [(str(raw), meaning) for raw, meaning in source.values]
+        if source.otherwise is not None:
+            meanings.append((OTHER_VALUES, source.otherwise))
+        parts.append("values = { " + ", ".join(f"{toml_key(raw)} = {meaning:g}"
+                                               for raw, meaning in meanings) + " }")
     return "{ " + ", ".join(parts) + " }"
 
 

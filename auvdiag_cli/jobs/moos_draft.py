@@ -13,8 +13,18 @@ from auvdiag_cli.jobs.draft_text import Proposal, typical_level
 # MOOS-IvP's pMarinePID turns the helm's set points into these actuator commands.
 PID_OUTPUT = re.compile(r"^DESIRED_(THRUST|RUDDER|ELEVATOR)")
 THRUST_PERCENT = 0.01
-# true while the vehicle is deployed (the helm drives it), as the IvP tools post it.
+# true while the vehicle is deployed, as the IvP tools post it.
 MOOS_DEPLOY = "DEPLOY"
+# The helm's own heartbeat: PARK, DRIVE, STANDBY, DISABLED (MALCONFIG where its mission file
+# is wrong); only DRIVE is the helm driving (a deployed vehicle parks on an all-stop).
+HELM_STATE = FieldSource("IVPHELM_STATE", MOOS_VALUE, values=(("DRIVE", 1.0),), otherwise=0.0)
+
+
+def operating(variables: set[str]) -> FieldSource | None:
+    """The helm driving, where the log has its state, else `DEPLOY`."""
+    if HELM_STATE.topic in variables:
+        return HELM_STATE
+    return FieldSource(MOOS_DEPLOY, MOOS_VALUE) if MOOS_DEPLOY in variables else None
 
 
 def label(topic: str, field: str, family: str) -> str:

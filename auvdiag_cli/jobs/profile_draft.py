@@ -17,7 +17,7 @@ from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.csv_log import csv_rows
 from adapters.fieldpath import is_field_path
 from adapters.recognise import is_number
-from adapters.signals import MOOS_SOURCE, MOOS_VALUE, FieldSource, LogSources, TimeColumn
+from adapters.signals import MOOS_SOURCE, FieldSource, LogSources, TimeColumn
 from auvdiag_cli.jobs.autopilot_outputs import (
     climb_source,
     output_channel,
@@ -39,7 +39,8 @@ from auvdiag_cli.jobs.draft_text import (
     render_draft,
     typical_level,
 )
-from auvdiag_cli.jobs.moos_draft import MOOS_DEPLOY, PID_OUTPUT, label, pid_output
+from auvdiag_cli.jobs.moos_draft import PID_OUTPUT, label, pid_output
+from auvdiag_cli.jobs.moos_draft import operating as moos_operating
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -320,12 +321,12 @@ def _nice(value: float) -> float:
 
 
 def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource | None:
-    """An armed flag, where the log has one ArduPilot-style, or MOOS-IvP's `DEPLOY`."""
+    """An armed flag, where the log has one ArduPilot-style, or MOOS-IvP's helm driving."""
     names = {topic.name for topic in contents.topics}
     if family == "dataflash" and "ARM" in names:
         return FieldSource("ARM", "ArmState", changes_only=True)
     if family == "moos":
-        return FieldSource(MOOS_DEPLOY, MOOS_VALUE) if MOOS_DEPLOY in names else None
+        return moos_operating(names)
     if family != "mavlink" or "HEARTBEAT" not in names:
         return None
     read = _read_each(path, family, {"type": FieldSource("HEARTBEAT", "type"),

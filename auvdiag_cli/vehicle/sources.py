@@ -10,6 +10,7 @@ from adapters.signals import (
     CLOCK_REFERENCE,
     MOOS_VALUE,
     OPERATING,
+    OTHER_VALUES,
     TIME_UNITS,
     FieldSource,
     LogSources,
@@ -59,19 +60,32 @@ def _field_source(entry: TableReader) -> FieldSource:
         _topic(entry), _field(entry), entry.get("scale", float, 1.0),
         entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
         entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
-        entry.get("changes_only", bool, False), _value_map(entry))
+        entry.get("changes_only", bool, False), *_value_map(entry))
 
 
-def _value_map(entry: TableReader) -> tuple[tuple[int, float], ...]:
-    """``values = { 10 = 1, 11 = 0 }``: the raw integers that count, and their meaning."""
+def _value_map(entry: TableReader) -> tuple[tuple[tuple[int | str, float], ...], float | None]:
+    """``values = { 10 = 1, 11 = 0 }`` or ``{ DRIVE = 1, "*" = 0 }``: the raw values that
+    count (integers, or texts such as a mode's name) and their meaning, and what any other
+    value means (``"*"``; without it, other values are no sample)."""
     if "values" not in entry.table:
-        return ()
+        return (), None
     table = entry.sub("values")
+    listed: list[tuple[int | str, float]] = []
+    for raw in table.names():
+        if raw != OTHER_VALUES:
+            listed.append((_integer_or_text(raw), table.get(raw, float)))
+    if not listed and OTHER_VALUES not in table.table:
+        raise ProfileError(f"key '{entry.key('values')}' lists no value: map raw values to "
+                           'numbers, e.g. { 10 = 1, 11 = 0 } or { DRIVE = 1, "*" = 0 }')
+    return tuple(listed), table.get(OTHER_VALUES, float, None)
+
+
+def _integer_or_text(raw: str) -> int | str:
+    """A key that reads as an integer matches that number (and its digits in a text)."""
     try:
-        return tuple((int(raw), table.get(raw, float)) for raw in table.names())
+        return int(raw)
     except ValueError:
-        raise ProfileError(f"key '{entry.key('values')}' must map integers (as keys) to "
-                           "numbers, e.g. { 10 = 1, 11 = 0 }") from None
+        return raw
 
 
 def _operating(reader: TableReader) -> tuple[FieldSource, FieldSource | None]:

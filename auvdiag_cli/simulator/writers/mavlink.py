@@ -37,7 +37,7 @@ def mavlink_message(dialect: Any, record: Record, boot_ns: int) -> Any:
              "time_usec": since_boot_ns // 1000 & 0xFFFFFFFF}
     values |= {name: t for name, t in times.items() if name in values}
     for name, raw in record.fields:
-        values[name] = round(raw) if types[name].startswith(("int", "uint")) else raw
+        values[name] = round(float(raw)) if types[name].startswith(("int", "uint")) else raw
     for name, text in record.where:
         values[name] = text.encode()
     if record.text is not None:

@@ -8,6 +8,9 @@ from adapters.signals import FieldSource, LogSources
 from auvdiag_cli.simulator.run import SimulatedDive, Stream
 from auvdiag_cli.vehicle.profile import Profile
 
+# A text an operating flag's map does not list, written where every such text means it.
+UNLISTED_TEXT = "OPERATING"
+
 
 @dataclass(frozen=True)
 class Record:
@@ -17,7 +20,7 @@ class Record:
 
     time_ns: int
     topic: str
-    fields: tuple[tuple[str, float], ...] = ()
+    fields: tuple[tuple[str, float | str], ...] = ()
     where: tuple[tuple[str, str], ...] = ()
     text: tuple[str, str] | None = None        # (field, text) of a segment marker
 
@@ -26,10 +29,19 @@ def raw_value(source: FieldSource, value: float) -> float:
     return (value - source.offset) / source.scale
 
 
-def operating_raw(source: FieldSource) -> float:
-    """The raw value that says "operating" to the profile's operating source (its bit, the
-    listed value that means it, else 1)."""
-    return float(source.bits or next((r for r, meaning in source.values if meaning), 1))
+def operating_raw(source: FieldSource) -> float | str:
+    """The raw value that says "operating" to the profile's operating source: its bit, the
+    listed value that means it, a value the map does not list where those mean it (`"*"`),
+    else 1."""
+    listed = next((raw for raw, meaning in source.values if meaning), None)
+    if source.bits or (listed is None and not source.otherwise):
+        return float(source.bits or 1)
+    if listed is not None:
+        return listed if isinstance(listed, str) else float(listed)
+    keys = [raw for raw, _ in source.values]
+    if any(isinstance(key, str) for key in keys):
+        return UNLISTED_TEXT
+    return float(max((key for key in keys if isinstance(key, int)), default=0) + 1)
 
 
 def family_sources(profile: Profile, family: str) -> LogSources:

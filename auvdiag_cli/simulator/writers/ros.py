@@ -50,6 +50,7 @@ TYPES_BY_FIELD = {
     "channels": "mavros_msgs/msg/RCOut",
     "climb": "mavros_msgs/msg/VFR_HUD",
     "armed": "mavros_msgs/msg/State",
+    "mode": "mavros_msgs/msg/State",
     "value_float": "mavros_msgs/msg/DebugValue",
 }
 SEGMENT_TYPES = {"data": "std_msgs/msg/String", "text": STATUSTEXT_TYPE}

@@ -112,7 +112,7 @@ def write_ulog(dive: SimulatedDive, profile: Profile, path: Path) -> None:
         columns = grouped.setdefault(key, {})
         times.setdefault(key, []).append(time_us)
         for field, value in record.fields:
-            columns.setdefault(field, []).append(value)
+            columns.setdefault(field, []).append(float(value))
     if sources.segment is not None and sources.segment.topic != "logging":
         raise ValueError("ULog segment markers are logged text messages: "
                          "segment = { message = \"logging\", field = \"message\" }")
