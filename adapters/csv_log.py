@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from adapters.collect import ColumnSource, SignalCollector
+from adapters.compressed import DAMAGED_STREAM, damage, open_text
 from adapters.fieldnames import closest_first
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import csv_delimiter, is_number
@@ -37,14 +38,16 @@ class CsvRows:
         self.stopped: str | None = None
 
     def __iter__(self) -> Iterator[list[str]]:
-        with self.path.open(newline="", encoding="utf-8", errors="replace") as stream:
-            first = stream.readline()
-            stream.seek(0)
-            reader = csv.reader(stream, delimiter=csv_delimiter(first))
+        with open_text(self.path) as stream:      # a `.csv.gz` decompressed as it is read
             try:
+                first = stream.readline()
+                stream.seek(0)
+                reader = csv.reader(stream, delimiter=csv_delimiter(first))
                 yield from reader
             except csv.Error as error:
                 self.stopped = f"unreadable from line {reader.line_num} ({error})"
+            except DAMAGED_STREAM as error:
+                self.stopped = damage(error)
 
 
 def csv_rows(path: Path) -> Iterator[list[str]]:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from adapters import inventory
 from adapters.autopilot_setup import TlogPayloads, autopilot_heartbeats, dataflash_parameters
+from adapters.compressed import first_bytes
 from adapters.mavlink_scan import (
     RecordIndex,
     index_dataflash,
@@ -72,8 +73,7 @@ def log_identity(path: Path, log_format: str, ros_topics: Collection[str] = (),
     if log_format not in ("tlog", "bin", "ulog", "alog"):
         return None
     try:
-        with path.open("rb") as stream:
-            prefix = stream.read(PREFIX_BYTES)
+        prefix = first_bytes(path, PREFIX_BYTES)        # an `.alog.gz` decompressed
         if log_format == "alog":
             return _moos_identity(prefix)
         if log_format == "tlog":

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from adapters.collect import SignalCollector
+from adapters.compressed import Chunks
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import ALOG_LOGSTART as LOGSTART
 from adapters.signals import MOOS_SOURCE as SOURCE
@@ -33,6 +34,7 @@ from auvdiag_errors import LogError
 NUMBER_TYPE, TEXT_TYPE = "double", "string"
 WORDS = {"true": 1.0, "false": 0.0}
 MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damage
+MAX_LOG_S = 2.0**32           # nor is a posting's time as far past the start
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
 CUT_SHORT = "the log ends inside a line (cut short?): that line is left out"
 
@@ -99,6 +101,7 @@ class ParsedAlog:
     last_s: float | None = None
     unreadable: int = 0
     cut_short: bool = False
+    stopped: str | None = None           # a compressed log's damage: read up to it
     posters: dict[str, set[str]] = field(default_factory=dict)   # inventory: who posts each
 
 
@@ -120,17 +123,19 @@ def _start_ns(text: bytes) -> int | None:
 
 
 def _blocks(path: Path, parsed: ParsedAlog) -> Iterator[bytes]:
-    """The file in blocks of whole lines; a last line without its newline was cut short:
-    left out (``parsed.cut_short``)."""
+    """The file (decompressed, where it is an `.alog.gz`) in blocks of whole lines; a last
+    line without its newline was cut short: left out (``parsed.cut_short``), as is what
+    follows a compressed stream's damage (``parsed.stopped``)."""
     rest = b""
-    with path.open("rb") as stream:
-        while block := stream.read(BLOCK_BYTES):
-            block = rest + block
-            end = block.rfind(b"\n") + 1
-            rest = block[end:]
-            if end:
-                yield block[:end]
+    chunks = Chunks(path, BLOCK_BYTES)
+    for chunk in chunks:
+        block = rest + chunk
+        end = block.rfind(b"\n") + 1
+        rest = block[end:]
+        if end:
+            yield block[:end]
     parsed.cut_short = bool(rest.strip())
+    parsed.stopped = chunks.stopped
 
 
 def _numbers(texts: Sequence[bytes]) -> np.ndarray:
@@ -178,7 +183,7 @@ def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
     counted. For inventory, only its first posting is kept."""
     stamps, _, sources, values = (list(column) for column in zip(*lines, strict=True))
     times = _numbers(stamps)
-    timed = times >= 0                      # NaN compares false: no time
+    timed = _readable(times)
     try:
         name = variable.decode("ascii")
     except UnicodeDecodeError:
@@ -200,9 +205,14 @@ def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
     parsed.postings.setdefault(name, _Postings()).add(times, sources, values)
 
 
+def _readable(times_s: np.ndarray) -> np.ndarray:
+    """Times a log can hold (NaN compares false: no time)."""
+    return (times_s >= 0) & (times_s < MAX_LOG_S)
+
+
 def _widen(parsed: ParsedAlog, times_s: np.ndarray) -> None:
     """The span read so far, widened to these times (those that read)."""
-    times_s = times_s[times_s >= 0]
+    times_s = times_s[_readable(times_s)]
     if times_s.size:
         first, last = float(times_s.min()), float(times_s.max())
         parsed.first_s = first if parsed.first_s is None else min(parsed.first_s, first)
@@ -274,6 +284,12 @@ def _notes(parsed: ParsedAlog) -> list[str]:
     return notes
 
 
+def _damage(parsed: ParsedAlog) -> list[str]:
+    """Where the log could be read only in part (a compressed stream's damage first)."""
+    return [reason for reason in (parsed.stopped, CUT_SHORT if parsed.cut_short else None)
+            if reason]
+
+
 def _span_ns(parsed: ParsedAlog) -> tuple[int | None, int | None]:
     if parsed.first_s is None or parsed.last_s is None:
         return None, None
@@ -288,8 +304,8 @@ class MoosAlogAdapter:
         parsed = parse_alog(path, set(collector.topics))
         if parsed.first_s is None:
             raise LogError(path, "no line reads as TIME VARIABLE SOURCE VALUE")
-        if parsed.cut_short:
-            collector.damaged(CUT_SHORT)
+        for damage in _damage(parsed):
+            collector.damaged(damage)
         for variable in sorted(collector.topics & parsed.postings.keys()):
             postings = parsed.postings[variable]
 
@@ -314,5 +330,5 @@ class MoosAlogAdapter:
                                     _fields(postings),
                                     ((SOURCE, posters),) if len(posters) > 1 else ()))
         start, end = _span_ns(parsed)
-        notes = _notes(parsed) + ([CUT_SHORT] if parsed.cut_short else [])
+        notes = _notes(parsed) + _damage(parsed)
         return LogInventory(fmt, start, end, topics, notes)

@@ -7,6 +7,8 @@ import struct
 from collections.abc import Callable
 from pathlib import Path
 
+from adapters.compressed import first_bytes, is_compressed
+
 ROS1_MAGIC = b"#ROSBAG V2.0"
 SQLITE_MAGIC = b"SQLite format 3\x00"
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -183,6 +185,8 @@ _RECOGNISERS: tuple[tuple[tuple[str, ...], Callable[[Path, bytes], str | None]],
     (("bin",), _dataflash), (("ulog",), _ulog), (("alog",), _alog),
     (("csv", "topic-csv"), _csv))
 KNOWN_FORMATS = tuple(fmt for formats, _ in _RECOGNISERS for fmt in formats)
+# Formats read gzip-compressed as well (`adapters.compressed`): the text logs read as streams.
+COMPRESSED_FORMATS = ("alog", "csv")
 
 
 def recognise(path: Path) -> str | None:
@@ -194,6 +198,10 @@ def recognise(path: Path) -> str | None:
         return None
     with path.open("rb") as stream:
         head = stream.read(CSV_SNIFF_BYTES)
+    if is_compressed(head):           # only a text log is read compressed
+        text = first_bytes(path, CSV_SNIFF_BYTES)
+        fmt = _alog(path, text) or _csv(path, text)
+        return fmt if fmt in COMPRESSED_FORMATS else None
     for _, recogniser in _RECOGNISERS:
         fmt = recogniser(path, head)
         if fmt is not None:

@@ -12,7 +12,7 @@ from auvdiag_cli.fuzz.mutations import MUTATIONS, mutate
 
 FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "json-mcap", "protobuf-mcap", "tlog", "bin",
            "ulog", "alog", "csv", "topic-csv", "bag+words", "db3+words", "ros2-mcap+words",
-           "mcap+words", "topic-csv+words")
+           "mcap+words", "topic-csv+words", "alog.gz", "csv.gz")
 
 
 def test_mutations_are_reproducible_and_damage_the_bytes():

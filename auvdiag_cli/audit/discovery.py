@@ -14,6 +14,7 @@ from auvdiag_cli.audit.copies import copies
 from auvdiag_errors import LogError, UsageError
 
 LOG_SUFFIXES = {".bag", ".mcap", ".db3", ".tlog", ".bin", ".ulg", ".alog"}
+COMPRESSED_ALOG = ".alog.gz"          # pLogger's CompressAlogs
 ROS2_METADATA = "metadata.yaml"
 
 
@@ -77,7 +78,7 @@ def _is_log(path: Path) -> bool:
 def _classify(path: Path, found: Discovery) -> None:
     if _is_log(path):
         found.logs.append(path)
-    elif path.suffix.lower() in LOG_SUFFIXES:
+    elif path.suffix.lower() in LOG_SUFFIXES or path.name.lower().endswith(COMPRESSED_ALOG):
         found.logs.append(path)          # named like a log: its error row says what is wrong
     else:
         found.skipped.append((path, "not a log this tool reads"))

@@ -6,6 +6,7 @@ with the vehicle's software talking beside the dive (`/rosout`, mavros status te
 plain seeds stay as they were, and the cases found on them replay as they did."""
 
 import copy
+import gzip
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,7 +22,11 @@ SEED_SCENARIO = "routine-flow-sensor-dead"   # markers, DMS segments and a fault
 SEED_SECONDS = 40.0
 WITH_WORDS = "+words"
 ROS_SEED_FORMATS = ("bag", "db3", "ros2-mcap", "mcap", "topic-csv")
-SEED_FORMATS = (*LOG_FORMATS, *(fmt + WITH_WORDS for fmt in ROS_SEED_FORMATS))
+# Text logs read gzip-compressed as well (`adapters.compressed`): damage lands in the stream.
+COMPRESSED = ".gz"
+COMPRESSED_SEED_FORMATS = ("alog", "csv")
+SEED_FORMATS = (*LOG_FORMATS, *(fmt + WITH_WORDS for fmt in ROS_SEED_FORMATS),
+                *(fmt + COMPRESSED for fmt in COMPRESSED_SEED_FORMATS))
 WORDS_TOPIC = "/rosout"      # a per-topic CSV folder's file that is damaged: the nodes' words
 
 
@@ -100,6 +105,9 @@ def simulated_seeds(folder: Path, profile: Profile, formats: tuple[str, ...] = S
         fmt, words = name.removesuffix(WITH_WORDS), name.endswith(WITH_WORDS)
         if words and fmt not in ROS_SEED_FORMATS:
             raise ValueError(f"{name}: only a ROS format carries words")
+        if fmt.endswith(COMPRESSED):
+            seeds.append(_compressed_seed(folder, dive, profile, fmt.removesuffix(COMPRESSED)))
+            continue
         tag = "-words" if words else ""
         path = folder / (f"seed{tag}.{fmt}" if fmt in ("bag", "mcap", "tlog", "bin")
                          else f"seed-{fmt}{tag}")
@@ -108,6 +116,17 @@ def simulated_seeds(folder: Path, profile: Profile, formats: tuple[str, ...] = S
         write_log(dive, profile, path, fmt, extra)
         seeds.append(SeedLog(name, path, _storage(path, WORDS_TOPIC if words else None)))
     return seeds
+
+
+def _compressed_seed(folder: Path, dive: SimulatedDive, profile: Profile, fmt: str) -> SeedLog:
+    if fmt not in COMPRESSED_SEED_FORMATS:
+        raise ValueError(f"{fmt}{COMPRESSED}: only a text log is read compressed")
+    plain = folder / f"seed-{fmt}-plain"
+    write_log(dive, profile, plain, fmt)
+    path = folder / f"seed-{fmt}{COMPRESSED}"
+    path.write_bytes(gzip.compress(plain.read_bytes(), mtime=0))
+    plain.unlink()
+    return SeedLog(f"{fmt}{COMPRESSED}", path, path)
 
 
 def real_seed(path: Path) -> SeedLog:
