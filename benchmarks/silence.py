@@ -1,4 +1,5 @@
-"""What a long silence costs: the fuzz campaign's seed dive (40 s) in every binary format,
+"""What a long silence costs: the fuzz campaign's seed dive (40 s) in every binary format
+and as a MOOS alog (a text log whose times are its own),
 as written and with its last 5 s moved 9.8 hours later (a recorder paused overnight, or a
 damaged chunk whose clock jumped: the fuzz campaign's slowest case was such a log). Each is
 put through what the fuzz harness does with a case (`inspect`, then `diagnose` to JSON, its
@@ -18,7 +19,7 @@ import tempfile
 from datetime import date
 from pathlib import Path
 
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "alog"]
 JUMP_S = 9.8 * 3600
 MOVED_AFTER_S = 35.0
 

@@ -33,7 +33,7 @@ from bytecode import write_bytecode  # benchmarks/bytecode.py, beside this scrip
 
 ONE_THREAD = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
-FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog"]
+FORMATS = ["bag", "db3", "ros2-mcap", "mcap", "tlog", "bin", "ulog", "alog"]
 REPLAY_STEPS, BATCH = 36_000, 16
 FAULTY = "mcap, faulty"
 
