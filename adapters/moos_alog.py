@@ -5,8 +5,10 @@ UNIX time), the MOOS variable posted, the app that posted it, and the posting (a
 or text to the end of the line). A profile maps a signal to a variable
 (``{ variable = "NAV_DEPTH" }``, its number as the field ``value``) or to one key of a
 text posting of ``KEY=VALUE`` pairs (``{ variable = "NODE_REPORT_LOCAL", field = "SPD" }``);
-``where = { source = "pNav" }`` keeps the postings of one app. MOOS has no boolean type:
-``true`` and ``false`` read as 1 and 0 (``DEPLOY``, ``MOOS_MANUAL_OVERRIDE``).
+``where = { source = "pNav" }`` keeps the postings of one app (the app alone where
+pLogger's ``LogAuxSrc`` logs ``pHelmIvP:loiter``; ``source_aux`` is the rest). MOOS has no
+boolean type: ``true`` and ``false`` read as 1 and 0 (``DEPLOY``,
+``MOOS_MANUAL_OVERRIDE``).
 
 Only the lines of the profile's variables are decoded; a line that does not read (damaged
 bytes, a time that is no number) is left out and counted, and a last line without its
@@ -27,6 +29,7 @@ from adapters.compressed import Chunks
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import ALOG_LOGSTART as LOGSTART
 from adapters.signals import MOOS_SOURCE as SOURCE
+from adapters.signals import MOOS_SOURCE_AUX as SOURCE_AUX
 from adapters.signals import MOOS_VALUE as VALUE
 from adapters.signals import LogSources, Signals
 from auvdiag_errors import LogError
@@ -36,6 +39,7 @@ WORDS = {"true": 1.0, "false": 0.0}
 MAX_UNIX_S = 2**32            # a LOGSTART beyond (year 2106) is no clock: damage
 MAX_LOG_S = 2.0**32           # nor is a posting's time as far past the start
 PAIR_SEPARATOR, KEY_SEPARATOR = ",", "="
+AUX_SEPARATOR = ":"           # app:aux in the source column (pLogger's LogAuxSrc)
 CUT_SHORT = "the log ends inside a line (cut short?): that line is left out"
 
 
@@ -198,7 +202,7 @@ def _keep(parsed: ParsedAlog, variable: bytes, lines: list[tuple[bytes, ...]],
     _widen(parsed, times)
     if inventory:
         parsed.posters.setdefault(name, set()).update(
-            source.decode("utf-8", "replace") for source in set(sources))
+            _app_and_aux(source.decode("utf-8", "replace"))[0] for source in set(sources))
         if name in parsed.postings:
             return
         sources, values, times = sources[:1], values[:1], times[:1]
@@ -245,8 +249,9 @@ def _texts(values: list[bytes]) -> list[str]:
 def _column(postings: _Postings, path: str) -> np.ndarray:
     """One field of every posting: numbers (NaN where a posting holds none), or the texts
     where no posting holds a number (segment labels, `where` on the source)."""
-    if path == SOURCE:
-        return np.asarray(_texts(postings.sources), object)
+    if path in (SOURCE, SOURCE_AUX):
+        split = [_app_and_aux(text) for text in _texts(postings.sources)]
+        return np.asarray([parts[path == SOURCE_AUX] for parts in split], object)
     if path == VALUE:
         values = postings.values
         numbers = _numbers(values)
@@ -266,12 +271,20 @@ def _clock_ns(parsed: ParsedAlog, times_s: np.ndarray | float) -> np.ndarray:
     return start_ns + np.round(np.asarray(times_s, np.float64) * 1e9).astype(np.int64)
 
 
+def _app_and_aux(source: str) -> tuple[str, str]:
+    """The app that posted, and what pLogger's `LogAuxSrc` adds after a colon (the helm's
+    behaviour: ``pHelmIvP:loiter``; "" where it adds nothing)."""
+    app, _, aux = source.partition(AUX_SEPARATOR)
+    return app, aux
+
+
 def _fields(postings: _Postings) -> tuple[str, ...]:
-    """The paths a profile can name on a variable: its value, its source, and the keys of
-    its first text posting."""
+    """The paths a profile can name on a variable: its value, its source (and the source's
+    aux where pLogger logged one), and the keys of its first text posting."""
     first = postings.value_blocks[0].split(b"\n", 1)[0].decode("utf-8", "replace")
-    keys = [key for key in pairs(first) if key not in (VALUE, SOURCE)]
-    return (VALUE, SOURCE, *keys)
+    keys = [key for key in pairs(first) if key not in (VALUE, SOURCE, SOURCE_AUX)]
+    aux = (SOURCE_AUX,) if AUX_SEPARATOR.encode() in postings.source_blocks[0] else ()
+    return (VALUE, SOURCE, *aux, *keys)
 
 
 def _notes(parsed: ParsedAlog) -> list[str]:

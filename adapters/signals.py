@@ -105,9 +105,10 @@ OPERATING = "operating"
 # The reserved signal of a UTC time the log carries on messages its own clock stamps (a
 # GPS time reference): where the log's clock is off, its UTC times are set by it.
 CLOCK_REFERENCE = "clock_reference"
-# A MOOS variable's posting, the field a profile reads where it names no key of it, and
-# the app that posted it (a `where` keeps one app's postings).
-MOOS_VALUE, MOOS_SOURCE = "value", "source"
+# A MOOS variable's posting, the field a profile reads where it names no key of it, the
+# app that posted it (a `where` keeps one app's postings), and what pLogger's LogAuxSrc
+# logs after the app's name (the helm's behaviour).
+MOOS_VALUE, MOOS_SOURCE, MOOS_SOURCE_AUX = "value", "source", "source_aux"
 # The key of a profile's `values` map that says what every value it does not list means.
 OTHER_VALUES = "*"
 # CSV logs have no topics: a column is both a signal's topic and its field.

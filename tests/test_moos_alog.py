@@ -214,3 +214,23 @@ def test_init_profile_takes_the_pid_outputs_as_commands_and_no_set_point_as_a_se
     assert sources.signals["operating"].topic == "DEPLOY"
     assert sources.signals["desired_thrust_l"].scale == 0.01          # percent
     assert sources.signals["desired_rudder"].scale == pytest.approx(1 / 40)  # degrees
+
+
+def test_a_source_logged_with_its_aux_is_filtered_on_the_app(tmp_path):
+    """pLogger's LogAuxSrc writes the source as APP:AUX (``pHelmIvP:loiter``): `source` is
+    the app, as without it, and `source_aux` the rest."""
+    plain = _write_alog(tmp_path / "plain.alog")
+    aux = tmp_path / "aux.alog"
+    aux.write_text(plain.read_text(encoding="utf-8").replace(" iIMU ", " iIMU:gyro_0 ")
+                   .replace(" uSimMarine ", " uSimMarine:sim "), encoding="utf-8")
+    profile = _profile(tmp_path)
+    read, expected = read_log(aux, profile.sources), read_log(plain, profile.sources)
+    assert np.array_equal(read.series["yaw_rate"].values, expected.series["yaw_rate"].values)
+    by_aux = _profile(tmp_path, MAPPING.replace('where = { source = "iIMU" }',
+                                                'where = { source_aux = "gyro_0" }'))
+    assert np.array_equal(read_log(aux, by_aux.sources).series["yaw_rate"].values,
+                          expected.series["yaw_rate"].values)
+    topics = {t.name: t for t in inventory(aux)[0].topics}
+    assert topics["IMU_YAW_RATE"].instances == (("source", ("iIMU", "uSimMarine")),)
+    assert topics["IMU_YAW_RATE"].fields == ("value", "source", "source_aux")
+    assert topics["DESIRED_THRUST_L"].fields == ("value", "source")

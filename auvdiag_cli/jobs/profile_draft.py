@@ -17,7 +17,7 @@ from adapters.autopilot_setup import AutopilotSetup, autopilot_setup
 from adapters.csv_log import csv_rows
 from adapters.fieldpath import is_field_path
 from adapters.recognise import is_number
-from adapters.signals import MOOS_SOURCE, FieldSource, LogSources, TimeColumn
+from adapters.signals import MOOS_SOURCE, MOOS_SOURCE_AUX, FieldSource, LogSources, TimeColumn
 from auvdiag_cli.jobs.autopilot_outputs import (
     climb_source,
     output_channel,
@@ -101,7 +101,7 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
         # (a damaged log's field names may not be).
         fields = (topic.fields or (topic.name,)) if family == "csv" else [
             field for field in topic.fields if is_field_path(field)
-            and (family != "moos" or field != MOOS_SOURCE)]
+            and (family != "moos" or field not in (MOOS_SOURCE, MOOS_SOURCE_AUX))]
         for field in fields:
             named = label(topic.name, field, family)
             command = COMMAND_NAME.search(named) or (
