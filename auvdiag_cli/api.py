@@ -27,6 +27,7 @@ through ``progress`` (a function taking one line of text) where it is given."""
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Callable, Sequence
 from importlib import import_module
 from pathlib import Path
@@ -367,9 +368,26 @@ def simulate(scenario: str | Scenario, profile: Profile, output: Path, *,
         raise UsageError(str(error).strip("'\"")) from None
     if output.exists():
         raise UsageError(f"{output}: exists already, not overwriting")
-    dive = fly(chosen, profile, seed, LOG_EPOCH_NS if start_ns is None else start_ns)
-    write_log(dive, profile, output, log_format, namespace=namespace)
+    # A profile the simulator cannot fly (no [simulation] table, measured inputs) or log (no
+    # [sources] table for the format, a field no message type it writes has) is the user's.
+    try:
+        dive = fly(chosen, profile, seed, LOG_EPOCH_NS if start_ns is None else start_ns)
+    except (KeyError, ValueError) as error:
+        raise UsageError(str(error).strip("'\"")) from None
+    try:
+        write_log(dive, profile, output, log_format, namespace=namespace)
+    except ValueError as error:
+        _remove(output)
+        raise UsageError(str(error)) from None
     return dive
+
+
+def _remove(path: Path) -> None:
+    """What a writer left of a log it could not finish."""
+    if path.is_dir():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        path.unlink(missing_ok=True)
 
 
 def scenarios(profile: Profile) -> dict[str, Scenario]:

@@ -345,3 +345,30 @@ def test_the_draft_reads_the_log_once(make_log, monkeypatch, fmt):
     text = draft.draft_profile(make_log("paper-normal", 11, fmt), "once")
     assert len(reads) == 1
     assert all(f'[[commands]]\nname = "{name}"' in text for name in ("data_0", "data_1"))
+
+
+@pytest.mark.parametrize(("profile", "fmt", "suffix", "expected"), [
+    ("bluerov2", "bag", ".bag", 'operating = { topic = "/mavros/state", field = "armed" }'),
+    ("px4-armed", "ulog", ".ulg",
+     'operating = { message = "actuator_armed", field = "armed", bits = 1 }'),
+])
+def test_the_draft_reads_the_armed_flag_of_a_mavros_or_px4_log(tmp_path, profile, fmt, suffix,
+                                                               expected):
+    from adapters import read_log
+    from auvdiag_cli import api
+    from auvdiag_cli.vehicle.profile import load_profile, profile_text
+
+    if profile == "px4-armed":            # the Twin-Burger logging PX4's armed state
+        text, _ = profile_text()
+        path = tmp_path / "px4.toml"
+        path.write_text(text.replace("[sources.ulog]\n", "[sources.ulog]\noperating = { message "
+                                     '= "actuator_armed", field = "armed", bits = 1 }\n'))
+        profile = str(path)
+    log = tmp_path / f"dive{suffix}"
+    api.simulate("paper-normal", api.load_profile(Path(profile)), log, log_format=fmt)
+    draft = tmp_path / "draft.toml"
+    result = CliRunner().invoke(app, ["init-profile", str(log), "--output", str(draft)])
+    assert result.exit_code == 0, result.output
+    assert expected in draft.read_text()
+    flag = read_log(log, load_profile(draft).sources).series["operating"]
+    assert len(flag) > 100 and set(flag.values.tolist()) == {1.0}

@@ -110,6 +110,17 @@ def test_simulate_command_writes_log_and_truth(tmp_path):
     bad = runner.invoke(app, ["simulate", "paper-normal", "--output", str(tmp_path / "x"),
                               "--format", "zip"])
     assert bad.exit_code == 2 and "unknown --format" in bad.stderr
+    unflown = runner.invoke(app, ["simulate", "paper-normal", "--profile", "px4_uuv",
+                                  "--format", "ulog", "--output", str(tmp_path / "p.ulg")])
+    assert unflown.exit_code == 2 and unflown.stderr.strip() == (
+        "auvdiag: error: profile 'px4_uuv' has no [simulation] table: nothing describes how "
+        "to fly it")
+    unlogged = runner.invoke(app, ["simulate", "paper-normal", "--profile", "three_thruster",
+                                   "--format", "ulog", "--output", str(tmp_path / "h.ulg")])
+    assert unlogged.exit_code == 2 and unlogged.stderr.strip() == (
+        "auvdiag: error: profile 'three-thruster' has no [sources.ulog] table: it does not "
+        "say how the vehicle logs ulog messages")
+    assert not (tmp_path / "h.ulg").exists()
 
 
 def test_scenarios_command_lists_the_paper_scenario():

@@ -71,7 +71,8 @@ def toml_key(text: str) -> str:
 
 
 def entry(source: FieldSource, family: str) -> str:
-    key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash") \
+    key = "column" if family == "csv" else "message" if family in ("mavlink", "dataflash",
+                                                                    "ulog") \
         else "variable" if family == "moos" else "topic"
     # A CSV column is its own field; a MOOS variable's posting is its field `value`.
     bare = family == "csv" or (family == "moos" and source.field == MOOS_VALUE)

@@ -40,7 +40,7 @@ from auvdiag_cli.jobs.draft_text import (
     typical_level,
 )
 from auvdiag_cli.jobs.moos_draft import PID_OUTPUT, label, pid_output
-from auvdiag_cli.jobs.moos_draft import operating as moos_operating
+from auvdiag_cli.jobs.operating_draft import draft_operating
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -57,7 +57,6 @@ NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW
 # A clock's column, its unit perhaps beside it as CSV exports write it ("time (s)", "t [ms]").
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
                        r"(\s*[(\[]\s*(s|ms|us|ns)\s*[)\]])?$", re.IGNORECASE)
-MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID = 6, 8
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
 HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
 ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
@@ -105,7 +104,7 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
         for field in fields:
             named = label(topic.name, field, family)
             command = COMMAND_NAME.search(named) or (
-                family in ("ros", "moos") and COMMAND_TOPIC.search(topic.name)) or (
+                family in ("ros", "moos", "ulog") and COMMAND_TOPIC.search(topic.name)) or (
                 family == "moos" and PID_OUTPUT.match(named))
             if command and (family != "mavlink" or topic.name == "SERVO_OUTPUT_RAW") and (
                     family != "dataflash" or topic.name == "RCOU"):
@@ -114,10 +113,17 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                     f"{field[:-3]}[{i}]" for i in range(MAX_ARRAY_COMMANDS)]
                 found += [("command", FieldSource(topic.name, path, where=where))
                           for path in elements]
-            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(named)) and not (
+            elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(
+                    _described(topic.name, named, family))) and not (
                     NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
+
+
+def _described(topic: str, named: str, family: str) -> str:
+    """What a field's name says: a PX4 topic's fields (``xyz[2]``) say it with the topic's
+    (``vehicle_angular_velocity``)."""
+    return f"{topic}.{named}" if family == "ulog" else named
 
 
 def guess_time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
@@ -241,7 +247,8 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             proposal = (family == "moos" and pid_output(source, series)) or _command(
                 name, source, series, guessed)
         else:
-            sensors.append(_sensor(name, called, source, series, paired, setup))
+            sensors.append(_sensor(name, _described(source.topic, called, family), source,
+                                   series, paired, setup))
             continue
         if proposal is not None:
             commands.append(proposal)
@@ -320,29 +327,6 @@ def _nice(value: float) -> float:
     return float(next(step * exponent for step in (1, 2, 5, 10) if step * exponent >= value))
 
 
-def _operating(path: Path, family: str, contents: LogInventory) -> FieldSource | None:
-    """An armed flag, where the log has one ArduPilot-style, or MOOS-IvP's helm driving."""
-    names = {topic.name for topic in contents.topics}
-    if family == "dataflash" and "ARM" in names:
-        return FieldSource("ARM", "ArmState", changes_only=True)
-    if family == "moos":
-        return moos_operating(names)
-    if family != "mavlink" or "HEARTBEAT" not in names:
-        return None
-    read = _read_each(path, family, {"type": FieldSource("HEARTBEAT", "type"),
-                                     "autopilot": FieldSource("HEARTBEAT", "autopilot")}, None)
-    if "type" not in read or "autopilot" not in read:
-        return None
-    # The autopilot's own heartbeats: not the ground station's, nor those of companions and
-    # cameras, which say MAV_AUTOPILOT_INVALID.
-    vehicle = [int(t) for t, a in zip(read["type"], read["autopilot"], strict=True)
-               if int(t) != MAV_TYPE_GCS and int(a) != MAV_AUTOPILOT_INVALID]
-    if not vehicle:
-        return None
-    kind = max(set(vehicle), key=vehicle.count)
-    return FieldSource("HEARTBEAT", "base_mode", where=(("type", str(kind)),), bits=128)
-
-
 def _clock_reference(family: str, contents: LogInventory) -> FieldSource | None:
     """A UTC time the log carries (a ROS TimeReference, as mavros publishes the autopilot's
     GPS time), where it has one: it dates a log whose own clock is off."""
@@ -381,7 +365,8 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                          "[[commands]] and [[sensors]] and their [sources] entries by hand "
                          "(`auvdiag inspect LOG` lists the fields; docs/vehicles.md has a complete "
                          "minimal profile)")
-    operating = _operating(path, family, contents)
+    operating = draft_operating(family, contents,
+                                lambda sources: _read_each(path, family, sources, None))
     return render_draft(path, name, family, commands, sensors, operating, time, groups,
                         attitude_loops(commands, sensors), _clock_reference(family, contents),
                         "" if setup is None else setup.evidence)

@@ -4,10 +4,11 @@ the vehicle logs them (its `[sources.FAMILY]` table read backwards), whatever th
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from adapters.signals import FieldSource, LogSources
+from adapters.signals import OPERATING, FieldSource, LogSources
 from auvdiag_cli.simulator.run import SimulatedDive, Stream
 from auvdiag_cli.vehicle.profile import Profile
 
+STATE_PERIOD_NS = 1_000_000_000      # a vehicle's state is published once a second
 # A text an operating flag's map does not list, written where every such text means it.
 UNLISTED_TEXT = "OPERATING"
 
@@ -42,6 +43,19 @@ def operating_raw(source: FieldSource) -> float | str:
     if any(isinstance(key, str) for key in keys):
         return UNLISTED_TEXT
     return float(max((key for key in keys if isinstance(key, int)), default=0) + 1)
+
+
+def operating_records(dive: SimulatedDive, profile: Profile, family: str) -> list[Record]:
+    """The flag the profile's operating source reads (mavros's state: armed; PX4's
+    actuator_armed), once a second over the dive, as those are published: operating
+    throughout."""
+    source = family_sources(profile, family).signals.get(OPERATING)
+    if source is None:
+        return []
+    raw = operating_raw(source)
+    return [Record(dive.start_ns + k * STATE_PERIOD_NS, source.topic, ((source.field, raw),),
+                   source.where)
+            for k in range(int(dive.duration_s) + 1)]
 
 
 def family_sources(profile: Profile, family: str) -> LogSources:

@@ -14,13 +14,12 @@ from typing import Any
 import numpy as np
 
 from adapters.fieldpath import parse_field_path
-from adapters.signals import OPERATING
 from auvdiag_cli.simulator.run import SimulatedDive
 from auvdiag_cli.simulator.writers.records import (
     Record,
     dive_records,
     family_sources,
-    operating_raw,
+    operating_records,
 )
 from auvdiag_cli.vehicle.profile import Profile
 
@@ -54,7 +53,6 @@ TYPES_BY_FIELD = {
     "value_float": "mavros_msgs/msg/DebugValue",
 }
 SEGMENT_TYPES = {"data": "std_msgs/msg/String", "text": STATUSTEXT_TYPE}
-STATE_PERIOD_NS = 1_000_000_000      # mavros publishes the vehicle's state once a second
 NUMPY_TYPES = {"float64": np.float64, "float32": np.float32, "int8": np.int8, "int16": np.int16,
                "int32": np.int32, "int64": np.int64, "uint8": np.uint8, "uint16": np.uint16,
                "uint32": np.uint32, "uint64": np.uint64, "byte": np.uint8, "char": np.uint8,
@@ -163,7 +161,7 @@ class RosMessages:
 
         def dive_messages() -> Iterator[tuple[int, str, bytes]]:
             records = heapq.merge(dive_records(dive, profile, "ros"),
-                                  _operating_records(dive, profile),
+                                  operating_records(dive, profile, "ros"),
                                   key=lambda record: record.time_ns)
             for record in records:
                 yield (record.time_ns, record.topic,
@@ -176,18 +174,6 @@ class RosMessages:
 
         yield from heapq.merge(dive_messages(), *map(extra_messages, extra),
                                key=lambda item: item[0])
-
-
-def _operating_records(dive: SimulatedDive, profile: Profile) -> list[Record]:
-    """The flag the profile's operating source reads (mavros's state: armed), once a second
-    over the dive: operating throughout."""
-    source = family_sources(profile, "ros").signals.get(OPERATING)
-    if source is None:
-        return []
-    raw = operating_raw(source)
-    return [Record(dive.start_ns + k * STATE_PERIOD_NS, source.topic, ((source.field, raw),),
-                   source.where)
-            for k in range(int(dive.duration_s) + 1)]
 
 
 def _assign(message: Any, path: str, value: float | str) -> None:

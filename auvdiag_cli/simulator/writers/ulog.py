@@ -13,7 +13,7 @@ import numpy as np
 
 from adapters.fieldpath import parse_field_path
 from auvdiag_cli.simulator.run import SimulatedDive
-from auvdiag_cli.simulator.writers.records import dive_records, family_sources
+from auvdiag_cli.simulator.writers.records import dive_records, family_sources, operating_records
 from auvdiag_cli.vehicle.profile import Profile
 
 MAGIC = b"ULog\x01\x12\x35"
@@ -102,7 +102,8 @@ def write_ulog(dive: SimulatedDive, profile: Profile, path: Path) -> None:
     grouped: dict[tuple[str, int], dict[str, list[float]]] = {}
     times: dict[tuple[str, int], list[int]] = {}
     texts: list[tuple[int, str]] = []
-    for record in dive_records(dive, profile, "ulog"):
+    records = [*dive_records(dive, profile, "ulog"), *operating_records(dive, profile, "ulog")]
+    for record in sorted(records, key=lambda record: record.time_ns):
         time_us = (record.time_ns - boot_ns) // 1000
         if record.text is not None:
             texts.append((time_us, record.text[1]))
