@@ -27,7 +27,6 @@ through ``progress`` (a function taking one line of text) where it is given."""
 
 from __future__ import annotations
 
-import shutil
 from collections.abc import Callable, Sequence
 from importlib import import_module
 from pathlib import Path
@@ -361,33 +360,17 @@ def simulate(scenario: str | Scenario, profile: Profile, output: Path, *,
     if log_format not in LOG_FORMATS:
         raise UsageError(f"unknown log format {log_format!r} (choose from "
                          f"{', '.join(LOG_FORMATS)})")
+    if output.exists():
+        raise UsageError(f"{output}: exists already, not overwriting")
+    # No such scenario, or a profile it cannot fly or log: the user's (no half log is kept).
     try:
         chosen = (get_scenario(scenario, profile, fault_at_s) if isinstance(scenario, str)
                   else scenario)
-    except (KeyError, ValueError) as error:
-        raise UsageError(str(error).strip("'\"")) from None
-    if output.exists():
-        raise UsageError(f"{output}: exists already, not overwriting")
-    # A profile the simulator cannot fly (no [simulation] table, measured inputs) or log (no
-    # [sources] table for the format, a field no message type it writes has) is the user's.
-    try:
         dive = fly(chosen, profile, seed, LOG_EPOCH_NS if start_ns is None else start_ns)
+        write_log(dive, profile, output, log_format, namespace=namespace)
     except (KeyError, ValueError) as error:
         raise UsageError(str(error).strip("'\"")) from None
-    try:
-        write_log(dive, profile, output, log_format, namespace=namespace)
-    except ValueError as error:
-        _remove(output)
-        raise UsageError(str(error)) from None
     return dive
-
-
-def _remove(path: Path) -> None:
-    """What a writer left of a log it could not finish."""
-    if path.is_dir():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        path.unlink(missing_ok=True)
 
 
 def scenarios(profile: Profile) -> dict[str, Scenario]:
