@@ -12,6 +12,7 @@ import pytest
 
 from auvdiag_cli.engine.effort_check import check_effort
 from auvdiag_cli.engine.effort_spans import typical_later_threshold
+from auvdiag_cli.engine.effort_words import more
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort import GroupFit, Thresholds
@@ -100,7 +101,7 @@ def test_a_rotor_lost_in_the_last_window_is_dated_where_it_was_lost():
                    for a in check.actuators[1:])
         assert (f"motor_1 carries {motor_1.since_onset:.0%} more of the effort since the "
                 f"change than before it in this log (over the whole log, "
-                f"{motor_1.departure:.0%} more than on normal logs") in check.describe()
+                f"{more(motor_1.departure)} than on normal logs") in check.describe()
 
 
 class _TightBetweenLogs(Thresholds):

@@ -112,11 +112,14 @@ def init_profile(
     ] = None,
     closed_loop: Annotated[bool, typer.Option(
         "--closed-loop", help="Draft a model of the closed loop from an ArduPilot DataFlash "
-                              "log: the controller's set points (ATT DesRoll, DesPitch; RATE "
-                              "RDes, PDes, YDes; CTUN DCRt) drive the model, what it measured "
-                              "beside each is a sensor, the motor outputs are read for the "
-                              "effort check only. A log whose set points are named commanded, "
-                              "desired or target is drafted so without it.")] = False,
+                              "log or a PX4 ULog: the controller's set points (ATT DesRoll, "
+                              "DesPitch; RATE RDes, PDes, YDes; CTUN DCRt; PX4's "
+                              "vehicle_rates_setpoint, vehicle_local_position_setpoint "
+                              "velocities, tecs_status height rate and airspeed) drive the "
+                              "model, what was measured beside each is a sensor, the motor "
+                              "outputs are read for the effort check only. A log whose set "
+                              "points are named commanded, desired or target is drafted so "
+                              "without it.")] = False,
 ) -> None:
     """Write a starting vehicle profile from what a log holds.
 

@@ -39,11 +39,17 @@ def carries(actuator: SaidEffort) -> str:
     a = actuator
     figures = f"{a.share:.3f} against {a.normal_share:.3f} ± {a.spread:.3f}"
     if a.since_onset is None:
-        return (f"{a.said} carries {a.departure or 0.0:.0%} more of the effort than on normal "
-                f"logs ({figures})")
-    return (f"{a.said} carries {a.since_onset:.0%} more of the effort since the change than "
-            f"before it in this log (over the whole log, {a.departure or 0.0:.0%} more than on "
-            f"normal logs: {figures})")
+        return (f"{a.said} carries {more(a.departure)} of the effort than on normal logs "
+                f"({figures})")
+    return (f"{a.said} carries {more(a.since_onset)} of the effort since the change than "
+            f"before it in this log (over the whole log, {more(a.departure)} than on normal "
+            f"logs: {figures})")
+
+
+def more(change: float | None) -> str:
+    """"12% more", "3% less" (not "-3% more"): a share's relative change."""
+    change = 0.0 if change is None or round(change, 2) == 0 else change
+    return f"{abs(change):.0%} {'less' if change < 0 else 'more'}"
 
 
 def smallest_rise_shown(actuators: Sequence[SaidEffort]) -> str:

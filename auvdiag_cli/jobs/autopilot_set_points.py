@@ -1,23 +1,64 @@
-"""ArduPilot's set points as a drafted model of the closed loop: each set point its
-controller logs beside what it measured, and the attitude loops whose gain the change
-test judges."""
+"""Autopilots' set points as a drafted model of the closed loop: each set point a
+controller logs beside what it measured (ArduPilot in one DataFlash message, PX4 in two
+ULog topics), and the attitude loops whose gain the change test judges."""
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
-from adapters import LogInventory
+from adapters import LogInventory, TopicInfo
 from adapters.signals import FieldSource
-from auvdiag_cli.jobs.draft_text import Proposal
+from auvdiag_cli.jobs.draft_text import Proposal, signal_name
+from auvdiag_cli.jobs.px4_names import px4_name
 
 DEGREES = 0.017453292519943295
-# ArduPilot's controllers log each set point beside what they measured (Copter and Sub:
-# ATT in degrees, RATE in deg/s, CTUN's climb rates in cm/s): message -> (set point,
-# measured, scale to SI, unit). The climb rates are negated like a drafted climb (down
-# positive, as a depth rate).
-ARDUPILOT_SET_POINTS = {
-    "ATT": (("DesRoll", "Roll", DEGREES, "rad"), ("DesPitch", "Pitch", DEGREES, "rad")),
-    "RATE": (("RDes", "R", DEGREES, "rad/s"), ("PDes", "P", DEGREES, "rad/s"),
-             ("YDes", "Y", DEGREES, "rad/s")),
-    "CTUN": (("DCRt", "CRt", -0.01, "m/s"),),
+
+
+@dataclass(frozen=True)
+class SetPointPair:
+    """A set point and what was measured beside it, each (topic, field), in one unit once
+    scaled."""
+
+    set_point: tuple[str, str]
+    measured: tuple[str, str]
+    scale: float
+    unit: str
+
+
+def _ardupilot(message: str, desired: str, measured: str, scale: float, unit: str
+               ) -> SetPointPair:
+    return SetPointPair((message, desired), (message, measured), scale, unit)
+
+
+def _px4(set_point: str, measured: str, pair: tuple[str, str], unit: str) -> SetPointPair:
+    return SetPointPair((set_point, pair[0]), (measured, pair[1]), 1.0, unit)
+
+
+RATES_SP, RATES = "vehicle_rates_setpoint", "vehicle_angular_velocity"
+POSITION_SP, POSITION = "vehicle_local_position_setpoint", "vehicle_local_position"
+SET_POINT_PAIRS = {
+    # ArduPilot's controllers (Copter, Sub, Plane's ATT and RATE): ATT in degrees, RATE in
+    # deg/s, CTUN's climb rates in cm/s, negated like a drafted climb (down positive, as a
+    # depth rate).
+    "dataflash": (
+        _ardupilot("ATT", "DesRoll", "Roll", DEGREES, "rad"),
+        _ardupilot("ATT", "DesPitch", "Pitch", DEGREES, "rad"),
+        _ardupilot("RATE", "RDes", "R", DEGREES, "rad/s"),
+        _ardupilot("RATE", "PDes", "P", DEGREES, "rad/s"),
+        _ardupilot("RATE", "YDes", "Y", DEGREES, "rad/s"),
+        _ardupilot("CTUN", "DCRt", "CRt", -0.01, "m/s")),
+    # PX4 logs the rate controller's set point and the filtered gyro rates (FRD, rad/s), the
+    # position controller's velocity set point and the estimate (NED, m/s: vz down
+    # positive), and a fixed wing's TECS its height rate and airspeed. PX4 logs its
+    # attitude as a quaternion only: no attitude angle to pair with its set point.
+    "ulog": (
+        _px4(RATES_SP, RATES, ("roll", "xyz[0]"), "rad/s"),
+        _px4(RATES_SP, RATES, ("pitch", "xyz[1]"), "rad/s"),
+        _px4(RATES_SP, RATES, ("yaw", "xyz[2]"), "rad/s"),
+        _px4(POSITION_SP, POSITION, ("vx", "vx"), "m/s"),
+        _px4(POSITION_SP, POSITION, ("vy", "vy"), "m/s"),
+        _px4(POSITION_SP, POSITION, ("vz", "vz"), "m/s"),
+        _px4("tecs_status", "tecs_status", ("height_rate_setpoint", "height_rate"), "m/s"),
+        _px4("tecs_status", "tecs_status", ("true_airspeed_sp", "true_airspeed_filtered"),
+             "m/s")),
 }
 # The attitude loops whose gain the change test can judge (`[[tracking]]`): set point ->
 # (what was measured beside it, its rate), each (message, field).
@@ -25,24 +66,37 @@ ARDUPILOT_LOOPS = {("ATT", "DesRoll"): (("ATT", "Roll"), ("RATE", "R")),
                    ("ATT", "DesPitch"): (("ATT", "Pitch"), ("RATE", "P"))}
 
 
-def set_point_pairs(contents: LogInventory) -> list[tuple[str, FieldSource]]:
-    """("set_point", source) and ("sensor", source) of each ArduPilot set point the log
-    holds beside what was measured (`ARDUPILOT_SET_POINTS`)."""
+def first_instance(topic: TopicInfo) -> tuple[tuple[str, str], ...]:
+    """The ``where`` that reads a topic logged by several instances from its first."""
+    return tuple((key, values[0]) for key, values in topic.instances if len(values) > 1)
+
+
+def set_point_pairs(contents: LogInventory, family: str) -> list[tuple[str, FieldSource]]:
+    """("set_point", source) and ("sensor", source) of each set point the log holds beside
+    what was measured (`SET_POINT_PAIRS`)."""
+    topics = {topic.name: topic for topic in contents.topics}
     found: list[tuple[str, FieldSource]] = []
-    for topic in contents.topics:
-        for desired, measured, _, _ in ARDUPILOT_SET_POINTS.get(topic.name, ()):
-            if {desired, measured} <= set(topic.fields):
-                found += [("set_point", FieldSource(topic.name, desired)),
-                          ("sensor", FieldSource(topic.name, measured))]
+    for pair in SET_POINT_PAIRS.get(family, ()):
+        ends = [(kind, topics.get(topic), field) for kind, (topic, field)
+                in (("set_point", pair.set_point), ("sensor", pair.measured))]
+        if all(topic is not None and field in topic.fields for _, topic, field in ends):
+            found += [(kind, FieldSource(topic.name, field, where=first_instance(topic)))
+                      for kind, topic, field in ends if topic is not None]
     return found
 
 
-def paired_unit(source: FieldSource) -> tuple[float, str] | None:
-    """The scale to SI and the unit of an ArduPilot set point or what was measured beside
-    it; None for any other field."""
-    return next(((scale, unit) for desired, measured, scale, unit
-                 in ARDUPILOT_SET_POINTS.get(source.topic, ())
-                 if source.field in (desired, measured)), None)
+def pairing(source: FieldSource, family: str) -> tuple[float, str, str] | None:
+    """The scale to SI, the unit and the drafted name of a set point or what was measured
+    beside it (PX4's named as what was measured, the set point with "_set_point"; others by
+    their message and field); None for any other field."""
+    for pair in SET_POINT_PAIRS.get(family, ()):
+        measured = FieldSource(*pair.measured)
+        for end, suffix in ((pair.set_point, "_set_point"), (pair.measured, "")):
+            if end == (source.topic, source.field):
+                named = px4_name(measured)
+                return pair.scale, pair.unit, (f"{named}{suffix}" if named is not None else
+                                               signal_name("", f"{end[0]}_{end[1]}"))
+    return None
 
 
 def set_point_proposal(name: str, source: FieldSource, scale: float, unit: str) -> Proposal:

@@ -59,6 +59,12 @@ def is_set_point(proposal: Proposal) -> bool:
         SET_POINT_NAME.search(proposal.source.field.rsplit(".", 1)[-1]))
 
 
+def signal_name(topic: str, field: str) -> str:
+    """A signal's name from its field's (or, for a topic's own value, the topic's)."""
+    text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
+    return text.lower() or "signal"
+
+
 def quoted(text: str) -> str:
     """``text`` as a TOML basic string: a log's names may hold quotes, backslashes or
     control characters (JSON's escapes are TOML's; TOML also refuses a raw DEL)."""

@@ -27,7 +27,8 @@ from auvdiag_cli.jobs.autopilot_outputs import (
 )
 from auvdiag_cli.jobs.autopilot_set_points import (
     attitude_loops,
-    paired_unit,
+    first_instance,
+    pairing,
     set_point_pairs,
     set_point_proposal,
 )
@@ -37,10 +38,12 @@ from auvdiag_cli.jobs.draft_text import (
     Proposal,
     is_set_point,
     render_draft,
+    signal_name,
     typical_level,
 )
 from auvdiag_cli.jobs.moos_draft import PID_OUTPUT, label, pid_output
 from auvdiag_cli.jobs.operating_draft import draft_operating
+from auvdiag_cli.jobs.px4_names import px4_name
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
@@ -49,11 +52,18 @@ COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|c
 COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU)",
                            re.IGNORECASE)
 SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_velocity\.[xyz]|"
-                         r"^w_|gyro|climb|^CRt$|depth|twist\.linear\.[xyz]|velocity|speed|flow|_rate|rate_)",
+                         r"^w_|gyro|climb|^CRt$|depth|heave|twist\.linear\.[xyz]|velocity|speed|"
+                         r"flow|_rate|rate_)",
                          re.IGNORECASE)
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
                           r"^EKF_|^REQUEST_|^PARAM|^DESIRED_)", re.IGNORECASE)
+# A set point left unset (NaN: PX4 holding a position sets no velocity) more often than
+# this drives no model.
+MOSTLY_UNSET = 0.1
+# A topic of a controller's set points (PX4's vehicle_rates_setpoint, mavros's setpoint_raw):
+# its fields are what was asked, never what was measured.
+SET_POINT_TOPIC = re.compile(r"setpoint|set_point", re.IGNORECASE)
 # A clock's column, its unit perhaps beside it as CSV exports write it ("time (s)", "t [ms]").
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
                        r"(\s*[(\[]\s*(s|ms|us|ns)\s*[)\]])?$", re.IGNORECASE)
@@ -81,21 +91,16 @@ def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
     return [group for group in names if frozenset(group) not in identical]
 
 
-def _signal_name(topic: str, field: str) -> str:
-    text = re.sub(r"[^A-Za-z0-9]+", "_", f"{field}" if field != topic else topic).strip("_")
-    return text.lower() or "signal"
-
-
 def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                 closed_loop: bool = False) -> list[tuple[str, FieldSource]]:
     """(kind, source) for every field whose name or topic looks like a command or a sensor;
     ``every_field``: any other field is a sensor too (names this does not recognise);
-    ``closed_loop``: ArduPilot's set points and what was measured beside them too."""
-    found = set_point_pairs(contents) if closed_loop and family == "dataflash" else []
+    ``closed_loop``: an autopilot's set points and what was measured beside them too."""
+    found = set_point_pairs(contents, family) if closed_loop else []
     for topic in contents.topics:
         if topic.count < 2:
             continue
-        where = tuple((key, values[0]) for key, values in topic.instances if len(values) > 1)
+        where = first_instance(topic)
         # A CSV column is a name, whatever it holds; other fields are paths into a message
         # (a damaged log's field names may not be).
         fields = (topic.fields or (topic.name,)) if family == "csv" else [
@@ -115,15 +120,18 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                           for path in elements]
             elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(
                     _described(topic.name, named, family))) and not (
-                    NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)):
+                    NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)
+                    or (family != "csv" and SET_POINT_TOPIC.search(topic.name))):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
 
 
 def _described(topic: str, named: str, family: str) -> str:
     """What a field's name says: a PX4 topic's fields (``xyz[2]``) say it with the topic's
-    (``vehicle_angular_velocity``)."""
-    return f"{topic}.{named}" if family == "ulog" else named
+    (``vehicle_angular_velocity``) and the name the draft gives it (`px4_name`)."""
+    if family != "ulog":
+        return named
+    return " ".join(filter(None, (f"{topic}.{named}", px4_name(FieldSource(topic, named)))))
 
 
 def guess_time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
@@ -154,7 +162,8 @@ def _sensor_unit(field: str) -> str:
     in m/s; "?" where the name says nothing."""
     if re.search(r"(roll|pitch|yaw)speed$|^Gyr|angular|gyro", field, re.IGNORECASE):
         return "rad/s"
-    if re.search(r"speed$|velocity|linear\.|^v[xyz]$|^V[NED]$", field, re.IGNORECASE):
+    if re.search(r"speed$|velocity|linear\.|^v[xyz]$|^V[NED]$|heave$|height_rate$", field,
+                 re.IGNORECASE):
         return "m/s"
     return "?"
 
@@ -215,7 +224,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                ) -> tuple[list[Proposal], list[Proposal], list[DraftGroup]]:
     """``every_field``: fields with unknown names are sensors; ``guess_commands``: those of
     them that hold their value between changes are commands (marked CHECK);
-    ``closed_loop``: ArduPilot's set points (`ARDUPILOT_SET_POINTS`) are commands;
+    ``closed_loop``: an autopilot's set points (`SET_POINT_PAIRS`) are commands;
     ``setup``: what an ArduPilot log says of its vehicle (a copter's motors by output)."""
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
            for kind, source in _candidates(contents, family, every_field, closed_loop)}
@@ -227,14 +236,15 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     command_values: list[np.ndarray] = []
     for key, (kind, source) in raw.items():
         series = values.get(key)
-        if series is None or not _moves(series):
-            continue                                   # not in the log, or never moves
+        if series is None or not _moves(series) or (
+                kind == "set_point" and np.isnan(series).mean() > MOSTLY_UNSET):
+            continue                   # not in the log, never moves, or not set (PX4: NaN)
         called = label(source.topic, source.field, family)
-        name = _signal_name(source.topic, called)
+        name = (family == "ulog" and px4_name(source)) or signal_name(source.topic, called)
         channel = output_channel(source) if kind == "command" else None
-        paired = paired_unit(source) if closed_loop else None
+        paired = pairing(source, family) if closed_loop else None
         if paired is not None:
-            name = _signal_name("", f"{source.topic}_{source.field}")
+            name = paired[2]
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
         if roles and channel is not None:
             # A copter's or a plane's output: what its log says it drives, or nothing
@@ -242,7 +252,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             proposal = None if channel not in roles else role_proposal(roles[channel],
                                                                        source, series)
         elif kind == "set_point" and paired is not None:
-            proposal = set_point_proposal(name, source, *paired)
+            proposal = set_point_proposal(name, source, *paired[:2])
         elif kind == "command" or guessed:
             proposal = (family == "moos" and pid_output(source, series)) or _command(
                 name, source, series, guessed)
@@ -279,7 +289,7 @@ def _command(name: str, source: FieldSource, series: np.ndarray, guessed: bool) 
 
 
 def _sensor(name: str, named: str, source: FieldSource, series: np.ndarray,
-            paired: tuple[float, str] | None, setup: AutopilotSetup | None) -> Proposal:
+            paired: tuple[float, str, str | None] | None, setup: AutopilotSetup | None) -> Proposal:
     """``named``: what the field is called (`moos_draft.label`)."""
     unit = _sensor_unit(named) if paired is None else paired[1]
     check = "unit and sign" + ("" if unit != "?" else ": no unit is known for it")
@@ -308,7 +318,7 @@ def _unique(proposals: list[Proposal]) -> list[Proposal]:
     """Names told apart: a field name that several topics share takes its topic's last part
     (nav_info/roll `commanded` -> roll_commanded); one still alike a count."""
     shared = {p.name for p in proposals if [q.name for q in proposals].count(p.name) > 1}
-    proposals = [replace(p, name=_signal_name("", f"{p.source.topic.rsplit('/', 1)[-1]}_"
+    proposals = [replace(p, name=signal_name("", f"{p.source.topic.rsplit('/', 1)[-1]}_"
                                                   f"{p.name}")) if p.name in shared else p
                  for p in proposals]
     seen: dict[str, int] = {}
@@ -339,7 +349,7 @@ def _clock_reference(family: str, contents: LogInventory) -> FieldSource | None:
 
 def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
     """The text of a starting profile for the vehicle that wrote the log at ``path``;
-    ``closed_loop``: a model driven by ArduPilot's set points, the motor outputs read for
+    ``closed_loop``: a model driven by the autopilot's set points, the motor outputs read for
     the effort check only (a log whose set points are named as such is drafted so
     anyway)."""
     contents, family = inventory(path)
@@ -352,8 +362,10 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
                                            closed_loop=closed_loop)
     if closed_loop and not any(is_set_point(c) for c in commands):
         raise UsageError(f"{path}: --closed-loop found no controller set point that varies "
-                         "in this log (ArduPilot DataFlash ATT DesRoll, RATE RDes, CTUN DCRt "
-                         "…, or fields named commanded, desired, setpoint or target)")
+                         "in this log (ArduPilot DataFlash ATT DesRoll, RATE RDes, CTUN DCRt …; "
+                         "PX4 ULog vehicle_rates_setpoint, vehicle_local_position_setpoint, "
+                         "tecs_status …; or fields named commanded, desired, setpoint or "
+                         "target)")
     if not commands or not sensors:   # names it does not know: every field that varies
         commands, sensors, groups = _proposals(path, family, contents, time, setup,
                                                every_field=True,

@@ -1,0 +1,128 @@
+"""A PX4 vehicle modelled from its controllers' set points: `init-profile --closed-loop` on a
+ULog pairs the rate controller's set points (`vehicle_rates_setpoint`) with the gyro rates
+(`vehicle_angular_velocity`) and the velocity set points with the estimate, each set point
+and what it measured in two topics; the motor outputs are read for the effort check only.
+ULogs written here: a quadrotor's rate and vertical-speed loops following stepped set points
+(first-order lags, noise), its four motors mixing what the loops ask; from 60 s one flight's
+yaw answers its set point at 40 % of the normal gain."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from helpers import diagnose_json
+from typer.testing import CliRunner
+
+from auvdiag_cli.cli import app
+from auvdiag_cli.simulator.writers.ulog import UlogTopic, write_ulog_file
+from auvdiag_cli.vehicle.profile import load_profile
+
+RATE_HZ = 50
+LAGS_S = np.array([0.08, 0.08, 0.15, 0.5])        # roll, pitch, yaw rate; vertical speed
+X_MIX = np.array([[-1, 1, 1], [1, -1, 1], [1, 1, -1], [-1, -1, -1]], float)
+SET_POINTS = ("roll_rate_set_point", "pitch_rate_set_point", "yaw_rate_set_point",
+              "heave_set_point")
+MEASURED = ("roll_rate", "pitch_rate", "yaw_rate", "heave")
+MOTORS = ("motor_1", "motor_2", "motor_3", "motor_4")
+
+
+def write_px4_flight(path: Path, seed: int, seconds: float = 120.0,
+                     yaw_weak_from_s: float | None = None) -> Path:
+    """A flight as PX4 logs it; the north-speed set point is unset (NaN) for its first half,
+    as PX4 leaves it while it holds a position."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, seconds, 1 / RATE_HZ)
+    steps = np.repeat(rng.uniform(-0.4, 0.4, (t.size // 100 + 1, 4)), 100, axis=0)[:t.size]
+    set_point = np.zeros_like(steps)
+    answer = np.zeros_like(steps)
+    gain = np.ones_like(steps)
+    if yaw_weak_from_s is not None:
+        gain[t >= yaw_weak_from_s, 2] = 0.4
+    for k in range(1, t.size):
+        set_point[k] = set_point[k - 1] + (steps[k] - set_point[k - 1]) / 10
+        answer[k] = answer[k - 1] + (gain[k - 1] * set_point[k - 1] - answer[k - 1]) / (
+            LAGS_S * RATE_HZ)
+    answer += rng.normal(0, 0.01, answer.shape)
+    motors = (0.55 + 0.1 * set_point[:, 3:] + 0.4 * (set_point[:, :3] - answer[:, :3]) @ X_MIX.T
+              + rng.normal(0, 0.01, (t.size, 4)))
+    us = (1_000_000 + t * 1e6).astype(np.int64)
+    north = np.where(t >= seconds / 2, 0.5 * np.sin(t / 7), np.nan)
+    write_ulog_file(path, [
+        UlogTopic("vehicle_rates_setpoint", ("roll", "pitch", "yaw", "thrust_body[2]"), us,
+                  np.column_stack([set_point[:, :3], np.full(t.size, -0.5)])),
+        UlogTopic("vehicle_angular_velocity", ("xyz[0]", "xyz[1]", "xyz[2]"), us + 100,
+                  answer[:, :3]),
+        UlogTopic("vehicle_local_position_setpoint", ("vx", "vz"), us[::5],
+                  np.column_stack([north, set_point[:, 3]])[::5]),
+        UlogTopic("vehicle_local_position", ("vx", "vz"), us[::5] + 200,
+                  np.column_stack([np.nan_to_num(north), answer[:, 3]])[::5]),
+        UlogTopic("actuator_motors", tuple(f"control[{i}]" for i in range(4)), us + 300, motors),
+        UlogTopic("actuator_armed", ("armed",), us[::50], np.ones((us[::50].size, 1))),
+    ], 900_000)
+    return path
+
+
+def invoke(*arguments: str) -> str:
+    result = CliRunner().invoke(app, list(arguments))
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+@pytest.fixture(scope="module")
+def flights(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = tmp_path_factory.mktemp("px4_flights")
+    for seed in range(4):
+        write_px4_flight(folder / f"normal_{seed}.ulg", seed)
+    write_px4_flight(folder / "later_normal.ulg", 40)
+    write_px4_flight(folder / "yaw_weak.ulg", 41, yaw_weak_from_s=60.0)
+    invoke("init-profile", str(folder / "normal_0.ulg"), "--closed-loop", "--output",
+           str(folder / "px4.toml"))
+    return folder
+
+
+def test_the_set_points_drive_the_draft_and_what_was_measured_beside_them_is_judged(
+        flights: Path):
+    profile = load_profile(flights / "px4.toml")
+    assert profile.command_names == SET_POINTS          # not the half-unset north speed
+    assert all(c.kind == "set_point" for c in profile.commands)
+    assert set(MEASURED) <= set(profile.sensor_names)
+    assert [profile.sensor(n).unit for n in MEASURED] == ["rad/s"] * 3 + ["m/s"]
+    signals = profile.sources["ulog"].signals
+    assert (signals["yaw_rate_set_point"].topic, signals["yaw_rate_set_point"].field) == (
+        "vehicle_rates_setpoint", "yaw")
+    assert (signals["yaw_rate"].topic, signals["yaw_rate"].field) == (
+        "vehicle_angular_velocity", "xyz[2]")
+    # PX4 numbers its motors from 1; they are read for the effort check only.
+    assert profile.output_names == MOTORS
+    assert signals["motor_1"].field == "control[0]"
+    assert [sorted(g.members) for g in profile.effort_groups] == [list(MOTORS)]
+    shown = invoke("inspect", str(flights / "later_normal.ulg"), "--profile",
+                   str(flights / "px4.toml"))
+    assert "MISSING" not in shown
+
+
+def test_without_closed_loop_no_set_point_is_taken_for_a_measurement(flights: Path,
+                                                                     tmp_path: Path):
+    invoke("init-profile", str(flights / "normal_0.ulg"), "--output", str(tmp_path / "p.toml"))
+    text = (tmp_path / "p.toml").read_text()
+    profile = load_profile(tmp_path / "p.toml")
+    assert profile.command_names == MOTORS and not profile.output_names
+    assert set(MEASURED) <= set(profile.sensor_names)
+    assert "_setpoint" not in text and "thrust_body" not in text
+
+
+@pytest.mark.slow    # trains a model
+def test_a_loop_that_stops_following_its_set_point_is_found_where_it_began(flights: Path):
+    model = flights / "model"
+    invoke("train", *(str(flights / f"normal_{s}.ulg") for s in range(4)), "--profile",
+           str(flights / "px4.toml"), "--output", str(model), "--iterations-scale", "0.02",
+           "--hidden", "8", "--predictor", "linear")
+    code, report = diagnose_json(flights / "later_normal.ulg", "--profile",
+                                 str(flights / "px4.toml"), "--model", str(model))
+    assert (code, report["verdict"]) == (0, "normal"), report
+    code, report = diagnose_json(flights / "yaw_weak.ulg", "--profile",
+                                 str(flights / "px4.toml"), "--model", str(model))
+    assert (code, report["verdict"]) == (1, "fault"), report
+    assert report["b"]["yaw_rate"] == 1
+    assert [s for s, bit in report["b"].items() if bit] == ["yaw_rate"]
+    assert 58.0 <= report["onset_s"] <= 62.0 and 60.0 <= report["detected_at_s"] <= 64.0
