@@ -12,6 +12,7 @@ import numpy as np
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
 from adapters.fieldpath import field_getter, field_of, resolves
 from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
+from adapters.recognise import is_number
 from adapters.ros_words import WordsRead, word_paths
 from adapters.signals import (
     Damage,
@@ -39,6 +40,15 @@ INSTANCE_FIELDS = ("I", "Instance", "instance")
 FIRST_INSTANCE = "0"
 # A topic's messages as columns: field path → one value per message.
 ColumnSource = Callable[[str], np.ndarray]
+
+
+def numbers_written_as_text(column: np.ndarray) -> np.ndarray | None:
+    """A column of texts that all read as numbers as those numbers (a CSV column that another
+    signal reads through a `values` map comes as its texts); None for any other column."""
+    cells = column.tolist()
+    if column.dtype.kind != "O" or not all(isinstance(c, str) and is_number(c) for c in cells):
+        return None
+    return np.array([float(c) for c in cells], np.float64)
 
 
 class _Extractor:
@@ -279,10 +289,14 @@ class SignalCollector:
                 raise LogError(self.path, unresolved(topic, wanted, extractor.name,
                                                      fields)) from None
             if numbers.dtype.kind not in "biuf" and not extractor.source.mapped:
-                if self.sources.tentative:
+                written = numbers_written_as_text(numbers)
+                if written is None and self.sources.tentative:
                     continue
-                raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
-                                          f"holds {numbers.dtype}, not numbers")
+                if written is None:
+                    raise LogError(self.path, f"{topic} field {wanted!r} (signal "
+                                              f"{extractor.name}) holds {numbers.dtype}, not "
+                                              "numbers")
+                numbers = written
             if filters and not numbers.size and rows:
                 key = filters[0][0]
                 self.filtered_out[extractor.name] = sorted(

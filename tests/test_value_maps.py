@@ -92,6 +92,29 @@ def test_a_helm_state_reads_from_an_alog_and_a_csv_column(tmp_path):
     assert read_log(table, {"csv": sources}).series[OPERATING].values.tolist() == expected
 
 
+def test_a_csv_column_read_through_a_map_and_as_a_number_gives_each_its_values(tmp_path):
+    """One mode column, the operating flag through a map and a signal of its own: each gets
+    what it asks for (the number one was refused as "not numbers" before); a text column
+    read as a number is still refused."""
+    from auvdiag_errors import LogError
+
+    table = tmp_path / "flight.csv"
+    table.write_text("t,mode,helm\n" + "".join(
+        f"{k},{mode},{'DRIVE' if mode else 'PARK'}\n" for k, mode in enumerate([0, 0, 4, 4, 10])))
+    sources = LogSources({OPERATING: FieldSource("mode", "mode", values=((0, 0.0),),
+                                                 otherwise=1.0),
+                          "mode_number": FieldSource("mode", "mode")},
+                         time=TimeColumn("t", "s"))
+    series = read_log(table, {"csv": sources}).series
+    assert series[OPERATING].values.tolist() == [0, 0, 1, 1, 1]
+    assert series["mode_number"].values.tolist() == [0, 0, 4, 4, 10]
+    both = LogSources({OPERATING: FieldSource("helm", "helm", values=(("DRIVE", 1.0),),
+                                              otherwise=0.0),
+                       "helm_number": FieldSource("helm", "helm")}, time=TimeColumn("t", "s"))
+    with pytest.raises(LogError, match="helm.*not numbers"):
+        read_log(table, {"csv": both})
+
+
 def test_a_mode_number_and_every_other_read_from_a_telemetry_log(tmp_path):
     """ArduPlane's heartbeat says its mode by number (10 AUTO, 15 GUIDED, 0 MANUAL)."""
     vehicle = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
