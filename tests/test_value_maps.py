@@ -111,7 +111,7 @@ def test_a_csv_column_read_through_a_map_and_as_a_number_gives_each_its_values(t
     both = LogSources({OPERATING: FieldSource("helm", "helm", values=(("DRIVE", 1.0),),
                                               otherwise=0.0),
                        "helm_number": FieldSource("helm", "helm")}, time=TimeColumn("t", "s"))
-    with pytest.raises(LogError, match="helm.*not numbers"):
+    with pytest.raises(LogError, match=r"helm.*not numbers"):
         read_log(table, {"csv": both})
 
 
