@@ -112,8 +112,9 @@ def init_profile(
     ] = None,
     closed_loop: Annotated[bool, typer.Option(
         "--closed-loop", help="Draft a model of the closed loop from an ArduPilot DataFlash "
-                              "log or a PX4 ULog: the controller's set points (ATT DesRoll, "
-                              "DesPitch; RATE RDes, PDes, YDes; CTUN DCRt; PX4's "
+                              "or telemetry log or a PX4 ULog: the controller's set points "
+                              "(ATT DesRoll, DesPitch; RATE RDes, PDes, YDes; CTUN DCRt; "
+                              "NAV_CONTROLLER_OUTPUT nav_roll, nav_pitch; PX4's "
                               "vehicle_rates_setpoint, vehicle_local_position_setpoint "
                               "velocities, tecs_status height rate and airspeed) drive the "
                               "model, what was measured beside each is a sensor, the motor "

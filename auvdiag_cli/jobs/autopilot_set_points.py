@@ -1,6 +1,7 @@
 """Autopilots' set points as a drafted model of the closed loop: each set point a
-controller logs beside what it measured (ArduPilot in one DataFlash message, PX4 in two
-ULog topics), and the attitude loops whose gain the change test judges."""
+controller logs beside what it measured (ArduPilot in one DataFlash message or two
+telemetry messages, PX4 in two ULog topics), and the attitude loops whose gain the change
+test judges."""
 
 from dataclasses import dataclass, replace
 
@@ -14,13 +15,18 @@ DEGREES = 0.017453292519943295
 
 @dataclass(frozen=True)
 class SetPointPair:
-    """A set point and what was measured beside it, each (topic, field), in one unit once
-    scaled."""
+    """A set point and what was measured beside it, each (topic, field), and each one's
+    scale to the one SI unit they share."""
 
     set_point: tuple[str, str]
     measured: tuple[str, str]
     scale: float
     unit: str
+    measured_scale: float | None = None     # None: the set point's
+
+    def scale_of(self, end: tuple[str, str]) -> float:
+        return self.scale if end == self.set_point or self.measured_scale is None \
+            else self.measured_scale
 
 
 def _ardupilot(message: str, desired: str, measured: str, scale: float, unit: str
@@ -45,6 +51,13 @@ SET_POINT_PAIRS = {
         _ardupilot("RATE", "PDes", "P", DEGREES, "rad/s"),
         _ardupilot("RATE", "YDes", "Y", DEGREES, "rad/s"),
         _ardupilot("CTUN", "DCRt", "CRt", -0.01, "m/s")),
+    # ArduPilot's telemetry: the attitude its controller targets (NAV_CONTROLLER_OUTPUT, in
+    # degrees; Copter, Sub and Plane stream it) beside the attitude (ATTITUDE, rad).
+    "mavlink": (
+        SetPointPair(("NAV_CONTROLLER_OUTPUT", "nav_roll"), ("ATTITUDE", "roll"), DEGREES,
+                     "rad", 1.0),
+        SetPointPair(("NAV_CONTROLLER_OUTPUT", "nav_pitch"), ("ATTITUDE", "pitch"), DEGREES,
+                     "rad", 1.0)),
     # PX4 logs the rate controller's set point and the filtered gyro rates (FRD, rad/s), the
     # position controller's velocity set point and the estimate (NED, m/s: vz down
     # positive), and a fixed wing's TECS its height rate and airspeed. PX4 logs its
@@ -63,7 +76,11 @@ SET_POINT_PAIRS = {
 # The attitude loops whose gain the change test can judge (`[[tracking]]`): set point ->
 # (what was measured beside it, its rate), each (message, field).
 ARDUPILOT_LOOPS = {("ATT", "DesRoll"): (("ATT", "Roll"), ("RATE", "R")),
-                   ("ATT", "DesPitch"): (("ATT", "Pitch"), ("RATE", "P"))}
+                   ("ATT", "DesPitch"): (("ATT", "Pitch"), ("RATE", "P")),
+                   ("NAV_CONTROLLER_OUTPUT", "nav_roll"): (("ATTITUDE", "roll"),
+                                                           ("ATTITUDE", "rollspeed")),
+                   ("NAV_CONTROLLER_OUTPUT", "nav_pitch"): (("ATTITUDE", "pitch"),
+                                                            ("ATTITUDE", "pitchspeed"))}
 
 
 def first_instance(topic: TopicInfo) -> tuple[tuple[str, str], ...]:
@@ -87,16 +104,22 @@ def set_point_pairs(contents: LogInventory, family: str) -> list[tuple[str, Fiel
 
 def pairing(source: FieldSource, family: str) -> tuple[float, str, str] | None:
     """The scale to SI, the unit and the drafted name of a set point or what was measured
-    beside it (PX4's named as what was measured, the set point with "_set_point"; others by
-    their message and field); None for any other field."""
+    beside it; None for any other field."""
     for pair in SET_POINT_PAIRS.get(family, ()):
-        measured = FieldSource(*pair.measured)
-        for end, suffix in ((pair.set_point, "_set_point"), (pair.measured, "")):
+        for end in (pair.set_point, pair.measured):
             if end == (source.topic, source.field):
-                named = px4_name(measured)
-                return pair.scale, pair.unit, (f"{named}{suffix}" if named is not None else
-                                               signal_name("", f"{end[0]}_{end[1]}"))
+                return pair.scale_of(end), pair.unit, _pair_name(pair, end, family)
     return None
+
+
+def _pair_name(pair: SetPointPair, end: tuple[str, str], family: str) -> str:
+    """PX4's named as what was measured, the set point with "_set_point"; a telemetry
+    message's by its field (nav_roll, roll); a DataFlash message's by message and field
+    (att_desroll: ATT and RATE both log a roll)."""
+    measured = px4_name(FieldSource(*pair.measured)) if family == "ulog" else None
+    if measured is not None:
+        return measured + ("_set_point" if end == pair.set_point else "")
+    return signal_name("", end[1] if family == "mavlink" else f"{end[0]}_{end[1]}")
 
 
 def set_point_proposal(name: str, source: FieldSource, scale: float, unit: str) -> Proposal:
@@ -105,7 +128,8 @@ def set_point_proposal(name: str, source: FieldSource, scale: float, unit: str) 
 
 
 def attitude_loops(commands: list[Proposal], sensors: list[Proposal]) -> list[tuple[str, str, str]]:
-    """(set point, measured, rate) of each ArduPilot attitude loop the draft holds whole."""
+    """(set point, measured, rate) of each ArduPilot attitude loop the draft holds whole
+    (`ARDUPILOT_LOOPS`)."""
     named = {(p.source.topic, p.source.field): p.name for p in [*commands, *sensors]}
     return [(named[point], named[measured], named[rate])
             for point, (measured, rate) in ARDUPILOT_LOOPS.items()

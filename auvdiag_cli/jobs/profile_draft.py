@@ -363,6 +363,7 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
     if closed_loop and not any(is_set_point(c) for c in commands):
         raise UsageError(f"{path}: --closed-loop found no controller set point that varies "
                          "in this log (ArduPilot DataFlash ATT DesRoll, RATE RDes, CTUN DCRt …; "
+                         "ArduPilot telemetry NAV_CONTROLLER_OUTPUT nav_roll, nav_pitch; "
                          "PX4 ULog vehicle_rates_setpoint, vehicle_local_position_setpoint, "
                          "tecs_status …; or fields named commanded, desired, setpoint or "
                          "target)")

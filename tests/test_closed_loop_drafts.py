@@ -1,16 +1,20 @@
-"""A PX4 vehicle modelled from its controllers' set points: `init-profile --closed-loop` on a
-ULog pairs the rate controller's set points (`vehicle_rates_setpoint`) with the gyro rates
-(`vehicle_angular_velocity`) and the velocity set points with the estimate, each set point
-and what it measured in two topics; the motor outputs are read for the effort check only.
+"""Vehicles modelled from their controllers' set points, drafted from logs whose set point and
+measurement sit in two messages. `init-profile --closed-loop` on a PX4 ULog pairs the rate
+controller's set points (`vehicle_rates_setpoint`) with the gyro rates
+(`vehicle_angular_velocity`) and the velocity set points with the estimate; on an ArduPilot
+telemetry log, the attitude its controller targets (`NAV_CONTROLLER_OUTPUT`, degrees) with
+`ATTITUDE` (rad). The motor outputs are read for the effort check only.
 ULogs written here: a quadrotor's rate and vertical-speed loops following stepped set points
 (first-order lags, noise), its four motors mixing what the loops ask; from 60 s one flight's
-yaw answers its set point at 40 % of the normal gain."""
+yaw answers its set point at 40 % of the normal gain. Telemetry logs written by pymavlink."""
 
 from pathlib import Path
 
 import numpy as np
 import pytest
 from helpers import diagnose_json
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
@@ -126,3 +130,60 @@ def test_a_loop_that_stops_following_its_set_point_is_found_where_it_began(fligh
     assert report["b"]["yaw_rate"] == 1
     assert [s for s, bit in report["b"].items() if bit] == ["yaw_rate"]
     assert 58.0 <= report["onset_s"] <= 62.0 and 60.0 <= report["detected_at_s"] <= 64.0
+
+
+def write_telemetry(path: Path, seed: int, seconds: float = 60.0) -> Path:
+    """An ArduPilot vehicle's telemetry as a ground station records it (pymavlink): the
+    targeted roll and pitch at 2 Hz, the attitude at 10 Hz following them, four outputs, an
+    armed heartbeat each second."""
+    rng = np.random.default_rng(seed)
+    vehicle = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    t = np.arange(0, seconds, 0.1)
+    target = np.repeat(rng.uniform(-15, 15, (t.size // 30 + 1, 2)), 30, axis=0)[:t.size]
+    attitude = np.zeros_like(target)
+    for k in range(1, t.size):
+        attitude[k] = attitude[k - 1] + (np.radians(target[k - 1]) - attitude[k - 1]) / 4
+    rates = np.gradient(attitude, 0.1, axis=0)
+    frames = []
+    for k, time in enumerate(t):
+        stamp = int(1_700_000_000e6 + time * 1e6)
+        if k % 10 == 0:
+            frames.append((stamp, vehicle.heartbeat_encode(12, 3, 209, 19, 4)))
+        if k % 5 == 0:
+            frames.append((stamp, vehicle.nav_controller_output_encode(
+                *target[k], 0, 0, 0, 0.0, 0.0, 0.0)))
+        frames.append((stamp, vehicle.attitude_encode(int(time * 1000), *attitude[k], 0.0,
+                                                      *rates[k], 0.0)))
+        outputs = 1500 + (200 * np.array([1, -1, 1, -1]) * (attitude[k, 0] - attitude[k, 1])
+                          + rng.normal(0, 5, 4)).astype(int)
+        frames.append((stamp, vehicle.servo_output_raw_encode(int(time * 1e6), 0, *outputs,
+                                                              1500, 1500, 1500, 1500)))
+    path.write_bytes(b"".join(stamp.to_bytes(8, "big") + bytes(frame.pack(vehicle))
+                              for stamp, frame in frames))
+    return path
+
+
+def test_a_telemetry_log_drafts_the_attitude_loops_from_its_targets(tmp_path: Path):
+    log = write_telemetry(tmp_path / "dive.tlog", 3)
+    invoke("init-profile", str(log), "--closed-loop", "--output", str(tmp_path / "sub.toml"))
+    profile = load_profile(tmp_path / "sub.toml")
+    assert profile.command_names == ("nav_roll", "nav_pitch")
+    assert all(c.kind == "set_point" for c in profile.commands)
+    signals = profile.sources["mavlink"].signals
+    # The targets in degrees, the attitude in radians: each in the one unit they share.
+    assert signals["nav_roll"].scale == pytest.approx(np.radians(1.0))
+    assert signals["roll"].scale == 1.0 and profile.sensor("roll").unit == "rad"
+    assert {(t.set_point, t.measured, t.rate) for t in profile.tracking} == {
+        ("nav_roll", "roll", "rollspeed"), ("nav_pitch", "pitch", "pitchspeed")}
+    assert len(profile.output_names) == 4
+    assert "MISSING" not in invoke("inspect", str(log), "--profile", str(tmp_path / "sub.toml"))
+
+
+@pytest.mark.shared_data("ardusub")
+def test_a_closed_loop_draft_of_a_real_ardusub_telemetry_log(tmp_path: Path):
+    log = SHARED_DATA / "ardusub" / "small.tlog"
+    invoke("init-profile", str(log), "--closed-loop", "--output", str(tmp_path / "sub.toml"))
+    profile = load_profile(tmp_path / "sub.toml")
+    assert profile.command_names == ("nav_roll", "nav_pitch")
+    assert {"roll", "pitch", "rollspeed", "pitchspeed"} <= set(profile.sensor_names)
+    assert "MISSING" not in invoke("inspect", str(log), "--profile", str(tmp_path / "sub.toml"))
