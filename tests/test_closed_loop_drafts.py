@@ -6,7 +6,8 @@ telemetry log, the attitude its controller targets (`NAV_CONTROLLER_OUTPUT`, deg
 `ATTITUDE` (rad). The motor outputs are read for the effort check only.
 ULogs written here: a quadrotor's rate and vertical-speed loops following stepped set points
 (first-order lags, noise), its four motors mixing what the loops ask; from 60 s one flight's
-yaw answers its set point at 40 % of the normal gain. Telemetry logs written by pymavlink."""
+yaw answers its set point at 40 % of the normal gain. Telemetry logs written by pymavlink,
+mavros bags by rosbags."""
 
 from pathlib import Path
 
@@ -18,6 +19,7 @@ from shared_data import SHARED_DATA
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
+from auvdiag_cli.simulator.writers.ros import RosMessages, _assign, _open_rosbag_writer
 from auvdiag_cli.simulator.writers.ulog import UlogTopic, write_ulog_file
 from auvdiag_cli.vehicle.profile import load_profile
 
@@ -53,7 +55,7 @@ def write_px4_flight(path: Path, seed: int, seconds: float = 120.0,
     north = np.where(t >= seconds / 2, 0.5 * np.sin(t / 7), np.nan)
     write_ulog_file(path, [
         UlogTopic("vehicle_rates_setpoint", ("roll", "pitch", "yaw", "thrust_body[2]"), us,
-                  np.column_stack([set_point[:, :3], np.full(t.size, -0.5)])),
+                  np.column_stack([set_point[:, :3], -0.5 - 0.1 * set_point[:, 3]])),
         UlogTopic("vehicle_angular_velocity", ("xyz[0]", "xyz[1]", "xyz[2]"), us + 100,
                   answer[:, :3]),
         UlogTopic("vehicle_local_position_setpoint", ("vx", "vz"), us[::5],
@@ -187,3 +189,73 @@ def test_a_closed_loop_draft_of_a_real_ardusub_telemetry_log(tmp_path: Path):
     assert profile.command_names == ("nav_roll", "nav_pitch")
     assert {"roll", "pitch", "rollspeed", "pitchspeed"} <= set(profile.sensor_names)
     assert "MISSING" not in invoke("inspect", str(log), "--profile", str(tmp_path / "sub.toml"))
+
+
+ATTITUDE_TARGET = ("std_msgs/Header header\nuint8 type_mask\ngeometry_msgs/Quaternion "
+                   "orientation\ngeometry_msgs/Vector3 body_rate\nfloat32 thrust\n")
+
+
+def write_mavros_bag(path: Path, namespace: str, seed: int) -> Path:
+    """A PX4 vehicle as mavros records it under ``namespace``: ATTITUDE_TARGET's body rates
+    at 50 Hz, the IMU's rates following them, the motor outputs, the armed state."""
+    from rosbags.typesys import get_types_from_msg
+
+    rng = np.random.default_rng(seed)
+    types = {"setpoint_raw/target_attitude": "mavros_msgs/msg/AttitudeTarget",
+             "imu/data": "sensor_msgs/msg/Imu", "rc/out": "mavros_msgs/msg/RCOut",
+             "state": "mavros_msgs/msg/State"}
+    messages = RosMessages(True, {})
+    messages.store.register(get_types_from_msg(ATTITUDE_TARGET, types[
+        "setpoint_raw/target_attitude"]))
+    t = np.arange(0, 30, 0.02)
+    asked = np.repeat(rng.uniform(-0.5, 0.5, (t.size // 50 + 1, 3)), 50, axis=0)[:t.size]
+    rates = np.zeros_like(asked)
+    for k in range(1, t.size):
+        rates[k] = rates[k - 1] + (asked[k - 1] - rates[k - 1]) / 4
+    with _open_rosbag_writer(path, "bag") as writer:
+        connections = {name: writer.add_connection(f"{namespace}/mavros/{name}", msgtype,
+                                                   typestore=messages.store)
+                       for name, msgtype in types.items()}
+        for k, time in enumerate(t):
+            stamp = 1_700_000_000 * 10**9 + int(time * 1e9)
+            fields = {"setpoint_raw/target_attitude": {f"body_rate.{a}": asked[k, i]
+                                                       for i, a in enumerate("xyz")},
+                      "imu/data": {f"angular_velocity.{a}": rates[k, i] + rng.normal(0, 0.01)
+                                   for i, a in enumerate("xyz")},
+                      "rc/out": {f"channels[{i}]": 1600 + int(200 * mix + rng.normal(0, 20))
+                                 for i, mix in enumerate(X_MIX @ asked[k])},
+                      "state": {"armed": 1.0}}
+            for name, values in fields.items():
+                message = messages.zero(types[name])
+                for field, value in values.items():
+                    _assign(message, field, value)
+                writer.write(connections[name], stamp, messages.store.serialize_ros1(
+                    message, types[name]))
+    return path
+
+
+def test_a_mavros_bag_drafts_the_attitude_target_beside_the_imu(tmp_path: Path):
+    """Under a namespace, as a vehicle among several records it. Before, a mavros bag's
+    draft had no command it recognised and took its headers' stamps for commands."""
+    log = write_mavros_bag(tmp_path / "flight.bag", "/uav1", 5)
+    invoke("init-profile", str(log), "--closed-loop", "--output", str(tmp_path / "p.toml"))
+    profile = load_profile(tmp_path / "p.toml")
+    axes = [f"angular_velocity_{a}" for a in "xyz"]
+    assert profile.command_names == tuple(f"{a}_set_point" for a in axes)
+    assert all(c.kind == "set_point" for c in profile.commands)
+    assert set(axes) <= set(profile.sensor_names)
+    signals = profile.sources["ros"].signals
+    assert (signals["angular_velocity_z_set_point"].topic,
+            signals["angular_velocity_z_set_point"].field) == (
+        "/uav1/mavros/setpoint_raw/target_attitude", "body_rate.z")
+    # mavros's rc/out is the autopilot's outputs, numbered as ArduPilot numbers them.
+    assert profile.output_names == ("servo1", "servo2", "servo3", "servo4")
+    assert (signals["servo1"].field, signals["servo1"].scale) == ("channels[0]", 0.0025)
+    assert "MISSING" not in invoke("inspect", str(log), "--profile", str(tmp_path / "p.toml"))
+    # Without it, the outputs are the commands; the attitude target is neither a measurement
+    # nor an actuator, and no header (sequence number, stamp) is either.
+    invoke("init-profile", str(log), "--output", str(tmp_path / "plain.toml"))
+    plain = load_profile(tmp_path / "plain.toml")
+    assert plain.command_names == ("servo1", "servo2", "servo3", "servo4")
+    assert set(plain.sensor_names) == set(axes)
+    assert "target_attitude" not in (tmp_path / "plain.toml").read_text()

@@ -1,7 +1,7 @@
 """Autopilots' set points as a drafted model of the closed loop: each set point a
 controller logs beside what it measured (ArduPilot in one DataFlash message or two
-telemetry messages, PX4 in two ULog topics), and the attitude loops whose gain the change
-test judges."""
+telemetry messages, PX4 in two ULog topics, mavros in two ROS topics), and the attitude
+loops whose gain the change test judges."""
 
 from dataclasses import dataclass, replace
 
@@ -40,6 +40,7 @@ def _px4(set_point: str, measured: str, pair: tuple[str, str], unit: str) -> Set
 
 RATES_SP, RATES = "vehicle_rates_setpoint", "vehicle_angular_velocity"
 POSITION_SP, POSITION = "vehicle_local_position_setpoint", "vehicle_local_position"
+MAVROS_SP = "/mavros/setpoint_raw/"
 SET_POINT_PAIRS = {
     # ArduPilot's controllers (Copter, Sub, Plane's ATT and RATE): ATT in degrees, RATE in
     # deg/s, CTUN's climb rates in cm/s, negated like a drafted climb (down positive, as a
@@ -72,6 +73,15 @@ SET_POINT_PAIRS = {
         _px4("tecs_status", "tecs_status", ("height_rate_setpoint", "height_rate"), "m/s"),
         _px4("tecs_status", "tecs_status", ("true_airspeed_sp", "true_airspeed_filtered"),
              "m/s")),
+    # mavros (under any namespace): the attitude controller's body-rate set point
+    # (ATTITUDE_TARGET, as PX4 streams it) beside the IMU's rates, and the local velocity
+    # set point beside the estimate's (both in mavros's ENU / FLU frames).
+    "ros": tuple(SetPointPair((f"{MAVROS_SP}target_attitude", f"body_rate.{axis}"),
+                              ("/mavros/imu/data", f"angular_velocity.{axis}"), 1.0, "rad/s")
+                 for axis in "xyz") + tuple(
+        SetPointPair((f"{MAVROS_SP}target_local", f"velocity.{axis}"),
+                     ("/mavros/local_position/velocity_local", f"twist.linear.{axis}"), 1.0,
+                     "m/s") for axis in "xyz"),
 }
 # The attitude loops whose gain the change test can judge (`[[tracking]]`): set point ->
 # (what was measured beside it, its rate), each (message, field).
@@ -90,16 +100,27 @@ def first_instance(topic: TopicInfo) -> tuple[tuple[str, str], ...]:
 
 def set_point_pairs(contents: LogInventory, family: str) -> list[tuple[str, FieldSource]]:
     """("set_point", source) and ("sensor", source) of each set point the log holds beside
-    what was measured (`SET_POINT_PAIRS`)."""
+    what was measured (`SET_POINT_PAIRS`; a ROS log's under any one namespace)."""
     topics = {topic.name: topic for topic in contents.topics}
     found: list[tuple[str, FieldSource]] = []
     for pair in SET_POINT_PAIRS.get(family, ()):
-        ends = [(kind, topics.get(topic), field) for kind, (topic, field)
-                in (("set_point", pair.set_point), ("sensor", pair.measured))]
-        if all(topic is not None and field in topic.fields for _, topic, field in ends):
-            found += [(kind, FieldSource(topic.name, field, where=first_instance(topic)))
-                      for kind, topic, field in ends if topic is not None]
+        for prefix in {_namespace(name, pair.set_point[0], family) for name in topics} - {None}:
+            ends = [(kind, topics.get(f"{prefix}{topic}"), field) for kind, (topic, field)
+                    in (("set_point", pair.set_point), ("sensor", pair.measured))]
+            if all(topic is not None and field in topic.fields for _, topic, field in ends):
+                found += [(kind, FieldSource(topic.name, field, where=first_instance(topic)))
+                          for kind, topic, field in ends if topic is not None]
     return found
+
+
+def _namespace(name: str, topic: str, family: str) -> str | None:
+    """What ``name`` holds before ``topic`` (a ROS namespace: "/uav1"), "" where it is
+    ``topic``; None where it is another topic."""
+    if name == topic:
+        return ""
+    if family == "ros" and name.endswith(topic) and name[:-len(topic)].startswith("/"):
+        return name[:-len(topic)]
+    return None
 
 
 def pairing(source: FieldSource, family: str) -> tuple[float, str, str] | None:
@@ -107,16 +128,17 @@ def pairing(source: FieldSource, family: str) -> tuple[float, str, str] | None:
     beside it; None for any other field."""
     for pair in SET_POINT_PAIRS.get(family, ()):
         for end in (pair.set_point, pair.measured):
-            if end == (source.topic, source.field):
+            if source.field == end[1] and _namespace(source.topic, end[0], family) is not None:
                 return pair.scale_of(end), pair.unit, _pair_name(pair, end, family)
     return None
 
 
 def _pair_name(pair: SetPointPair, end: tuple[str, str], family: str) -> str:
-    """PX4's named as what was measured, the set point with "_set_point"; a telemetry
-    message's by its field (nav_roll, roll); a DataFlash message's by message and field
-    (att_desroll: ATT and RATE both log a roll)."""
-    measured = px4_name(FieldSource(*pair.measured)) if family == "ulog" else None
+    """PX4's and mavros's named as what was measured, the set point with "_set_point"; a
+    telemetry message's by its field (nav_roll, roll); a DataFlash message's by message and
+    field (att_desroll: ATT and RATE both log a roll)."""
+    measured = px4_name(FieldSource(*pair.measured)) if family == "ulog" else \
+        signal_name("", pair.measured[1]) if family == "ros" else None
     if measured is not None:
         return measured + ("_set_point" if end == pair.set_point else "")
     return signal_name("", end[1] if family == "mavlink" else f"{end[0]}_{end[1]}")

@@ -32,6 +32,7 @@ from auvdiag_cli.jobs.autopilot_set_points import (
     set_point_pairs,
     set_point_proposal,
 )
+from auvdiag_cli.jobs.draft_names import described, draft_name
 from auvdiag_cli.jobs.draft_text import (
     NEUTRAL,
     DraftGroup,
@@ -43,13 +44,12 @@ from auvdiag_cli.jobs.draft_text import (
 )
 from auvdiag_cli.jobs.moos_draft import PID_OUTPUT, label, pid_output
 from auvdiag_cli.jobs.operating_draft import draft_operating
-from auvdiag_cli.jobs.px4_names import px4_name
 from auvdiag_errors import LogError, UsageError
 
 PWM_SCALE, PWM_CENTRE_US = 0.0025, 1500.0       # ArduPilot: 1500 µs neutral, ±400 µs full
 COMMAND_NAME = re.compile(r"(servo\d+_raw|^C\d+$|pwm|thrust|motor|throttle|cmd|command)",
                           re.IGNORECASE)
-COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU)",
+COMMAND_TOPIC = re.compile(r"(cmd|command|thrust|motor|actuator|servo|pwm|RCOU|rc/out$)",
                            re.IGNORECASE)
 SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_velocity\.[xyz]|"
                          r"^w_|gyro|climb|^CRt$|depth|heave|twist\.linear\.[xyz]|velocity|speed|"
@@ -58,11 +58,14 @@ SENSOR_NAME = re.compile(r"(rollspeed|pitchspeed|yawspeed|^Gyr[XYZ]$|angular_vel
 # Estimator and bookkeeping fields whose names look like sensors but are not measurements.
 NOT_A_SENSOR = re.compile(r"(variance|covariance|^req_|_count$|status|error|^RAW_|^SCALED_IMU|"
                           r"^EKF_|^REQUEST_|^PARAM|^DESIRED_)", re.IGNORECASE)
+# A ROS message's header (its sequence number and stamp) says when, never what.
+HEADER_FIELD = re.compile(r"header\.")
 # A set point left unset (NaN: PX4 holding a position sets no velocity) more often than
 # this drives no model.
 MOSTLY_UNSET = 0.1
 # A topic of a controller's set points (PX4's vehicle_rates_setpoint, mavros's setpoint_raw):
-# its fields are what was asked, never what was measured.
+# its fields are what was asked, never what was measured nor what an actuator was told
+# (its thrust).
 SET_POINT_TOPIC = re.compile(r"setpoint|set_point", re.IGNORECASE)
 # A clock's column, its unit perhaps beside it as CSV exports write it ("time (s)", "t [ms]").
 TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
@@ -98,13 +101,14 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
     ``closed_loop``: an autopilot's set points and what was measured beside them too."""
     found = set_point_pairs(contents, family) if closed_loop else []
     for topic in contents.topics:
-        if topic.count < 2:
-            continue
+        if topic.count < 2 or (family != "csv" and SET_POINT_TOPIC.search(topic.name)):
+            continue                     # a set point is drafted only beside its measurement
         where = first_instance(topic)
         # A CSV column is a name, whatever it holds; other fields are paths into a message
         # (a damaged log's field names may not be).
         fields = (topic.fields or (topic.name,)) if family == "csv" else [
             field for field in topic.fields if is_field_path(field)
+            and not HEADER_FIELD.match(field)
             and (family != "moos" or field not in (MOOS_SOURCE, MOOS_SOURCE_AUX))]
         for field in fields:
             named = label(topic.name, field, family)
@@ -119,19 +123,10 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
                 found += [("command", FieldSource(topic.name, path, where=where))
                           for path in elements]
             elif not TIME_NAME.match(field) and (every_field or SENSOR_NAME.search(
-                    _described(topic.name, named, family))) and not (
-                    NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)
-                    or (family != "csv" and SET_POINT_TOPIC.search(topic.name))):
+                    described(topic.name, named, family))) and not (
+                    NOT_A_SENSOR.search(named) or NOT_A_SENSOR.search(topic.name)):
                 found.append(("sensor", FieldSource(topic.name, field, where=where)))
     return found
-
-
-def _described(topic: str, named: str, family: str) -> str:
-    """What a field's name says: a PX4 topic's fields (``xyz[2]``) say it with the topic's
-    (``vehicle_angular_velocity``) and the name the draft gives it (`px4_name`)."""
-    if family != "ulog":
-        return named
-    return " ".join(filter(None, (f"{topic}.{named}", px4_name(FieldSource(topic, named)))))
 
 
 def guess_time_column(contents: LogInventory, path: Path) -> TimeColumn | None:
@@ -229,6 +224,9 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
            for kind, source in _candidates(contents, family, every_field, closed_loop)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
+    # Only where the set point and what was measured beside it are both in the log.
+    pairs = {(s.topic, s.field) for _, s in set_point_pairs(contents, family)} \
+        if closed_loop else set()
     roles = output_roles(setup, sorted({c for kind, source in raw.values()
                                         if kind == "command"
                                         and (c := output_channel(source)) is not None}))
@@ -240,9 +238,9 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
                 kind == "set_point" and np.isnan(series).mean() > MOSTLY_UNSET):
             continue                   # not in the log, never moves, or not set (PX4: NaN)
         called = label(source.topic, source.field, family)
-        name = (family == "ulog" and px4_name(source)) or signal_name(source.topic, called)
+        name = draft_name(source, called, family)
         channel = output_channel(source) if kind == "command" else None
-        paired = pairing(source, family) if closed_loop else None
+        paired = pairing(source, family) if (source.topic, source.field) in pairs else None
         if paired is not None:
             name = paired[2]
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
@@ -257,7 +255,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
             proposal = (family == "moos" and pid_output(source, series)) or _command(
                 name, source, series, guessed)
         else:
-            sensors.append(_sensor(name, _described(source.topic, called, family), source,
+            sensors.append(_sensor(name, described(source.topic, called, family), source,
                                    series, paired, setup))
             continue
         if proposal is not None:
