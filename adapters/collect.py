@@ -1,28 +1,26 @@
 """Turn decoded messages into `Signals`: one piece of code shared by every adapter."""
 
-import operator
 from array import array
-from collections.abc import Callable, Iterable, Sequence
-from functools import cached_property, partial
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from adapters.extractor import ColumnSource, Extractor
 from adapters.fieldnames import closest_first, object_field_paths, unresolved
-from adapters.fieldpath import field_getter, field_of, resolves
+from adapters.fieldpath import field_of, resolves
 from adapters.namespace import ROOT, Resolution, naming_hint, normalised, resolve, under
-from adapters.recognise import is_number
 from adapters.ros_words import WordsRead, word_paths
 from adapters.signals import (
     Damage,
-    FieldSource,
     LogSources,
     SegmentMarker,
     Series,
     Signals,
     as_text,
     fallback_name,
+    readable_column,
 )
 from adapters.timebase import MAX_TIME_NS, spikes
 from auvdiag_errors import LogError
@@ -31,78 +29,6 @@ from auvdiag_errors import LogError
 MISSING_SIGNALS = "no messages for signal(s)"
 # How far a container's recorded start or end may lie outside the data it holds.
 MAX_LEAD_NS = 24 * 3600 * 1_000_000_000
-# Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one; a
-# ULog topic's multi id is read as `instance`).
-INSTANCE_FIELDS = ("I", "Instance", "instance")
-# The instance a message without an instance field is (ArduPilot before 4.1 logged its first
-# IMU, BARO, MAG as IMU, BARO, MAG with no `I` field and the others as IMU2, IMU3...): a
-# `where` asking for this instance reads such messages whole.
-FIRST_INSTANCE = "0"
-# A topic's messages as columns: field path → one value per message.
-ColumnSource = Callable[[str], np.ndarray]
-
-
-def numbers_written_as_text(column: np.ndarray) -> np.ndarray | None:
-    """A column of texts that all read as numbers as those numbers (a CSV column that another
-    signal reads through a `values` map comes as its texts); None for any other column."""
-    cells = column.tolist()
-    if column.dtype.kind != "O" or not all(isinstance(c, str) and is_number(c) for c in cells):
-        return None
-    return np.array([float(c) for c in cells], np.float64)
-
-
-class _Extractor:
-    def __init__(self, name: str, source: FieldSource) -> None:
-        self.name, self.source = name, source
-
-    # Made at the first message read whole: a CSV column is a name, not a path.
-    @cached_property
-    def get(self) -> Callable[[Any], Any]:
-        return field_getter(self.source.field)
-
-    @cached_property
-    def where(self) -> list[tuple[str, Callable[[Any], Any], str]]:
-        return [(key, field_getter(key), value) for key, value in self.source.where]
-
-    def matches(self, message: Any) -> bool:
-        return all(as_text(get(message)) == value for key, get, value in self.where
-                   if not _before_instances(key, value, partial(resolves, message, key)))
-
-    def filters(self, fields: Sequence[str]) -> list[tuple[str, str]]:
-        """The `where` conditions messages with these fields are filtered on: none on an
-        instance field they lack when the first instance is wanted (`FIRST_INSTANCE`)."""
-        return [(key, value) for key, value in self.source.where
-                if not _before_instances(key, value, partial(operator.contains, fields, key))]
-
-    def rows_matching(self, column: ColumnSource, rows: int, fields: Sequence[str]
-                      ) -> np.ndarray:
-        """The `where` filter on columns: each distinct value is compared once."""
-        keep = np.ones(rows, bool)
-        for key, value in self.filters(fields):
-            distinct, which = np.unique(column(key), return_inverse=True)
-            keep &= np.array([as_text(d) == value for d in distinct.tolist()], bool)[which]
-        return keep
-
-    def mixed_instances(self, column: ColumnSource, fields: Sequence[str], keep: Any
-                        ) -> tuple[str, list[str]] | None:
-        """The instance field and its values when the kept rows mix several instances of
-        one sensor (and the profile neither chose one nor asked for a merge)."""
-        chosen = {key for key, _ in self.source.where}
-        for key in INSTANCE_FIELDS:
-            if key in fields and key not in chosen and not self.source.merge_instances:
-                values = np.unique(column(key)[keep])
-                if values.size > 1:
-                    return key, [as_text(v) for v in values.tolist()]
-        return None
-
-
-def _before_instances(key: str, value: str, present: Callable[[], bool]) -> bool:
-    """A `where` on the first instance of a sensor, on a message from before instance
-    fields: it is that instance. ``present`` (whether the message has the field) is asked
-    only then: on the per-message path it costs a field lookup a message."""
-    return key in INSTANCE_FIELDS and value == FIRST_INSTANCE and not present()
-
-
 def _with_state_before(flag: Series, start_ns: int) -> Series:
     """A flag logged only when it changes was, before its first record, the other way."""
     if not len(flag) or int(flag.times_ns[0]) <= start_ns:
@@ -121,7 +47,7 @@ class SignalCollector:
     def __init__(self, path: Path, sources: LogSources) -> None:
         self.path, self.sources = path, sources
         self.wanted = sources.wanted
-        self.extractors = [_Extractor(name, source) for name, source in self.wanted.items()]
+        self.extractors = [Extractor(name, source) for name, source in self.wanted.items()]
         self.words = WordsRead()
         self._apply(Resolution(normalised(sources.namespace or ROOT),
                                {topic: topic for topic in sources.topics}))
@@ -160,7 +86,7 @@ class SignalCollector:
     def _apply(self, resolution: Resolution) -> None:
         """Read the profile's topics under the log's names for them."""
         self.namespace, self.names = resolution.namespace, resolution.names
-        self.by_topic: dict[str, list[_Extractor]] = {}
+        self.by_topic: dict[str, list[Extractor]] = {}
         for extractor in self.extractors:
             self.by_topic.setdefault(self.names[extractor.source.topic], []).append(extractor)
         segment = self.sources.segment
@@ -263,18 +189,8 @@ class SignalCollector:
             if self._only_words(topic):
                 return
         self.count += rows
-        segment = self.sources.segment
-        if segment is not None and topic == self.segment_topic:
-            try:
-                texts = column(segment.field).tolist()
-            except (IndexError, KeyError, TypeError, ValueError):
-                raise LogError(self.path, unresolved(topic, segment.field, "segment markers",
-                                                     fields)) from None
-            for time_ns, raw in zip(times_ns.tolist(), texts, strict=True):
-                text = as_text(raw)
-                if text.startswith(segment.prefix):
-                    self.markers.append(SegmentMarker(time_ns,
-                                                      text[len(segment.prefix):].strip()))
+        if self.sources.segment is not None and topic == self.segment_topic:
+            self._add_marker_columns(topic, times_ns, column, fields)
         for extractor in self.by_topic.get(topic, ()):
             wanted = extractor.source.field
             filters = extractor.filters(fields)
@@ -288,15 +204,13 @@ class SignalCollector:
                     continue
                 raise LogError(self.path, unresolved(topic, wanted, extractor.name,
                                                      fields)) from None
-            if numbers.dtype.kind not in "biuf" and not extractor.source.mapped:
-                written = numbers_written_as_text(numbers)
-                if written is None and self.sources.tentative:
-                    continue
-                if written is None:
-                    raise LogError(self.path, f"{topic} field {wanted!r} (signal "
-                                              f"{extractor.name}) holds {numbers.dtype}, not "
-                                              "numbers")
-                numbers = written
+            readable = readable_column(numbers, extractor.source)
+            if readable is None and self.sources.tentative:
+                continue
+            if readable is None:
+                raise LogError(self.path, f"{topic} field {wanted!r} (signal {extractor.name}) "
+                                          f"holds {numbers.dtype}, not numbers")
+            numbers = readable
             if filters and not numbers.size and rows:
                 key = filters[0][0]
                 self.filtered_out[extractor.name] = sorted(
@@ -315,6 +229,20 @@ class SignalCollector:
                 values, times = values[listed], times[listed]
             self.times[extractor.name].frombytes(times.astype(np.int64).tobytes())
             self.values[extractor.name].frombytes(values.tobytes())
+
+    def _add_marker_columns(self, topic: str, times_ns: np.ndarray, column: ColumnSource,
+                            fields: Sequence[str]) -> None:
+        segment = self.sources.segment
+        assert segment is not None
+        try:
+            texts = column(segment.field).tolist()
+        except (IndexError, KeyError, TypeError, ValueError):
+            raise LogError(self.path, unresolved(topic, segment.field, "segment markers",
+                                                 fields)) from None
+        for time_ns, raw in zip(times_ns.tolist(), texts, strict=True):
+            text = as_text(raw)
+            if text.startswith(segment.prefix):
+                self.markers.append(SegmentMarker(time_ns, text[len(segment.prefix):].strip()))
 
     def require_topics(self, available: Iterable[str], where: str = "") -> None:
         """Every signal topic is among the log's topics ``available`` (under its namespace,

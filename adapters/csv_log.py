@@ -16,8 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from adapters.collect import ColumnSource, SignalCollector
+from adapters.collect import SignalCollector
 from adapters.compressed import DAMAGED_STREAM, damage, open_text
+from adapters.extractor import ColumnSource
 from adapters.fieldnames import closest_first
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.recognise import csv_delimiter, is_number

@@ -13,7 +13,8 @@ from typing import Any
 import numpy as np
 
 from adapters.autopilot_messages import dataflash_messages, tlog_messages
-from adapters.collect import INSTANCE_FIELDS, ColumnSource, SignalCollector
+from adapters.collect import SignalCollector
+from adapters.extractor import INSTANCE_FIELDS, ColumnSource
 from adapters.fieldpath import parse_field_path
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.mavlink_columns import (

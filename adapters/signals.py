@@ -14,6 +14,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from adapters.namespace import normalised, under
+from adapters.recognise import is_number
 
 
 @dataclass(frozen=True)
@@ -79,6 +80,18 @@ def _number(text: str) -> float:
         return float(text)
     except ValueError:
         return np.nan
+
+
+def readable_column(column: np.ndarray, source: FieldSource) -> np.ndarray | None:
+    """The column as ``source`` reads it: numbers; a mapped source's texts as they are; texts
+    that all read as numbers as those numbers (a CSV column another signal reads through a
+    `values` map comes as its texts); None where it holds no numbers."""
+    if column.dtype.kind in "biuf" or source.mapped:
+        return column
+    cells = column.tolist()
+    if column.dtype.kind != "O" or not all(isinstance(c, str) and is_number(c) for c in cells):
+        return None
+    return np.array([float(c) for c in cells], np.float64)
 
 
 def as_text(value: Any) -> str:

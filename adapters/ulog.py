@@ -20,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from adapters.autopilot_messages import ulog_messages
-from adapters.collect import ColumnSource, SignalCollector
+from adapters.collect import SignalCollector
+from adapters.extractor import ColumnSource
 from adapters.inventory import LogInventory, TopicInfo
 from adapters.signals import LogSources, Signals
 from adapters.ulog_decode import (
