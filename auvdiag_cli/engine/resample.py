@@ -156,9 +156,9 @@ def slow_command_note(rates_hz: dict[str, float | None], dt_s: float) -> str | N
     return (f"{', '.join(slow)} {'is' if len(slow) == 1 else 'are'} logged at {rates}, below "
             f"the model's {1 / dt_s:g} Hz step: each command is held about "
             f"{1 / lowest:.2f} s, so changes faster than that are invisible to the replay and "
-            "residuals after them are larger (raise the logging rate: on ArduPilot's "
-            "telemetry the ground station's link's stream rates, SRn_RC_CHAN for "
-            "SERVO_OUTPUT_RAW, SRn_EXT_STAT for NAV_CONTROLLER_OUTPUT)")
+            "residuals after them are larger (raise the logging rate: ArduPilot streams "
+            "SERVO_OUTPUT_RAW at SRn_RC_CHAN Hz, NAV_CONTROLLER_OUTPUT at SRn_EXT_STAT Hz on "
+            "telemetry link n)")
 
 
 def _rate_hz(times_ns: np.ndarray) -> float | None:
