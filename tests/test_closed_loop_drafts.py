@@ -49,7 +49,7 @@ def write_px4_flight(path: Path, seed: int, seconds: float = 120.0,
         answer[k] = answer[k - 1] + (gain[k - 1] * set_point[k - 1] - answer[k - 1]) / (
             LAGS_S * RATE_HZ)
     answer += rng.normal(0, 0.01, answer.shape)
-    motors = (0.55 + 0.1 * set_point[:, 3:] + 0.4 * (set_point[:, :3] - answer[:, :3]) @ X_MIX.T
+    motors = (0.55 + 0.5 * set_point[:, 3:] + 0.4 * (set_point[:, :3] - answer[:, :3]) @ X_MIX.T
               + rng.normal(0, 0.01, (t.size, 4)))
     us = (1_000_000 + t * 1e6).astype(np.int64)
     north = np.where(t >= seconds / 2, 0.5 * np.sin(t / 7), np.nan)

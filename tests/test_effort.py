@@ -261,7 +261,8 @@ def test_effort_groups_in_a_profile_are_checked(tmp_path: Path):
 
 def test_init_profile_proposes_groups_of_alike_commands():
     from adapters.signals import FieldSource
-    from auvdiag_cli.jobs.profile_draft import Proposal, effort_groups
+    from auvdiag_cli.jobs.draft_groups import effort_groups
+    from auvdiag_cli.jobs.draft_text import Proposal
 
     def command(name: str, level: float, two_way: bool) -> Proposal:
         return Proposal(name, FieldSource("RCOU", name), "1", "", level=level, two_way=two_way)
@@ -272,6 +273,14 @@ def test_init_profile_proposes_groups_of_alike_commands():
              command("t2", 0.35, True)]
     assert effort_groups(mixed, set()) == [["c0", "c1"], ["t1", "t2"]]
     assert effort_groups(rotors, {frozenset(["c0", "c1", "c2", "c3"])}) == []
+    # Logged side by side, thrusters at like levels that do not move together are two jobs
+    # (a ROV's horizontal and vertical thrusters); a pair that moves against each other is
+    # one (a differential pair).
+    rng = np.random.default_rng(0)
+    surge, heave = rng.normal(size=(2, 500))
+    thrusters = [command(f"t{k}", 0.3 + 0.01 * k, True) for k in range(4)]
+    logged = [surge, -surge + 0.3 * rng.normal(size=500), heave, heave]
+    assert effort_groups(thrusters, set(), logged) == [["t0", "t1"], ["t2", "t3"]]
 
 
 @pytest.mark.shared_data("crazypad/labels.csv")

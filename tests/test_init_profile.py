@@ -144,6 +144,20 @@ def test_a_closed_loop_draft_of_a_real_ardusub_log(tmp_path):
     assert "RATE" not in plain.stdout
 
 
+@pytest.mark.shared_data("ardusub")
+def test_the_thrusters_of_a_real_bluerov2_heavy_telemetry_log_are_grouped_by_their_job():
+    """Eight thrusters at like levels, no parameters in the log: the draft groups those
+    that move together, the four horizontal (outputs 1-4) and the four vertical (5-8); the
+    camera mount and lights (12, 13) in none. By their levels alone, seven were one group."""
+    from auvdiag_cli.jobs.profile_draft import draft_profile
+
+    text = draft_profile(SHARED_DATA / "ardusub" / "small.tlog", "heavy")
+    groups = sorted(sorted(line.split("=", 1)[1].strip(' []').replace('"', "").split(", "))
+                    for line in text.splitlines() if line.startswith("actuators ="))
+    assert groups == [[f"servo{n}_raw" for n in (1, 2, 3, 4)],
+                      [f"servo{n}_raw" for n in (5, 6, 7, 8)]]
+
+
 def test_closed_loop_needs_set_points_and_no_like(make_log):
     log = make_log("paper-normal", 11)
     refused = runner.invoke(app, ["init-profile", str(log), "--closed-loop"])
@@ -219,7 +233,8 @@ def test_a_log_with_set_points_is_drafted_as_a_closed_loop_with_outputs(tmp_path
     rng = np.random.default_rng(5)
     steps = 800
     roll = np.repeat(rng.uniform(-0.3, 0.3, steps // 40 + 1), 40)[:steps]
-    motors = 0.5 + 0.05 * rng.standard_normal((steps, 4))
+    collective = 0.1 * np.sin(np.arange(steps) / 30)      # the rotors share the lift
+    motors = 0.5 + collective[:, None] + 0.02 * rng.standard_normal((steps, 4))
     log, draft = tmp_path / "flight.csv", tmp_path / "draft.toml"
     rows = ["time,roll_commanded,motor_1,motor_2,motor_3,motor_4,roll_rate"]
     rows += [f"{0.05 * k:.2f},{roll[k]:.3f}," + ",".join(f"{m:.4f}" for m in motors[k])

@@ -112,9 +112,9 @@ def _groups_and_loops(groups: list[DraftGroup], loops: Sequence[tuple[str, str, 
         lines += ([f"# {group.said}: each one's share of their effort is judged."]
                   if group.said else
                   ["# CHECK: actuators that seem to act alike (their commands run at similar "
-                   "levels in this", "# log): each one's share of their effort is judged. "
-                   "Split the group as the frame's", "# geometry says (horizontal and vertical "
-                   "thrusters apart), add the mixing factors."])
+                   "levels and move", "# together in this log): each one's share of their "
+                   "effort is judged. Split the group", "# as the frame's geometry says "
+                   "(horizontal and vertical thrusters apart), add the mixing factors."])
         lines += ["[[effort]]", f'name = "{group.name or f"group_{number}"}"',
                   "actuators = [" + ", ".join(f'"{m}"' for m in group.members) + "]", ""]
     for set_point, measured, rate in loops:

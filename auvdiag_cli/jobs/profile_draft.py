@@ -32,6 +32,7 @@ from auvdiag_cli.jobs.autopilot_set_points import (
     set_point_pairs,
     set_point_proposal,
 )
+from auvdiag_cli.jobs.draft_groups import effort_groups, repeated
 from auvdiag_cli.jobs.draft_names import described, draft_name
 from auvdiag_cli.jobs.draft_text import (
     NEUTRAL,
@@ -72,26 +73,6 @@ TIME_NAME = re.compile(r"^(t|time|timestamp|stamp|time_\w+|\w+_time)"
                        r"(\s*[(\[]\s*(s|ms|us|ns)\s*[)\]])?$", re.IGNORECASE)
 MAX_ARRAY_COMMANDS = 8          # thrusters looked for in one command array
 HELD_SHARE = 0.5                # of consecutive samples equal: a field that holds its value
-ALIKE_LEVELS = 2.0        # commands act alike when their levels lie within this factor
-
-
-def effort_groups(commands: list[Proposal], identical: set[frozenset[str]]
-                  ) -> list[list[str]]:
-    """Commands that look like actuators acting alike: all one-way or all two-way, with
-    typical levels within ALIKE_LEVELS of each other (rotors; a ROV's thrusters), and not
-    one command logged several times (``identical``: sets of names with equal values)."""
-    ordered = sorted((p for p in commands if p.level > NEUTRAL and not is_set_point(p)),
-                     key=lambda p: (p.two_way, p.level))
-    groups: list[list[Proposal]] = []
-    for proposal in ordered:
-        group = groups[-1] if groups else None
-        if group and group[0].two_way == proposal.two_way and \
-                proposal.level <= ALIKE_LEVELS * group[0].level:
-            group.append(proposal)
-        else:
-            groups.append([proposal])
-    names = [[p.name for p in group] for group in groups if len(group) > 1]
-    return [group for group in names if frozenset(group) not in identical]
 
 
 def _candidates(contents: LogInventory, family: str, every_field: bool = False,
@@ -266,7 +247,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     if roles:
         return commands, sensors, role_groups(commands, roles)
     return commands, sensors, [DraftGroup(g) for g in effort_groups(
-        commands, _repeated(commands, command_values))]
+        commands, repeated(commands, command_values), command_values)]
 
 
 def _command(name: str, source: FieldSource, series: np.ndarray, guessed: bool) -> Proposal:
@@ -301,15 +282,6 @@ def _sensor(name: str, named: str, source: FieldSource, series: np.ndarray,
         source, unit, check = climb_source(source, setup)
     full_scale = float(np.nanpercentile(np.abs(series * source.scale), 99)) * 2
     return Proposal(name, source, unit, check, _nice(full_scale))
-
-
-def _repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
-    """Sets of commands whose logged values are all equal: one command logged several times
-    (the Haizhe AUV's pwm1 … pwm4), never a group whose shares could differ."""
-    groups: dict[bytes, list[str]] = {}
-    for proposal, value in zip(commands, values, strict=True):
-        groups.setdefault(np.nan_to_num(value).tobytes(), []).append(proposal.name)
-    return {frozenset(names) for names in groups.values() if len(names) > 1}
 
 
 def _unique(proposals: list[Proposal]) -> list[Proposal]:
