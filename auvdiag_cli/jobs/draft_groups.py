@@ -43,9 +43,11 @@ def _comoving(one: np.ndarray | None, other: np.ndarray | None) -> bool:
     if one is None or other is None or one.shape != other.shape:
         return True
     both = np.isfinite(one) & np.isfinite(other)
-    if both.sum() < 3 or np.std(one[both]) == 0 or np.std(other[both]) == 0:
-        return True
-    return abs(float(np.corrcoef(one[both], other[both])[0, 1])) >= ALIKE_CORRELATION
+    with np.errstate(all="ignore"):        # a damaged log's huge values overflow: unknown
+        if both.sum() < 3 or not np.std(one[both]) > 0 or not np.std(other[both]) > 0:
+            return True
+        correlation = float(np.corrcoef(one[both], other[both])[0, 1])
+    return not np.isfinite(correlation) or abs(correlation) >= ALIKE_CORRELATION
 
 
 def repeated(commands: list[Proposal], values: list[np.ndarray]) -> set[frozenset[str]]:
