@@ -126,7 +126,7 @@ class SignalCollector:
     def field_paths(self, topic: str) -> list[str]:
         """Every field path read on ``topic``: values, `where` filters, segment labels."""
         paths = [path for extractor in self.by_topic.get(topic, ())
-                 for path in (extractor.source.field, *(k for k, _ in extractor.source.where))]
+                 for path in (*extractor.source.paths, *(k for k, _ in extractor.source.where))]
         segment = self.sources.segment
         if segment is not None and self.segment_topic == topic:
             paths.append(segment.field)
@@ -168,7 +168,8 @@ class SignalCollector:
             except (AttributeError, IndexError, KeyError, TypeError, ValueError):
                 if self.sources.tentative:
                     continue
-                wrong = next((key for key, _ in extractor.source.where
+                wrong = next((key for key in (*(k for k, _ in extractor.source.where),
+                                              *extractor.source.paths)
                               if not resolves(message, key)), extractor.source.field)
                 raise LogError(self.path, unresolved(
                     topic, wrong, extractor.name, object_field_paths(message))) from None
@@ -195,10 +196,10 @@ class SignalCollector:
             wanted = extractor.source.field
             filters = extractor.filters(fields)
             try:
-                for wanted in (*(key for key, _ in filters), extractor.source.field):
+                for wanted in (*(key for key, _ in filters), *extractor.source.paths):
                     column(wanted)
                 keep = extractor.rows_matching(column, rows, fields) if filters else slice(None)
-                numbers = column(extractor.source.field)[keep]
+                numbers = extractor.column(column)[keep]
             except (IndexError, KeyError, TypeError, ValueError):
                 if self.sources.tentative:
                     continue

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from adapters.fieldpath import field_getter, resolves
-from adapters.signals import FieldSource, as_text
+from adapters.signals import FieldSource, as_text, euler_angle
 
 # Fields that tell a sensor's instances apart (DataFlash IMU, BARO, GPS... carry one; a
 # ULog topic's multi id is read as `instance`).
@@ -26,14 +26,24 @@ class Extractor:
     """One signal's field read from its topic's messages: the message filters its source's
     `where` sets, and the sensor instances a column mixes."""
 
-
     def __init__(self, name: str, source: FieldSource) -> None:
         self.name, self.source = name, source
 
     # Made at the first message read whole: a CSV column is a name, not a path.
     @cached_property
     def get(self) -> Callable[[Any], Any]:
-        return field_getter(self.source.field)
+        if not self.source.angle:
+            return field_getter(self.source.field)
+        parts = [field_getter(path) for path in self.source.quaternion]
+        angle = self.source.angle
+        return lambda message: euler_angle(angle, *(float(get(message)) for get in parts))
+
+    def column(self, columns: ColumnSource) -> np.ndarray:
+        """Its raw values, every message at once."""
+        if not self.source.angle:
+            return columns(self.source.field)
+        parts = [np.asarray(columns(path), np.float64) for path in self.source.quaternion]
+        return np.asarray(euler_angle(self.source.angle, *parts))
 
     @cached_property
     def where(self) -> list[tuple[str, Callable[[Any], Any], str]]:

@@ -36,6 +36,21 @@ class FieldSource:
     # values mean ``otherwise``, or are no sample where it is None. Neither: all, as numbers.
     values: tuple[tuple[int | str, float], ...] = ()
     otherwise: float | None = None
+    # An attitude angle from a quaternion logged as four fields (w, x, y, z: PX4's q[0..3],
+    # a ROS orientation's .w .x .y .z): ``angle`` roll, pitch or yaw (rad, Z-Y-X order, in
+    # the quaternion's own frames); ``field`` is then its w.
+    quaternion: tuple[str, ...] = ()
+    angle: str = ""
+
+    @property
+    def paths(self) -> tuple[str, ...]:
+        """Every field path its value is read from."""
+        return self.quaternion or (self.field,)
+
+    @property
+    def said(self) -> str:
+        """Its field, as a reader names it: ``roll of q[0] q[1] q[2] q[3]``."""
+        return f"{self.angle} of {' '.join(self.quaternion)}" if self.angle else self.field
 
     @property
     def mapped(self) -> bool:
@@ -73,6 +88,22 @@ class FieldSource:
         if texts is None:
             out[np.isnan(numbers)] = np.nan
         return out
+
+
+EULER_ANGLES = ("roll", "pitch", "yaw")
+
+
+def euler_angle(angle: str, w: Any, x: Any, y: Any, z: Any) -> Any:
+    """Roll, pitch or yaw (rad; Z-Y-X, as aircraft and vehicles state their attitude) of the
+    unit quaternion (w, x, y, z); arrays or scalars. A quaternion not quite of unit length
+    (float rounding, a logger's half precision) gives the same angles."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        if angle == "roll":
+            return np.arctan2(2 * (w * x + y * z), w * w - x * x - y * y + z * z)
+        if angle == "pitch":
+            norm = w * w + x * x + y * y + z * z
+            return np.arcsin(np.clip(2 * (w * y - z * x) / norm, -1.0, 1.0))
+        return np.arctan2(2 * (w * z + x * y), w * w + x * x - y * y - z * z)
 
 
 def _number(text: str) -> float:

@@ -32,6 +32,15 @@ MEASURED = ("roll_rate", "pitch_rate", "yaw_rate", "heave")
 MOTORS = ("motor_1", "motor_2", "motor_3", "motor_4")
 
 
+def quaternions(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """(samples, 4): w, x, y, z of the Z-Y-X attitudes."""
+    cr, sr = np.cos(roll / 2), np.sin(roll / 2)
+    cp, sp = np.cos(pitch / 2), np.sin(pitch / 2)
+    cy, sy = np.cos(yaw / 2), np.sin(yaw / 2)
+    return np.column_stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
+                            cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy])
+
+
 def write_px4_flight(path: Path, seed: int, seconds: float = 120.0,
                      yaw_weak_from_s: float | None = None) -> Path:
     """A flight as PX4 logs it; the north-speed set point is unset (NaN) for its first half,
@@ -197,7 +206,8 @@ ATTITUDE_TARGET = ("std_msgs/Header header\nuint8 type_mask\ngeometry_msgs/Quate
 
 def write_mavros_bag(path: Path, namespace: str, seed: int) -> Path:
     """A PX4 vehicle as mavros records it under ``namespace``: ATTITUDE_TARGET's body rates
-    at 50 Hz, the IMU's rates following them, the motor outputs, the armed state."""
+    and attitude at 50 Hz, the IMU's rates and attitude following them, the motor outputs,
+    the armed state."""
     from rosbags.typesys import get_types_from_msg
 
     rng = np.random.default_rng(seed)
@@ -212,16 +222,21 @@ def write_mavros_bag(path: Path, namespace: str, seed: int) -> Path:
     rates = np.zeros_like(asked)
     for k in range(1, t.size):
         rates[k] = rates[k - 1] + (asked[k - 1] - rates[k - 1]) / 4
+    aimed = quaternions(0.3 * np.sin(t / 3), 0.2 * np.sin(t / 4), 0.1 * t)
+    held = np.vstack([aimed[:10], aimed[:-10]])          # the attitude 0.2 s behind its target
     with _open_rosbag_writer(path, "bag") as writer:
         connections = {name: writer.add_connection(f"{namespace}/mavros/{name}", msgtype,
                                                    typestore=messages.store)
                        for name, msgtype in types.items()}
         for k, time in enumerate(t):
             stamp = 1_700_000_000 * 10**9 + int(time * 1e9)
-            fields = {"setpoint_raw/target_attitude": {f"body_rate.{a}": asked[k, i]
-                                                       for i, a in enumerate("xyz")},
-                      "imu/data": {f"angular_velocity.{a}": rates[k, i] + rng.normal(0, 0.01)
-                                   for i, a in enumerate("xyz")},
+            fields = {"setpoint_raw/target_attitude": {
+                          **{f"body_rate.{a}": asked[k, i] for i, a in enumerate("xyz")},
+                          **{f"orientation.{a}": aimed[k, i] for i, a in enumerate("wxyz")}},
+                      "imu/data": {
+                          **{f"angular_velocity.{a}": rates[k, i] + rng.normal(0, 0.01)
+                             for i, a in enumerate("xyz")},
+                          **{f"orientation.{a}": held[k, i] for i, a in enumerate("wxyz")}},
                       "rc/out": {f"channels[{i}]": 1600 + int(200 * mix + rng.normal(0, 20))
                                  for i, mix in enumerate(X_MIX @ asked[k])},
                       "state": {"armed": 1.0}}
@@ -241,9 +256,14 @@ def test_a_mavros_bag_drafts_the_attitude_target_beside_the_imu(tmp_path: Path):
     invoke("init-profile", str(log), "--closed-loop", "--output", str(tmp_path / "p.toml"))
     profile = load_profile(tmp_path / "p.toml")
     axes = [f"angular_velocity_{a}" for a in "xyz"]
-    assert profile.command_names == tuple(f"{a}_set_point" for a in axes)
+    assert set(profile.command_names) == {f"{a}_set_point" for a in [*axes, "roll", "pitch"]}
     assert all(c.kind == "set_point" for c in profile.commands)
-    assert set(axes) <= set(profile.sensor_names)
+    assert {*axes, "roll", "pitch"} <= set(profile.sensor_names)
+    # mavros logs the attitude as a quaternion only: roll and pitch read from it, their
+    # loops with the IMU's rates about the same axes.
+    assert {(t.set_point, t.measured, t.rate) for t in profile.tracking} == {
+        ("roll_set_point", "roll", "angular_velocity_x"),
+        ("pitch_set_point", "pitch", "angular_velocity_y")}
     signals = profile.sources["ros"].signals
     assert (signals["angular_velocity_z_set_point"].topic,
             signals["angular_velocity_z_set_point"].field) == (
@@ -257,5 +277,98 @@ def test_a_mavros_bag_drafts_the_attitude_target_beside_the_imu(tmp_path: Path):
     invoke("init-profile", str(log), "--output", str(tmp_path / "plain.toml"))
     plain = load_profile(tmp_path / "plain.toml")
     assert plain.command_names == ("servo1", "servo2", "servo3", "servo4")
-    assert set(plain.sensor_names) == set(axes)
+    assert set(plain.sensor_names) == {*axes, "roll", "pitch"}
     assert "target_attitude" not in (tmp_path / "plain.toml").read_text()
+
+
+def test_a_px4_attitude_reads_from_its_quaternion_and_its_target_drives_the_draft(
+        tmp_path: Path):
+    """PX4 logs the attitude and the attitude its controller targets as quaternions only
+    (`vehicle_attitude` `q`, `vehicle_attitude_setpoint` `q_d`, w first)."""
+    from adapters import read_log
+    from adapters.signals import FieldSource, LogSources
+
+    t = np.arange(0, 60, 0.02)
+    angles = np.column_stack([0.4 * np.sin(t / 3), 0.3 * np.sin(t / 5 + 1), 2.5 * np.sin(t / 7)])
+    target = quaternions(*angles.T)
+    us = (1_000_000 + t * 1e6).astype(np.int64)
+    log = tmp_path / "flight.ulg"
+    write_ulog_file(log, [
+        UlogTopic("vehicle_attitude_setpoint", tuple(f"q_d[{i}]" for i in range(4)), us,
+                  target),
+        UlogTopic("vehicle_attitude", tuple(f"q[{i}]" for i in range(4)), us + 50,
+                  np.vstack([target[:10], target[:-10]])),
+        UlogTopic("vehicle_angular_velocity", ("xyz[0]", "xyz[1]", "xyz[2]"), us + 100,
+                  np.gradient(angles, 0.02, axis=0)),
+        UlogTopic("actuator_motors", tuple(f"control[{i}]" for i in range(4)), us + 200,
+                  0.5 + 0.1 * np.sin(t / 2)[:, None] + np.zeros((t.size, 4)))], 900_000)
+    paths = tuple(f"q_d[{i}]" for i in range(4))
+    read = read_log(log, {"ulog": LogSources({
+        angle: FieldSource("vehicle_attitude_setpoint", paths[0], quaternion=paths,
+                           angle=angle) for angle in ("roll", "pitch", "yaw")})}).series
+    for k, angle in enumerate(("roll", "pitch", "yaw")):
+        assert read[angle].values == pytest.approx(angles[:, k], abs=1e-6)
+    invoke("init-profile", str(log), "--closed-loop", "--output", str(tmp_path / "p.toml"))
+    profile = load_profile(tmp_path / "p.toml")
+    assert profile.command_names == ("roll_set_point", "pitch_set_point")
+    assert {"roll", "pitch"} <= set(profile.sensor_names) and profile.sensor("roll").unit == "rad"
+    assert {(t.set_point, t.measured, t.rate) for t in profile.tracking} == {
+        ("roll_set_point", "roll", "roll_rate"), ("pitch_set_point", "pitch", "pitch_rate")}
+    shown = invoke("inspect", str(log), "--profile", str(tmp_path / "p.toml"))
+    assert "roll of q[0] q[1] q[2] q[3]" in shown and "MISSING" not in shown
+    # The simulator writes a field a signal; it says so rather than write a wrong log.
+    from auvdiag_cli.vehicle.profile import profile_text
+
+    text, _ = profile_text()
+    (tmp_path / "tb.toml").write_text(text.replace(
+        'yaw_rate = { message = "vehicle_angular_velocity", field = "xyz[2]" }',
+        'yaw_rate = { message = "vehicle_attitude", quaternion = ["q[0]", "q[1]", "q[2]", '
+        '"q[3]"], angle = "yaw" }'))
+    refused = CliRunner().invoke(app, ["simulate", "paper-normal", "--profile",
+                                       str(tmp_path / "tb.toml"), "--format", "ulog",
+                                       "--output", str(tmp_path / "sim.ulg")])
+    assert refused.exit_code == 2 and "from a quaternion" in refused.output
+
+
+@pytest.mark.parametrize(("entry", "words"), [
+    ('{ message = "a", quaternion = ["q[0]", "q[1]", "q[2]"], angle = "roll" }',
+     "must list the paths of its w, x, y and z"),
+    ('{ message = "a", quaternion = ["q[0]", "q[1]", "q[2]", "q[3]"], angle = "heading" }',
+     "must be one of roll, pitch, yaw"),
+    ('{ message = "a", field = "q[0]", quaternion = ["q[0]", "q[1]", "q[2]", "q[3]"], '
+     'angle = "roll" }', "has no field"),
+])
+def test_a_quaternion_source_says_what_is_wrong_with_it(tmp_path: Path, entry: str,
+                                                         words: str):
+    from auvdiag_cli.vehicle.profile import profile_text
+    from auvdiag_errors import ProfileError
+
+    text, _ = profile_text(Path("px4_uuv"))
+    path = tmp_path / "p.toml"
+    path.write_text(text.replace('heave = { message = "vehicle_local_position", field = "vz" }',
+                                 f"heave = {entry}"))
+    with pytest.raises(ProfileError, match=words):
+        load_profile(path)
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_real_aircraft_attitude_from_its_quaternion_matches_its_autopilot(tmp_path: Path):
+    """ALFA 2018-09-11-14-41-38 (folder and bag): `/mavros/imu/data` `orientation` as roll and
+    pitch against the angles ArduPlane reports (`nav_info` `measured`, degrees); ROS's pitch
+    is nose down positive."""
+    from adapters import read_log
+    from adapters.signals import FieldSource, LogSources
+
+    folder = SHARED_DATA / "alfa" / "carbonZ_2018-09-11-14-41-38_no_failure"
+    paths = tuple(f"orientation.{part}" for part in "wxyz")
+    sources = LogSources({
+        **{angle: FieldSource("/mavros/imu/data", paths[0], quaternion=paths, angle=angle)
+           for angle in ("roll", "pitch")},
+        **{f"said_{angle}": FieldSource(f"/mavros/nav_info/{angle}", "measured",
+                                        scale=np.radians(1.0)) for angle in ("roll", "pitch")}})
+    for log in (folder, next(folder.glob("*.bag"))):
+        series = read_log(log, {"ros": sources}).series
+        for angle, sign, within in (("roll", 1, 0.04), ("pitch", -1, 0.02)):
+            said = series[f"said_{angle}"]
+            ours = np.interp(said.times_ns, series[angle].times_ns, series[angle].values)
+            assert np.sqrt(np.mean((sign * ours - said.values) ** 2)) < within

@@ -104,7 +104,7 @@ def set_point_pairs(contents: LogInventory, family: str) -> list[tuple[str, Fiel
     topics = {topic.name: topic for topic in contents.topics}
     found: list[tuple[str, FieldSource]] = []
     for pair in SET_POINT_PAIRS.get(family, ()):
-        for prefix in {_namespace(name, pair.set_point[0], family) for name in topics} - {None}:
+        for prefix in {namespace_of(name, pair.set_point[0], family) for name in topics} - {None}:
             ends = [(kind, topics.get(f"{prefix}{topic}"), field) for kind, (topic, field)
                     in (("set_point", pair.set_point), ("sensor", pair.measured))]
             if all(topic is not None and field in topic.fields for _, topic, field in ends):
@@ -113,7 +113,7 @@ def set_point_pairs(contents: LogInventory, family: str) -> list[tuple[str, Fiel
     return found
 
 
-def _namespace(name: str, topic: str, family: str) -> str | None:
+def namespace_of(name: str, topic: str, family: str) -> str | None:
     """What ``name`` holds before ``topic`` (a ROS namespace: "/uav1"), "" where it is
     ``topic``; None where it is another topic."""
     if name == topic:
@@ -128,7 +128,7 @@ def pairing(source: FieldSource, family: str) -> tuple[float, str, str] | None:
     beside it; None for any other field."""
     for pair in SET_POINT_PAIRS.get(family, ()):
         for end in (pair.set_point, pair.measured):
-            if source.field == end[1] and _namespace(source.topic, end[0], family) is not None:
+            if source.field == end[1] and namespace_of(source.topic, end[0], family) is not None:
                 return pair.scale_of(end), pair.unit, _pair_name(pair, end, family)
     return None
 

@@ -84,6 +84,9 @@ def entry(source: FieldSource, family: str) -> str:
     bare = family == "csv" or (family == "moos" and source.field == MOOS_VALUE)
     parts = [f"{key} = {quoted(source.topic)}"] if bare else [
         f"{key} = {quoted(source.topic)}", f"field = {quoted(source.field)}"]
+    if source.angle:
+        parts[1:] = ["quaternion = [" + ", ".join(map(quoted, source.quaternion)) + "]",
+                     f"angle = {quoted(source.angle)}"]
     if source.scale != 1.0:
         parts.append(f"scale = {source.scale:g}")
     if source.offset:
@@ -114,7 +117,7 @@ def _groups_and_loops(groups: list[DraftGroup], loops: Sequence[tuple[str, str, 
                   ["# CHECK: actuators that seem to act alike (their commands run at similar "
                    "levels and move", "# together in this log): each one's share of their "
                    "effort is judged. Split the group", "# as the frame's geometry says "
-                   "(horizontal and vertical thrusters apart), add the mixing factors."])
+                   "(horizontal and vertical thrusters apart), add the mixing", "# factors."])
         lines += ["[[effort]]", f'name = "{group.name or f"group_{number}"}"',
                   "actuators = [" + ", ".join(f'"{m}"' for m in group.members) + "]", ""]
     for set_point, measured, rate in loops:
@@ -162,7 +165,7 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
         table = "[[outputs]]" if closed_loop and not is_set_point(proposal) else "[[commands]]"
         lines += [table, f'name = "{proposal.name}"',
                   f'component = "{proposal.name}"   # CHECK: the part that fails', kind,
-                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.field}')}",
+                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.said}')}",
                   ""]
     for proposal in sensors:
         lines += ["[[sensors]]", f'name = "{proposal.name}"',
@@ -170,7 +173,7 @@ def render_draft(path: Path, name: str, family: str, commands: list[Proposal],
                   f'unit = "{proposal.unit}"   # CHECK: {proposal.check}',
                   f"full_scale = {proposal.full_scale:g}   # CHECK: twice the log's 99th "
                   "percentile",
-                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.field}')}",
+                  f"description = {quoted(f'{proposal.source.topic} {proposal.source.said}')}",
                   ""]
     lines += _groups_and_loops(groups, loops)
     names = [p.name for p in sensors]

@@ -170,14 +170,14 @@ def inspect_log(path: Path, profile: Profile | None) -> Inspection:
         if series is not None:
             span_s = (int(series.times_ns.max()) - int(series.times_ns.min())) / 1e9
             rate = (len(series) - 1) / span_s if span_s > 0 else None
-            results.append(SignalResolution(name, source.topic, source.field, len(series),
+            results.append(SignalResolution(name, source.topic, source.said, len(series),
                                             rate, None, on_grid=on_grid(name, rate, profile)))
         elif name in problems or source.topic in available:
-            results.append(SignalResolution(name, source.topic, source.field, 0, None,
+            results.append(SignalResolution(name, source.topic, source.said, 0, None,
                                             problems.get(name, "no samples in the log"),
                                             optional=optional))
         else:
-            results.append(SignalResolution(name, source.topic, source.field, 0, None,
+            results.append(SignalResolution(name, source.topic, source.said, 0, None,
                                             f"no {source.topic} in the log",
                                             _closest(source.topic, sorted(available)),
                                             optional=optional))

@@ -18,6 +18,7 @@ from adapters.csv_log import csv_rows
 from adapters.fieldpath import is_field_path
 from adapters.recognise import is_number
 from adapters.signals import MOOS_SOURCE, MOOS_SOURCE_AUX, FieldSource, LogSources, TimeColumn
+from auvdiag_cli.jobs.attitude_draft import angle_loops, angle_proposal, attitude_candidates
 from auvdiag_cli.jobs.autopilot_outputs import (
     climb_source,
     output_channel,
@@ -80,7 +81,8 @@ def _candidates(contents: LogInventory, family: str, every_field: bool = False,
     """(kind, source) for every field whose name or topic looks like a command or a sensor;
     ``every_field``: any other field is a sensor too (names this does not recognise);
     ``closed_loop``: an autopilot's set points and what was measured beside them too."""
-    found = set_point_pairs(contents, family) if closed_loop else []
+    found = [*(set_point_pairs(contents, family) if closed_loop else []),
+             *attitude_candidates(contents, family, closed_loop)]
     for topic in contents.topics:
         if topic.count < 2 or (family != "csv" and SET_POINT_TOPIC.search(topic.name)):
             continue                     # a set point is drafted only beside its measurement
@@ -202,7 +204,7 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     them that hold their value between changes are commands (marked CHECK);
     ``closed_loop``: an autopilot's set points (`SET_POINT_PAIRS`) are commands;
     ``setup``: what an ArduPilot log says of its vehicle (a copter's motors by output)."""
-    raw = {f"{kind}:{source.topic}:{source.field}": (kind, source)
+    raw = {f"{kind}:{source.topic}:{source.field}:{source.angle}": (kind, source)
            for kind, source in _candidates(contents, family, every_field, closed_loop)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
     # Only where the set point and what was measured beside it are both in the log.
@@ -225,7 +227,13 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
         if paired is not None:
             name = paired[2]
         guessed = guess_commands and kind != "command" and _holds_its_value(series)
-        if roles and channel is not None:
+        proposal: Proposal | None
+        if source.angle:                    # an attitude angle from a logged quaternion
+            proposal = angle_proposal(source, series, family)
+            if not proposal.set_point:
+                sensors.append(proposal)
+                continue
+        elif roles and channel is not None:
             # A copter's or a plane's output: what its log says it drives, or nothing
             # the model needs (a camera mount, a light).
             proposal = None if channel not in roles else role_proposal(roles[channel],
@@ -351,6 +359,8 @@ def draft_profile(path: Path, name: str, closed_loop: bool = False) -> str:
     operating = draft_operating(family, contents,
                                 lambda sources: _read_each(path, family, sources, None))
     return render_draft(path, name, family, commands, sensors, operating, time, groups,
-                        attitude_loops(commands, sensors), _clock_reference(family, contents),
+                        attitude_loops(commands, sensors) + angle_loops(
+                            {p.name for p in [*commands, *sensors]}, family),
+                        _clock_reference(family, contents),
                         "" if setup is None else setup.evidence)
 

@@ -8,6 +8,7 @@ from adapters.fieldpath import parse_field_path
 from adapters.ros_words import ROS_WORD_SOURCES
 from adapters.signals import (
     CLOCK_REFERENCE,
+    EULER_ANGLES,
     MOOS_VALUE,
     OPERATING,
     OTHER_VALUES,
@@ -35,12 +36,34 @@ def _topic(reader: TableReader) -> str:
 
 def _field(reader: TableReader) -> str:
     """A CSV `column` is a name, whatever it holds ("depth (m)"); any other source's
-    `field` a path into its message (`twist.linear.x`, `channels[2]`), checked here."""
+    `field` a path into its message (`twist.linear.x`, `channels[2]`), checked here; an
+    angle's, its quaternion's w."""
+    if "quaternion" in reader.table:
+        return _quaternion(reader)[0][0]
     if "column" in reader.table:
         return str(reader.get("column", str))
     if "variable" in reader.table:      # a MOOS variable's posting is its `value`
         return _path(reader, "field", reader.get("field", str, MOOS_VALUE))
     return _path(reader, "field", reader.get("field", str))
+
+
+def _quaternion(reader: TableReader) -> tuple[tuple[str, ...], str]:
+    """``quaternion = ["q[0]", "q[1]", "q[2]", "q[3]"]`` (the paths of w, x, y, z) with
+    ``angle = "roll"``: an attitude angle from a logged quaternion (PX4, ROS)."""
+    if "quaternion" not in reader.table:
+        return (), ""
+    paths = reader.get("quaternion", list)
+    if len(paths) != 4 or not all(isinstance(p, str) for p in paths):
+        raise ProfileError(f"key '{reader.key('quaternion')}' must list the paths of its w, "
+                           f'x, y and z, e.g. ["q[0]", "q[1]", "q[2]", "q[3]"], got {paths!r}')
+    angle = reader.get("angle", str)
+    if angle not in EULER_ANGLES:
+        raise ProfileError(f"key '{reader.key('angle')}' must be one of "
+                           f"{', '.join(EULER_ANGLES)}, got {angle!r}")
+    if "field" in reader.table:
+        raise ProfileError(f"key '{reader.key('field')}': a quaternion's angle has no field "
+                           "(its paths are in quaternion)")
+    return tuple(_path(reader, "quaternion", p) for p in paths), angle
 
 
 def _path(reader: TableReader, key: str, path: str) -> str:
@@ -60,7 +83,7 @@ def _field_source(entry: TableReader) -> FieldSource:
         _topic(entry), _field(entry), entry.get("scale", float, 1.0),
         entry.get("offset", float, 0.0), tuple((k, str(v)) for k, v in where.items()),
         entry.get("merge_instances", bool, False), entry.get("bits", int, 0),
-        entry.get("changes_only", bool, False), *_value_map(entry))
+        entry.get("changes_only", bool, False), *_value_map(entry), *_quaternion(entry))
 
 
 def _value_map(entry: TableReader) -> tuple[tuple[tuple[int | str, float], ...], float | None]:

@@ -63,6 +63,11 @@ def family_sources(profile: Profile, family: str) -> LogSources:
     if sources is None:
         raise ValueError(f"profile {profile.name!r} has no [sources.{family}] table: it does "
                          f"not say how the vehicle logs {family} messages")
+    angles = [name for name, source in sources.signals.items() if source.angle]
+    if angles:
+        raise ValueError(f"profile {profile.name!r} reads {', '.join(angles)} from a "
+                         f"quaternion in its [sources.{family}] table: the simulator writes "
+                         "each signal as a field of its own, not as a quaternion")
     return sources
 
 
