@@ -55,7 +55,9 @@ def attitude_candidates(contents: LogInventory, family: str, closed_loop: bool
     topics = {topic.name: topic for topic in contents.topics}
     found: list[tuple[str, FieldSource]] = []
     for prefix in {namespace_of(name, where.measured[0], family) for name in topics} - {None}:
-        ends = [("sensor", where.measured)] + [("set_point", where.target)] * closed_loop
+        ends = [("sensor", where.measured)]
+        if closed_loop:
+            ends.append(("set_point", where.target))
         for kind, (topic_name, quaternion) in ends:
             topic, paths = topics.get(f"{prefix}{topic_name}"), where.paths(quaternion)
             if topic is None or not set(paths) <= set(topic.fields):
