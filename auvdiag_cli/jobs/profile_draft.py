@@ -7,6 +7,7 @@ cannot tell (units, full scales, which component fails how, thresholds) is writt
 ``CHECK`` comment. The draft loads, and every signal in it resolves on the log it came from."""
 
 import re
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 
@@ -77,12 +78,13 @@ HELD_SHARE = 0.5                # of consecutive samples equal: a field that hol
 
 
 def _candidates(contents: LogInventory, family: str, every_field: bool = False,
-                closed_loop: bool = False) -> list[tuple[str, FieldSource]]:
+                closed_loop: bool = False, pairs: Sequence[tuple[str, FieldSource]] = ()
+                ) -> list[tuple[str, FieldSource]]:
     """(kind, source) for every field whose name or topic looks like a command or a sensor;
     ``every_field``: any other field is a sensor too (names this does not recognise);
-    ``closed_loop``: an autopilot's set points and what was measured beside them too."""
-    found = [*(set_point_pairs(contents, family) if closed_loop else []),
-             *attitude_candidates(contents, family, closed_loop)]
+    ``closed_loop``: an autopilot's set points (``pairs``, `set_point_pairs`) and what was
+    measured beside them too."""
+    found = [*pairs, *attitude_candidates(contents, family, closed_loop)]
     for topic in contents.topics:
         if topic.count < 2 or (family != "csv" and SET_POINT_TOPIC.search(topic.name)):
             continue                     # a set point is drafted only beside its measurement
@@ -204,12 +206,12 @@ def _proposals(path: Path, family: str, contents: LogInventory, time: TimeColumn
     them that hold their value between changes are commands (marked CHECK);
     ``closed_loop``: an autopilot's set points (`SET_POINT_PAIRS`) are commands;
     ``setup``: what an ArduPilot log says of its vehicle (a copter's motors by output)."""
+    found = set_point_pairs(contents, family) if closed_loop else []
     raw = {f"{kind}:{source.topic}:{source.field}:{source.angle}": (kind, source)
-           for kind, source in _candidates(contents, family, every_field, closed_loop)}
+           for kind, source in _candidates(contents, family, every_field, closed_loop, found)}
     values = _read_each(path, family, {key: src for key, (_, src) in raw.items()}, time)
     # Only where the set point and what was measured beside it are both in the log.
-    pairs = {(s.topic, s.field) for _, s in set_point_pairs(contents, family)} \
-        if closed_loop else set()
+    pairs = {(s.topic, s.field) for _, s in found}
     roles = output_roles(setup, sorted({c for kind, source in raw.values()
                                         if kind == "command"
                                         and (c := output_channel(source)) is not None}))
