@@ -39,8 +39,9 @@ from auvdiag_cli.jobs.effort import effort_log
 from auvdiag_cli.jobs.relate import relation_log
 from auvdiag_cli.vehicle.profile import Profile, load_profile
 from models.command_relations import RelationLog
-from models.effort import GroupFit, smallest_rise
+from models.effort import GroupFit
 from models.effort_model import EffortModel, GroupSetup, learn_effort
+from models.effort_thresholds import smallest_rise
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 NORMAL_MISSIONS = ("paper-normal", "mission-ccw", "mission-large-cw", "mission-sprint-ccw",

@@ -30,9 +30,6 @@ from typing import Any
 import numpy as np
 
 from models.chi_square import largest_spread_factor
-from models.effort_directions import judged_directions
-from models.sign_test import median_lower_bound
-from models.student_t import quantile
 
 LEVEL_BINS = 3                # operating conditions of a one-way group (rotors): the level's
                               # terciles on normal logs; of a two-way group (a vectored ROV's
@@ -43,7 +40,6 @@ CONDITIONED_GAIN = 0.9        # condition on the level only when it cuts the spr
 MIN_BIN_LOGS = 2              # logs with steady time in a level bin for its own share
 SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
 LONG_WINDOW = 4               # windows this many times longer measure the slow wander
-WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the rest: later starts
 DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
 # Fewer logs than this that show no offset between them: their spread is taken at the upper
 # limit of this confidence (`largest_spread_factor`).
@@ -93,6 +89,11 @@ class GroupLog:
     # The same over windows LONG_WINDOW times as long (None: fewer than MIN_WINDOWS of them).
     long_var: np.ndarray | None = None
     long_windows: int = 0
+    # (members, members): the covariance of its windows' shares (None: a model from before)
+    within_cov: np.ndarray | None = None
+    # The same log in its group's change bin alone (`effort_model.GroupSetup.change_bin`)
+    change: "GroupLog | None" = None
+    long_cov: np.ndarray | None = None      # the long windows' covariance (as within_cov)
 
     @property
     def share(self) -> np.ndarray:
@@ -110,7 +111,12 @@ class GroupLog:
                 "within_var": self.within_var.round(9).tolist(), "windows": self.windows,
                 **({} if self.long_var is None else {
                     "long_var": self.long_var.round(9).tolist(),
-                    "long_windows": self.long_windows})}
+                    "long_windows": self.long_windows}),
+                **({} if self.within_cov is None else {
+                    "within_cov": self.within_cov.round(9).tolist()}),
+                **({} if self.change is None else {"change": self.change.to_json()}),
+                **({} if self.long_cov is None else {
+                    "long_cov": self.long_cov.round(9).tolist()})}
 
     @classmethod
     def from_json(cls, entry: dict[str, Any]) -> "GroupLog":
@@ -118,7 +124,10 @@ class GroupLog:
                    np.asarray(entry["level"], float), np.asarray(entry["within_var"], float),
                    int(entry["windows"]),
                    None if "long_var" not in entry else np.asarray(entry["long_var"], float),
-                   int(entry.get("long_windows", 0)))
+                   int(entry.get("long_windows", 0)),
+                   None if "within_cov" not in entry else np.asarray(entry["within_cov"], float),
+                   None if "change" not in entry else cls.from_json(entry["change"]),
+                   None if "long_cov" not in entry else np.asarray(entry["long_cov"], float))
 
 
 def window_shares(effort: np.ndarray, level: np.ndarray, window_steps: int
@@ -144,28 +153,26 @@ def summarise(name: str, effort: np.ndarray, level: np.ndarray, bins: np.ndarray
     levels = np.bincount(bins, weights=level, minlength=n_bins)
     own = effort.sum(axis=0) / level.sum()
 
-    def variance(steps: int) -> tuple[np.ndarray, int]:
+    def covariance(steps: int) -> tuple[np.ndarray, int]:
         shares, _ = window_shares(effort, level, steps)
-        return ((shares - own) ** 2).sum(axis=0) / max(1, len(shares) - 1), len(shares)
+        return (shares - own).T @ (shares - own) / max(1, len(shares) - 1), len(shares)
 
-    within, windows = variance(window_steps)
+    within, windows = covariance(window_steps)
+    summary = GroupLog(name, len(level) * dt_s, sums, levels, np.diag(within).copy(), windows,
+                       within_cov=within)
     if len(level) < MIN_WINDOWS * LONG_WINDOW * window_steps:
-        return GroupLog(name, len(level) * dt_s, sums, levels, within, windows)
-    long_var, long_windows = variance(LONG_WINDOW * window_steps)
-    return GroupLog(name, len(level) * dt_s, sums, levels, within, windows, long_var,
-                    long_windows)
-
-
-def pooled_within(logs: Sequence[GroupLog]) -> np.ndarray:
-    """(members,) σ_w of one window, pooled over the logs: the larger of what the windows
-    and the long windows say (a long window's variance times LONG_WINDOW: how a span's
-    noise would shrink with its length were the windows independent), each member's drawn
-    towards the group's (`drawn_towards_group`: a window's shares average to one too)."""
-    return within_and_dof(logs)[0]
+        return summary
+    long_cov, long_windows = covariance(LONG_WINDOW * window_steps)
+    return replace(summary, long_var=np.diag(long_cov).copy(), long_windows=long_windows,
+                   long_cov=long_cov)
 
 
 def within_and_dof(logs: Sequence[GroupLog]) -> tuple[np.ndarray, float]:
-    """`pooled_within`, and the degrees of freedom it rests on: every log's windows (the
+    """(members,) σ_w of one window, pooled over the logs: the larger of what the windows
+    and the long windows say (a long window's variance times LONG_WINDOW: how a span's
+    noise would shrink with its length were the windows independent), each member's drawn
+    towards the group's (`drawn_towards_group`: a window's shares average to one too); and
+    the degrees of freedom it rests on: every log's windows (the
     long windows', fewer, where any log has them), times m - 1 for the members drawn
     together. Many more than the between-log spread's: a change within one log is judged
     on far firmer ground than a log against the others when the normal logs are few."""
@@ -234,6 +241,12 @@ class GroupFit:
     # How many times its spread as seen the whole log is judged against (> 1: alike logs,
     # few of them: `ALIKE_FEW_LOGS`).
     widened: float = 1.0
+    # (members, members): how its members' shares move together within a log
+    # (`models.effort_correlation`; None: a model from before, which did not keep it)
+    within_corr: np.ndarray | None = None
+    # (members, members): the long windows' covariance times LONG_WINDOW, in units of σ_w:
+    # a slow wander, along a direction where it exceeds the windows' noise
+    within_slow: np.ndarray | None = None
 
     def sigma(self, span_s: float | np.ndarray) -> np.ndarray:
         """(…, members): σ(T) of a span of ``span_s`` steady seconds."""
@@ -325,68 +338,3 @@ def drawn_towards_group(own: np.ndarray, own_dof: float) -> tuple[np.ndarray, fl
         return own, own_dof
     group = float(np.mean(own))
     return (own + (members - 1) * group) / members, own_dof * (members - 1)
-
-
-@dataclass(frozen=True)
-class Thresholds:
-    """z thresholds for a false-alarm budget, and what leave-one-log-out said of them."""
-
-    false_alarm_rate: float      # per log, the budget over every judged actuator
-    actuators: int               # judged actuators (the budget's Bonferroni split)
-
-    def whole_log(self, fit: GroupFit, dof: float | None = None) -> float:
-        """``dof``: were the spread known on that many degrees of freedom (None: its own)."""
-        share = WHOLE_LOG_BUDGET * self.false_alarm_rate / self.actuators
-        return widening(fit) * quantile(1 - share, fit.dof if dof is None else dof)
-
-    def later_start(self, fit: GroupFit, starts: int) -> float:
-        """For the departure from one of ``starts`` later window starts to the end: a change
-        against the log's own beginning, whose noise is the windows' (σ_w, on its own
-        degrees of freedom; the between-log widening is not its to carry)."""
-        share = (1 - WHOLE_LOG_BUDGET) * self.false_alarm_rate / (self.actuators
-                                                                  * max(1, starts))
-        return quantile(1 - share, fit.within_dof)
-
-
-def widening(fit: GroupFit) -> float:
-    """≥ 1: how much wider the group's normal logs, each judged by the others, scatter than
-    t says (median |z| against t's quartile), where even its lower confidence bound passes
-    the quartile (a handful of logs pass it by chance one time in three). Each group's own."""
-    scatter, reference = np.abs(fit.loo_z).ravel(), quantile(0.75, max(1.0, fit.logs - 2))
-    bound = median_lower_bound(scatter, fit.logs * max(1, len(fit.group.members) - 1))
-    return 1.0 if bound is None or bound <= reference else float(np.nanmedian(scatter)) / reference
-
-
-def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None,
-                  span_s: float | None = None, shares: np.ndarray | None = None
-                  ) -> np.ndarray:
-    """Per member, the smallest rise of its share (relative to its normal share: ``shares``,
-    or the normal logs' mean) that the whole-log test judges over ``span_s`` steady seconds
-    (None: the normal logs' typical steady time), the others' shares falling alike (one
-    weak member). ``logs``: were the spread, as measured, known from that many normal logs
-    (its degrees of freedom and the new log's share of the uncertainty in the normal shares
-    scale with them): what more normal logs would buy. With three or four logs the Student-t
-    threshold is wide; this says how wide in a user's terms (a motor's share 14 % up)."""
-    n = fit.logs if logs is None else logs
-    # The normal logs' scatter beyond t (`widening`) stays as measured on the logs there are.
-    dof = fit.dof * max(1, n - 1) / max(1, fit.logs - 1)
-    sigma = replace(fit, logs=n).sigma(fit.typical_s if span_s is None else span_s)
-    return rise_judged(thresholds.whole_log(fit, dof), sigma,
-                       fit.means.mean(axis=0) if shares is None else shares)
-
-
-def rise_judged(z_threshold: float, sigma: np.ndarray, shares: np.ndarray) -> np.ndarray:
-    """Per member, the rise of its share (relative to ``shares``, its normal one) whose
-    departure, the others' shares falling alike and each in units of its ``sigma``, projects
-    on its weakness's direction to ``z_threshold``."""
-    members = len(sigma)
-    # Member i's share up by r, the others' down by r / (m - 1): its statistic is linear in r.
-    pattern = (np.eye(members) * members - 1.0) / max(1, members - 1)
-    per_unit = np.einsum("ij,ij->i", pattern / sigma, judged_directions(members))
-    return np.asarray(z_threshold / per_unit / shares)
-
-
-def thresholds_for(fits: Sequence[GroupFit], false_alarm_rate: float) -> Thresholds:
-    """The budget split over the judged actuators of ``fits``; each group's whole-log
-    threshold widened by its own normal logs' scatter (`widening`)."""
-    return Thresholds(false_alarm_rate, sum(len(f.group.members) for f in fits))

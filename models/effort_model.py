@@ -5,7 +5,7 @@ model.json as the ``effort`` entry; the fit is recomputed from the summaries at 
 the numbers a report shows and the ones that judged can never drift apart."""
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -13,25 +13,31 @@ import numpy as np
 from models.effort import (
     DEFAULT_FALSE_ALARM_RATE,
     LEVEL_BINS,
+    LONG_WINDOW,
     MIN_LOGS,
     MIN_WINDOWS,
+    SPREAD_FLOOR,
     EffortGroup,
     GroupFit,
     GroupLog,
-    Thresholds,
     efforts,
     fit_group,
-    smallest_rise,
     summarise,
-    thresholds_for,
 )
+from models.effort_correlation import pooled_correlation, pooled_covariance
 from models.effort_reach import as_table
+from models.effort_thresholds import Thresholds, smallest_rise, thresholds_for
 
 FORMAT_VERSION = 1
 MIN_WINDOW_S, MAX_WINDOW_S = 2.0, 30.0
 WINDOWS_PER_LOG = 6           # the window: this fraction of a typical log's steady time
 IDLE_LEVEL = 1e-3             # a level this low is an actuator at rest, not operating
 LEARNT_MIN_LEVEL = 0.5        # of the median operating level: steady from there up
+# A change bin (`GroupSetup.change_bin`) holds at least this share of the normal logs'
+# steady effort; its windows are this many to a judging window: its noise, measured on
+# them, on more degrees of freedom (the simulated BlueROV2's windows of 5 s against 16 s).
+MIN_CHANGE_SHARE = 0.5
+CHANGE_WINDOWS_PER_WINDOW = 3
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,13 @@ class GroupSetup:
     edges: np.ndarray        # level terciles (a one-way group's conditions)
     window_s: float
     two_way: bool            # some actuator pushed in reverse on normal logs
+    # Where the mixer cannot drive the group member by member (a vectored ROV), a weak
+    # member's signature depends on which way each pushes: a change within a log is judged
+    # in the operating condition (bin) that holds most of the normal logs' steady effort,
+    # where the signature is fixed, over windows of ``change_window_s`` (None: every steady
+    # step, along the plain signatures).
+    change_bin: int | None = None
+    change_window_s: float = 0.0
 
     @property
     def n_bins(self) -> int:
@@ -93,8 +106,23 @@ class GroupSetup:
 
     def summarise(self, log: EffortLog, dt_s: float) -> GroupLog | None:
         _, effort, level, bins = self.steady_steps(log)
-        return summarise(log.name, effort, level, bins, self.n_bins, self.window_steps(dt_s),
-                         dt_s)
+        summary = summarise(log.name, effort, level, bins, self.n_bins,
+                            self.window_steps(dt_s), dt_s)
+        if summary is None or self.change_bin is None:
+            return summary
+        inside = bins == self.change_bin
+        return replace(summary, change=summarise(
+            log.name, effort[inside], level[inside], np.zeros(int(inside.sum()), int), 1,
+            self.change_window_steps(dt_s), dt_s))
+
+    def change_steps(self, log: EffortLog) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(indices, effort, level) of the log's steady steps in the change bin."""
+        steady, effort, level, bins = self.steady_steps(log)
+        inside = bins == self.change_bin
+        return steady[inside], effort[inside], level[inside]
+
+    def change_window_steps(self, dt_s: float) -> int:
+        return max(1, round(self.change_window_s / dt_s))
 
     def window_steps(self, dt_s: float) -> int:
         return max(1, round(self.window_s / dt_s))
@@ -112,6 +140,8 @@ class EffortModel:
     fits: tuple[GroupFit | None, ...]              # None: too few logs to judge the group
     refused: tuple[str | None, ...]                # per setup: why it is not judged
     thresholds: Thresholds | None
+    # Per setup, the fit of its change bin's windows (`change_fit`; None: no change bin)
+    change_fits: tuple[GroupFit | None, ...] = ()
 
     @classmethod
     def fitted(cls, setups: Sequence[GroupSetup], summaries: Sequence[Sequence[GroupLog]],
@@ -131,7 +161,9 @@ class EffortModel:
         judged = [f for f in fits if f is not None]
         return cls(dt_s, false_alarm_rate, tuple(setups), tuple(tuple(s) for s in summaries),
                    tuple(fits), tuple(refused),
-                   thresholds_for(judged, false_alarm_rate) if judged else None)
+                   thresholds_for(judged, false_alarm_rate) if judged else None,
+                   tuple(None if fit is None else change_fit(fit, setup, logs)
+                         for setup, logs, fit in zip(setups, summaries, fits, strict=True)))
 
     @property
     def judges_anything(self) -> bool:
@@ -168,6 +200,8 @@ class EffortModel:
                 "factors": list(setup.group.factors), "min_level": round(setup.min_level, 6),
                 "level_edges": setup.edges.round(6).tolist(), "window_s": setup.window_s,
                 "two_way": setup.two_way,
+                **({} if setup.change_bin is None else {
+                    "change_bin": setup.change_bin, "change_window_s": setup.change_window_s}),
                 **({} if setup.group.reach is None else {
                     "reach": [list(row) for row in setup.group.reach]}),
                 **({} if setup.group.balance is None else {
@@ -195,7 +229,9 @@ class EffortModel:
                                 bool(g.get("driven_alone", False)))
             setups.append(GroupSetup(group, float(g["min_level"]),
                                      np.asarray(g["level_edges"], float), float(g["window_s"]),
-                                     bool(g["two_way"])))
+                                     bool(g["two_way"]),
+                                     None if g.get("change_bin") is None else int(g["change_bin"]),
+                                     float(g.get("change_window_s", 0.0))))
             summaries.append([GroupLog.from_json(s) for s in g["logs"]])
         return cls.fitted(setups, summaries, float(entry["dt_s"]),
                           float(entry["false_alarm_rate"]))
@@ -237,6 +273,46 @@ def learn_effort(groups: Sequence[EffortGroup], logs: Sequence[EffortLog], dt_s:
     return EffortModel.fitted(setups, summaries, dt_s, false_alarm_rate), notes
 
 
+def change_fit(fit: GroupFit, setup: GroupSetup, logs: Sequence[GroupLog]) -> GroupFit | None:
+    """``fit`` as its change bin's windows measure a change within a log: the bin's normal
+    share; its windows' spread per member, the members' correlation there
+    (`models.effort_correlation`) and the degrees of freedom of both (every log's windows);
+    and the long windows' covariance, for a slow wander along a direction judged (None: no
+    change bin, or no normal log with windows in it)."""
+    inside = [g.change for g in logs if g.change is not None and g.change.within_cov is not None]
+    if setup.change_bin is None or not inside:
+        return None
+    dof = sum(g.windows - 1 for g in inside)
+    pooled = pooled_covariance([(g.within_cov, g.windows - 1) for g in inside])
+    if pooled is None:
+        return None
+    sigma = np.sqrt(np.maximum(np.diag(pooled), SPREAD_FLOOR ** 2))
+    slow = pooled_covariance([(g.long_cov, g.long_windows - 1) for g in inside
+                              if g.long_cov is not None])
+    return replace(fit, window_s=setup.change_window_s, conditioned=False,
+                   means=fit.means[setup.change_bin:setup.change_bin + 1], within=sigma,
+                   within_dof=float(dof),
+                   within_corr=pooled_correlation([(g.within_cov, g.windows - 1)
+                                                   for g in inside]),
+                   within_slow=None if slow is None else LONG_WINDOW * slow
+                   / np.outer(sigma, sigma))
+
+
+def _change_bin(setup: GroupSetup, logs: Sequence[EffortLog]) -> GroupSetup:
+    """``setup`` with its change bin, where its mixer cannot drive it member by member and
+    one operating condition holds most of the normal logs' steady effort."""
+    if setup.group.projection is None or not setup.two_way:
+        return setup
+    held = np.zeros(setup.n_bins)
+    for log in logs:
+        _, _, level, bins = setup.steady_steps(log)
+        held += np.bincount(bins, weights=level, minlength=setup.n_bins)
+    if held.sum() <= 0 or held.max() < MIN_CHANGE_SHARE * held.sum():
+        return setup
+    return replace(setup, change_bin=int(np.argmax(held)), change_window_s=max(
+        MIN_WINDOW_S, setup.window_s / CHANGE_WINDOWS_PER_WINDOW))
+
+
 def _setup(group: EffortGroup, logs: Sequence[EffortLog], dt_s: float) -> GroupSetup | None:
     """The steady level (the profile's, or half the median operating level), the level
     terciles and the window (the profile's, or a sixth of a typical log's steady time)."""
@@ -261,4 +337,4 @@ def _setup(group: EffortGroup, logs: Sequence[EffortLog], dt_s: float) -> GroupS
         per_log = [float((u >= min_level).sum()) * dt_s for u in usable_levels]
         window_s = float(np.clip(np.median(per_log) / WINDOWS_PER_LOG, MIN_WINDOW_S,
                                  MAX_WINDOW_S))
-    return GroupSetup(group, min_level, edges, window_s, reverse)
+    return _change_bin(GroupSetup(group, min_level, edges, window_s, reverse), logs)

@@ -111,3 +111,4 @@ def named_signatures(group: EffortGroup, commands: np.ndarray, shares: np.ndarra
     steps = np.linspace(0.0, 1.0, BALANCE_STEPS)[None, :, None]
     between = (1 - steps) * plain[:, None, :] + steps * tilts[:, None, :]
     return np.asarray(between / np.linalg.norm(between, axis=2, keepdims=True))
+

@@ -16,10 +16,9 @@ from models.effort import (
     between_spread,
     fit_group,
     summarise,
-    thresholds_for,
-    widening,
     within_and_dof,
 )
+from models.effort_thresholds import thresholds_for, widening
 from models.student_t import quantile
 
 RATE, MEMBERS, LOGS, SIGMA = 0.01, 4, 4, 0.02

@@ -15,8 +15,9 @@ from auvdiag_cli.engine.effort_spans import typical_later_threshold
 from auvdiag_cli.engine.effort_words import more
 from auvdiag_cli.reports.training import effort_lines
 from auvdiag_cli.vehicle.profile import load_profile
-from models.effort import GroupFit, Thresholds
+from models.effort import GroupFit
 from models.effort_model import EffortLog, learn_effort
+from models.effort_thresholds import Thresholds
 
 PROFILE = load_profile(Path("arducopter_quad"))
 STEPS = 1500                       # 150 s at 10 Hz

@@ -5,7 +5,7 @@ minutes are not taken for a change; where the windows are independent, both scal
 
 import numpy as np
 
-from models.effort import LONG_WINDOW, pooled_within, summarise
+from models.effort import LONG_WINDOW, summarise, within_and_dof
 
 WINDOW, STEPS, DT_S = 20, 4000, 0.1
 
@@ -46,7 +46,7 @@ def test_a_slow_wander_widens_the_noise_of_a_span_and_keeps_late_spans_normal():
     rng = np.random.default_rng(3)
     # Correlated over two windows (a simulated ROV's roll disturbance against 2 s windows).
     learnt = [_log(rng, 2 * WINDOW)[0] for _ in range(12)]
-    within, short = pooled_within(learnt), _short(learnt)
+    within, short = within_and_dof(learnt)[0], _short(learnt)
     assert np.all(within > 1.5 * short)
     fresh = [_log(rng, 2 * WINDOW) for _ in range(40)]
     # With the windows taken as independent, a normal log's late span stands 3 σ out now
@@ -58,5 +58,5 @@ def test_a_slow_wander_widens_the_noise_of_a_span_and_keeps_late_spans_normal():
 def test_independent_windows_keep_the_short_measure():
     rng = np.random.default_rng(4)
     learnt = [_log(rng, 0)[0] for _ in range(12)]
-    assert np.allclose(pooled_within(learnt), _short(learnt), rtol=0.2)
+    assert np.allclose(within_and_dof(learnt)[0], _short(learnt), rtol=0.2)
     assert learnt[0].long_windows == STEPS // (LONG_WINDOW * WINDOW)

@@ -10,7 +10,7 @@ from quad_effort import SHARES, STEPS, quad_check, quad_commands, quad_model
 from auvdiag_cli.engine.effort_spans import smallest_later_rise
 from auvdiag_cli.engine.effort_words import rise_range
 from auvdiag_cli.reports.training import effort_lines
-from models.effort import smallest_rise
+from models.effort_thresholds import smallest_rise
 
 ONE_WEAK = np.array([1.0, -1 / 3, -1 / 3, -1 / 3])   # motor_1 up, the others down alike
 

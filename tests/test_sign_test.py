@@ -9,7 +9,8 @@ import pytest
 from quad_effort import quad_commands, quad_model
 
 from auvdiag_cli.reports.training import effort_lines
-from models.effort import EffortGroup, GroupFit, GroupLog, fit_group, widening
+from models.effort import EffortGroup, GroupFit, GroupLog, fit_group
+from models.effort_thresholds import widening
 from models.sign_test import lower_rank, median_lower_bound
 from models.student_t import quantile
 

@@ -23,33 +23,21 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import held_over
+from auvdiag_cli.engine.effort_change import HELD_SHARE_OF_STRIDE, log_change
 from auvdiag_cli.engine.effort_spans import (
     STARTS_PER_WINDOW,
     Spans,
     cumulative,
-    date_change,
-    later_starts,
     rise_since,
 )
 from auvdiag_cli.engine.effort_words import carries, smallest_rise_shown
 from auvdiag_cli.vehicle.profile import Profile
-from models.effort import (
-    GroupFit,
-    Thresholds,
-    expected_share,
-    smallest_rise,
-    window_shares,
-)
+from models.effort import GroupFit, expected_share, window_shares
 from models.effort_directions import judged_directions, weakness_directions
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
+from models.effort_thresholds import Thresholds, smallest_rise
 
-# A crossing counts as seen once it holds for this share of a stride: one that falls back
-# sooner is the noise of the short spans just after a start, looked at end after end (taken
-# for the detection, it saw a simulated rotor weakened in a flight's last 3 s 20 s before it
-# weakened). Held for a whole stride, marginal true crossings of the simulated BlueROV2 were
-# seen up to 12 s later.
-HELD_SHARE_OF_STRIDE = 0.25
 CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
 
 
@@ -241,35 +229,29 @@ def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, flo
         a.group != group or a.name == clear)))
 
 
-def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: EffortLog,
-                 time_s: np.ndarray, dt_s: float
+def _judge_group(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
+                 thresholds: Thresholds, log: EffortLog, time_s: np.ndarray, dt_s: float
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
-                            EffortSeries, tuple, np.ndarray | None]:
+                            EffortSeries, tuple, tuple[np.ndarray | None, np.ndarray] | None]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures, the departures (σ) of a change that alarmed)."""
+    alarm_s, series, whole-log figures, (signatures, departures) of a change that alarmed,
+    to name its member by)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
     window = setup.window_steps(dt_s)
     spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
     n = len(level)
     toward = judged_directions(len(setup.group.members))
-    # Later starts every STARTS_PER_WINDOW-th of a window: the onset to that, not to a whole
-    # window (a sixth of a typical log); each start still has a window of the log before it
-    # and WINDOWS_AFTER_START after it, and the threshold allows for every start tried.
-    stride = max(1, window // STARTS_PER_WINDOW)
-    starts = later_starts(n, window)
-    later_threshold = thresholds.later_start(fit, len(starts))
-    candidates = [(0, thresholds.whole_log(fit))] + [(s, later_threshold) for s in starts]
+    within = log_change(setup, fit, change, thresholds, log, time_s, dt_s)
     # The whole log against the normal logs; each later start against the log before it.
-    departures = np.array([spans.z(0, n)[0]] + [spans.changed(s, n)[0] for s in starts])
-    z = departures @ toward.T
-    ratios = z / np.array([t for _, t in candidates])[:, None]
+    ratios = np.vstack([spans.z(0, n)[0] @ toward.T / thresholds.whole_log(fit),
+                        within.ratios()])
     per_actuator = ratios.max(axis=0)
     share = effort.sum(axis=0) / level.sum()
     normal = expected_share(fit.means, np.bincount(bins, weights=level, minlength=setup.n_bins))
     sigma = fit.sigma(n * dt_s)
-    figures = (share, normal, sigma, named_signatures(
-        setup.group, np.nan_to_num(log.group_commands(setup.group)[steady]), share, sigma))
+    commands = np.nan_to_num(log.group_commands(setup.group)[steady])
+    figures = (share, normal, sigma, named_signatures(setup.group, commands, share, sigma))
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
@@ -279,22 +261,17 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, log: 
         # The whole log departs because something changed within it (a rotor lost midway
         # moves the whole log's shares too): dated where it changed, not from the start.
         best = 1 + int(np.argmax(ratios[1:, top]))
-    start, threshold = candidates[best]
-    # When it was seen: the first end, a stride on from the start, from which the span's
-    # departure stays past its threshold for a part of a stride (or to the log's end); a
-    # change within the log no sooner than it may have begun, dated on the whole log.
-    first = start + (window if start == 0 else stride)
     if best != 0:
-        onset_s, error_s = date_change(spans, toward[top], times, window, stride, n - 1)
-        first = min(n, max(first, int(np.searchsorted(times, onset_s - error_s)) + 1))
-    running = ((spans.z if start == 0 else spans.changed)(start, np.arange(first, n + 1))
-               @ toward.T)[:, top]
-    alarm = first + held_over(running, threshold, max(1, round(stride * HELD_SHARE_OF_STRIDE))) - 1
-    if best == 0:        # the whole log departs: from its start
-        return (per_actuator, (float(times[0]), None), float(times[alarm]), series, figures,
-                None)
-    onset = date_change(spans, toward[top], times, window, stride, alarm)
-    return per_actuator, onset, float(times[alarm]), series, figures, departures[best]
+        onset, alarm_s, departure = within.seen(top, within.starts[best - 1])
+        return (per_actuator, onset, alarm_s, series, figures,
+                (within.signatures, departure))
+    # The whole log departs: seen from the first end, a window on, from which its
+    # departure stays past its threshold (as `LogChange.seen`), and from its start.
+    stride = max(1, window // STARTS_PER_WINDOW)
+    running = (spans.z(0, np.arange(window, n + 1)) @ toward.T)[:, top]
+    alarm = window + held_over(running, thresholds.whole_log(fit),
+                               max(1, round(stride * HELD_SHARE_OF_STRIDE))) - 1
+    return per_actuator, (float(times[0]), None), float(times[alarm]), series, figures, None
 
 
 def _series(setup: GroupSetup, fit: GroupFit, effort: np.ndarray, level: np.ndarray,
@@ -319,6 +296,19 @@ def _unread(members: Sequence[str], log: EffortLog) -> str | None:
     return f"not judged (this log has no {', '.join(absent)})" if absent else None
 
 
+def _steady_s(setup: GroupSetup, fit: GroupFit | None, refused: str | None,
+              model: EffortModel, log: EffortLog) -> tuple[float, str | None]:
+    """The log's steady seconds in the group, and why it is not judged (None: it is)."""
+    why = refused if refused is not None else _unread(setup.group.members, log)
+    _, level, ok = log.group_efforts(setup.group)
+    steady_s = float(setup.steady(level, ok).sum()) * model.dt_s
+    if why is None and fit is not None and model.thresholds is not None \
+            and steady_s < setup.needs_s():
+        why = (f"not judged (too little steady effort in this log: {steady_s:.1f} s at "
+               f"{setup.min_level:.3g} of full scale or more, needs {setup.needs_s():.0f} s)")
+    return steady_s, why
+
+
 def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                  usable: np.ndarray, time_s: np.ndarray) -> EffortCheck:
     """Judge one log's effort shares (``efforts``: the commands, then the actuator outputs;
@@ -330,27 +320,25 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     onsets: list[tuple[float, float, float | None, str]] = []   # alarm, onset, error, group
     directions: dict[str, np.ndarray] = {}     # each judged group's signatures, whole log
     changed: dict[str, np.ndarray] = {}        # a group's departures where a change alarmed
+    changed_toward: dict[str, np.ndarray] = {}   # and the signatures to match them with
     alike = {setup.group.name for setup, fit in zip(model.setups, model.fits, strict=True)
              if fit is not None and fit.alike}
-    for setup, fit, refused in zip(model.setups, model.fits, model.refused, strict=True):
+    for setup, fit, refused, change in zip(model.setups, model.fits, model.refused,
+                                           model.change_fits or [None] * len(model.setups),
+                                           strict=True):
         members = setup.group.members
-        why = refused if refused is not None else _unread(members, log)
-        if why is None and fit is not None and model.thresholds is not None:
-            _, level, ok = log.group_efforts(setup.group)
-            steady_s = float(setup.steady(level, ok).sum()) * model.dt_s
-            if steady_s < setup.needs_s():
-                why = (f"not judged (too little steady effort in this log: {steady_s:.1f} s "
-                       f"at {setup.min_level:.3g} of full scale or more, needs "
-                       f"{setup.needs_s():.0f} s)")
+        steady_s, why = _steady_s(setup, fit, refused, model, log)
         if why is not None or fit is None or model.thresholds is None:
             actuators += [ActuatorEffort(m, component.get(m, m), setup.group.name, None, None,
                                          None, None, None, why) for m in members]
             continue
         ratio, onset, alarm, group_series, (share, normal, sigma, toward), departure = \
-            _judge_group(setup, fit, model.thresholds, log, time_s, model.dt_s)
+            _judge_group(setup, fit, change, model.thresholds, log, time_s, model.dt_s)
         directions[setup.group.name] = toward
         if departure is not None:
-            changed[setup.group.name] = departure
+            signatures, changed[setup.group.name] = departure
+            changed_toward[setup.group.name] = (toward if signatures is None
+                                                else signatures[:, None, :])
         # Relative to this log's normal shares (its mix of levels or thrust directions).
         rise = smallest_rise(fit, model.thresholds, span_s=steady_s, shares=normal)
         since = None if onset is None or onset[1] is None else \
@@ -367,7 +355,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
     matches = signature_matches(actuators, directions)
     # A rotor lost at the log's end barely moves the whole log: the change names it.
     if changed and not _clear_suspect(actuators, matches):
-        matches = signature_matches(actuators, directions, changed)
+        matches = signature_matches(actuators, changed_toward, changed)
     named = _named(actuators, matches)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.effort_actuators}

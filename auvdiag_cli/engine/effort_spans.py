@@ -8,8 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from auvdiag_cli.engine.change_point import likely_span
-from models.effort import SPREAD_FLOOR, GroupFit, Thresholds, rise_judged
+from models.effort import SPREAD_FLOOR, GroupFit
 from models.effort_model import EffortLog, GroupSetup
+from models.effort_thresholds import Thresholds, rise_judged
 
 STARTS_PER_WINDOW = 8
 # Windows a later start needs after it to detect a change: the windows' noise is measured on

@@ -16,8 +16,9 @@ from auvdiag_cli.jobs.train import TrainingResult
 from auvdiag_cli.reports.sentences import by_reason
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused, StartReference
-from models.effort import EffortGroup, GroupFit, Thresholds, smallest_rise, widening
+from models.effort import EffortGroup, GroupFit
 from models.effort_model import EffortModel, GroupSetup
+from models.effort_thresholds import Thresholds, smallest_rise, widening
 from models.fast import NETWORK
 from models.relation_forms import Relations
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
