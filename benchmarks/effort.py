@@ -225,14 +225,18 @@ def _simulated(profile: Profile, scenario_name: str, seed: int, work: Path,
     return relation_log(ingest(path, profile), profile)
 
 
-def _rise(model: EffortModel, setup: GroupSetup, fit: GroupFit | None) -> str:
+def _rise(model: EffortModel, setup: GroupSetup, fit: GroupFit | None,
+          change: GroupFit | None) -> str:
     """The smallest rise of one member's share the group's whole-log test judges, and the
-    later-start test where it weakens halfway through a mission."""
+    later-start test where it weakens halfway through a mission (no one figure where that
+    is judged along the mixer's signatures over the change bin)."""
     if fit is None or model.thresholds is None:
         return ""
+    whole = f"; judged from a rise of {rise_range(list(smallest_rise(fit, model.thresholds)))}"
+    if change is not None and setup.change_bin is not None:
+        return whole + ", within a mission along the mixer's signatures under way"
     later = smallest_later_rise(setup, fit, model.thresholds, model.dt_s)
-    return (f"; judged from a rise of {rise_range(list(smallest_rise(fit, model.thresholds)))}"
-            f", from halfway {rise_range(list(later))}")
+    return whole + f", from halfway {rise_range(list(later))}"
 
 
 def _conditions(two_way: bool, fit: GroupFit | None) -> str:
@@ -275,8 +279,9 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                 named = set(check.named)
                 mark = "-"
                 if check.suspects:
-                    mark = ("named" if named == {component} else "in a pair"
-                            if component in named else "other")
+                    mark = ("named" if named == {component} else "other"
+                            if component not in named else "in a pair" if len(named) == 2
+                            else f"among {len(named)}")
                 if (mark == "named" and check.onset_s is not None
                         and check.alarm_s is not None):
                     times.append((check.onset_s - FAULT_FROM_S, check.alarm_s - FAULT_FROM_S,
@@ -288,13 +293,15 @@ def simulated(profile_name: str, title: str, training_logs: int) -> list[str]:
                 *_late(profile, model, components, work, 0.0, STOPPED_BEFORE_LAST_WORK_S),
                 _seeds(profile, model, components, work)]
     alarms = sum(bool(c.suspects) for c in normal)
+    changes = model.change_fits or (None,) * len(model.setups)
     groups = ", ".join(f"{setup.group.name} ({_conditions(setup.two_way, fit)}"
-                       f"{_rise(model, setup, fit)})"
-                       for setup, fit in zip(model.setups, model.fits, strict=True))
+                       f"{_rise(model, setup, fit, change)})"
+                       for setup, fit, change in zip(model.setups, model.fits, changes,
+                                                     strict=True))
     return ["", f"**Simulated {title}** (`{profile_name}`, {len(training)} normal missions to "
             f"learn from; groups {groups}): false alarms on {len(normal)} normal missions of "
             f"other seeds: {alarms}. One actuator weakened from 60 s (- not found; named; in a "
-            "pair: named with the actuator whose command moves with it; a group's rise: the "
+            "pair, among n: named with others it cannot be told from; a group's rise: the "
             "smallest rise of one member's share its whole-log test judges over a mission, "
             "and its test against the mission's own beginning where it weakens halfway; "
             "onset and detection after 60 s, median over those named alone):", "",
@@ -354,13 +361,17 @@ def _seeds(profile: Profile, model: EffortModel, components: list[str], work: Pa
     """Each actuator weakened to LATE_FRACTION from FAULT_FROM_S on missions of ten noise
     seeds: how many of them name it alone, and when."""
     named: dict[str, int] = {}
+    paired: dict[str, int] = {}
+    wrong = 0
     delays = []
     for component in components:
-        named[component] = 0
+        named[component] = paired[component] = 0
         for seed in SEEDS:
             check = _judge(model, profile, _simulated(
                 profile, _weak(component), seed, work,
                 LATE_FRACTION))
+            paired[component] += len(check.named) == 2 and component in check.named
+            wrong += bool(check.named) and component not in check.named
             if check.named == (component,):
                 named[component] += 1
                 if check.alarm_s is not None:
@@ -368,8 +379,9 @@ def _seeds(profile: Profile, model: EffortModel, components: list[str], work: Pa
     timing = (f"; detected {np.median(delays):.1f} s after the fault began (median; worst "
               f"{max(delays):.1f} s)" if delays else "")
     return (f"- Weakened to {LATE_FRACTION:.0%} from {FAULT_FROM_S:.0f} s on missions of "
-            f"{len(SEEDS)} other noise seeds: named alone in "
-            + ", ".join(f"{n} of {len(SEEDS)} ({c})" for c, n in named.items()) + timing + ".")
+            f"{len(SEEDS)} other noise seeds: named alone (in a pair) in "
+            + ", ".join(f"{n} ({paired[c]}) of {len(SEEDS)} ({c})" for c, n in named.items())
+            + f"; another named in its place in {wrong}" + timing + ".")
 
 
 def _row_timing(times: list[Timing]) -> str:

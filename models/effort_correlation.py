@@ -15,10 +15,9 @@ of unit variance under normal operation. Where R is only what the shares' averag
 makes it (every pair correlated −1/(m − 1)), z is the plain projection scaled by
 √((m − 1)/m) (`models.effort_directions.judged_directions`); where the mixer ties members
 together, the noise the ties carry is set aside and a weak thruster's signature stands out
-of it. On the simulated BlueROV2 trained on three normal missions, each horizontal
-thruster weakened to 70 % halfway through a mission departs by z 4-8.6 along its signature
-where 20 normal missions of other seeds reach 3.9 at most (plain projection: faults 3.1-,
-normal missions 4.9)."""
+of it (on the simulated BlueROV2: `benchmarks/effort.py`, docs/method.md). Where the mission
+wanders slowly more than the windows say, the larger of the two is taken in each direction
+of the noise (`with_slow_wander`)."""
 
 from collections.abc import Sequence
 
@@ -77,6 +76,18 @@ def whitening(correlation: np.ndarray | None, sigma: np.ndarray) -> np.ndarray:
     kept = values > 1e-9 * max(float(values.max()), 1e-300)
     roots = np.where(kept, 1.0 / np.sqrt(np.where(kept, values, 1.0)), 0.0)
     return np.asarray((vectors * roots) @ vectors.T)
+
+
+def with_slow_wander(whiten: np.ndarray, slow: np.ndarray | None) -> np.ndarray:
+    """``whiten`` (`whitening`) taken further where the departures wander slowly more than
+    the windows' noise says (``slow``: the covariance of long windows' departures, in a
+    window's terms; a mission's legs, each trimmed its own way): every direction judged
+    against the larger of the two, max(I, T S T), so that a change's size along each
+    signature and its likeness to each are read in the same noise."""
+    if slow is None:
+        return whiten
+    values, vectors = np.linalg.eigh(whiten @ slow @ whiten)
+    return np.asarray((vectors / np.sqrt(np.maximum(values, 1.0))) @ vectors.T @ whiten)
 
 
 def unit_rows(rows: np.ndarray) -> np.ndarray:

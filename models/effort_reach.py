@@ -16,10 +16,11 @@ near normal: far from "the others down alike".
 The signature of a span is those rises summed over its steps, less each member's share of
 their mean (the shares average to one), in units of each member's spread; it depends on
 which way each thruster pushed, so it is taken from the span's own commands. It names the
-weak member (`engine.effort_check.signature_matches`); the tests still judge along the
-plain signatures: the controller's own corrections move the shares along the mixer's
-signatures too, and judged along them (scaled by how much noisier they are there, on the
-normal logs' windows) the simulated BlueROV2 found fewer weak thrusters at the budget."""
+weak member (`engine.effort_naming.signature_matches`). The whole-log test judges along
+the plain signatures; the test against the log's own beginning judges a group the mixer
+cannot drive member by member along these, in the noise of its windows' correlated
+departures (`models.effort_correlation`), over the operating condition it holds most
+(`GroupSetup.change_bin`)."""
 
 from typing import Any
 

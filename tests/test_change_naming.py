@@ -13,7 +13,8 @@ from helpers import observed
 
 from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.change_suspects import beyond_the_replay
-from auvdiag_cli.engine.effort_check import ActuatorEffort, EffortCheck, signature_matches
+from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.effort_naming import ActuatorEffort, signature_matches
 from auvdiag_cli.engine.isolation import apply_change_alarm
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Verdict

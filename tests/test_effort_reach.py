@@ -129,3 +129,34 @@ def test_a_model_read_back_names_along_the_same_signatures():
     assert _judge(again, weak).matches == _judge(model, weak).matches
     assert _judge(again, weak).matches[0][1] > 0.95
 
+
+
+def _without_change_bins(entry: dict) -> dict:  # type: ignore[type-arg]
+    """model.json as written before groups had a change bin."""
+    for group in entry["groups"]:
+        group.pop("change_bin", None)
+        group.pop("change_window_s", None)
+        for log in group["logs"]:
+            log.pop("change", None)
+            log.pop("within_cov", None)
+            log.pop("long_cov", None)
+    return entry
+
+
+def test_the_change_bin_is_read_back_and_a_model_without_it_judges_every_steady_step():
+    rng = np.random.default_rng(8)
+    model = _model(rng)
+    setup = model.setups[0]
+    assert setup.change_bin is not None and setup.change_window_s >= 2.0
+    again = EffortModel.from_json(json.loads(json.dumps(model.to_json())))
+    assert again.setups[0].change_bin == setup.change_bin
+    weak = _commands(rng, kept=0.7)
+    assert ([a.ratio for a in _judge(again, weak).actuators]
+            == [a.ratio for a in _judge(model, weak).actuators])
+    older = EffortModel.from_json(_without_change_bins(json.loads(json.dumps(
+        model.to_json()))))
+    assert older.setups[0].change_bin is None and older.change_fits[0] is None
+    # The same weakness, judged over every steady step along the plain signatures.
+    check = _judge(older, weak)
+    plain = {a.name: a.ratio for a in check.actuators}
+    assert plain["motor_1"] == max(plain.values()) > 1 and check.named[0] == "thruster_1"

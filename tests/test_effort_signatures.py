@@ -13,20 +13,26 @@ from helpers import observed
 
 from auvdiag_cli.engine.active import ActiveDiagnosis
 from auvdiag_cli.engine.command_check import CommandCheck
-from auvdiag_cli.engine.effort_check import (
+from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.effort_naming import (
     CLEAR_MATCH,
     ActuatorEffort,
-    EffortCheck,
-    _named,
+    named_components,
+    not_told_apart,
     signature_matches,
 )
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.isolation import _measured_instead, name_by_hypotheses
+from auvdiag_cli.engine.isolation import (
+    _measured_instead,
+    apply_other_evidence,
+    name_by_hypotheses,
+)
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort_reach import named_signatures
+from models.store import LoadedModel
 
 
 def _group(departures: list[float], *harder: int) -> tuple[ActuatorEffort, ...]:
@@ -64,13 +70,13 @@ def test_one_clear_weakness_is_named_alone_two_are_named_together():
     # Motor 3's weakness, and motor 1 crossing beside it (a drift within the log): one named.
     clear = _group([0.01, -0.03, 0.06, -0.04], 0, 2)
     assert signature_matches(clear)[0][0] == "motor_3"
-    assert _named(clear, signature_matches(clear)) == ("motor_3",)
+    assert named_components(clear, signature_matches(clear))[0] == ("motor_3",)
     # A load between motors 3 and 4 matches no one weakness: both named.
     shared = _group([-0.04, -0.04, 0.04, 0.04], 2, 3)
-    assert _named(shared, signature_matches(shared)) == ("motor_3", "motor_4")
+    assert named_components(shared, signature_matches(shared))[0] == ("motor_3", "motor_4")
     # The clearest match is not among those driven harder: every one driven harder named.
     elsewhere = _group([0.01, -0.03, 0.06, -0.04], 0)
-    assert _named(elsewhere, signature_matches(elsewhere)) == ("motor_1",)
+    assert named_components(elsewhere, signature_matches(elsewhere))[0] == ("motor_1",)
 
 
 def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
@@ -256,8 +262,8 @@ def test_what_the_commands_measured_on_one_thruster_names_it_where_the_replay_ca
 def test_a_member_the_clear_match_leaves_out_is_not_described_as_driven_harder():
     # Motor 4's share fell over the log; it crossed only against the log's own beginning.
     actuators = _group([-0.02, -0.01, 0.06, -0.05], 2, 3)
-    check = EffortCheck(actuators, 0.01, 20.0, 15.0, _named(actuators, signature_matches(
-        actuators)), (), "a damaged propeller or a weak motor", signature_matches(actuators))
+    check = EffortCheck(actuators, 0.01, 20.0, 15.0, named_components(actuators, signature_matches(
+        actuators))[0], (), "a damaged propeller or a weak motor", signature_matches(actuators))
     assert check.named == ("motor_3",)
     assert "motor_3 carries 6% more" in check.describe()
     assert "motor_4" not in check.describe().split(":")[0]
@@ -273,7 +279,7 @@ def test_a_change_within_the_log_is_matched_by_the_departure_that_alarmed():
     changed = {"rotors": np.array([4.0, -1.5, -1.2, -1.3])}
     matches = signature_matches(whole, None, changed)
     assert matches[0][0] == "motor_1" and matches[0][1] > 0.95
-    assert _named(whole, matches) == ("motor_1",)
+    assert named_components(whole, matches)[0] == ("motor_1",)
 
 
 def test_a_rotor_that_stopped_matches_its_signature_with_the_tilt_balance():
@@ -313,3 +319,54 @@ def test_a_part_whose_output_is_named_otherwise_is_said_as_the_verdict_names_it(
     assert "the shares match thruster_5 (motor_5) weak (1.00; the next, thruster_6 (motor_6)" \
         in text
     assert _check(_group([-0.02, -0.01, 0.06, -0.03], 2)).describe().startswith("motor_3 carr")
+
+
+def test_members_whose_signatures_lie_close_are_named_together_until_the_change_leans():
+    """A vectored ROV's mix under way moves a weak thruster's shares nearly as it moves a
+    neighbour's (signatures at cosine 0.9, in the noise's own coordinates): a change along
+    one, a few of its noise's σ in size, matches it best but leans towards it by less than
+    TOLD_APART_Z along the difference, and both are named; a change far larger, or one
+    along signatures far apart (the plain ones), names it alone."""
+    close = np.array([1.0, 0.0, 0.0, 0.0]), np.array([0.9, 0.19 ** 0.5, 0.0, 0.0])
+    signatures = {"rotors": np.array([close[0], -close[0], close[1], -close[1]])[:, None, :]}
+    actuators = _group([0.06, -0.03, 0.0, -0.03], 0)
+    for size, alone in ((5.0, False), (25.0, True)):
+        change = {"rotors": size * close[0]}
+        matches = signature_matches(actuators, signatures, change)
+        assert matches[0] == ("motor_1", 1.0) and matches[1][0] == "motor_3"
+        untold = not_told_apart(actuators, "motor_1", signatures, change)
+        named, together = named_components(actuators, matches, untold)
+        assert named == (("motor_1",) if alone else ("motor_1", "motor_3"))
+        assert together is not alone
+    plain = {"rotors": 5.0 * (np.eye(4)[0] - 0.25) / np.linalg.norm(np.eye(4)[0] - 0.25)}
+    assert not_told_apart(actuators, "motor_1", None, plain) == ()
+    check = EffortCheck(actuators, 0.01, 20.0, 15.0, ("motor_1", "motor_3"), (), "",
+                        (("motor_1", 1.0), ("motor_3", 0.9)), cannot_tell_apart=True)
+    assert "leans too little towards one to tell which is weak" in check.describe()
+
+
+def test_a_pair_the_shares_cannot_tell_apart_is_told_by_the_commands_against_the_motion():
+    """Thrusters 1 and 3 under way move the shares nearly alike; the commands against the
+    motion, which see each act on the vehicle its own way, name thruster 1 alone: the
+    verdict names it. Where they name neither, or both, the pair stands."""
+    profile = load_profile(Path("bluerov2"))
+    judging = Judging((), {}, 1, 1, profile, {}, cast(LoadedModel, None))
+    pair = EffortCheck(_group([0.06, -0.03, 0.0, -0.03], 0), 0.01, 80.0, 60.0,
+                       ("thruster_1", "thruster_3"), (), "", (("motor_1", 0.98),
+                                                               ("motor_3", 0.11)),
+                       cannot_tell_apart=True)
+    seen = replace(observed(None, {}, "bluerov2"), effort_check=pair)
+    normal = Finding(verdict=Verdict.NORMAL, b={"surge": 0})
+    told = apply_other_evidence(replace(seen, command_check=_thrust_lost(
+        ("thruster_1",), 74.5, ())), normal, judging)
+    assert told.verdict is Verdict.FAULT and told.component == "thruster_1"
+    assert "which tells thruster_1 from the others" in told.notes[-1]
+    for motion in (("thruster_2",), ("thruster_1", "thruster_3")):
+        untold = apply_other_evidence(replace(seen, command_check=_thrust_lost(
+            motion, 74.5, ())), normal, judging)
+        assert untold.component is None and untold.candidates == ("thruster_1", "thruster_3")
+        assert "one of thruster_1 or thruster_3, which the shares cannot tell apart" \
+            in untold.notes[-1]
+    # Members the shares told apart are named as they were.
+    both = replace(pair, cannot_tell_apart=False)
+    assert both.told_by(("thruster_1",)) == ("thruster_1", "thruster_3")

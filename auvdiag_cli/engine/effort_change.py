@@ -17,7 +17,7 @@ from auvdiag_cli.engine.effort_spans import (
     later_starts,
 )
 from models.effort import GroupFit
-from models.effort_correlation import unit_rows, whitening
+from models.effort_correlation import unit_rows, whitening, with_slow_wander
 from models.effort_directions import judged_directions
 from models.effort_model import EffortLog, GroupSetup
 from models.effort_reach import rises, signature_directions
@@ -106,13 +106,8 @@ def log_change(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
     directions = signature_directions(
         rises(commands, np.asarray(setup.group.factors), setup.group.projection), share,
         change.within)
-    whiten = whitening(change.within_corr, change.within)
-    signatures = unit_rows(directions @ whiten)
+    whiten = with_slow_wander(whitening(change.within_corr, change.within), change.within_slow)
+    signatures = unit_rows(directions @ whiten.T)
     toward = signatures @ whiten
-    if change.within_slow is not None:
-        # A slow wander along a direction judged (a mission's legs, each trimmed its own
-        # way) varies the change more than the windows say: judged against the larger.
-        toward = toward / np.sqrt(np.maximum(1.0, np.einsum(
-            "ij,jk,ik->i", toward, change.within_slow, toward)))[:, None]
     return LogChange(spans, time_s[steady], window, starts,
                      thresholds.later_start(change, len(starts)), toward, whiten, signatures)

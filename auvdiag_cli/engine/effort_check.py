@@ -17,13 +17,18 @@ span from the start that departs most stays past its threshold; the onset, the s
 departs most near the start that departs most among those tried on to the detection (the
 change point's likeliest place, `effort_spans.date_change`)."""
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from auvdiag_cli.engine.change_point import held_over
 from auvdiag_cli.engine.effort_change import HELD_SHARE_OF_STRIDE, log_change
+from auvdiag_cli.engine.effort_naming import (
+    CLEAR_MATCH,
+    ActuatorEffort,
+    named_by_shares,
+)
 from auvdiag_cli.engine.effort_spans import (
     STARTS_PER_WINDOW,
     Spans,
@@ -33,39 +38,10 @@ from auvdiag_cli.engine.effort_spans import (
 from auvdiag_cli.engine.effort_words import carries, smallest_rise_shown
 from auvdiag_cli.vehicle.profile import Profile
 from models.effort import GroupFit, expected_share, window_shares
-from models.effort_directions import judged_directions, weakness_directions
+from models.effort_directions import judged_directions
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
 from models.effort_thresholds import Thresholds, smallest_rise
-
-CLEAR_MATCH = 0.8           # a match below this names no one actuator's weakness
-
-
-@dataclass(frozen=True)
-class ActuatorEffort:
-    name: str
-    component: str
-    group: str
-    share: float | None          # of the group's mean effort, over the log's steady time
-    normal_share: float | None   # what normal logs give for the same operating conditions
-    spread: float | None         # σ of the share between normal logs of this length
-    departure: float | None      # share / normal share − 1 (0.10: carries 10 % more)
-    ratio: float | None          # the largest z over its threshold (either test); > 1 alarms
-    not_judged: str | None       # why not, or None
-    # The smallest rise of its share the whole-log test judges over this log (`smallest_rise`)
-    smallest_rise_shown: float | None = None
-    # Where its group changed within the log: its share from the onset on over its share
-    # before, less one (a rotor lost in a log's last seconds barely moves the whole log's).
-    since_onset: float | None = None
-    driven_alone: bool = False   # its controller drives it alone (`EffortGroup.driven_alone`)
-
-    @property
-    def driven_harder(self) -> bool:
-        return self.ratio is not None and self.ratio > 1
-
-    @property
-    def said(self) -> str:      # its part, as the verdict names it, and its own name
-        return self.name if self.component == self.name else f"{self.component} ({self.name})"
 
 
 @dataclass(frozen=True)
@@ -101,10 +77,28 @@ class EffortCheck:
     # The alarm is the whole log's departure from normal logs that differ no more than their
     # own noise makes them (`GroupFit.alike`): a normal log of another day may stray as far.
     against_alike_logs: bool = False
+    # The members named in the suspect's group are ones its shares cannot tell apart
+    # (`named_components`).
+    cannot_tell_apart: bool = False
 
     @property
     def judged(self) -> bool:
         return any(a.not_judged is None for a in self.actuators)
+
+    def told_by(self, motion: Sequence[str]) -> tuple[str, ...]:
+        """The components named, or the one of those the shares cannot tell apart that the
+        motion names (``motion``: the components the commands against the motion name;
+        members a mixer moves alike in the shares act on the vehicle each its own way)."""
+        told = tuple(c for c in self.named if c in motion)
+        return told if self.cannot_tell_apart and len(told) == 1 else self.named
+
+    def several(self) -> str:
+        """What more than one component named means, to follow the description."""
+        if self.cannot_tell_apart:
+            return "; one of " + " or ".join(self.named) + ", which the shares cannot tell apart"
+        if len(self.named) > 1:
+            return "; more than one actuator is driven harder (a fault near several of them?)"
+        return ""
 
     @property
     def clearly_one(self) -> str | None:
@@ -146,7 +140,8 @@ class EffortCheck:
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.said}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
                     f"its threshold){smallest_rise_shown(judged)}")
-        # A member its group's clear match leaves out (`_named`) is not a weakness of its own.
+        # A member its group's clear match leaves out (`named_components`) is not a weakness
+        # of its own.
         parts = [carries(a) for a in suspects if a.component in self.named or not self.named]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
                 + self._since() + self._caution())
@@ -172,61 +167,12 @@ class EffortCheck:
         if match < CLEAR_MATCH:
             return (f"; the shares match no one actuator's weakness well (closest {best}, "
                     f"{match:.2f}): more than one, or a load between them")
-        return f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
-
-
-def signature_matches(actuators: Sequence[ActuatorEffort],
-                      directions: Mapping[str, np.ndarray] | None = None,
-                      departures: Mapping[str, np.ndarray] | None = None
-                      ) -> tuple[tuple[str, float], ...]:
-    """How well the departures of the strongest suspect's group, in units of their spreads,
-    match each member's weakness, best first: the cosine between them and the signature
-    of member i, the best of its candidates. ``directions``: the group's, (members,
-    candidates, members), over the whole log (`models.effort_reach.named_signatures`); by
-    default its own share up and the others' down alike, the shares averaging to one:
-    e_i - 1/m. ``departures``: a group's to match instead of the whole log's (those of a
-    change within the log that alarmed, from its start to the end). One weak actuator
-    matches its own near 1; a load shared between two, or two weak ones, matches none
-    well."""
-    suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
-    if not suspects:
-        return ()
-    group = [a for a in actuators if a.group == suspects[0].group and a.spread]
-    if len(group) < 2:
-        return ()
-    z = (departures or {}).get(group[0].group)
-    if z is None or len(z) != len(group):
-        z = np.array([((a.share or 0.0) - (a.normal_share or 0.0)) / (a.spread or 1.0)
-                      for a in group])
-    length = float(np.linalg.norm(z))
-    toward = (directions or {}).get(group[0].group)
-    if toward is None or toward.shape[::2] != (len(group), len(group)):
-        toward = weakness_directions(len(group))[:, None, :]
-    matches = (toward @ z).max(axis=1) / length if length > 0 else np.zeros(len(group))
-    return tuple(sorted(((a.name, round(float(m), 2)) for a, m in zip(group, matches,
-                                                                     strict=True)),
-                        key=lambda item: -item[1]))
-
-
-def _clear_suspect(actuators: Sequence[ActuatorEffort],
-                   matches: Sequence[tuple[str, float]]) -> bool:
-    """Whether the best match is clear and of an actuator driven harder."""
-    return bool(matches) and matches[0][1] >= CLEAR_MATCH and any(
-        a.name == matches[0][0] and a.driven_harder for a in actuators)
-
-
-def _named(actuators: Sequence[ActuatorEffort], matches: Sequence[tuple[str, float]]
-           ) -> tuple[str, ...]:
-    """The components of the actuators driven harder; in the strongest suspect's group,
-    where its departure matches the weakness of one member driven harder clearly
-    (CLEAR_MATCH), that member alone. Another member crossing beside it (a slow drift of
-    its share within the log, seen by the test against the log's own beginning) is not a
-    second weakness the shares show: two weak members, or a load between them, match no
-    one signature."""
-    clear = matches[0][0] if matches and matches[0][1] >= CLEAR_MATCH else None
-    group = next((a.group for a in actuators if a.name == clear and a.driven_harder), None)
-    return tuple(dict.fromkeys(a.component for a in actuators if a.driven_harder and (
-        a.group != group or a.name == clear)))
+        pattern = f"; the shares match {best} weak ({match:.2f}; the next, {second}: {other:.2f})"
+        if self.cannot_tell_apart:
+            pattern += (", but where the vehicle worked its mix moves the shares of "
+                        + " and ".join(self.named) + " nearly alike, and the departure that "
+                        "alarmed leans too little towards one to tell which is weak")
+        return pattern
 
 
 def _judge_group(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
@@ -352,11 +298,8 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             setup.group.driven_alone) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
-    matches = signature_matches(actuators, directions)
-    # A rotor lost at the log's end barely moves the whole log: the change names it.
-    if changed and not _clear_suspect(actuators, matches):
-        matches = signature_matches(actuators, changed_toward, changed)
-    named = _named(actuators, matches)
+    matches, named, cannot_tell_apart = named_by_shares(actuators, directions, changed,
+                                                        changed_toward)
     first = min(onsets, key=lambda o: (o[0], o[1]), default=None)
     kinds = {c.name: c.failure for c in profile.effort_actuators}
     failure = next((kinds[a.name] for a in actuators if a.driven_harder), "")
@@ -365,4 +308,5 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                        None if first is None else round(first[1], 3), named, tuple(series),
                        failure, matches,
                        None if first is None or first[2] is None else round(first[2], 3),
-                       first is not None and first[2] is None and first[3] in alike)
+                       first is not None and first[2] is None and first[3] in alike,
+                       cannot_tell_apart)

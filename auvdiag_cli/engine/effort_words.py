@@ -6,7 +6,7 @@ from typing import Protocol
 
 
 class SaidEffort(Protocol):
-    """What is said of one actuator's effort (`effort_check.ActuatorEffort`)."""
+    """What is said of one actuator's effort (`effort_naming.ActuatorEffort`)."""
 
     @property
     def said(self) -> str: ...

@@ -1,7 +1,6 @@
-"""Naming the component once something is found: the pattern table's row, the hypothesis
-test, the DMS runs (active diagnosis, `narrowing`), a weakened thruster, the start and
-command checks; and Substituting Control for a failed sensor. Each step takes the finding
-so far and returns the next; the observations are read, never changed."""
+"""Naming the component once something is found (the pattern table, the hypothesis test,
+the DMS runs of `narrowing`, a weakened thruster, the start and command checks), and
+Substituting Control for a failed sensor; each step maps the finding so far to the next."""
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
@@ -206,12 +205,13 @@ def _apply_effort_alarm(seen: Observations, finding: Finding, effort: EffortChec
     taking less of the total, not faults of their own."""
     finding = replace(finding, verdict=Verdict.FAULT, case=None,
                       detected_at_s=effort.alarm_s, onset_s=effort.onset_s)
-    note = f"found in the effort the actuators carry: {effort.describe()}"
-    if len(effort.named) > 1:
-        note += "; more than one actuator is driven harder (a fault near several of them?)"
+    note = f"found in the effort the actuators carry: {effort.describe()}{effort.several()}"
+    named = effort.named
     if check is not None and check.alarm_s is not None:
-        note += f"; the commands against the motion: {check.describe()}"
-    return _found(seen, finding, list(effort.named), note, judging)
+        named = effort.told_by(check.named)
+        note += f"; the commands against the motion: {check.describe()}" + (
+            f", which tells {named[0]} from the others" if named != effort.named else "")
+    return _found(seen, finding, list(named), note, judging)
 
 
 def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandCheck,

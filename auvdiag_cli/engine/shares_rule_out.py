@@ -9,7 +9,7 @@ it); its share of the group's mean effort then rises by (a − 1)(m − 1)/(a + 
 m members, over the part of the log's steady time after the onset. The weakness is ruled
 out where, to show the share observed, the log's own offset from the normal logs would have
 to lie below the normal band by as much as the whole-log test's threshold lies above it
-(the smallest rise it shows, `effort_check.ActuatorEffort.smallest_rise_shown`): as
+(the smallest rise it shows, `effort_naming.ActuatorEffort.smallest_rise_shown`): as
 unlikely, on a normal log, as a false alarm. Where the mixer cannot drive a member alone
 (a vectored ROV's four horizontal thrusters, three efforts for four), a weak one moves the
 shares little (a simulated BlueROV2's thruster at 70 % moved its share 1-9 % under way)
@@ -20,7 +20,8 @@ import math
 
 import numpy as np
 
-from auvdiag_cli.engine.effort_check import ActuatorEffort, EffortCheck
+from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.effort_naming import ActuatorEffort
 
 LEAST_FRACTION = 0.25
 

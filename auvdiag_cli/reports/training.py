@@ -190,8 +190,9 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
     if isinstance(effort, Refused):
         return [f"effort: {effort.reason}"]
     lines = []
-    for setup, logs, fit, why in zip(effort.setups, effort.summaries, effort.fits,
-                                     effort.refused, strict=True):
+    changes = effort.change_fits or (None,) * len(effort.setups)
+    for setup, logs, fit, why, change in zip(effort.setups, effort.summaries, effort.fits,
+                                             effort.refused, changes, strict=True):
         group = setup.group
         if fit is None or effort.thresholds is None:
             lines.append(f"effort of {group.name}: {why}")
@@ -205,22 +206,36 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"{effort.false_alarm_rate:.1%} of normal logs; each normal log judged by the "
             f"others: largest z {float(fit.loo_z.max()):.2f}{_scatter(fit)}); changed within "
             "a log past z "
-            f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s):.2f} "
-            f"(a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
-            f"on {fit.within_dof:.0f} degrees of freedom)"
-            + _smallest(setup, fit, effort.thresholds, effort.dt_s) + _alike(fit))
+            f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s, change):.2f}"
+            + _later_noise(setup, fit, change)
+            + _smallest(setup, fit, effort.thresholds, effort.dt_s, change) + _alike(fit))
     return lines
 
 
-def _smallest(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, dt_s: float) -> str:
+def _later_noise(setup: GroupSetup, fit: GroupFit, change: GroupFit | None) -> str:
+    """What the test of a change within a log is judged over, and its noise."""
+    if change is None or setup.change_bin is None:
+        return (f" (a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
+                f"on {fit.within_dof:.0f} degrees of freedom)")
+    return (f" (a log of {change.typical_s:.0f} s of steady effort in the thrust direction "
+            "that holds most of the normal logs' effort, judged there along the mixer's "
+            f"signatures in {change.window_s:.1f} s windows whose noise, the thrusters moving "
+            f"together included, rests on {change.within_dof:.0f} degrees of freedom)")
+
+
+def _smallest(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, dt_s: float,
+              change: GroupFit | None) -> str:
     """The smallest weakness each test judges, in terms a user can weigh, and what twice the
-    normal logs would bring the whole log's to."""
+    normal logs would bring the whole log's to. A change judged along the mixer's signatures
+    depends on the log's own thrust, so no one rise is said for it."""
     more = 2 * fit.logs
-    return (f"; one weak actuator is judged once it carries about "
-            f"{rise_range(list(smallest_rise(fit, thresholds)))} more than its share over a "
-            f"log of {fit.typical_s:.0f} s (with {more} normal logs, about "
-            f"{rise_range(list(smallest_rise(fit, thresholds, more)))}), or, where it weakens "
-            "halfway through such a log, about "
+    whole = (f"; one weak actuator is judged once it carries about "
+             f"{rise_range(list(smallest_rise(fit, thresholds)))} more than its share over a "
+             f"log of {fit.typical_s:.0f} s (with {more} normal logs, about "
+             f"{rise_range(list(smallest_rise(fit, thresholds, more)))})")
+    if change is not None and setup.change_bin is not None:
+        return whole
+    return (whole + ", or, where it weakens halfway through such a log, about "
             f"{rise_range(list(smallest_later_rise(setup, fit, thresholds, dt_s)))} more from "
             "then on (against the log's own first half)")
 
