@@ -348,7 +348,8 @@ def test_members_whose_signatures_lie_close_are_named_together_until_the_change_
 def test_a_pair_the_shares_cannot_tell_apart_is_told_by_the_commands_against_the_motion():
     """Thrusters 1 and 3 under way move the shares nearly alike; the commands against the
     motion, which see each act on the vehicle its own way, name thruster 1 alone: the
-    verdict names it. Where they name neither, or both, the pair stands."""
+    verdict names it, and where they saw it first, it was detected then. Where they name
+    neither, or both, the pair stands."""
     profile = load_profile(Path("bluerov2"))
     judging = Judging((), {}, 1, 1, profile, {}, cast(LoadedModel, None))
     pair = EffortCheck(_group([0.06, -0.03, 0.0, -0.03], 0), 0.01, 80.0, 60.0,
@@ -370,3 +371,11 @@ def test_a_pair_the_shares_cannot_tell_apart_is_told_by_the_commands_against_the
     # Members the shares told apart are named as they were.
     both = replace(pair, cannot_tell_apart=False)
     assert both.told_by(("thruster_1",)) == ("thruster_1", "thruster_3")
+    # Seen first by the commands against the motion (their alarm at 114.5 s, their first
+    # window over from 29.5 s): detected then, from the shares' onset where it comes before.
+    late = replace(seen, command_check=_thrust_lost(("thruster_1",), 74.5, ()))
+    for onset, dated in ((100.0, 100.0), (120.0, 29.5)):
+        found = apply_other_evidence(replace(late, effort_check=replace(
+            pair, alarm_s=130.0, onset_s=onset)), normal, judging)
+        assert (found.detected_at_s, found.onset_s) == (114.5, dated)
+    assert told.detected_at_s == 80.0 and told.onset_s == 60.0

@@ -92,6 +92,17 @@ class EffortCheck:
         told = tuple(c for c in self.named if c in motion)
         return told if self.cannot_tell_apart and len(told) == 1 else self.named
 
+    def seen_with(self, motion: Sequence[str], alarm_s: float, onset_s: float | None
+                  ) -> tuple[float | None, float | None]:
+        """(Detection, onset): the effort's, or where the commands against the motion saw
+        one of the same parts first (``motion``: the components they name, at ``alarm_s``,
+        begun by ``onset_s``), their alarm, with the effort's onset where it comes before."""
+        if not set(motion) & set(self.named) or (self.alarm_s is not None
+                                                 and self.alarm_s <= alarm_s):
+            return self.alarm_s, self.onset_s
+        before = self.onset_s is not None and self.onset_s <= alarm_s
+        return alarm_s, self.onset_s if before else onset_s
+
     def several(self) -> str:
         """What more than one component named means, to follow the description."""
         if self.cannot_tell_apart:

@@ -203,15 +203,15 @@ def _apply_effort_alarm(seen: Observations, finding: Finding, effort: EffortChec
     """An actuator carries more of its group's effort than on normal logs: the controller
     drives it harder to make up for a weakness near it. Shares that fell are the others
     taking less of the total, not faults of their own."""
-    finding = replace(finding, verdict=Verdict.FAULT, case=None,
-                      detected_at_s=effort.alarm_s, onset_s=effort.onset_s)
     note = f"found in the effort the actuators carry: {effort.describe()}{effort.several()}"
-    named = effort.named
+    named, (detected, onset) = effort.named, (effort.alarm_s, effort.onset_s)
     if check is not None and check.alarm_s is not None:
         named = effort.told_by(check.named)
+        detected, onset = effort.seen_with(check.named, check.alarm_s, check.onset_s)
         note += f"; the commands against the motion: {check.describe()}" + (
             f", which tells {named[0]} from the others" if named != effort.named else "")
-    return _found(seen, finding, list(named), note, judging)
+    return _found(seen, replace(finding, verdict=Verdict.FAULT, case=None,
+                                detected_at_s=detected, onset_s=onset), list(named), note, judging)
 
 
 def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandCheck,
