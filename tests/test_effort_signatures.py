@@ -30,6 +30,7 @@ from auvdiag_cli.engine.isolation import (
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
 from auvdiag_cli.engine.results import Finding, Verdict
+from auvdiag_cli.reports.report_build import _actuators
 from auvdiag_cli.vehicle.profile import load_profile
 from models.effort_reach import named_signatures
 from models.store import LoadedModel
@@ -379,3 +380,9 @@ def test_a_pair_the_shares_cannot_tell_apart_is_told_by_the_commands_against_the
             pair, alarm_s=130.0, onset_s=onset)), normal, judging)
         assert (found.detected_at_s, found.onset_s) == (114.5, dated)
     assert told.detected_at_s == 80.0 and told.onset_s == 60.0
+    # The report's JSON says the pair is one the shares cannot tell apart.
+    part = _actuators(pair)
+    assert part is not None and part.cannot_tell_apart
+    assert part.named == ("thruster_1", "thruster_3")
+    told_apart = _actuators(both)
+    assert told_apart is not None and not told_apart.cannot_tell_apart

@@ -173,6 +173,8 @@ class ActuatorsPart:
     # The alarm is the whole log against normal logs that differ no more than their noise.
     against_alike_logs: bool = False
     named: tuple[str, ...] = ()
+    # The components named in the suspect's group are ones its shares cannot tell apart.
+    cannot_tell_apart: bool = False
     signatures: tuple[SignaturePart, ...] = ()
     shares: Mapping[str, SharePart] = field(default_factory=dict)
 

@@ -241,6 +241,7 @@ def _actuators(check: EffortCheck | None) -> ActuatorsPart | None:
         false_alarm_rate=check.false_alarm_rate, alarm_s=check.alarm_s,
         onset_s=check.onset_s, onset_error_s=check.onset_error_s,
         against_alike_logs=check.against_alike_logs, named=tuple(check.named),
+        cannot_tell_apart=check.cannot_tell_apart,
         signatures=tuple(SignaturePart(actuator=n, match=m) for n, m in check.matches),
         shares={a.name: SharePart(
             group=a.group, component=a.component, share=a.share, normal_share=a.normal_share,
