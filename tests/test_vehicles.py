@@ -169,16 +169,20 @@ def test_bluerov2_failed_sensor_is_named(tmp_path, scenario, component):
         "gyro", "yaw_rate")
 
 
-def test_bluerov2_yaw_alarm_on_a_mission_asks_for_the_motor_tests(tmp_path):
+def test_bluerov2_yaw_alarm_on_a_mission_names_the_gyro_whose_reading_froze(tmp_path):
     # Seed 302: on seed 301 the vehicle, spinning three times faster than on any training
     # dive once its gyro reads 0, also lifts the heave bit (the model predicts far outside
-    # what it learnt) and no row of the table fits; the hypotheses then rank the gyro first.
+    # what it learnt) and no row of the table fits. Here the table reads the yaw bit as any
+    # horizontal thruster or the gyro (case 1); the gyro's readings froze at 0 from the
+    # onset while the model has the vehicle turn, which no thruster's fault gives.
     code, report = bluerov2_report(tmp_path, "mission-gyro-dead", seed=302)
     assert code == 1
-    assert report["case"] == 1 and report["component"] is None
-    assert report["candidates"] == ["thruster_1", "thruster_2", "thruster_3", "thruster_4",
-                                    "gyro"]
-    assert {"M1", "M2", "M3", "M4"} <= set(report["active_diagnosis"]["recommended_dms"])
+    assert report["case"] == 1 and report["component"] == "gyro"
+    assert report["active_diagnosis"]["candidates_before"] == [
+        "thruster_1", "thruster_2", "thruster_3", "thruster_4", "gyro"]
+    assert report["active_diagnosis"]["recommended_dms"] == []
+    assert any("gyro is the sensor whose every reading froze" in n for n in report["notes"])
+    assert report["substitution"]["signal"] == "yaw_rate"
 
 
 def test_bluerov2_dead_vertical_thruster_on_a_mission_shows_in_the_roll(tmp_path):

@@ -82,3 +82,12 @@ def change_suspects(flagged: Mapping[str, float], profile: Profile,
         weight[component] = weight.get(component, 0.0) + sum(
             weights.get(name, 0.0) for name in flagged)
     return sorted(weight, key=lambda part: (-round(weight[part], 6), part not in movers))
+
+
+def carriers(change: ChangeCheck, most: int = 3) -> str:
+    """The signals that carried most of the change from the onset to the alarm (their
+    ratio to their thresholds above their usual level), as the note gives them."""
+    carried = sorted(((v, n) for n, v in change.evidence.items() if v > 0), reverse=True)
+    return "" if not carried else (" (carried from the onset, in shares of each threshold "
+                                   "above its usual level: ") + ", ".join(
+        f"{n} {v:.2f}" for v, n in carried[:most]) + ")"

@@ -9,12 +9,13 @@ import numpy as np
 
 from auvdiag_cli.engine.active import DmsRun
 from auvdiag_cli.engine.change_check import ChangeCheck
-from auvdiag_cli.engine.change_suspects import change_suspects
+from auvdiag_cli.engine.change_suspects import carriers, change_suspects
 from auvdiag_cli.engine.closed_loop import replay_closed_loop
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect, healthy_from_onset
+from auvdiag_cli.engine.frozen_sensor import frozen_sensor
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging, unpredicted
 from auvdiag_cli.engine.narrowing import (
@@ -157,7 +158,7 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
                       f"{alone} weak alone, begun by the onset), not {ranked[0]}, whose "
                       "signals changed", judging)
     if len(ranked) > 1:
-        note += (f"; the part that moves most of what changed{_carriers(change)} is named, "
+        note += (f"; the part that moves most of what changed{carriers(change)} is named, "
                  "before " + ", ".join(ranked[1:]))
     if healthy is not None:
         horizon, cannot = judging.model.horizon_steps, unpredicted(judging.model)
@@ -166,15 +167,6 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         finding = replace(finding, healthy_from_onset=healthy_from_onset(
             seen, change, healthy, horizon, cannot))
     return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
-
-
-def _carriers(change: ChangeCheck, most: int = 3) -> str:
-    """The signals that carried most of the change from the onset to the alarm (their
-    ratio to their thresholds above their usual level), as the note gives them."""
-    carried = sorted(((v, n) for n, v in change.evidence.items() if v > 0), reverse=True)
-    return "" if not carried else (" (carried from the onset, in shares of each threshold "
-                                   "above its usual level: ") + ", ".join(
-        f"{n} {v:.2f}" for v, n in carried[:most]) + ")"
 
 
 def _found(seen: Observations, finding: Finding, candidates: Sequence[str], note: str,
@@ -250,6 +242,12 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
+        frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
+                               judging.window)
+        if frozen is not None:
+            return _found(seen, finding, [frozen], f"{note}; named as the sensor whose every "
+                          "reading froze at one value from the onset on, while the model of "
+                          "the healthy vehicle has what it measures move", judging)
         if (weak := alone or weak_throughout(seen)) is None:
             return finding.noted(note)
         whole = "" if alone else ", over the whole log"

@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
+from auvdiag_cli.engine.frozen_sensor import frozen_sensor
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Observations
@@ -30,6 +31,8 @@ def narrowed(seen: Observations, finding: Finding, runs: Sequence[tuple[DmsRun, 
     if active.conflict:
         finding = finding.noted("the DMS runs contradict each other (more than one fault?); "
                                 "all candidates kept")
+    if len(active.candidates) > 1:
+        active, finding = _narrow_by_frozen(seen, finding, active, judging)
     if len(active.candidates) > 1:
         active, finding = _narrow_by_predicted_signatures(finding, active, onset_ns, runs,
                                                           judging)
@@ -124,6 +127,21 @@ def closest(test: HypothesisTest, component: str | None,
     leaves."""
     return min((h.peak_g_ratio for h in test.ranked if h.component == component
                 and (kinds is None or h.kind in kinds)), default=float("inf"))
+
+
+def _narrow_by_frozen(seen: Observations, finding: Finding, active: ActiveDiagnosis,
+                      judging: Judging) -> tuple[ActiveDiagnosis, Finding]:
+    """Among the candidates left, the sensor whose every reading froze at one value from
+    the onset on (`frozen_sensor`): what no motion and no other part's fault gives."""
+    frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
+                           judging.window)
+    if frozen is None or frozen not in active.candidates:
+        return active, finding
+    finding = finding.noted(
+        f"the pattern table reads b as {' or '.join(active.candidates)}; {frozen} is the "
+        "sensor whose every reading froze at one value from the onset on, while the model of "
+        "the healthy vehicle has what it measures move")
+    return replace(active, candidates=(frozen,), recommended_dms=()), finding
 
 
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
