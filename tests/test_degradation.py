@@ -65,9 +65,12 @@ def test_b_that_fits_no_row_is_a_fault_without_a_case(make_log, tmp_path):
     code, report = diagnose_json(make_log("mission-yaw-rate-sensor-dead", 81, "bag"),
                                  "--profile", str(partial))
     assert code == 1 and report["verdict"] == "fault"
-    assert report["case"] is None and report["component"] is None
+    assert report["case"] is None
     assert report["b"] == {"flow": 0, "yaw_rate": 1}
     assert any("fits no row of the pattern table" in note for note in report["notes"])
+    # No row names it, but its readings froze at 0 from the onset on: the sensor is named.
+    assert report["component"] == "yaw_rate_sensor"
+    assert any("whose every reading froze" in note for note in report["notes"])
 
 
 @pytest.mark.parametrize(("sensor_ratio", "thruster_ratio", "overrules"), [

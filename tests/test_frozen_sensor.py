@@ -1,6 +1,6 @@
 """A sensor whose readings froze at one value from the onset on is named; one still
 reading, one pinned at the limit of what it read (saturated), one on a vehicle at rest, or
-one that froze far from the onset is not."""
+one that froze far from the onset is not, nor two sensors frozen at once."""
 
 import numpy as np
 
@@ -61,3 +61,10 @@ def test_what_is_not_a_frozen_sensor_is_not_named():
     # No onset, no replay: nothing to judge.
     assert frozen_sensor(SENSORS, _log(0.0), None, WINDOW) is None
     assert frozen_sensor(SENSORS, Histories(), TIME_S[ONSET], WINDOW) is None
+
+
+def test_two_sensors_frozen_at_once_name_neither():
+    both = _log(0.0)
+    assert both.matching is not None
+    both.matching.measured[ONSET:, 2] = 0.0
+    assert frozen_sensor(SENSORS, both, TIME_S[ONSET], WINDOW) is None

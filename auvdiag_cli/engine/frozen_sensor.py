@@ -27,20 +27,22 @@ def frozen_sensor(sensors: Sequence[Sensor], histories: Histories, onset_s: floa
     ``onset_s`` (an onset dated from a window's residual may come a little early) and read
     one value to the log's end, for a window or more and within the range it read before (a
     reading pinned at its limit may be a saturated sensor), at least one of them where the
-    model moves; else None."""
+    model moves, where one sensor did; else None."""
     matching = histories.matching
     if matching is None or onset_s is None:
         return None
     onset = int(np.searchsorted(histories.time_s, onset_s))
     column = {name: i for i, name in enumerate(histories.sensor_names)}
+    frozen = []
     for component in dict.fromkeys(s.component for s in sensors):
         signals = [column[s.name] for s in sensors
                    if s.component == component and s.name in column]
         states = [_frozen(matching.measured[:, i], matching.modelled[:, i], onset, window)
                   for i in signals]
         if states and all(s is not None for s in states) and any(states):
-            return component
-    return None
+            frozen.append(component)
+    # Two sensors frozen at once are no single part's fault.
+    return frozen[0] if len(frozen) == 1 else None
 
 
 def _frozen(measured: np.ndarray, modelled: np.ndarray, onset: int, window: int

@@ -243,7 +243,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
         frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
-                               judging.window)
+                               seen.window_samples)
         if frozen is not None:
             return _found(seen, finding, [frozen], f"{note}; named as the sensor whose every "
                           "reading froze at one value from the onset on, while the model of "

@@ -134,7 +134,7 @@ def _narrow_by_frozen(seen: Observations, finding: Finding, active: ActiveDiagno
     """Among the candidates left, the sensor whose every reading froze at one value from
     the onset on (`frozen_sensor`): what no motion and no other part's fault gives."""
     frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
-                           judging.window)
+                           seen.window_samples)
     if frozen is None or frozen not in active.candidates:
         return active, finding
     finding = finding.noted(
