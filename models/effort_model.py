@@ -121,6 +121,11 @@ class GroupSetup:
         inside = bins == self.change_bin
         return steady[inside], effort[inside], level[inside]
 
+    def bin_fit(self, change: GroupFit | None) -> GroupFit | None:
+        """``change``, the fit of its change bin, where it has one; None: its change test
+        judges every steady step along the plain signatures."""
+        return change if self.change_bin is not None else None
+
     def change_window_steps(self, dt_s: float) -> int:
         return max(1, round(self.change_window_s / dt_s))
 

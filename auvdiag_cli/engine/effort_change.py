@@ -89,7 +89,8 @@ def log_change(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
     """The change test of ``log`` in one group: over its change bin where the model has its
     fit there (``change``), else over every steady step."""
     members = len(setup.group.members)
-    if change is None or setup.change_bin is None or setup.group.projection is None:
+    change = setup.bin_fit(change)
+    if change is None or setup.group.projection is None:
         steady, effort, level, bins = setup.steady_steps(log)
         spans = Spans(fit, *cumulative(effort, level, bins, setup.n_bins), dt_s)
         window = setup.window_steps(dt_s)

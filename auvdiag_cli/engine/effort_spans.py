@@ -116,8 +116,8 @@ def typical_later_threshold(setup: GroupSetup, fit: GroupFit, thresholds: Thresh
     """The later-start test's threshold for a log of the normal logs' typical steady time
     (each log's own depends on its length: the number of starts it tries); over the change
     bin's steps and windows where the group has one (``change``, `GroupSetup.change_bin`)."""
-    if change is not None and setup.change_bin is not None:
-        fit, window = change, setup.change_window_steps(dt_s)
+    if (bin_fit := setup.bin_fit(change)) is not None:
+        fit, window = bin_fit, setup.change_window_steps(dt_s)
     else:
         window = setup.window_steps(dt_s)
     return thresholds.later_start(fit, len(later_starts(round(fit.typical_s / dt_s), window)))

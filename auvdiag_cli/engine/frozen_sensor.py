@@ -56,7 +56,7 @@ def _frozen(measured: np.ndarray, modelled: np.ndarray, onset: int, window: int
             and before.size > window and np.isfinite(after[0])):
         return None
     steps = np.abs(np.diff(before[np.isfinite(before)]))
-    if (np.mean(steps > 0) < MOVED_AT_LEAST
+    if (not steps.size or np.mean(steps > 0) < MOVED_AT_LEAST
             or not np.nanmin(before) < after[0] < np.nanmax(before)):
         return None
     predicted = modelled[since:][np.isfinite(modelled[since:])]

@@ -214,7 +214,8 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
 
 def _later_noise(setup: GroupSetup, fit: GroupFit, change: GroupFit | None) -> str:
     """What the test of a change within a log is judged over, and its noise."""
-    if change is None or setup.change_bin is None:
+    change = setup.bin_fit(change)
+    if change is None:
         return (f" (a log of {fit.typical_s:.0f} s of steady effort; its windows' noise rests "
                 f"on {fit.within_dof:.0f} degrees of freedom)")
     return (f" (a log of {change.typical_s:.0f} s of steady effort in the thrust direction "
@@ -233,7 +234,7 @@ def _smallest(setup: GroupSetup, fit: GroupFit, thresholds: Thresholds, dt_s: fl
              f"{rise_range(list(smallest_rise(fit, thresholds)))} more than its share over a "
              f"log of {fit.typical_s:.0f} s (with {more} normal logs, about "
              f"{rise_range(list(smallest_rise(fit, thresholds, more)))})")
-    if change is not None and setup.change_bin is not None:
+    if setup.bin_fit(change) is not None:
         return whole
     return (whole + ", or, where it weakens halfway through such a log, about "
             f"{rise_range(list(smallest_later_rise(setup, fit, thresholds, dt_s)))} more from "
