@@ -276,3 +276,42 @@ def test_a_flight_recorded_on_a_clock_days_off_is_dated_by_its_gps_time(calibrat
     # Another day's flight on a clock that kept time: nothing said, nothing moved.
     other, _ = _judged(calibrated, "carbonZ_2018-07-30-17-10-45_engine_failure_with_emr_traj")
     assert other.utc_offset_ns == 0 and not any("clock runs" in n for n in other.notes)
+
+
+def _frozen_copy(folder, into, fields: dict[str, tuple[str, ...]], from_s: float):
+    """The flight's CSV folder with the named fields of each topic file (by the end of its
+    name) reading, from ``from_s`` on, the value they read then."""
+    copy = into / folder.name
+    copy.mkdir()
+    for path in folder.glob("*.csv"):
+        rows = list(csv.reader(path.open(newline="")))
+        frozen = [rows[0].index(f"field.{name}")
+                  for end, names in fields.items() if path.stem.endswith(end) for name in names]
+        start, held = int(rows[1][0]), None
+        for row in rows[1:]:
+            if frozen and int(row[0]) - start >= from_s * 1e9:
+                held = held or [row[i] for i in frozen]
+                for i, value in zip(frozen, held, strict=True):
+                    row[i] = value
+        with (copy / path.name).open("w", newline="") as stream:
+            csv.writer(stream).writerows(rows)
+    return copy
+
+
+@pytest.mark.shared_data("alfa")
+@pytest.mark.parametrize(("fields", "sensor"), [
+    ({"imu-data_raw": ("angular_velocity.x", "angular_velocity.y", "angular_velocity.z")},
+     "gyro"),
+    ({"nav_info-roll": ("measured",), "nav_info-pitch": ("measured",)}, "ahrs")])
+def test_a_sensor_that_freezes_mid_flight_is_named(calibrated, tmp_path, fields, sensor):
+    """A real flight whose gyro (three rates at 10 Hz, read onto the model's grid by
+    interpolation) or attitude (read at about 4 Hz: a reading repeats on the grid) reads one
+    value from 100 s on: the change test sees the motion depart from the prediction, and
+    the sensor that froze is named, not the part that moves what changed."""
+    profile, model, _ = calibrated
+    flight = _frozen_copy(ALFA / "carbonZ_2018-07-18-12-10-11_no_ground_truth", tmp_path,
+                          fields, 100.0)
+    diagnosis = api.diagnose(flight, profile, model)
+    assert (str(diagnosis.verdict), diagnosis.component) == ("fault", sensor)
+    assert 100.0 <= diagnosis.detected_at_s <= 105.0
+    assert any("froze at one value" in note for note in diagnosis.notes)

@@ -68,3 +68,29 @@ def test_two_sensors_frozen_at_once_name_neither():
     assert both.matching is not None
     both.matching.measured[ONSET:, 2] = 0.0
     assert frozen_sensor(SENSORS, both, TIME_S[ONSET], WINDOW) is None
+
+
+def test_a_reading_resampled_onto_the_grid_still_reads_as_frozen():
+    # Held readings interpolated onto the grid differ in their last digits.
+    rounded = _log(0.0)
+    assert rounded.matching is not None
+    rounded.matching.measured[ONSET:, :2] = 0.01 * (1 + 1e-13 * np.sin(np.arange(STEPS - ONSET)))[
+        :, None]
+    assert frozen_sensor(SENSORS, rounded, TIME_S[ONSET], WINDOW) == "gyro"
+    # Sampled slower than the grid: each reading repeats for three steps before it froze.
+    slow = _log(None)
+    assert slow.matching is not None
+    held = np.repeat(slow.matching.measured[::3, :2], 3, axis=0)[:STEPS]
+    held[ONSET:] = 0.0
+    slow.matching.measured[:, :2] = held
+    assert frozen_sensor(SENSORS, slow, TIME_S[ONSET], WINDOW) == "gyro"
+
+
+def test_a_coarse_reading_that_held_as_long_before_is_not_named():
+    # Quantised so coarsely that it held one value for 20 s before: a minute more is no news.
+    coarse = _log(None)
+    assert coarse.matching is not None
+    coarse.matching.measured[:, :2] = np.round(coarse.matching.measured[:, :2] / 0.3) * 0.3
+    coarse.matching.measured[ONSET - 200:ONSET, :2] = coarse.matching.measured[ONSET - 200, :2]
+    coarse.matching.measured[ONSET:, :2] = 0.0
+    assert frozen_sensor(SENSORS, coarse, TIME_S[ONSET], WINDOW) is None

@@ -15,7 +15,7 @@ from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.failure_effect import failure_effect, healthy_from_onset
-from auvdiag_cli.engine.frozen_sensor import frozen_sensor
+from auvdiag_cli.engine.frozen_sensor import FROZEN_WHY, frozen_in
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging, unpredicted
 from auvdiag_cli.engine.narrowing import (
@@ -147,6 +147,9 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     if row is not None and row.components:
         return _found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
+    if (frozen := frozen_in(seen, change.onset_s, judging)) is not None:
+        return _found(seen, replace(finding, case=None), [frozen], f"{note}; named as "
+                      f"{FROZEN_WHY}", judging)
     ranked = change_suspects(change.flagged, judging.profile, change.evidence,
                               change.ways)
     alone = weak_alone(seen, change.onset_s)
@@ -242,12 +245,8 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         raised = ", ".join(k for k, v in finding.b.items() if v)
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
-        frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
-                               seen.window_samples)
-        if frozen is not None:
-            return _found(seen, finding, [frozen], f"{note}; named as the sensor whose every "
-                          "reading froze at one value from the onset on, while the model of "
-                          "the healthy vehicle has what it measures move", judging)
+        if (frozen := frozen_in(seen, finding.onset_s, judging)) is not None:
+            return _found(seen, finding, [frozen], f"{note}; named as {FROZEN_WHY}", judging)
         if (weak := alone or weak_throughout(seen)) is None:
             return finding.noted(note)
         whole = "" if alone else ", over the whole log"

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 from auvdiag_cli.engine.active import ActiveDiagnosis, DmsRun, decide
-from auvdiag_cli.engine.frozen_sensor import frozen_sensor
+from auvdiag_cli.engine.frozen_sensor import FROZEN_WHY, frozen_in
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Finding, Observations
@@ -133,14 +133,11 @@ def _narrow_by_frozen(seen: Observations, finding: Finding, active: ActiveDiagno
                       judging: Judging) -> tuple[ActiveDiagnosis, Finding]:
     """Among the candidates left, the sensor whose every reading froze at one value from
     the onset on (`frozen_sensor`): what no motion and no other part's fault gives."""
-    frozen = frozen_sensor(judging.profile.sensors, seen.histories, finding.onset_s,
-                           seen.window_samples)
+    frozen = frozen_in(seen, finding.onset_s, judging)
     if frozen is None or frozen not in active.candidates:
         return active, finding
-    finding = finding.noted(
-        f"the pattern table reads b as {' or '.join(active.candidates)}; {frozen} is the "
-        "sensor whose every reading froze at one value from the onset on, while the model of "
-        "the healthy vehicle has what it measures move")
+    finding = finding.noted(f"the pattern table reads b as {' or '.join(active.candidates)}; "
+                            f"{frozen} is {FROZEN_WHY}")
     return replace(active, candidates=(frozen,), recommended_dms=()), finding
 
 
