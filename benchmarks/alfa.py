@@ -37,6 +37,8 @@ from datetime import date
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from alfa_roll import roll_after_failure
+
 if TYPE_CHECKING:
     from auvdiag_cli.engine.results import Diagnosis
     from auvdiag_cli.jobs.train import HorizonScore
@@ -359,6 +361,8 @@ ONE_DAY = ("**Trained on one day's flights** (the handful a user has after a day
            "calibrated on as above; or, for a day with three normal flights or more, those "
            "alone; every flight of the other days judged, as shipped):")
 MIN_NORMAL_FLIGHTS = 3
+AILERONS = ("**The roll after an aileron failed** (as shipped; what the motion gave any judge "
+            "to see):")
 
 
 def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) -> list[str]:
@@ -429,6 +433,10 @@ def main() -> None:
         print("\n".join(table(found)))
         print()
     print("\n".join(notes))
+    print(f"\n{AILERONS}\n")
+    print("\n".join(roll_after_failure(
+        [(o.flight.folder, o.flight.onset_ns, o.delay_s) for o in outcomes[SHIPPED]
+         if "aileron" in o.flight.kind and o.flight.onset_ns is not None])))
     print("\n".join(["", ONE_DAY, "", *one_day]))
     print("\nPer flight:\n")
     print("| flight | kind | verdict | onset (s) | detected (s) | component | judge |")
