@@ -161,20 +161,42 @@ def crazypad_few(root: Path) -> list[str]:
              "", "| spreads | k | false alarms | choices cautioned | smallest rise judged | "
              + " | ".join(f"cut {c:g} mm" for c in cuts)
              + " | cut ≥ 2 mm |", "|---" * (len(cuts) + 6) + "|"]
+    # Motor 3's largest statistic over its threshold, per cut flight of 2 mm or more and
+    # choice of 4 normal flights, as shipped: which flights the misses are.
+    ratios: dict[str, list[float]] = defaultdict(list)
     for label, spread in (("drawn towards the group's", pooled),
                           ("each member's own", functools.partial(pooled, pool=False))):
         # The yardstick swaps the spread estimate itself, everything else as shipped.
         models.effort.between_spread = spread   # type: ignore[assignment]
         try:
             for k in (3, 4):
-                lines.append(_few_row(profile, logs, normal, by_cut, k, label))
+                lines.append(_few_row(profile, logs, normal, by_cut, k, label,
+                                      ratios if spread is pooled and k == 4 else None))
         finally:
             models.effort.between_spread = pooled
-    return lines
+    return [*lines, "", _misses_by_folder(ratios)]
+
+
+def _misses_by_folder(ratios: dict[str, list[float]]) -> str:
+    """The cut folders (2 mm or more) that some choice of 4 normal flights misses, with
+    motor 3's statistic over its threshold there: median over the choices and flights, and
+    the range."""
+    folders: dict[str, list[float]] = defaultdict(list)
+    for file, values in ratios.items():
+        folders[Path(file).parent.name] += values
+    missed = [f"`{name}` {np.median(v):.2f} ({min(v):.2f}-{max(v):.2f})"
+              for name, v in sorted(folders.items()) if min(v) <= 1.0]
+    return ("With 4 normal flights as shipped, the cut folders of 2 mm or more that some "
+            "choice misses, and motor 3's largest statistic over its threshold there (median "
+            "over the choices and the folder's flights, and the range): "
+            + ("; ".join(missed) or "none") + ".")
 
 
 def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
-             by_cut: dict[float, list[str]], k: int, label: str) -> str:
+             by_cut: dict[float, list[str]], k: int, label: str,
+             ratios: dict[str, list[float]] | None = None) -> str:
+    """A table row for choices of ``k``; ``ratios``: filled with motor 3's statistic over
+    its threshold per cut flight of 2 mm or more, one per choice."""
     alarms = judged = 0
     found: dict[float, int] = defaultdict(int)
     tried: dict[float, int] = defaultdict(int)
@@ -203,6 +225,9 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
                 tried[cut] += 1
                 found[cut] += bool(check.suspects)
                 wrong += bool(check.suspects) and check.named != (CUT_MOTOR,)
+                if ratios is not None and cut >= 2.0:
+                    ratios[f].append(next(a.ratio or 0.0 for a in check.actuators
+                                          if a.name == CUT_MOTOR))
     big = [c for c in by_cut if c >= 2.0]
     cells = [_percent(found[c], tried[c]) for c in by_cut]
     return (f"| {label} | {k} | {_percent(alarms, judged)} | {alike}/{folds} ({alike_alarms}) | "
