@@ -223,8 +223,9 @@ def _change_peaks(diagnosis: "Diagnosis", onset_s: float | None, profile: "Profi
     them, largest before the onset, after it, and within each of GOAL_DELAYS_S of it."""
     import numpy as np
 
-    from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, change_statistics
+    from auvdiag_cli.engine.change_check import REFERENCE_MIN_S
     from auvdiag_cli.engine.change_signatures import below_only, signatures
+    from auvdiag_cli.engine.change_statistics import change_statistics
 
     residual, time_s = diagnosis.histories.change_residual, diagnosis.histories.time_s
     if residual is None:

@@ -10,7 +10,7 @@ import pytest
 from shared_data import SHARED_DATA
 
 from auvdiag_cli import api
-from auvdiag_cli.engine.change_check import SUM, WINDOW
+from auvdiag_cli.engine.change_statistics import SUM, WINDOW
 from auvdiag_cli.reports.training import calibration_lines
 
 ALFA = SHARED_DATA / "alfa"

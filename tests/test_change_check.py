@@ -14,16 +14,9 @@ from typer.testing import CliRunner
 
 from auvdiag_cli import api
 from auvdiag_cli.cli import app
-from auvdiag_cli.engine.change_check import (
-    REFERENCE_MIN_S,
-    SUM,
-    ChangeCheck,
-    change_statistics,
-    check_change,
-)
-from auvdiag_cli.engine.change_check import (
-    WINDOW as WINDOW_Z,
-)
+from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, ChangeCheck, check_change
+from auvdiag_cli.engine.change_check import WINDOW as WINDOW_Z
+from auvdiag_cli.engine.change_statistics import SUM, change_statistics
 from auvdiag_cli.engine.change_suspects import change_suspects
 from auvdiag_cli.engine.diagnosis import check_model_fits
 from auvdiag_cli.jobs.change_calibration import MIN_CHANGE_THRESHOLDS, MIN_FITTED_THRESHOLDS

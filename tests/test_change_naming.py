@@ -15,8 +15,8 @@ from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.change_suspects import beyond_the_replay
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.effort_naming import ActuatorEffort, signature_matches
-from auvdiag_cli.engine.isolation import apply_change_alarm
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.other_alarms import apply_change_alarm
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
 

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from auvdiag_cli import api
-from auvdiag_cli.engine.change_check import SUM, WINDOW, check_change
+from auvdiag_cli.engine.change_check import check_change
 from auvdiag_cli.engine.change_signatures import (
     signature_names,
     signature_only,
     signatures,
     thresholded,
 )
+from auvdiag_cli.engine.change_statistics import SUM, WINDOW
 from auvdiag_cli.engine.change_suspects import change_suspects
 from auvdiag_cli.vehicle.profile import load_profile, profile_text
 from auvdiag_errors import ProfileError

@@ -22,13 +22,10 @@ from auvdiag_cli.engine.effort_naming import (
     signature_matches,
 )
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.isolation import (
-    _measured_instead,
-    apply_other_evidence,
-    name_by_hypotheses,
-)
+from auvdiag_cli.engine.isolation import _measured_instead, name_by_hypotheses
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.narrowing import _narrow_by_effort, unsupported_table
+from auvdiag_cli.engine.other_alarms import apply_other_evidence
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.reports.report_build import _actuators
 from auvdiag_cli.vehicle.profile import load_profile

@@ -12,7 +12,7 @@ from helpers import diagnose_json
 from typer.testing import CliRunner
 
 from auvdiag_cli.cli import app
-from auvdiag_cli.engine.isolation import _stand_in
+from auvdiag_cli.engine import naming
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.engine.substitution import dead_reckon
 from auvdiag_cli.simulator.truth_files import truth_paths
@@ -100,7 +100,7 @@ def test_the_substitute_is_a_signal_the_model_predicts():
         finding = Finding(verdict=Verdict.FAULT, b={s.name: int(s.name == raised)
                                                      for s in profile.sensors})
         seen = cast(Observations, SimpleNamespace(not_judged=not_judged))
-        chosen = _stand_in(seen, finding, gyro)
+        chosen = naming.stand_in(seen, finding, gyro)
         return None if chosen is None else chosen.name
 
     assert stand_in("yaw_rate", unpredicted) == "yaw_rate"

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from auvdiag_cli import api
-from auvdiag_cli.engine.change_check import SUM, WINDOW, check_change, way_statistics
+from auvdiag_cli.engine.change_check import check_change
+from auvdiag_cli.engine.change_statistics import SUM, WINDOW, way_statistics
 from auvdiag_cli.vehicle.profile import parse_profile, profile_text
 from auvdiag_errors import ProfileError
 from models.tracking import TrackingFit, TrackingSpec, fit_tracking

@@ -32,10 +32,11 @@ from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
 from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.hypotheses import weigh_hypotheses
 from auvdiag_cli.engine.ingest import IngestedLog, ingest
-from auvdiag_cli.engine.isolation import apply_change_alarm, apply_other_evidence, isolate
+from auvdiag_cli.engine.isolation import isolate
 from auvdiag_cli.engine.judging import Judging, nothing_judged, skilled
 from auvdiag_cli.engine.log_clock import clock_note, utc_offset_ns, utc_start_ns
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
+from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
 from auvdiag_cli.engine.results import (
@@ -64,8 +65,7 @@ from models.fast import new_replay_budget
 from models.store import LoadedModel
 
 ONSET_LOOKBACK_S = 300.0
-# A profile whose signals changed since a model was trained (a shipped one, updated) needs
-# the model trained again; another vehicle's model needs its own profile.
+# A profile changed since its model was trained, or another vehicle's model: train again.
 REFIT = "train the model with this profile, or diagnose with the profile it was trained with"
 
 

@@ -1,23 +1,17 @@
-"""Naming the component once something is found (the pattern table, the hypothesis test,
-the DMS runs of `narrowing`, a weakened thruster, the start and command checks), and
-Substituting Control for a failed sensor; each step maps the finding so far to the next."""
+"""Naming the component once the replay alarmed (the pattern table, the hypothesis test,
+the DMS runs of `narrowing`, a weakened thruster); each step maps the finding so far to the
+next. Alarms of the other judges are named in `other_alarms`, the component and its
+Substituting Control in `naming`."""
 
 from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
-import numpy as np
-
 from auvdiag_cli.engine.active import DmsRun
-from auvdiag_cli.engine.change_check import ChangeCheck
-from auvdiag_cli.engine.change_suspects import carriers, change_suspects
-from auvdiag_cli.engine.closed_loop import replay_closed_loop
-from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.detection import look_up
-from auvdiag_cli.engine.effort_check import EffortCheck
-from auvdiag_cli.engine.failure_effect import failure_effect, healthy_from_onset
 from auvdiag_cli.engine.frozen_sensor import FROZEN_WHY, frozen_in
 from auvdiag_cli.engine.hypotheses import Hypothesis, HypothesisTest
-from auvdiag_cli.engine.judging import Judging, unpredicted
+from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.naming import found, name_component
 from auvdiag_cli.engine.narrowing import (
     DECISIVE_MARGIN,
     closest,
@@ -32,10 +26,7 @@ from auvdiag_cli.engine.narrowing import (
 from auvdiag_cli.engine.results import Finding, Observations, Verdict, dms_runs
 from auvdiag_cli.engine.segments import ROUTINE_MODE
 from auvdiag_cli.engine.signatures import dms_signature
-from auvdiag_cli.engine.start_check import StartCheck
-from auvdiag_cli.engine.substitution import substitute
 from auvdiag_cli.engine.weakened_naming import left_undecided, name_weakened
-from auvdiag_cli.vehicle.profile import Sensor
 
 
 def isolate(seen: Observations, finding: Finding, b: Mapping[str, int], alarm_s: float,
@@ -117,118 +108,6 @@ def _outweighs_the_table(weak: Hypothesis, finding: Finding, test: HypothesisTes
     return sensor >= 1.0 or weak.peak_g_ratio * DECISIVE_MARGIN <= sensor
 
 
-def apply_other_evidence(seen: Observations, finding: Finding, judging: Judging) -> Finding:
-    """The replay raised no alarm: a sensor that read wrong from the start, an actuator
-    carrying more of its group's effort than on normal logs, or one driven harder than the
-    motion needs, still makes the verdict."""
-    check, start, effort = seen.command_check, seen.start_check, seen.effort_check
-    if start is not None and start.off:
-        return _apply_start_alarm(seen, finding, start, judging)
-    if effort is not None and effort.suspects:
-        return _apply_effort_alarm(seen, finding, effort, check, judging)
-    if check is not None and check.alarm_s is not None:
-        return _apply_command_alarm(seen, finding, check, judging)
-    return finding
-
-
-def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck,
-                       judging: Judging, healthy: np.ndarray | None = None) -> Finding:
-    """The log changed against its own beginning before the replay's thresholds were
-    crossed, in signals the profile says which parts move: the signals that changed make
-    b; a row of the pattern table names the part, else the part that moves most of what
-    changed (`change_suspects`). ``healthy``: the model of the healthy vehicle replayed
-    from the measured state at the onset, which gives the failure's effect (none: the
-    effect is not said)."""
-    b = {name: int(name in change.changed) for name in finding.b}
-    finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
-                      onset_s=change.onset_s)
-    note = f"found by the change test: {change.describe()}"
-    row = look_up(judging.profile.pattern, b)
-    if row is not None and row.components:
-        return _found(seen, replace(finding, case=row.case), list(row.components), note,
-                      judging)
-    if (frozen := frozen_in(seen, change.onset_s, judging)) is not None:
-        return _found(seen, replace(finding, case=None), [frozen], f"{note}; named as "
-                      f"{FROZEN_WHY}", judging)
-    ranked = change_suspects(change.flagged, judging.profile, change.evidence,
-                              change.ways)
-    alone = weak_alone(seen, change.onset_s)
-    if alone is not None and ranked and ranked[0] in {s.component
-                                                      for s in judging.profile.sensors}:
-        # A weak actuator moves what a sensor measures too; its group's shares say which.
-        return _found(seen, replace(finding, case=None), [alone],
-                      f"{note}; named by the effort its group carries (its shares match "
-                      f"{alone} weak alone, begun by the onset), not {ranked[0]}, whose "
-                      "signals changed", judging)
-    if len(ranked) > 1:
-        note += (f"; the part that moves most of what changed{carriers(change)} is named, "
-                 "before " + ", ".join(ranked[1:]))
-    if healthy is not None:
-        horizon, cannot = judging.model.horizon_steps, unpredicted(judging.model)
-        effect = failure_effect(seen, change, healthy, horizon, cannot)
-        note += "; " + effect if effect else ""
-        finding = replace(finding, healthy_from_onset=healthy_from_onset(
-            seen, change, healthy, horizon, cannot))
-    return _found(seen, replace(finding, case=None), ranked[:1], note, judging)
-
-
-def _found(seen: Observations, finding: Finding, candidates: Sequence[str], note: str,
-           judging: Judging) -> Finding:
-    """A fault with these candidates: one of them is named."""
-    finding = replace(finding.noted(note), candidates=tuple(candidates))
-    if len(candidates) == 1:
-        return _name_component(seen, finding, candidates[0], judging)
-    return finding
-
-
-def _apply_start_alarm(seen: Observations, finding: Finding, start: StartCheck,
-                       judging: Judging) -> Finding:
-    """The replay starts from the measured state and takes a wrong start reading as the
-    truth; the sensors that started away from where normal logs start are the candidates."""
-    finding = replace(finding, verdict=Verdict.FAULT, case=None, onset_s=0.0,
-                      detected_at_s=start.at_s)
-    candidates = list(dict.fromkeys(s.component for s in judging.profile.sensors
-                                    if s.name in start.off))
-    return _found(seen, finding, candidates, "found at the start of the log: "
-                  + start.describe(seen.sensor_units), judging)
-
-
-def _apply_effort_alarm(seen: Observations, finding: Finding, effort: EffortCheck,
-                        check: CommandCheck | None, judging: Judging) -> Finding:
-    """An actuator carries more of its group's effort than on normal logs: the controller
-    drives it harder to make up for a weakness near it. Shares that fell are the others
-    taking less of the total, not faults of their own."""
-    note = f"found in the effort the actuators carry: {effort.describe()}{effort.several()}"
-    named, (detected, onset) = effort.named, (effort.alarm_s, effort.onset_s)
-    if check is not None and check.alarm_s is not None:
-        named = effort.told_by(check.named)
-        detected, onset = effort.seen_with(check.named, check.alarm_s, check.onset_s)
-        note += f"; the commands against the motion: {check.describe()}" + (
-            f", which tells {named[0]} from the others" if named != effort.named else "")
-    return _found(seen, replace(finding, verdict=Verdict.FAULT, case=None,
-                                detected_at_s=detected, onset_s=onset), list(named), note, judging)
-
-
-def _apply_command_alarm(seen: Observations, finding: Finding, check: CommandCheck,
-                         judging: Judging) -> Finding:
-    """The motion looks normal (or cannot be judged) but an actuator works harder than the
-    motion needs: a weakened actuator whose loss the controller makes up for."""
-    finding = replace(finding, verdict=Verdict.FAULT, case=None,
-                      detected_at_s=check.alarm_s, onset_s=check.onset_s)
-    # A sensor reading the motion wrongly also makes the controller push harder; the motion
-    # model rules that out only for the sensors it judges.
-    unjudged = [s.component for s in judging.profile.sensors if s.name in seen.not_judged
-                and (check.rests_on is None or s.name in check.rests_on)]
-    candidates = list(dict.fromkeys([*check.named, *unjudged])) if check.named else []
-    note = f"found in the commands, not the motion: {check.describe()}"
-    if len(check.named) > 1:
-        note += "; these actuators act alike on the vehicle and cannot be told apart from it"
-    if check.named and unjudged:
-        note += ("; a misreading " + " or ".join(dict.fromkeys(unjudged)) + " (not judged by "
-                 "the motion model) would look the same")
-    return _found(seen, finding, candidates, note, judging)
-
-
 def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTest,
                        judging: Judging) -> Finding:
     """No row of the pattern table names the component (or there is no table): the
@@ -246,18 +125,18 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         note = (f"anomaly on {raised}: no single-component fault explains it (the closest, "
                 f"{best.describe()}, leaves g at {best.peak_g_ratio:.0%} of its threshold)")
         if (frozen := frozen_in(seen, finding.onset_s, judging)) is not None:
-            return _found(seen, finding, [frozen], f"{note}; named as {FROZEN_WHY}", judging)
+            return found(seen, finding, [frozen], f"{note}; named as {FROZEN_WHY}", judging)
         if (weak := alone or weak_throughout(seen)) is None:
             return finding.noted(note)
         whole = "" if alone else ", over the whole log"
-        return _found(seen, finding, [weak], f"{note}; named by the effort its group carries"
+        return found(seen, finding, [weak], f"{note}; named by the effort its group carries"
                       f" (its shares match {weak} weak alone{whole})", judging)
     beside = ("" if runner_up is None or margin is None else
               f"; runner-up {runner_up.describe()} ({runner_up.peak_g_ratio:.0%}, "
               f"{margin:.1f}x the best)")
     why = _shares_overrule(seen, finding, best, alone)
     if alone is not None and why is not None:
-        return _found(seen, finding, [alone],
+        return found(seen, finding, [alone],
                       f"named by the effort its group carries (its shares match {alone} weak "
                       f"alone, begun by the onset): the hypothesis test favours "
                       f"{best.describe()} but {why}", judging)
@@ -265,7 +144,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
             and margin < DECISIVE_MARGIN):
         # The motion departed, but several single faults explain it about as well; the
         # actuator its group's effort points at is the specific evidence.
-        return _found(seen, finding, list(effort.named),
+        return found(seen, finding, list(effort.named),
                       f"named by the effort its group carries ({effort.named[0]}, above): "
                       f"the hypothesis test does not decide (best {best.describe()}"
                       f"{beside})",
@@ -275,7 +154,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
         return left_undecided(finding, best, rival)
     if best.kind == "weakened":
         finding = replace(finding, degradation=best)
-    return _found(seen, finding, [best.component],
+    return found(seen, finding, [best.component],
                   f"named by the hypothesis test: {best.describe()} explains the log (g then "
                   f"stays at {best.peak_g_ratio:.0%} of its threshold at most){beside}",
                   judging)
@@ -312,7 +191,7 @@ def apply_active_diagnosis(seen: Observations, finding: Finding,
                            runs: Sequence[tuple[DmsRun, int]], judging: Judging) -> Finding:
     finding = narrowed(seen, finding, runs, judging)
     if len(finding.candidates) == 1:
-        return _name_component(seen, finding, finding.candidates[0], judging)
+        return name_component(seen, finding, finding.candidates[0], judging)
     return finding
 
 
@@ -333,17 +212,8 @@ def apply_detection(seen: Observations, finding: Finding, b: Mapping[str, int],
                                 "one fault, or one the table does not describe")
     finding = replace(finding, candidates=tuple(candidates))
     if len(candidates) == 1:
-        return _name_component(seen, finding, candidates[0], judging)
+        return name_component(seen, finding, candidates[0], judging)
     return finding
-
-
-def _stand_in(seen: Observations, finding: Finding, sensors: Sequence[Sensor]
-              ) -> Sensor | None:
-    """The failed component's signal the model stands in for: one whose bit is raised,
-    else the first the replay judges; none where the model predicts none of them (a
-    substitute no better than a guess)."""
-    judged = [s for s in sensors if s.name not in seen.not_judged]
-    return next((s for s in judged if finding.b.get(s.name)), judged[0] if judged else None)
 
 
 def _predicted_on_dms(seen: Observations, finding: Finding, b: Mapping[str, int],
@@ -371,27 +241,3 @@ def _predicted_on_dms(seen: Observations, finding: Finding, b: Mapping[str, int]
                                 f"{', '.join(matching)}")
     return matching, finding
 
-
-def _name_component(seen: Observations, finding: Finding, component: str, judging: Judging
-                    ) -> Finding:
-    """The verdict names one component; a failed sensor gets Substituting Control."""
-    finding = replace(finding, component=component)
-    sensors = [s for s in judging.profile.sensors if s.component == component]
-    sensor = _stand_in(seen, finding, sensors)
-    histories = seen.histories
-    matching = histories.matching
-    if sensors and sensor is None:
-        return finding.noted(f"no substitute for {component}: the replay judges none of "
-                             f"its signals ({', '.join(s.name for s in sensors)}), and the "
-                             "model's reading of them is no better than a guess")
-    if sensor is None or finding.onset_s is None or matching is None:
-        return finding
-    substitution = substitute(
-        sensor, histories.sensor_names, histories.time_s, matching.measured, matching.modelled,
-        finding.onset_s, judging.profile.navigation,
-        judging.model.card.heldout_error_rms.get(sensor.name))
-    if judging.profile.controller is not None and seen.mission_legs:
-        substitution = replace(substitution, closed_loop=replay_closed_loop(
-            judging.model, judging.profile.controller, histories, finding.onset_s,
-            seen.mission_legs, judging.profile.dt_s))
-    return replace(finding, substitution=substitution)

@@ -33,8 +33,8 @@ from dataclasses import replace
 import numpy as np
 
 from auvdiag_cli.engine.envelope import within_the_envelope
-from auvdiag_cli.engine.isolation import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.vehicle.profile import Profile

@@ -17,9 +17,9 @@ import numpy as np
 
 from auvdiag_cli.digest import log_digest
 from auvdiag_cli.engine.autopilot_words import trouble_in_normal_log
-from auvdiag_cli.engine.change_check import STRIDE_STEPS
 from auvdiag_cli.engine.change_columns import change_judged
 from auvdiag_cli.engine.change_signatures import judged_within
+from auvdiag_cli.engine.change_statistics import STRIDE_STEPS
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.diagnosis import diagnose_ingested
 from auvdiag_cli.engine.ingest import IngestedLog, ingest

@@ -7,11 +7,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from auvdiag_cli.engine.change_check import (
+from auvdiag_cli.engine.change_check import MIN_JUDGED_S, REFERENCE_MIN_S
+from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
+from auvdiag_cli.engine.change_signatures import below_only, signatures, thresholded
+from auvdiag_cli.engine.change_statistics import (
     ABOVE,
     BELOW,
-    MIN_JUDGED_S,
-    REFERENCE_MIN_S,
     STATISTICS,
     STRIDE_STEPS,
     SUM,
@@ -23,8 +24,6 @@ from auvdiag_cli.engine.change_check import (
     signal_of,
     way_statistics,
 )
-from auvdiag_cli.engine.change_columns import change_judged, change_names, loop_names
-from auvdiag_cli.engine.change_signatures import below_only, signatures, thresholded
 from auvdiag_cli.engine.results import Diagnosis
 from auvdiag_cli.jobs.budget import BudgetThresholds
 from auvdiag_cli.vehicle.actuators import Actuator

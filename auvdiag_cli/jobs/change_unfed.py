@@ -18,9 +18,9 @@ airspeed had risen 17 % from fewer logs alone, and left a stuck aileron under it
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from auvdiag_cli.engine.change_check import WayScales
 from auvdiag_cli.engine.change_columns import change_judged, loop_names
 from auvdiag_cli.engine.change_signatures import thresholded
+from auvdiag_cli.engine.change_statistics import WayScales
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import IngestedLog
 from auvdiag_cli.engine.judging import skilled

@@ -6,7 +6,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from auvdiag_cli.engine.change_check import REFERENCE_MIN_S, SUM, way_statistics
+from auvdiag_cli.engine.change_check import REFERENCE_MIN_S
+from auvdiag_cli.engine.change_statistics import SUM, way_statistics
 from auvdiag_cli.vehicle.profile import Profile
 from models.skill import ScoringLog
 from models.tracking import fit_tracking

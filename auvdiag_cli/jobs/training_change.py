@@ -12,8 +12,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from auvdiag_cli.digest import log_digest
-from auvdiag_cli.engine.change_check import STRIDE_STEPS
 from auvdiag_cli.engine.change_columns import change_judged
+from auvdiag_cli.engine.change_statistics import STRIDE_STEPS
 from auvdiag_cli.engine.diagnosis import change_errors_of
 from auvdiag_cli.engine.ingest import ingest
 from auvdiag_cli.engine.judging import skilled
