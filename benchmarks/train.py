@@ -83,10 +83,12 @@ def main() -> None:
 
     def before(sequences: Sequence[training.TrainingLog], hidden: int,
                stages: Sequence[training.Stage], seed: int,
-               progress: Callable[[str], None] | None, linear: np.ndarray | None = None
-               ) -> object:
+               progress: Callable[[str], None] | None, linear: np.ndarray | None = None,
+               run: tuple[int, int] = (1, 1)) -> object:
         """The trainer as it was: torch's default thread count."""
-        return training._train(sequences, hidden, stages, 64, seed, progress, linear)
+        tracker = training._Progress(stages, training._horizons(sequences, stages), progress,
+                                     run)
+        return training._train(sequences, hidden, stages, 64, seed, tracker, linear)
 
     with tempfile.TemporaryDirectory() as work:
         logs, heldout = simulated_logs(Path(work), args.minutes)

@@ -82,9 +82,14 @@ class _Progress:
     REPORT_EVERY_S = 2.0
 
     def __init__(self, stages: Sequence[Stage], horizons: Sequence[int],
-                 report: Callable[[str], None] | None) -> None:
+                 report: Callable[[str], None] | None, run: tuple[int, int] = (1, 1)) -> None:
         self.work = [s.iterations * h for s, h in zip(stages, horizons, strict=True)]
         self.stages, self.horizons, self.report = stages, horizons, report
+        # Which of the trainings of one `train` job this is: the time left counts the ones
+        # after it (each as long as this one), so it does not reach 0 s before they start.
+        number, runs = run
+        self.said = f"network {number} of {runs}, " if runs > 1 else ""
+        self.total = sum(self.work) * (1 + runs - number)
         self.last = time.perf_counter()
         self.done = 0
         self.measured_from: tuple[float, int] | None = None   # (time, work done) then
@@ -101,9 +106,10 @@ class _Progress:
         since, done_then = self.measured_from
         rate = (now - since) / (self.done - done_then) if self.done > done_then else None
         left = "" if rate is None else \
-            f", about {_duration(rate * (sum(self.work) - self.done))} left"
-        self.report(f"stage {stage + 1}/{len(self.stages)} (horizon {self.horizons[stage]} "
-                    f"steps): {iteration + 1}/{self.stages[stage].iterations} iterations, "
+            f", about {_duration(rate * (self.total - self.done))} left"
+        iterations = self.stages[stage].iterations
+        self.report(f"{self.said}stage {stage + 1}/{len(self.stages)} (horizon "
+                    f"{self.horizons[stage]} steps): {iteration + 1}/{iterations} iterations, "
                     f"loss {loss:.5f}{left}")
 
 
@@ -113,35 +119,41 @@ def _duration(seconds: float) -> str:
 
 def train(sequences: Sequence[TrainingLog], hidden: int = 32,
           stages: Sequence[Stage] = DEFAULT_STAGES, batch_size: int = 64, seed: int = 0,
-          progress: Callable[[str], None] | None = None, linear: np.ndarray | None = None
-          ) -> tuple[RecurrentDynamics, Normaliser]:
+          progress: Callable[[str], None] | None = None, linear: np.ndarray | None = None,
+          run: tuple[int, int] = (1, 1)) -> tuple[RecurrentDynamics, Normaliser]:
     """Train a model on normal-condition logs; returns the network and its normaliser.
     ``linear``: a fixed linear model (normalised units) the network learns on top of.
+    ``run``: (this training, how many the job trains alike), for the progress lines.
 
     Runs on one thread: the network's matrices are small, and a second thread only waits
     on the first (on a busy two-core machine it made training tens of times slower)."""
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        return _train(sequences, hidden, stages, batch_size, seed, progress, linear)
+        return _train(sequences, hidden, stages, batch_size, seed,
+                      _Progress(stages, _horizons(sequences, stages), progress, run), linear)
     finally:
         torch.set_num_threads(threads)
 
 
+def _horizons(sequences: Sequence[TrainingLog], stages: Sequence[Stage]) -> list[int]:
+    """Each stage's horizon: a window needs every sensor measured throughout, so not longer
+    than the data allow."""
+    longest = max(longest_complete_stretch(s.sensors) for s in sequences)
+    if longest < 2:
+        raise ValueError("no two consecutive samples with every sensor measured")
+    return [min(stage.horizon_steps, longest) for stage in stages]
+
+
 def _train(sequences: Sequence[TrainingLog], hidden: int, stages: Sequence[Stage],
-           batch_size: int, seed: int, progress: Callable[[str], None] | None,
+           batch_size: int, seed: int, tracker: _Progress,
            linear: np.ndarray | None) -> tuple[RecurrentDynamics, Normaliser]:
     torch.manual_seed(seed)
     generator = np.random.default_rng(seed)
     normaliser = fit_normaliser(sequences)
     n_commands, n_states = sequences[0].commands.shape[1], sequences[0].sensors.shape[1]
     network = RecurrentDynamics(n_commands, n_states, hidden, normaliser.delta_ratio, linear)
-    longest = max(longest_complete_stretch(s.sensors) for s in sequences)
-    if longest < 2:
-        raise ValueError("no two consecutive samples with every sensor measured")
-    # A window needs every sensor measured throughout: not longer than the data allow.
-    horizons = [min(stage.horizon_steps, longest) for stage in stages]
-    tracker = _Progress(stages, horizons, progress)
+    horizons = tracker.horizons
     for number, (stage, horizon) in enumerate(zip(stages, horizons, strict=True)):
         commands, states = _windows(sequences, horizon, normaliser)
         optimiser = torch.optim.Adam(network.parameters(), lr=stage.learning_rate)

@@ -189,12 +189,16 @@ def _network_fit(training: Sequence[ScoringLog], options: TrainOptions,
         progress("the network alone is not trained: no signal may be read from it "
                  f"(--predictor {', '.join(options.predictors)})")
 
-    def fit_network(linear: np.ndarray | None) -> Any:
-        return (trainer or train)(sequences, hidden=options.hidden,
-                                  stages=stages if alone or linear is not None else [],
-                                  seed=options.seed, progress=progress, linear=linear)
-
     on_linear = "network-on-linear" in options.predictors
+    runs = max(1, int(alone) + int(on_linear))
+
+    def fit_network(linear: np.ndarray | None) -> Any:
+        trained = alone or linear is not None
+        return (trainer or train)(sequences, hidden=options.hidden,
+                                  stages=stages if trained else [],
+                                  seed=options.seed, progress=progress, linear=linear,
+                                  run=(runs if linear is not None else 1, runs))
+
     return fit_network, stages if alone or on_linear else []
 
 
