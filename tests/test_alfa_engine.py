@@ -315,3 +315,37 @@ def test_a_sensor_that_freezes_mid_flight_is_named(calibrated, tmp_path, fields,
     assert (str(diagnosis.verdict), diagnosis.component) == ("fault", sensor)
     assert 100.0 <= diagnosis.detected_at_s <= 105.0
     assert any("froze at one value" in note for note in diagnosis.notes)
+
+
+def _cropped_copy(folder, tmp_path, from_ns: int):
+    """The flight's CSV folder from ``from_ns`` on (each topic's rows received then or
+    later), as a recording begun then would hold it."""
+    copy = tmp_path / folder.name
+    copy.mkdir()
+    for path in folder.glob("*.csv"):
+        rows = list(csv.reader(path.open(newline="")))
+        with (copy / path.name).open("w", newline="") as stream:
+            csv.writer(stream).writerows([rows[0], *(r for r in rows[1:]
+                                                     if int(r[0]) >= from_ns)])
+    return copy
+
+
+@pytest.mark.shared_data("alfa")
+def test_a_failure_inside_the_reference_is_found_but_not_named_alone(calibrated, tmp_path):
+    """An engine cut 20 s into a recording: within the 30 s of its own beginning the change
+    test takes as its reference, where the cut's first effect (the forward acceleration
+    falling) is absorbed. What changes after judging begins may be the aircraft's answer
+    (on another day's engine cut so placed, the roll changed most, and "ailerons" was
+    named): the verdict gives the two likeliest parts and says why it names neither alone."""
+    profile, model, _ = calibrated
+    name = "carbonZ_2018-07-18-15-53-31_1_engine_failure"
+    (row,) = [r for r in _labels() if r["sequence"] == name]
+    onset_ns = int(row["onset_time_ns"])
+    flight = _cropped_copy(ALFA / name, tmp_path, onset_ns - 20 * 10**9)
+    diagnosis = api.diagnose(flight, profile, model)
+    check = diagnosis.change_check
+    assert str(diagnosis.verdict) == "fault" and check is not None and check.since_judged
+    assert diagnosis.component is None and len(diagnosis.candidates) == 2
+    assert "engine" in diagnosis.candidates
+    assert any("no one part is named: the change may have begun before the first step "
+               "judged" in note for note in diagnosis.notes)

@@ -64,7 +64,18 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
                       f"{note}; named by the effort its group carries (its shares match "
                       f"{alone} weak alone, begun by the onset), not {ranked[0]}, whose "
                       "signals changed", judging)
-    if len(ranked) > 1:
+    named = ranked[:1]
+    if change.since_judged and len(ranked) > 1:
+        # What the failure moved first lies in the reference; what changes after it is
+        # often the vehicle's answer (an engine lost 10 s before judging began left the
+        # roll as the signal that changed most, and "ailerons" named).
+        named = ranked[:2]
+        note += (f"; no one part is named: the change may have begun before the first step "
+                 f"judged ({change.judged_from_s:.1f} s), in the log's own beginning the test "
+                 "takes as its reference, where what the failure moved first is not seen, and "
+                 f"what changed after it{carriers(change)} may be the vehicle's answer; the "
+                 f"likeliest parts: {' or '.join(named)}")
+    elif len(ranked) > 1:
         note += (f"; the part that moves most of what changed{carriers(change)} is named, "
                  "before " + ", ".join(ranked[1:]))
     if healthy is not None:
@@ -73,7 +84,7 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         note += "; " + effect if effect else ""
         finding = replace(finding, healthy_from_onset=healthy_from_onset(
             seen, change, healthy, horizon, cannot))
-    return found(seen, replace(finding, case=None), ranked[:1], note, judging)
+    return found(seen, replace(finding, case=None), named, note, judging)
 
 
 def _apply_start_alarm(seen: Observations, finding: Finding, start: StartCheck,
