@@ -41,10 +41,11 @@ MIN_BIN_LOGS = 2              # logs with steady time in a level bin for its own
 SPREAD_FLOOR = 0.002          # of a share: no spread is known better than this
 LONG_WINDOW = 4               # windows this many times longer measure the slow wander
 DEFAULT_FALSE_ALARM_RATE = 0.01   # per log
-# Fewer logs than this that show no offset between them: their spread is taken at the upper
-# limit of this confidence (`largest_spread_factor`).
+# Fewer normal logs than this are few: where they show no offset between them, their spread
+# is taken at the upper limit of ALIKE_CONFIDENCE (`largest_spread_factor`); a log they
+# judge near its threshold they cannot rule out (`effort_thresholds.Thresholds.near`).
 ALIKE_CONFIDENCE = 0.95
-ALIKE_FEW_LOGS = 5
+FEW_LOGS = 5
 
 
 @dataclass(frozen=True)
@@ -239,7 +240,7 @@ class GroupFit:
     # would by chance: no offset between them shows (logs of one day or one battery, say).
     alike: bool = False
     # How many times its spread as seen the whole log is judged against (> 1: alike logs,
-    # few of them: `ALIKE_FEW_LOGS`).
+    # few of them: `FEW_LOGS`).
     widened: float = 1.0
     # (members, members): how its members' shares move together within a log
     # (`models.effort_correlation`; None: a model from before, which did not keep it)
@@ -277,7 +278,7 @@ def fit_group(group: EffortGroup, logs: Sequence[GroupLog], min_level: float,
     # spread says only that it is small, and logs of another day carry offsets these never
     # sampled. Judge against the largest spread they do not rule out. Dozens that show none
     # show that the offsets are small.
-    widened = largest_spread_factor(dof, ALIKE_CONFIDENCE) if alike and n < ALIKE_FEW_LOGS \
+    widened = largest_spread_factor(dof, ALIKE_CONFIDENCE) if alike and n < FEW_LOGS \
         else 1.0
     fit = GroupFit(group, min_level, window_s, conditioned, _bin_means(logs, conditioned),
                    spread * widened, within, typical, n, dof, within_dof,

@@ -109,8 +109,9 @@ class _TightBetweenLogs(Thresholds):
     """The whole log judged as against normal logs that agree closely (a vehicle whose
     missions differ only by their noise): its departure stands far past its threshold."""
 
-    def whole_log(self, fit: GroupFit, dof: float | None = None) -> float:
-        return 0.2 * super().whole_log(fit, dof)
+    def whole_log(self, fit: GroupFit, dof: float | None = None, rate: float | None = None
+                  ) -> float:
+        return 0.2 * super().whole_log(fit, dof, rate)
 
 
 def test_a_rotor_lost_midway_moves_the_whole_log_and_is_dated_where_it_was_lost():

@@ -28,6 +28,7 @@ from auvdiag_cli.engine.effort_naming import (
     CLEAR_MATCH,
     ActuatorEffort,
     named_by_shares,
+    not_ruled_out,
 )
 from auvdiag_cli.engine.effort_spans import (
     STARTS_PER_WINDOW,
@@ -41,7 +42,7 @@ from models.effort import GroupFit, expected_share, window_shares
 from models.effort_directions import judged_directions
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
-from models.effort_thresholds import Thresholds, smallest_rise
+from models.effort_thresholds import NEAR_RATE, Thresholds, smallest_rise
 
 
 @dataclass(frozen=True)
@@ -80,6 +81,11 @@ class EffortCheck:
     # The members named in the suspect's group are ones its shares cannot tell apart
     # (`named_components`).
     cannot_tell_apart: bool = False
+    # Where none alarmed: the component few normal logs cannot rule out weak
+    # (`effort_naming.not_ruled_out`), and how its group's departure matches each member's
+    # weakness, best first.
+    not_ruled_out: str | None = None
+    near_matches: tuple[tuple[str, float], ...] = ()
 
     @property
     def judged(self) -> bool:
@@ -150,12 +156,23 @@ class EffortCheck:
             worst = max(judged, key=lambda a: a.ratio or 0.0)
             return (f"every actuator carries its normal share of the effort (closest: "
                     f"{worst.said}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
-                    f"its threshold){smallest_rise_shown(judged)}")
+                    f"its threshold){self._not_ruled_out()}{smallest_rise_shown(judged)}")
         # A member its group's clear match leaves out (`named_components`) is not a weakness
         # of its own.
         parts = [carries(a) for a in suspects if a.component in self.named or not self.named]
         return ("; ".join(parts) + ": " + (self.failure or MARINE_FAILURE) + self._pattern()
                 + self._since() + self._caution())
+
+    def _not_ruled_out(self) -> str:
+        """Why the few normal logs cannot rule out the actuator nearest its threshold."""
+        if self.not_ruled_out is None or len(self.near_matches) < 2:
+            return ""
+        said = {a.name: a.said for a in self.actuators}
+        (best, match), (second, other) = ((said.get(n, n), m) for n, m in self.near_matches[:2])
+        return (f"; but {best} is past the threshold a {NEAR_RATE:.0%} budget would set, and "
+                f"the shares match it weak ({match:.2f}; the next, {second}: {other:.2f}): "
+                f"these few normal logs cannot rule out a weak {self.not_ruled_out} (more "
+                "would narrow its threshold)")
 
     def _caution(self) -> str:
         return "" if not self.against_alike_logs else (
@@ -191,7 +208,8 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
                  ) -> tuple[np.ndarray, tuple[float, float | None] | None, float | None,
                             EffortSeries, tuple, tuple[np.ndarray | None, np.ndarray] | None]:
     """(ratio per actuator, (onset_s, its error: None for the whole log) after an alarm,
-    alarm_s, series, whole-log figures, (signatures, departures) of a change that alarmed,
+    alarm_s, series, whole-log figures (share, normal share, σ, signatures, the whole log's
+    ratio to its threshold), (signatures, departures) of a change that alarmed,
     to name its member by)."""
     steady, effort, level, bins = setup.steady_steps(log)
     times = time_s[steady]
@@ -208,7 +226,8 @@ def _judge_group(setup: GroupSetup, fit: GroupFit, change: GroupFit | None,
     normal = expected_share(fit.means, np.bincount(bins, weights=level, minlength=setup.n_bins))
     sigma = fit.sigma(n * dt_s)
     commands = np.nan_to_num(log.group_commands(setup.group)[steady])
-    figures = (share, normal, sigma, named_signatures(setup.group, commands, share, sigma))
+    figures = (share, normal, sigma, named_signatures(setup.group, commands, share, sigma),
+               ratios[0])
     series = _series(setup, fit, effort, level, bins, times, window)
     top = int(np.argmax(per_actuator))
     if per_actuator[top] <= 1:
@@ -289,8 +308,11 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             actuators += [ActuatorEffort(m, component.get(m, m), setup.group.name, None, None,
                                          None, None, None, why) for m in members]
             continue
-        ratio, onset, alarm, group_series, (share, normal, sigma, toward), departure = \
+        ratio, onset, alarm, group_series, (share, normal, sigma, toward, whole), departure = \
             _judge_group(setup, fit, change, model.thresholds, log, time_s, model.dt_s)
+        near = model.thresholds.near(fit)
+        past_near = np.zeros(len(members), bool) if near is None else \
+            (whole >= near / model.thresholds.whole_log(fit)) & (ratio <= 1)
         directions[setup.group.name] = toward
         if departure is not None:
             signatures, changed[setup.group.name] = departure
@@ -306,7 +328,7 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
             round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None,
             round(float(rise[k]), 4), None if since is None else round(float(since[k]), 4),
-            setup.group.driven_alone) for k, m in enumerate(members)]
+            setup.group.driven_alone, bool(past_near[k])) for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
     matches, named, cannot_tell_apart = named_by_shares(actuators, directions, changed,
@@ -320,4 +342,4 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
                        failure, matches,
                        None if first is None or first[2] is None else round(first[2], 3),
                        first is not None and first[2] is None and first[3] in alike,
-                       cannot_tell_apart)
+                       cannot_tell_apart, *not_ruled_out(actuators, directions))

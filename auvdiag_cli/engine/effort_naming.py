@@ -2,7 +2,7 @@
 with each member's weakness (its signature), and whether the departure tells the best
 match from the others (`engine.effort_check`)."""
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +32,9 @@ class ActuatorEffort:
     # before, less one (a rotor lost in a log's last seconds barely moves the whole log's).
     since_onset: float | None = None
     driven_alone: bool = False   # its controller drives it alone (`EffortGroup.driven_alone`)
+    # Under its threshold, but past the one a looser budget would set, on few normal logs
+    # (`models.effort_thresholds.Thresholds.near`): they cannot rule it out.
+    near: bool = False
 
     @property
     def driven_harder(self) -> bool:
@@ -42,13 +45,18 @@ class ActuatorEffort:
         return self.name if self.component == self.name else f"{self.component} ({self.name})"
 
 
+def driven_harder(actuator: ActuatorEffort) -> bool:
+    return actuator.driven_harder
+
+
 def _suspect_group(actuators: Sequence[ActuatorEffort],
                    directions: Mapping[str, np.ndarray] | None,
-                   departures: Mapping[str, np.ndarray] | None
+                   departures: Mapping[str, np.ndarray] | None,
+                   suspect: Callable[[ActuatorEffort], bool] = driven_harder
                    ) -> tuple[list[ActuatorEffort], np.ndarray, np.ndarray] | None:
     """(The strongest suspect's group, its departures, its members' signatures (members,
     candidates, members)) as `signature_matches` reads them; None: nothing to match."""
-    suspects = sorted((a for a in actuators if a.driven_harder), key=lambda a: -(a.ratio or 0))
+    suspects = sorted(filter(suspect, actuators), key=lambda a: -(a.ratio or 0))
     if not suspects:
         return None
     group = [a for a in actuators if a.group == suspects[0].group and a.spread]
@@ -66,9 +74,11 @@ def _suspect_group(actuators: Sequence[ActuatorEffort],
 
 def signature_matches(actuators: Sequence[ActuatorEffort],
                       directions: Mapping[str, np.ndarray] | None = None,
-                      departures: Mapping[str, np.ndarray] | None = None
+                      departures: Mapping[str, np.ndarray] | None = None,
+                      suspect: Callable[[ActuatorEffort], bool] = driven_harder
                       ) -> tuple[tuple[str, float], ...]:
-    """How well the departures of the strongest suspect's group, in units of their spreads,
+    """How well the departures of the strongest suspect's group (``suspect``: which
+    actuators are suspects, by default those driven harder), in units of their spreads,
     match each member's weakness, best first: the cosine between them and the signature
     of member i, the best of its candidates. ``directions``: the group's, (members,
     candidates, members), over the whole log (`models.effort_reach.named_signatures`); by
@@ -77,7 +87,7 @@ def signature_matches(actuators: Sequence[ActuatorEffort],
     change within the log that alarmed, from its start to the end). One weak actuator
     matches its own near 1; a load shared between two, or two weak ones, matches none
     well."""
-    found = _suspect_group(actuators, directions, departures)
+    found = _suspect_group(actuators, directions, departures, suspect)
     if found is None:
         return ()
     group, z, toward = found
@@ -152,3 +162,18 @@ def named_by_shares(actuators: Sequence[ActuatorEffort], directions: Mapping[str
                                                          else (directions, None)))
               if matches else ())
     return (matches, *named_components(actuators, matches, untold))
+
+
+def not_ruled_out(actuators: Sequence[ActuatorEffort], directions: Mapping[str, np.ndarray]
+                  ) -> tuple[str | None, tuple[tuple[str, float], ...]]:
+    """(The component of the actuator few normal logs cannot rule out weak: the strongest
+    one past the looser threshold (`ActuatorEffort.near`) where none is driven harder, its
+    group's departure matching its weakness clearly and best; None where there is none;
+    the matches). A departure matching no one member's weakness is not one weak member."""
+    if any(a.driven_harder for a in actuators) or not any(a.near for a in actuators):
+        return None, ()
+    matches = signature_matches(actuators, directions, suspect=lambda a: a.near)
+    best = next((a for a in actuators if matches and a.name == matches[0][0] and a.near), None)
+    if best is None or matches[0][1] < CLEAR_MATCH:
+        return None, matches
+    return best.component, matches

@@ -34,6 +34,7 @@ import numpy as np
 
 from auvdiag_cli.engine.envelope import within_the_envelope
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.near_effort import unless_not_ruled_out
 from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
@@ -53,15 +54,18 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
     """``finding`` where the model can make it: not past the logs it learnt from
     (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
     as given, its thresholds not the model's, as ``judging``'s are); where other judges
-    alarmed only later, on what they saw (`before_later_judges`)."""
+    alarmed only later, on what they saw (`before_later_judges`); not normal where the effort
+    shares cannot rule out a weak actuator (`near_effort`)."""
     card = judging.model.card
     finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
                                   frame)
     raised = raised_by_training(profile, card)
     later = later_judges_begin(seen, finding)
     if later is not None:
-        return before_later_judges(finding, normal, seen, raised, judging, later)
-    return beyond_slight(finding, normal, seen, raised)
+        finding = before_later_judges(finding, normal, seen, raised, judging, later)
+    else:
+        finding = beyond_slight(finding, normal, seen, raised)
+    return unless_not_ruled_out(finding, seen)
 
 
 def raised_by_training(profile: Profile, card: ModelCard) -> frozenset[str]:

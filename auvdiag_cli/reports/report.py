@@ -177,6 +177,8 @@ class ActuatorsPart:
     cannot_tell_apart: bool = False
     signatures: tuple[SignaturePart, ...] = ()
     shares: Mapping[str, SharePart] = field(default_factory=dict)
+    # Where none alarmed, the component the few normal logs cannot rule out weak.
+    not_ruled_out: str | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

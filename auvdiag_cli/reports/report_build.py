@@ -242,7 +242,9 @@ def _actuators(check: EffortCheck | None) -> ActuatorsPart | None:
         onset_s=check.onset_s, onset_error_s=check.onset_error_s,
         against_alike_logs=check.against_alike_logs, named=tuple(check.named),
         cannot_tell_apart=check.cannot_tell_apart,
-        signatures=tuple(SignaturePart(actuator=n, match=m) for n, m in check.matches),
+        signatures=tuple(SignaturePart(actuator=n, match=m)
+                         for n, m in check.matches or check.near_matches),
+        not_ruled_out=check.not_ruled_out,
         shares={a.name: SharePart(
             group=a.group, component=a.component, share=a.share, normal_share=a.normal_share,
             spread=a.spread, departure=a.departure, over_threshold=a.ratio,
