@@ -13,6 +13,7 @@ from quad_effort import SHARES, quad_check, quad_commands, quad_model
 from auvdiag_cli.engine.near_effort import NOT_RULED_OUT, unless_not_ruled_out
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.reports.report_build import _actuators
+from auvdiag_cli.reports.training import effort_lines
 from models.effort_model import EffortModel
 from models.effort_thresholds import NEAR_RATE, smallest_rise
 
@@ -60,6 +61,18 @@ def test_five_normal_logs_judge_it_normal_or_fault():
     check = quad_check(model, _between(model, 0.5))
     assert check.alarm_s is None and check.not_ruled_out is None
     assert "cannot rule out" not in check.describe()
+    (line,) = effort_lines(model)
+    assert "cannot rule that weakness out" not in line
+
+
+def test_training_says_where_the_band_lies():
+    model = _model(4)
+    assert model.thresholds is not None and model.fits[0] is not None
+    (line,) = effort_lines(model)
+    near = model.thresholds.near(model.fits[0])
+    assert near is not None and near < model.thresholds.whole_log(model.fits[0])
+    assert (f"from z {near:.2f} (the threshold of a 5% budget) to it, a log whose shares "
+            "match one actuator's weakness is undetermined") in line
 
 
 @pytest.mark.parametrize("verdict", [Verdict.NORMAL, Verdict.FAULT])

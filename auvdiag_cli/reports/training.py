@@ -16,9 +16,9 @@ from auvdiag_cli.jobs.train import TrainingResult
 from auvdiag_cli.reports.sentences import by_reason
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import Refused, StartReference
-from models.effort import EffortGroup, GroupFit
+from models.effort import FEW_LOGS, EffortGroup, GroupFit
 from models.effort_model import EffortModel, GroupSetup
-from models.effort_thresholds import Thresholds, smallest_rise, widening
+from models.effort_thresholds import NEAR_RATE, Thresholds, smallest_rise, widening
 from models.fast import NETWORK
 from models.relation_forms import Relations
 from models.skill import MIN_SCORED_SAMPLES, MIN_SKILL, SKILL_MARGIN, HorizonScore, SignalSkill
@@ -204,12 +204,21 @@ def effort_lines(effort: EffortModel | Refused) -> list[str]:
             f"{', by level' if fit.conditioned else ''}): share {parts}; driven harder past "
             f"z {effort.thresholds.whole_log(fit):.2f} (false alarms budgeted at "
             f"{effort.false_alarm_rate:.1%} of normal logs; each normal log judged by the "
-            f"others: largest z {float(fit.loo_z.max()):.2f}{_scatter(fit)}); changed within "
-            "a log past z "
+            f"others: largest z {float(fit.loo_z.max()):.2f}{_scatter(fit)})"
+            f"{_not_ruled_out(fit, effort.thresholds)}; changed within a log past z "
             f"{typical_later_threshold(setup, fit, effort.thresholds, effort.dt_s, change):.2f}"
             + _later_noise(setup, fit, change)
             + _smallest(setup, fit, effort.thresholds, effort.dt_s, change) + _alike(fit))
     return lines
+
+
+def _not_ruled_out(fit: GroupFit, thresholds: Thresholds) -> str:
+    """Where the few normal logs leave a band under the threshold undetermined."""
+    near = thresholds.near(fit)
+    return "" if near is None else (
+        f"; from z {near:.2f} (the threshold of a {NEAR_RATE:.0%} budget) to it, a log whose "
+        f"shares match one actuator's weakness is undetermined: fewer than {FEW_LOGS} normal "
+        "logs cannot rule that weakness out")
 
 
 def _later_noise(setup: GroupSetup, fit: GroupFit, change: GroupFit | None) -> str:
