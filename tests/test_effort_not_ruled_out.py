@@ -10,7 +10,7 @@ import pytest
 from helpers import observed
 from quad_effort import SHARES, quad_check, quad_commands, quad_model
 
-from auvdiag_cli.engine.near_effort import NOT_RULED_OUT, unless_not_ruled_out
+from auvdiag_cli.engine.near_effort import not_ruled_out_because, unless_not_ruled_out
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.reports.report_build import _actuators
 from auvdiag_cli.reports.training import effort_lines
@@ -44,6 +44,7 @@ def test_a_rotor_between_the_two_thresholds_is_not_ruled_out_on_four_logs():
     assert check.alarm_s is None and not check.named
     assert check.not_ruled_out == "motor_1"
     assert check.near_matches[0][0] == "motor_1" and check.near_matches[0][1] >= 0.8
+    assert check.describe().startswith("no actuator is past its threshold (closest: motor_1")
     assert "these few normal logs cannot rule out a weak motor_1" in check.describe()
     assert _actuators(check).not_ruled_out == "motor_1"     # the JSON's
     # Under the looser threshold it is normal.
@@ -85,5 +86,6 @@ def test_only_a_normal_verdict_becomes_undetermined(verdict: Verdict):
         return
     assert finding.verdict is Verdict.UNDETERMINED
     assert finding.candidates == ("motor_1",)
-    assert finding.undetermined_because == NOT_RULED_OUT
+    assert finding.undetermined_because == not_ruled_out_because("motor_1")
+    assert finding.undetermined_because.startswith("motor_1 may be weak")
     assert "cannot rule out a weak motor_1" in finding.notes[-1]

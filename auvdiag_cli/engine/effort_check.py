@@ -154,9 +154,11 @@ class EffortCheck:
             if not judged:
                 return "not judged"
             worst = max(judged, key=lambda a: a.ratio or 0.0)
-            return (f"every actuator carries its normal share of the effort (closest: "
-                    f"{worst.said}, {worst.departure or 0.0:+.1%}, {worst.ratio or 0.0:.0%} of "
-                    f"its threshold){self._not_ruled_out()}{smallest_rise_shown(judged)}")
+            lead = ("every actuator carries its normal share of the effort"
+                    if self.not_ruled_out is None else "no actuator is past its threshold")
+            return (f"{lead} (closest: {worst.said}, {worst.departure or 0.0:+.1%}, "
+                    f"{worst.ratio or 0.0:.0%} of its threshold){self._not_ruled_out()}"
+                    f"{smallest_rise_shown(judged)}")
         # A member its group's clear match leaves out (`named_components`) is not a weakness
         # of its own.
         parts = [carries(a) for a in suspects if a.component in self.named or not self.named]

@@ -9,8 +9,12 @@ from dataclasses import replace
 
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 
-NOT_RULED_OUT = ("an actuator carries more of the effort than normal, short of its threshold, "
-                 "and the few normal logs the model rests on cannot rule out its weakness")
+
+def not_ruled_out_because(component: str) -> str:
+    """Why the verdict is undetermined, the component named (the JSON's
+    `undetermined_because`)."""
+    return (f"{component} may be weak: it carries more of the effort than normal, short of "
+            "its threshold, and the few normal logs the model rests on cannot rule that out")
 
 
 def unless_not_ruled_out(finding: Finding, seen: Observations) -> Finding:
@@ -21,6 +25,7 @@ def unless_not_ruled_out(finding: Finding, seen: Observations) -> Finding:
         return finding
     return replace(finding, verdict=Verdict.UNDETERMINED, case=None,
                    candidates=(effort.not_ruled_out,),
-                   undetermined_because=NOT_RULED_OUT).noted(
-        f"not judged normal: {effort.describe()}; calibrate the model on more normal logs "
-        "(auvdiag calibrate) to judge it")
+                   undetermined_because=not_ruled_out_because(effort.not_ruled_out)).noted(
+        "not judged normal: the effort shares cannot rule out a weak "
+        f"{effort.not_ruled_out} (the effort shares' summary says why); calibrate the model on more "
+        "normal logs (auvdiag calibrate) to judge it")
