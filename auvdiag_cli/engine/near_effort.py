@@ -27,5 +27,5 @@ def unless_not_ruled_out(finding: Finding, seen: Observations) -> Finding:
                    candidates=(effort.not_ruled_out,),
                    undetermined_because=not_ruled_out_because(effort.not_ruled_out)).noted(
         "not judged normal: the effort shares cannot rule out a weak "
-        f"{effort.not_ruled_out} (the effort shares' summary says why); calibrate the model on more "
-        "normal logs (auvdiag calibrate) to judge it")
+        f"{effort.not_ruled_out} (the effort shares' summary says why); calibrate the model "
+        "on more normal logs (auvdiag calibrate) to judge it")
