@@ -229,7 +229,7 @@ def _few_row(profile: Profile, logs: dict[str, RelationLog], normal: list[str],
                 check = _judge(model, profile, logs[f])
                 tried[cut] += 1
                 found[cut] += bool(check.suspects)
-                wrong += bool(check.suspects) and check.named != (CUT_MOTOR,)
+                wrong += cut >= 2.0 and bool(check.suspects) and check.named != (CUT_MOTOR,)
                 unruled_cut += cut >= 2.0 and check.not_ruled_out == CUT_MOTOR
                 if ratios is not None and cut >= 2.0:
                     ratios[f].append(next(a.ratio or 0.0 for a in check.actuators
