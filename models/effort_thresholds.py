@@ -41,7 +41,8 @@ class Thresholds:
         t on the few degrees of freedom such logs give sets a wide threshold (four logs of
         four rotors: 3.8 for 1 % a log, 2.8 for 5 %), and a log between the two is one they
         can neither clear nor convict: a simulated quadrotor's 20-25 mm cut, its rotor's
-        share 10 % up, fell there in 22 of 80 logs, and 5 of 120 normal ones did."""
+        share 10 % up, fell there in 22 of 80 logs, and 5 of 120 normal ones did (21 and 3
+        of them matching the rotor's weakness clearly: `effort_naming.not_ruled_out`)."""
         if self.false_alarm_rate >= NEAR_RATE or fit.logs >= FEW_LOGS:
             return None
         return self.whole_log(fit, rate=NEAR_RATE)
