@@ -5,11 +5,11 @@ PYTHON ?= .venv/bin/python
 OUT := .bench
 
 .PHONY: bench bench-reference bench-detection bench-ingest bench-speed bench-audit bench-fuzz \
-	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-whole bench-shipped bench-samples bench-silence test model \
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-effort-band bench-few bench-whole bench-shipped bench-samples bench-silence test model \
 	samples
 
 bench: bench-reference bench-detection bench-ingest bench-speed bench-audit bench-silence bench-fuzz \
-	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-few bench-whole bench-shipped bench-samples
+	bench-train bench-train-busy bench-real bench-alfa bench-hidden bench-effort bench-effort-band bench-few bench-whole bench-shipped bench-samples
 
 bench-reference:
 	@mkdir -p $(OUT)
@@ -90,6 +90,11 @@ bench-effort:
 	@mkdir -p $(OUT)
 	$(PYTHON) benchmarks/effort.py > $(OUT)/effort.md
 	$(PYTHON) benchmarks/readme.py effort $(OUT)/effort.md
+
+bench-effort-band:
+	@mkdir -p $(OUT)
+	$(PYTHON) benchmarks/effort_band.py > $(OUT)/effort_band.md
+	$(PYTHON) benchmarks/readme.py effort_band $(OUT)/effort_band.md
 
 bench-few:
 	@mkdir -p $(OUT)
