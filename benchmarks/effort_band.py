@@ -2,8 +2,8 @@
 near the threshold: how many such logs are found, how many the few normal logs cannot rule
 out (undetermined, the rotor the candidate), and what becomes of normal logs.
 
-The shares are drawn as a user's ArduCopter quad X gave them (a user's real ArduCopter quad X: four normal
-flights, motor_1 to motor_4 at 0.985 ± 0.018, 1.002 ± 0.013, 1.013 ± 0.028, 1.000 ± 0.036;
+The shares are drawn as a user's real ArduCopter quad X gave them (four normal flights,
+motor_1 to motor_4 at 0.985 ± 0.018, 1.002 ± 0.013, 1.013 ± 0.028, 1.000 ± 0.036;
 two flights with motor_1's propeller cut by 20-25 mm at 1.092 / 0.949 / 0.971 / 0.988 and
 1.085 / 0.950 / 1.012 / 0.952): each draw learns an effort model from four normal logs of
 rotors hovering near half throttle (the `arducopter_quad` profile's rotor group), each log's
@@ -90,7 +90,8 @@ def main() -> None:
             good.add(_judge(profile, model, _normal(rng)), None)
     print(f"Measured {date.today()} on {platform.machine()} ({os.cpu_count()} cores), Python "
           f"{platform.python_version()}: {args.draws} draws of {NORMAL_LOGS} normal logs each "
-          "(the shares and spreads of a real ArduCopter quad X's flights, simulated), budget 1 % a log.\n")
+          "(the shares and spreads of a real ArduCopter quad X's flights, simulated), "
+          "budget 1 % a log.\n")
     print("| logs | judged | found, motor_1 named | alarmed otherwise | undetermined: not "
           "ruled out |")
     print("|---|---|---|---|---|")
