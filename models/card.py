@@ -155,6 +155,9 @@ class ModelIdentity:
     inputs: tuple[str, ...]
     thresholds_calibrated: bool
     false_alarm_rate: FalseAlarmSetting | None
+    # How many of calibrate's normal logs the model had not been trained on (None: not
+    # calibrated, or calibrated before it was kept): what its thresholds rest on.
+    calibration_unseen_logs: int | None = None
 
     def as_dict(self) -> dict[str, object]:
         """The JSON report's ``model`` object."""
@@ -233,6 +236,9 @@ class ModelCard:
     change_training: ChangeTraining = field(default_factory=ChangeTraining)
     # The UTC days of the normal logs calibrate set the thresholds on (none: not known).
     calibration_days: tuple[str, ...] = ()
+    # Of those logs, how many the model was not trained on (None: not calibrated, or not
+    # known).
+    calibration_unseen_logs: int | None = None
     # The controller's loops whose gain the change test judges (`models.tracking`).
     tracking: tuple[TrackingFit, ...] = ()
     # signal -> the largest |value| the logs it learnt from reached (`engine.envelope`;
@@ -291,7 +297,8 @@ class ModelCard:
             _frozen(self.heldout_error_rms) if self.heldout_error_rms else None,
             self.horizon_s,
             None if self.skill is None else _frozen({k: v.skill for k, v in self.skill.items()}),
-            self.predictors, self.input_names, self.calibrated, self.false_alarm_rate)
+            self.predictors, self.input_names, self.calibrated, self.false_alarm_rate,
+            self.calibration_unseen_logs)
 
     @classmethod
     def from_document(cls, meta: Mapping[str, Any]) -> "ModelCard":
@@ -301,9 +308,8 @@ class ModelCard:
         sensors = tuple(str(s["name"]) for s in signals["sensors"])
         skill = meta.get("skill", {}).get("signals")
         chosen = meta.get("predictors", {}).get("per_signal", {})
-        calibration = meta.get("calibration") or {}
+        calibration, change = meta.get("calibration") or {}, meta.get("change_test") or {}
         budget = calibration.get("false_alarm_budget")
-        change = meta.get("change_test") or {}
         return cls(
             name=meta.get("name"), vehicle=meta.get("vehicle"), created=meta.get("created"),
             dt_s=float(meta["dt_s"]),
@@ -351,9 +357,17 @@ class ModelCard:
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
+            calibration_unseen_logs=_unseen(calibration),
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
             envelope=_envelope(meta.get("envelope") or {}),
             document_text=json.dumps(meta))
+
+
+def _unseen(calibration: Mapping[str, Any]) -> int | None:
+    """How many of calibrate's normal logs the model was not trained on (None: no record)."""
+    if "normal_logs" not in calibration or "in_sample_logs" not in calibration:
+        return None
+    return len(calibration["normal_logs"]) - len(calibration["in_sample_logs"])
 
 
 def _envelope(entry: Mapping[str, Any]) -> Mapping[str, float]:

@@ -68,3 +68,17 @@ def test_the_sensor_whose_own_signal_alone_changed_is_named_unless_the_shares_sa
     late = replace(_motor_3_weak(90.0), alarm_s=93.0)
     assert apply_change_alarm(observed(late, UNJUDGED), normal, rates,
                               judging).component == "gyro"
+
+
+def test_a_change_no_one_part_moves_is_named_by_the_shares_where_they_match_one_rotor():
+    """A rotor lost mid-flight moves every signal at once, and no part's signature fits
+    them all: where its group's shares match one rotor weak from the change, that rotor is
+    named; without them, no part is."""
+    normal = Finding(verdict=Verdict.NORMAL, b={n: 0 for n in SIGNALS})
+    judging = _judging({})
+    everything = replace(_change(*SIGNALS), ways={n: "below" for n in SIGNALS})
+    unnamed = apply_change_alarm(observed(None, {}), normal, everything, judging)
+    assert unnamed.verdict == Verdict.FAULT and unnamed.component is None
+    named = apply_change_alarm(observed(_motor_3_weak(67.0), {}), normal, everything, judging)
+    assert named.component == "motor_3" and named.onset_s == 67.0
+    assert "where no one part moves what changed" in named.notes[-1]

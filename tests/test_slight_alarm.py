@@ -22,7 +22,7 @@ from auvdiag_cli.engine.slight_alarm import (
     before_later_judges,
     beyond_slight,
     later_judges_begin,
-    raised_by_training,
+    set_by_logs,
 )
 from auvdiag_cli.vehicle.profile import load_profile
 from models.card import ModelCard
@@ -76,8 +76,8 @@ def test_the_thresholds_training_raised_are_those_above_the_profiles():
     mission = dict(profile.thresholds_for("mission"))
     trained = cast(ModelCard, SimpleNamespace(thresholds={
         "mission": {**mission, "heave": mission["heave"] * 1.77, "surge": mission["surge"]}}))
-    assert raised_by_training(profile, trained) == {"heave"}
-    assert raised_by_training(profile, cast(ModelCard, SimpleNamespace(thresholds=None))) \
+    assert set_by_logs(profile, trained) == {"heave"}
+    assert set_by_logs(profile, cast(ModelCard, SimpleNamespace(thresholds=None))) \
         == frozenset()
 
 

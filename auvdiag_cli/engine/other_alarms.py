@@ -57,13 +57,15 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     ranked = change_suspects(change.flagged, judging.profile, change.evidence,
                               change.ways)
     alone = weak_alone(seen, change.onset_s)
-    if alone is not None and ranked and ranked[0] in {s.component
-                                                      for s in judging.profile.sensors}:
-        # A weak actuator moves what a sensor measures too; its group's shares say which.
+    if alone is not None and (not ranked or ranked[0] in {s.component
+                                                          for s in judging.profile.sensors}):
+        # A weak actuator moves what a sensor measures too, and a lost one moves every
+        # signal at once (no part's signature fits): its group's shares say which.
+        instead = (f"not {ranked[0]}, whose signals changed" if ranked
+                   else "where no one part moves what changed")
         return found(seen, replace(finding, case=None), [alone],
                       f"{note}; named by the effort its group carries (its shares match "
-                      f"{alone} weak alone, begun by the onset), not {ranked[0]}, whose "
-                      "signals changed", judging)
+                      f"{alone} weak alone, begun by the onset), {instead}", judging)
     named = ranked[:1]
     if change.since_judged and len(ranked) > 1:
         # What the failure moved first lies in the reference; what changes after it is

@@ -326,7 +326,8 @@ def _warnings(modes: Sequence[ModeCalibration], in_sample: Sequence[Path],
               normal_logs: Sequence[IngestedLog], widening: dict[str, float],
               change: ChangeEvidence, budgeted: bool) -> list[str]:
     warnings = (dominated_by_one_log(change, [log.signals.path.name for log in normal_logs])
-                + thin_evidence(normal_logs, budgeted, len(change.peaks)))
+                + thin_evidence(normal_logs, budgeted, len(change.peaks),
+                                len(normal_logs) - len(in_sample)))
     if in_sample:
         which = ("every calibration log was" if len(in_sample) == len(normal_logs)
                  else f"{len(in_sample)} of the calibration logs were")

@@ -6,17 +6,26 @@ from collections.abc import Sequence
 from auvdiag_cli.engine.ingest import IngestedLog
 from auvdiag_cli.engine.log_clock import utc_start_ns
 from auvdiag_cli.engine.results import utc_day
+from auvdiag_cli.engine.slight_alarm import SETTLED_LOGS
 from models.false_alarms import MIN_LOGS
 
 
 def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
-                  change_logs: int | None = None) -> list[str]:
+                  change_logs: int | None = None, unseen: int | None = None) -> list[str]:
     """The warnings: fewer logs than a law needs, where the margin rule sets thresholds (all
     of them, or with ``budgeted`` those g's blocks do not: the largest of a few peaks
     understates the next normal log's; the change test's rest on ``change_logs``, the
-    training logs the model keeps counted too), and logs of a single day (on UTC clocks),
-    whose wind, sea state and payload say nothing of another day's."""
+    training logs the model keeps counted too); fewer than SETTLED_LOGS the model was not
+    trained on (``unseen``), whose replay alarms are then judged as those of thresholds no
+    calibration set (`slight_alarm`); and logs of a single day (on UTC clocks), whose
+    wind, sea state and payload say nothing of another day's."""
     warnings = []
+    if unseen is not None and unseen < SETTLED_LOGS:
+        warnings.append(
+            f"{unseen} of the calibration logs were not used to train the model: until it is "
+            f"calibrated on {SETTLED_LOGS} or more such logs, an alarm of the replay alone "
+            "that crosses these thresholds by less than a quarter, or that no single fault "
+            "explains, is undetermined, not a fault")
     if len(logs) < MIN_LOGS:
         ruled = ("the change test's thresholds (and the commands')"
                  if (len(logs) if change_logs is None else change_logs) < MIN_LOGS
