@@ -239,6 +239,8 @@ class ModelCard:
     # Of those logs, how many the model was not trained on (None: not calibrated, or not
     # known).
     calibration_unseen_logs: int | None = None
+    # How many normal logs the change test's thresholds rest on (None: not known).
+    change_logs: int | None = None
     # The controller's loops whose gain the change test judges (`models.tracking`).
     tracking: tuple[TrackingFit, ...] = ()
     # signal -> the largest |value| the logs it learnt from reached (`engine.envelope`;
@@ -338,7 +340,7 @@ class ModelCard:
             thresholds=None if not meta.get("thresholds") else _frozen({
                 mode: _frozen({k: float(v) for k, v in values.items()})
                 for mode, values in meta["thresholds"].items()}),
-            calibrated="calibration" in meta,
+            calibrated="calibration" in meta, change_stride=_change_stride(change),
             false_alarm_rate=None if not budget else FalseAlarmSetting(float(budget["rate"]),
                                                                        str(budget["per"])),
             training_digests=frozenset(str(e.get("sha256")) for e in
@@ -347,7 +349,6 @@ class ModelCard:
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"),
             change_thresholds=_limits(change.get("thresholds", {})),
-            change_stride=_change_stride(change),
             change_way_scales=_way_scales(change),
             change_unfed=_frozen({str(i): _limits(by) for i, by in change.get(
                 "unfed_thresholds", {}).items()}),
@@ -357,10 +358,15 @@ class ModelCard:
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
-            calibration_unseen_logs=_unseen(calibration),
+            calibration_unseen_logs=_unseen(calibration), change_logs=_change_logs(change),
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
             envelope=_envelope(meta.get("envelope") or {}),
             document_text=json.dumps(meta))
+
+
+def _change_logs(change: Mapping[str, Any]) -> int | None:
+    """How many normal logs the change test's thresholds rest on (None: not kept)."""
+    return None if change.get("logs") is None else int(change["logs"])
 
 
 def _unseen(calibration: Mapping[str, Any]) -> int | None:

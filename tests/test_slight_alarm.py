@@ -16,8 +16,8 @@ from auvdiag_cli.engine.histories import Histories
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.residuals import Matching
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
+from auvdiag_cli.engine.settled import SLIGHT
 from auvdiag_cli.engine.slight_alarm import (
-    SLIGHT,
     TOO_SLIGHT,
     before_later_judges,
     beyond_slight,

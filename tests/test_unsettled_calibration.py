@@ -15,8 +15,8 @@ from test_slight_alarm import ALARM, NORMAL, RAISED, _effort_from, _seen
 
 from auvdiag_cli.engine.judging import Judging
 from auvdiag_cli.engine.results import Verdict
+from auvdiag_cli.engine.settled import SETTLED_LOGS
 from auvdiag_cli.engine.slight_alarm import (
-    SETTLED_LOGS,
     UNSETTLED,
     before_later_judges,
     beyond_slight,
@@ -71,5 +71,7 @@ def test_the_card_counts_the_calibration_logs_the_model_was_not_trained_on():
     calibrated = {**document, "calibration": {"normal_logs": ["a", "b", "c", "d"],
                                               "in_sample_logs": ["a", "b", "c"]}}
     card = ModelCard.from_document(calibrated)
-    assert card.calibration_unseen_logs == 1
+    assert card.calibration_unseen_logs == 1 and card.change_logs is None
     assert card.identity("m").calibration_unseen_logs == 1
+    changed = ModelCard.from_document({**calibrated, "change_test": {"logs": 4}})
+    assert changed.change_logs == 4

@@ -47,15 +47,11 @@ from auvdiag_cli.engine.near_effort import unless_not_ruled_out
 from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
+from auvdiag_cli.engine.settled import SETTLED_LOGS, SLIGHT, judged_ratios, settled
+from auvdiag_cli.engine.slight_change import beyond_slight_change
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import ModelCard, ModelIdentity
 
-# g that stays under this many times its uncalibrated threshold, from the onset on,
-# decides nothing alone.
-SLIGHT = 1.25
-# Calibrated on fewer normal logs than this that the model was not trained on, thresholds
-# are not settled: their alarms are judged as those of thresholds no calibration set.
-SETTLED_LOGS = 5
 UNCALIBRATED = "thresholds no calibration set"
 UNSETTLED = "thresholds calibrated on few logs the model had not seen"
 
@@ -79,7 +75,8 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
     as given, its thresholds not the model's, as ``judging``'s are); where other judges
     alarmed only later, on what they saw (`before_later_judges`); not normal where the effort
     shares cannot rule out a weak actuator (`near_effort`); where they alarmed too and no
-    single fault explains the replay's, on what they saw."""
+    single fault explains the replay's, on what they saw; not on a slight crossing of the
+    change test's thresholds where few logs set them (`slight_change`)."""
     card = judging.model.card
     finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
                                   frame)
@@ -89,6 +86,7 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
         finding = before_later_judges(finding, normal, seen, raised, judging, later)
     else:
         finding = beyond_slight(finding, normal, seen, raised)
+    finding = beyond_slight_change(finding, normal, seen, card.change_logs)
     return unless_not_ruled_out(finding, seen)
 
 
@@ -99,14 +97,6 @@ def set_by_logs(profile: Profile, card: ModelCard) -> frozenset[str]:
     return frozenset(name for mode, limits in (card.thresholds or {}).items()
                      for name, value in limits.items()
                      if value != profile.thresholds_for(mode).get(name, value))
-
-
-def settled(model: ModelIdentity) -> bool:
-    """Whether ``model``'s thresholds were calibrated on SETTLED_LOGS normal logs or more
-    that it was not trained on (a calibration from before that count was kept: settled)."""
-    unseen = model.calibration_unseen_logs
-    return ((model.thresholds_calibrated or model.false_alarm_rate is not None)
-            and (unseen is None or unseen >= SETTLED_LOGS))
 
 
 def _basis(model: ModelIdentity) -> str:
@@ -178,14 +168,11 @@ def slight_peak(finding: Finding, seen: Observations, raised: frozenset[str],
     them only in signals of ``raised`` (thresholds set from logs, not the profile's): the
     signal that went furthest and how far; else None."""
     model, histories = seen.model, seen.histories
+    ratio = judged_ratios(seen)
     if (finding.verdict is not Verdict.FAULT or finding.onset_s is None
-            or settled(model) or histories.matching is None):
+            or settled(model) or ratio is None):
         return None
     names = histories.sensor_names
-    judged = np.array([name not in seen.not_judged and name not in seen.set_aside
-                       for name in names], bool)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = np.where(judged, histories.matching.g_percent / histories.thresholds, np.nan)
     after = ratio[(histories.time_s >= finding.onset_s) & (histories.time_s < until_s)]
     if not np.isfinite(after).any():
         return None

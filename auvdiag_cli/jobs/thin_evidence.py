@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from auvdiag_cli.engine.ingest import IngestedLog
 from auvdiag_cli.engine.log_clock import utc_start_ns
 from auvdiag_cli.engine.results import utc_day
-from auvdiag_cli.engine.slight_alarm import SETTLED_LOGS
+from auvdiag_cli.engine.settled import SETTLED_LOGS
 from models.false_alarms import MIN_LOGS
 
 
@@ -22,7 +22,8 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
     warnings = []
     if unseen is not None and unseen < SETTLED_LOGS:
         warnings.append(
-            f"{unseen} of the calibration logs were not used to train the model: until it is "
+            f"{unseen} of the calibration logs {'was' if unseen == 1 else 'were'} not used to "
+            "train the model: until it is "
             f"calibrated on {SETTLED_LOGS} or more such logs, an alarm of the replay alone "
             "that crosses these thresholds by less than a quarter, or that no single fault "
             "explains, is undetermined, not a fault")
