@@ -167,12 +167,13 @@ def _judged(vehicle: str, model_dir: Path, calibration: list[Path], label: str,
         mission = (model.card.thresholds or profile.thresholds)["mission"]
         shown = ", ".join(f"{name} {mission[name]:g} %"
                           for name in replay_judged(model, profile)) or "none judged"
-    alarms = sum(api.diagnose(p, profile, model).verdict.value == "fault" for p in normal)
+    verdicts = Counter(api.diagnose(p, profile, model).verdict.value for p in normal)
     found, named, _, _, _ = _found_named(model, profile, faulty)
     weak_found, weak_named, weak_wrong, delays, by_part = _found_named(model, profile,
                                                                       weakened)
     delay = (f"{statistics.median(delays):.1f} / {max(delays):.1f}" if delays else "–")
-    return (f"`{vehicle}`", label, shown, f"{alarms}/{len(normal)}",
+    return (f"`{vehicle}`", label, shown, f"{verdicts['fault']}/{len(normal)}",
+            f"{verdicts['undetermined']}/{len(normal)}",
             f"{found}/{len(faulty)}", f"{named}/{len(faulty)}",
             f"{weak_found}/{len(weakened)}", f"{weak_named}/{len(weakened)}",
             f"{weak_wrong}/{len(weakened)}", delay,
@@ -237,9 +238,9 @@ def main() -> None:
           "delay: from the weakness's onset to its detection, median / worst over those "
           "named.\n")
     print("| vehicle | thresholds | g thresholds of the judged signals | normal missions "
-          f"alarmed | faults found | the part named | weakened to {WEAKENED:.0%}: found | "
-          "named | another named | delay (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
+          "alarmed | normal missions undetermined | faults found | the part named | "
+          f"weakened to {WEAKENED:.0%}: found | named | another named | delay (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     for row in rows:
         print("| " + " | ".join(row[:-1]) + " |")
     print(f"\nWeakened to {WEAKENED:.0%}, named per actuator (of {len(WEAKENED_SEEDS)} seeds):\n")
