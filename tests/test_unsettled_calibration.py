@@ -1,9 +1,8 @@
 """Thresholds `calibrate` set on fewer than SETTLED_LOGS normal logs the model was not
 trained on rest on as little as those `train` raised: an alarm of the replay alone that
 crosses them slightly, or that no single fault explains, is undetermined, and says what the
-thresholds rest on; five such logs settle them. Where another judge saw an event of its own
-and no single fault explains the replay's alarm, the verdict and its times are that
-judge's."""
+thresholds rest on; five such logs settle them. An early alarm no single fault explains
+gives way to another judge's later event."""
 
 from dataclasses import replace
 from pathlib import Path
@@ -49,19 +48,20 @@ def test_an_alarm_on_thresholds_few_unseen_logs_set_is_judged_as_an_uncalibrated
     assert beyond_slight(unnamed, NORMAL, _calibrated_on(None, 2.65), RAISED) == unnamed
 
 
-def test_another_judges_event_begun_by_an_unexplained_replay_alarm_gives_the_verdict():
-    """The replay crossed at 67.6 s, unexplained; the shares show thruster 5 weak from 66 s
-    (give or take 2 s): the verdict is the shares', at their times."""
+def test_an_early_alarm_no_single_fault_explains_gives_way_to_a_later_event():
+    """The replay crossed clearly at 67.6 s, naming nothing that explains it; the shares
+    show thruster 5 weak from 100 s: the verdict is the shares', at their times. An alarm a
+    fault explains, or on settled thresholds, stands."""
     judging = cast(Judging, SimpleNamespace(profile=load_profile(Path("bluerov2"))))
     unnamed = replace(ALARM, candidates=(), hypotheses=UNEXPLAINED_TEST)
-    seen = _calibrated_on(1, 2.65, effort=_effort_from(66.0, 70.0))
-    assert later_judges_begin(seen, unnamed) is None
-    judged = before_later_judges(unnamed, NORMAL, seen, RAISED, judging, None)
+    seen = _calibrated_on(1, 2.65, effort=_effort_from(100.0, 104.0))
+    assert later_judges_begin(seen, unnamed) == 98.0
+    judged = before_later_judges(unnamed, NORMAL, seen, RAISED, judging, 98.0)
     assert judged.verdict is Verdict.FAULT and judged.component == "thruster_5"
-    assert judged.onset_s == 66.0 and judged.detected_at_s == 70.0
-    assert any("the other judges saw an event of their own" in n for n in judged.notes)
-    settled = _calibrated_on(SETTLED_LOGS, 2.65, effort=_effort_from(66.0, 70.0))
-    assert before_later_judges(unnamed, NORMAL, settled, RAISED, judging, None) == unnamed
+    assert judged.onset_s == 100.0 and judged.detected_at_s == 104.0
+    assert before_later_judges(ALARM, NORMAL, seen, RAISED, judging, 98.0) == ALARM
+    settled = _calibrated_on(SETTLED_LOGS, 2.65, effort=_effort_from(100.0, 104.0))
+    assert before_later_judges(unnamed, NORMAL, settled, RAISED, judging, 98.0) == unnamed
 
 
 def test_the_card_counts_the_calibration_logs_the_model_was_not_trained_on():

@@ -74,15 +74,14 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
     (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
     as given, its thresholds not the model's, as ``judging``'s are); where other judges
     alarmed only later, on what they saw (`before_later_judges`); not normal where the effort
-    shares cannot rule out a weak actuator (`near_effort`); where they alarmed too and no
-    single fault explains the replay's, on what they saw; not on a slight crossing of the
+    shares cannot rule out a weak actuator (`near_effort`); not on a slight crossing of the
     change test's thresholds where few logs set them (`slight_change`)."""
     card = judging.model.card
     finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
                                   frame)
     raised = set_by_logs(profile, card)
     later = later_judges_begin(seen, finding)
-    if later is not None or (not others_silent(seen) and only_fitted(finding)):
+    if later is not None:
         finding = before_later_judges(finding, normal, seen, raised, judging, later)
     else:
         finding = beyond_slight(finding, normal, seen, raised)
@@ -133,7 +132,7 @@ def later_judges_begin(seen: Observations, finding: Finding) -> float | None:
 
 
 def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
-                        raised: frozenset[str], judging: Judging, later_s: float | None
+                        raised: frozenset[str], judging: Judging, later_s: float
                         ) -> Finding:
     """``finding``, or where the replay's alarm is slight until the other judges' event
     begins at ``later_s`` (`slight_peak`), or no single fault explains it (`unexplained`),
@@ -141,19 +140,16 @@ def before_later_judges(finding: Finding, normal: Finding, seen: Observations,
     crossed thresholds few unseen logs set takes nothing from a fault seen later (a
     simulated BlueROV2's heave at 1.04 x its threshold 36 s into a dive had named "thruster
     2 giving 50 %" a vertical thruster weakened at 90 s; a simulated quadrotor's climb at 2
-    x its threshold 18 s into a flight had dated a rotor lost at 60 s there). ``later_s``
-    None: their event had begun by the replay's alarm, which no single fault explains (a
-    simulated quadrotor's climb crossed 2 s before a rotor weakened, within the error of
-    the onset its shares gave): the verdict is theirs, at their times."""
-    slight = slight_peak(finding, seen, raised, np.inf if later_s is None else later_s,
-                         bound=np.inf if only_fitted(finding) else SLIGHT)
+    x its threshold 18 s into a flight, named nothing, had dated a rotor lost at 60 s
+    there)."""
+    slight = slight_peak(finding, seen, raised, later_s,
+                         bound=np.inf if unexplained(finding) else SLIGHT)
     if slight is None:
         return finding
     name, ratio = slight
-    others = ("the other judges saw an event of their own" if later_s is None else
-              f"no other judge saw anything before {later_s:.1f} s, where the other judges' "
-              "event begins")
-    normal = normal.noted(_not_taken(finding, seen.model, name, ratio, others)
+    normal = normal.noted(_not_taken(finding, seen.model, name, ratio,
+                                     f"no other judge saw anything before {later_s:.1f} s, "
+                                     "where the other judges' event begins")
                           + "; the verdict is theirs")
     change = seen.change_check
     if change is not None and change.alarm_s is not None:
