@@ -239,8 +239,6 @@ class ModelCard:
     # Of those logs, how many the model was not trained on (None: not calibrated, or not
     # known).
     calibration_unseen_logs: int | None = None
-    # How many normal logs the change test's thresholds rest on (None: not known).
-    change_logs: int | None = None
     # The controller's loops whose gain the change test judges (`models.tracking`).
     tracking: tuple[TrackingFit, ...] = ()
     # signal -> the largest |value| the logs it learnt from reached (`engine.envelope`;
@@ -358,15 +356,10 @@ class ModelCard:
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
             calibration_days=tuple(str(day) for day in calibration.get("days", [])),
-            calibration_unseen_logs=_unseen(calibration), change_logs=_change_logs(change),
+            calibration_unseen_logs=_unseen(calibration),
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
             envelope=_envelope(meta.get("envelope") or {}),
             document_text=json.dumps(meta))
-
-
-def _change_logs(change: Mapping[str, Any]) -> int | None:
-    """How many normal logs the change test's thresholds rest on (None: not kept)."""
-    return None if change.get("logs") is None else int(change["logs"])
 
 
 def _unseen(calibration: Mapping[str, Any]) -> int | None:

@@ -1,6 +1,5 @@
-"""How far thresholds set from a few logs can be trusted: what an alarm must show before
-it is taken for a fault where they rest on few normal logs (`slight_alarm`: the replay's;
-`slight_change`: the change test's)."""
+"""How far thresholds set from a few logs can be trusted: what the replay's alarm must show
+before it is taken for a fault where they rest on few normal logs (`slight_alarm`)."""
 
 import numpy as np
 

@@ -339,6 +339,4 @@ def change_entry(thresholds: ChangeThresholds, evidence: ChangeEvidence,
                                for s, v in thresholds.items()},
             "way_scales": {s: {n: list(pair) for n, pair in v.items()}
                            for s, v in scales.items()},
-            "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS,
-            # how many normal logs the thresholds rest on (`engine.slight_change`)
-            "logs": len(evidence.peaks)}
+            "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS}
