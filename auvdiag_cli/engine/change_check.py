@@ -96,22 +96,16 @@ class ChangeCheck:
     def judged(self) -> bool:
         return self.judged_from_s is not None and any(self.thresholds.values())
 
-    def peak_ratios(self) -> dict[str, float]:
-        """Each judged signal's largest statistic over its threshold in the log (the larger
-        of the two statistics')."""
+    def describe(self) -> str:
+        if not self.judged:
+            return (f"not judged (the log is too short: needs {REFERENCE_MIN_S:.0f} s of its "
+                    "own residuals as its reference)")
         ratios: dict[str, float] = {}
         for statistic, limits in self.thresholds.items():
             for name, limit in limits.items():
                 value = self.peaks.get(statistic, {}).get(name)
                 if value is not None and limit > 0:
                     ratios[name] = max(ratios.get(name, 0.0), value / limit)
-        return ratios
-
-    def describe(self) -> str:
-        if not self.judged:
-            return (f"not judged (the log is too short: needs {REFERENCE_MIN_S:.0f} s of its "
-                    "own residuals as its reference)")
-        ratios = self.peak_ratios()
         if self.alarm_s is None:
             worst = max(ratios, key=lambda n: ratios[n], default=None)
             # What came before is its reference: a change there is not seen (a log that
