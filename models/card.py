@@ -338,7 +338,7 @@ class ModelCard:
             thresholds=None if not meta.get("thresholds") else _frozen({
                 mode: _frozen({k: float(v) for k, v in values.items()})
                 for mode, values in meta["thresholds"].items()}),
-            calibrated="calibration" in meta, change_stride=_change_stride(change),
+            calibrated="calibration" in meta,
             false_alarm_rate=None if not budget else FalseAlarmSetting(float(budget["rate"]),
                                                                        str(budget["per"])),
             training_digests=frozenset(str(e.get("sha256")) for e in
@@ -347,6 +347,7 @@ class ModelCard:
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"),
             change_thresholds=_limits(change.get("thresholds", {})),
+            change_stride=_change_stride(change),
             change_way_scales=_way_scales(change),
             change_unfed=_frozen({str(i): _limits(by) for i, by in change.get(
                 "unfed_thresholds", {}).items()}),
