@@ -229,6 +229,9 @@ class ModelCard:
     # signal -> how long calibrate's normal logs let the change test judge it, all
     # together, where too little to set it thresholds (it has none).
     change_too_brief: Mapping[str, float] = field(default_factory=dict)
+    # How many normal logs (calibrate's and those trained on) set those thresholds (None:
+    # not recorded, calibrated before it was kept).
+    change_logs: int | None = None
     # The change test's predictor a moment ahead (`models.ahead`); None: a model trained
     # without it, whose change test judges the replay's error.
     ahead: AheadPredictor | None = None
@@ -346,13 +349,7 @@ class ModelCard:
             start_state=StartReference.from_json(meta.get("start_state") or {}),
             relations_refused=(meta.get("command_relations") or {}).get("refused"),
             effort_refused=(meta.get("effort") or {}).get("refused"),
-            change_thresholds=_limits(change.get("thresholds", {})),
-            change_stride=_change_stride(change),
-            change_way_scales=_way_scales(change),
-            change_unfed=_frozen({str(i): _limits(by) for i, by in change.get(
-                "unfed_thresholds", {}).items()}),
-            change_too_brief={str(n): float(v) for n, v in (
-                change.get("judged_too_briefly_s") or {}).items()},
+            **_change_test(change),
             ahead=_ahead(meta, len(signals["commands"]), len(sensors),
                          len(signals.get("inputs", []))),
             change_training=ChangeTraining.from_json(meta.get("change_training") or {}),
@@ -361,6 +358,18 @@ class ModelCard:
             tracking=tuple(TrackingFit.from_json(t) for t in meta.get("tracking") or []),
             envelope=_envelope(meta.get("envelope") or {}),
             document_text=json.dumps(meta))
+
+
+def _change_test(change: Mapping[str, Any]) -> dict[str, Any]:
+    """The card's fields read from model.json's `change_test` entry."""
+    count = change.get("normal_logs")
+    return {"change_thresholds": _limits(change.get("thresholds", {})),
+            "change_stride": _change_stride(change), "change_way_scales": _way_scales(change),
+            "change_unfed": _frozen({str(i): _limits(by) for i, by in change.get(
+                "unfed_thresholds", {}).items()}),
+            "change_too_brief": {str(n): float(v) for n, v in (
+                change.get("judged_too_briefly_s") or {}).items()},
+            "change_logs": None if count is None else int(count)}
 
 
 def _unseen(calibration: Mapping[str, Any]) -> int | None:

@@ -433,6 +433,8 @@ def test_a_rotor_lost_mid_flight_is_named_by_its_effort_when_no_replay_explains_
     # The replay's thresholds rest on the two logs the model was not trained on: too few
     # to settle them (`engine.settled`).
     assert model.card.calibration_unseen_logs == 2
+    # The change test's rest on five, which settle them (`engine.slight_change`).
+    assert model.card.change_logs == 5
     # Five logs are too few to tell how far normal operation goes each way: both ways alike.
     assert not model.card.change_way_scales
     from auvdiag_cli.reports.training import calibration_lines

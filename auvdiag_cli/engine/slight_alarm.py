@@ -48,6 +48,7 @@ from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evid
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.engine.settled import SETTLED_LOGS, SLIGHT, judged_ratios, settled
+from auvdiag_cli.engine.slight_change import beyond_slight_change
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import ModelCard, ModelIdentity
 
@@ -72,8 +73,9 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
     """``finding`` where the model can make it: not past the logs it learnt from
     (`envelope`), not on a slight crossing of thresholds its held-out logs set (``profile``:
     as given, its thresholds not the model's, as ``judging``'s are); where other judges
-    alarmed only later, on what they saw (`before_later_judges`); not normal where the effort
-    shares cannot rule out a weak actuator (`near_effort`)."""
+    alarmed only later, on what they saw (`before_later_judges`); not on a slight crossing
+    of the change test's thresholds few logs set (`slight_change`); not normal where the
+    effort shares cannot rule out a weak actuator (`near_effort`)."""
     card = judging.model.card
     finding = within_the_envelope(finding, normal, dict(card.envelope), judging.judged,
                                   frame)
@@ -83,7 +85,7 @@ def within_what_it_knows(finding: Finding, normal: Finding, seen: Observations,
         finding = before_later_judges(finding, normal, seen, raised, judging, later)
     else:
         finding = beyond_slight(finding, normal, seen, raised)
-    return unless_not_ruled_out(finding, seen)
+    return unless_not_ruled_out(beyond_slight_change(finding, normal, seen, card), seen)
 
 
 def set_by_logs(profile: Profile, card: ModelCard) -> frozenset[str]:

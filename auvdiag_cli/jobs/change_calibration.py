@@ -339,4 +339,5 @@ def change_entry(thresholds: ChangeThresholds, evidence: ChangeEvidence,
                                for s, v in thresholds.items()},
             "way_scales": {s: {n: list(pair) for n, pair in v.items()}
                            for s, v in scales.items()},
-            "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS}
+            "reference_s": REFERENCE_MIN_S, "stride_steps": STRIDE_STEPS,
+            "normal_logs": len(evidence.peaks)}
