@@ -368,9 +368,10 @@ AILERONS = ("**The roll after an aileron failed** (as shipped; what the motion g
 
 def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) -> list[str]:
     """A table row per flying day whose flights alone train and calibrate the model."""
-    rows = ["| trained on | flights | found after onset | false alarms | delay median / worst "
-            "(s) | right part named | the change test judges |",
-            "|---|---|---|---|---|---|---|"]
+    rows = ["| trained on | flights | found after onset | failed flights undetermined | "
+            "false alarms | normal flights undetermined | delay median / worst (s) | right "
+            "part named | the change test judges |",
+            "|---|---|---|---|---|---|---|---|---|"]
     days = sorted({f.day for f in every})
     # And each day with a few normal flights, those alone: what a user has who kept no
     # failed flight's healthy part.
@@ -385,9 +386,12 @@ def one_day_rows(every: list[Flight], work: Path, scale: float, guard_s: float) 
         found = outcomes[SHIPPED]
         failed = [o for o in found if o.flight.onset_ns is not None]
         delays = [d for o in failed if (d := o.delay_s) is not None]
+        undetermined = [o for o in found if o.verdict == "undetermined"]
         rows.append(f"| {label} | {len(training)} | {sum(o.found for o in failed)} of "
-                    f"{len(failed)} | {sum(o.alarmed and not o.found for o in found)} of "
-                    f"{len(found)} | {_seconds(delays)} | "
+                    f"{len(failed)} | {sum(o.flight.onset_ns is not None for o in undetermined)} "
+                    f"| {sum(o.alarmed and not o.found for o in found)} of {len(found)} | "
+                    f"{sum(o.flight.onset_ns is None for o in undetermined)} | "
+                    f"{_seconds(delays)} | "
                     f"{sum(o.named_right for o in found)} | {judged} |")
     return rows
 

@@ -16,6 +16,7 @@ from auvdiag_cli.engine.effort_naming import ActuatorEffort
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.engine.settled import SETTLED_LOGS, SLIGHT
 from auvdiag_cli.engine.slight_change import FEW_CHANGE_LOGS, beyond_slight_change
+from auvdiag_cli.jobs.thin_evidence import thin_evidence
 from models.card import ModelCard
 
 FOUND = Finding(verdict=Verdict.FAULT, b={"heave": 0, "sway": 1}, onset_s=33.6,
@@ -69,3 +70,11 @@ def test_a_clear_change_settled_thresholds_or_another_judge_keep_the_fault():
     seen = replace(_seen(0.5, calibrated=True), change_check=_changed(1.22))
     replayed = replace(FOUND, detected_at_s=67.6)
     assert beyond_slight_change(replayed, NORMAL, seen, _card(3)) == replayed
+
+
+def test_calibrate_warns_while_the_change_tests_thresholds_rest_on_few_logs():
+    warned = thin_evidence([], True, change_logs=3)
+    assert any(w.startswith("the change test's thresholds rest on 3 normal log(s)")
+               for w in warned)
+    settled = thin_evidence([], True, change_logs=SETTLED_LOGS)
+    assert not any(w.startswith("the change test's thresholds rest on") for w in settled)

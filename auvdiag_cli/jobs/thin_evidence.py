@@ -17,7 +17,8 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
     understates the next normal log's; the change test's rest on ``change_logs``, the
     training logs the model keeps counted too); fewer than SETTLED_LOGS the model was not
     trained on (``unseen``), whose replay alarms are then judged as those of thresholds no
-    calibration set (`slight_alarm`); and logs of a single day (on UTC clocks), whose
+    calibration set (`slight_alarm`); fewer than SETTLED_LOGS behind the change test's
+    (`slight_change`); and logs of a single day (on UTC clocks), whose
     wind, sea state and payload say nothing of another day's."""
     warnings = []
     if unseen is not None and unseen < SETTLED_LOGS:
@@ -27,6 +28,12 @@ def thin_evidence(logs: Sequence[IngestedLog], budgeted: bool,
             f"calibrated on {SETTLED_LOGS} or more such logs, an alarm of the replay alone "
             "that crosses these thresholds by less than a quarter, or that no single fault "
             "explains, is undetermined, not a fault")
+    if change_logs is not None and change_logs < SETTLED_LOGS:
+        warnings.append(
+            f"the change test's thresholds rest on {change_logs} normal log(s) (those the "
+            f"model was trained on included): until {SETTLED_LOGS} or more, a change-test "
+            "alarm that no other judge bears out and that crosses them by less than a "
+            "quarter is undetermined, not a fault")
     if len(logs) < MIN_LOGS:
         ruled = ("the change test's thresholds (and the commands')"
                  if (len(logs) if change_logs is None else change_logs) < MIN_LOGS
