@@ -33,6 +33,29 @@ def test_only_a_judged_signal_past_the_envelope_before_the_onset_counts():
     assert beyond_before({}, judged, names, time_s, sensors, onset_s=46.0) is None
 
 
+def test_a_signal_already_past_what_was_learnt_at_the_onset_counts_until_the_detection():
+    """A sprint accelerating past the fastest mission learnt: its surge is past the envelope
+    at the onset and past MARGIN times it before the detection. A signal within the
+    envelope at the onset (a fault's effect begins there), or one that falls back within
+    it before going further, does not count."""
+    time_s = np.arange(0.0, 30.0, 0.1)
+    names, judged, envelope = ("surge",), ["surge"], {"surge": 1.0}
+    accelerating = (0.5 + 0.05 * time_s)[:, None]         # 1.0 at 10 s, 1.25 at 15 s
+    found = beyond_before(envelope, judged, names, time_s, accelerating, onset_s=11.0,
+                          detected_s=20.0)
+    assert found is not None and found.since_s == pytest.approx(15.1, abs=0.05)
+    assert found.reached == pytest.approx(1.5)
+    assert beyond_before(envelope, judged, names, time_s, accelerating, onset_s=11.0,
+                         detected_s=14.0) is None           # not past MARGIN x by then
+    assert beyond_before(envelope, judged, names, time_s, accelerating, onset_s=11.0) is None
+    assert beyond_before(envelope, judged, names, time_s, accelerating, onset_s=9.0,
+                         detected_s=20.0) is None           # within it at the onset
+    dipping = accelerating.copy()
+    dipping[(time_s > 12.0) & (time_s < 13.0)] = 0.9
+    assert beyond_before(envelope, judged, names, time_s, dipping, onset_s=11.0,
+                         detected_s=20.0) is None
+
+
 def test_a_sprint_past_three_slow_missions_is_undetermined_a_lost_thruster_a_fault(
         tmp_path: Path):
     from auvdiag_cli import api
