@@ -48,7 +48,7 @@ from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evid
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.results import Finding, Observations, Verdict
 from auvdiag_cli.engine.settled import SETTLED_LOGS, SLIGHT, judged_ratios, settled
-from auvdiag_cli.engine.slight_change import beyond_slight_change
+from auvdiag_cli.engine.slight_change import beyond_slight_change, checks_quiet
 from auvdiag_cli.vehicle.profile import Profile
 from models.card import ModelCard, ModelIdentity
 
@@ -104,12 +104,8 @@ def _basis(model: ModelIdentity) -> str:
 
 def others_silent(seen: Observations) -> bool:
     """Whether every judge beside the replay stayed quiet on the log."""
-    change, command, effort, start = (seen.change_check, seen.command_check,
-                                      seen.effort_check, seen.start_check)
-    return ((change is None or change.alarm_s is None)
-            and (command is None or command.alarm_s is None)
-            and (effort is None or effort.alarm_s is None)
-            and (start is None or not start.off))
+    change = seen.change_check
+    return (change is None or change.alarm_s is None) and checks_quiet(seen)
 
 
 def later_judges_begin(seen: Observations, finding: Finding) -> float | None:

@@ -1,19 +1,19 @@
-"""A change-test alarm too slight for thresholds few normal logs set: the log changed
-against its own beginning by a little more than the largest change those logs showed (times
-the margin, or the test's floor), and no other judge saw anything.
+"""A change-test alarm too slight for thresholds few normal logs set: the log changed against
+its own beginning by a little more than the largest change those logs showed (times the
+margin, or the test's floor), and no other judge saw anything.
 
-How far a log departs from its own beginning depends on what it was asked to do after it:
-a turn into a current the reference never met, a leg flown faster. With three normal logs
+How far a log departs from its own beginning depends on what it was asked to do after it: a
+turn into a current the reference never met, a leg flown faster. With three normal logs
 behind the thresholds, their largest value is about the normal logs' 75th percentile, and
 the next normal log passes the margin often: a simulated BlueROV2 trained and calibrated on
 three missions raised the change test on 4 of 20 normal missions of other noise seeds (sway
 1.03-1.22 x its threshold, roll rate 1.37 x), each crossing for 0.3-3 s. The ALFA aircraft
 modelled from one day's three normal flights crossed its thresholds on four of the five
-failed flights of other days it found by the same little (1.00-1.24 x, for 0.1-3 s; one
-of them named the wrong part). Nothing in such an alarm tells a failure from the next normal log: the verdict is
-undetermined, saying how far the test went and what would judge it. An alarm any other
-judge bears out (the replay, the commands against the motion, the effort shares, the
-start), and any over SLIGHT times its threshold, stands."""
+failed flights of other days it found by the same little (1.00-1.24 x, for 0.1-3 s; one of
+them named the wrong part). Nothing in such an alarm tells a failure from the next normal
+log: the verdict is undetermined, saying how far the test went and what would judge it. An
+alarm any other judge bears out (the replay, the commands against the motion, the effort
+shares, the start), and any over SLIGHT times its threshold, stands."""
 
 from dataclasses import replace
 
@@ -51,13 +51,19 @@ def beyond_slight_change(finding: Finding, normal: Finding, seen: Observations,
         f"{SETTLED_LOGS} or more normal logs (auvdiag calibrate) to judge it")
 
 
+def checks_quiet(seen: Observations) -> bool:
+    """Whether the commands against the motion, the effort shares and the start stayed
+    quiet on the log."""
+    command, effort, start = seen.command_check, seen.effort_check, seen.start_check
+    return ((command is None or command.alarm_s is None)
+            and (effort is None or effort.alarm_s is None)
+            and (start is None or not start.off))
+
+
 def _change_alone(seen: Observations, change: ChangeCheck) -> bool:
     """Whether no judge but the change test alarmed: the replay's g stayed under its
     thresholds from the change's onset on, and the other checks stayed quiet."""
-    command, effort, start = seen.command_check, seen.effort_check, seen.start_check
-    if ((command is not None and command.alarm_s is not None)
-            or (effort is not None and effort.alarm_s is not None)
-            or (start is not None and start.off)):
+    if not checks_quiet(seen):
         return False
     ratio = judged_ratios(seen)
     if ratio is None:
