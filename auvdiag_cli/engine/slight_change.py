@@ -8,9 +8,9 @@ behind the thresholds, their largest value is about the normal logs' 75th percen
 the next normal log passes the margin often: a simulated BlueROV2 trained and calibrated on
 three missions raised the change test on 4 of 20 normal missions of other noise seeds (sway
 1.03-1.22 x its threshold, roll rate 1.37 x), each crossing for 0.3-3 s. The ALFA aircraft
-modelled from one day's three normal flights crossed its thresholds on four of the five
-failed flights of other days it found by the same little (1.00-1.24 x, for 0.1-3 s; one of
-them named the wrong part). Nothing in such an alarm tells a failure from the next normal
+modelled from one day's three normal flights crossed its thresholds on three failed flights
+of other days by the same little (1.05-1.24 x, for 0.2-3 s), every other judge quiet.
+Nothing in such an alarm tells a failure from the next normal
 log: the verdict is undetermined, saying how far the test went and what would judge it. An
 alarm any other judge bears out (the replay, the commands against the motion, the effort
 shares, the start), and any over SLIGHT times its threshold, stands."""
