@@ -70,24 +70,23 @@ def beyond_before(envelope: dict[str, float], judged: list[str], names: tuple[st
             continue
         values = np.nan_to_num(np.abs(sensors[:, names.index(name)]))
         past = np.flatnonzero(stretch & (values > MARGIN * learnt))
-        span = (values[stretch] if past.size
-                else _past_from_onset(values, time_s, onset_s, detected_s, learnt))
-        if span is None or not span.size:
-            continue
-        since = float(time_s[past[0]]) if past.size else float(
-            time_s[np.searchsorted(time_s, onset_s) + np.argmax(span > MARGIN * learnt)])
-        if found is None or float(span.max()) / learnt > found.reached / found.learnt:
-            found = Beyond(name, since, float(span.max()), learnt)
+        span = (past[0], values[stretch]) if past.size else _past_from_onset(
+            values, time_s, onset_s, detected_s, learnt)
+        if span is not None and (found is None or float(span[1].max()) / learnt
+                                 > found.reached / found.learnt):
+            found = Beyond(name, float(time_s[span[0]]), float(span[1].max()), learnt)
     return found
 
 
 def _past_from_onset(values: np.ndarray, time_s: np.ndarray, onset_s: float,
-                     detected_s: float | None, learnt: float) -> np.ndarray | None:
-    """``values`` from the onset for as long as they stay past ``learnt``, where they are
-    past it at the onset and go past MARGIN times it by ``detected_s``: the vehicle was
-    already beyond what the model learnt from when its error began to grow (a sprint
-    accelerating past the fastest mission learnt), which a fault, whose effect begins at
-    its onset within the learnt range, does not explain (None: not so)."""
+                     detected_s: float | None, learnt: float
+                     ) -> tuple[int, np.ndarray] | None:
+    """Where ``values`` are past ``learnt`` at the onset and, staying past it, go past MARGIN
+    times it by ``detected_s``: the step they first do, and the values from the onset for
+    as long as they stay past it. The vehicle was already beyond what the model learnt from
+    when its error began to grow (a sprint accelerating past the fastest mission learnt),
+    which a fault, whose effect begins at its onset within the learnt range, does not
+    explain (None: not so)."""
     if detected_s is None:
         return None
     start = int(np.searchsorted(time_s, onset_s))
@@ -96,7 +95,8 @@ def _past_from_onset(values: np.ndarray, time_s: np.ndarray, onset_s: float,
         return None
     beyond = span > learnt
     span = span if beyond.all() else span[:int(np.argmin(beyond))]
-    return span if (span > MARGIN * learnt).any() else None
+    over = np.flatnonzero(span > MARGIN * learnt)
+    return (start + int(over[0]), span) if over.size else None
 
 
 def within_the_envelope(finding: Finding, normal: Finding, envelope: dict[str, float],

@@ -10,10 +10,10 @@ three missions raised the change test on 4 of 20 normal missions of other noise 
 1.03-1.22 x its threshold, roll rate 1.37 x), each crossing for 0.3-3 s. The ALFA aircraft
 modelled from one day's three normal flights crossed its thresholds on three failed flights
 of other days by the same little (1.05-1.24 x, for 0.2-3 s), every other judge quiet.
-Nothing in such an alarm tells a failure from the next normal
-log: the verdict is undetermined, saying how far the test went and what would judge it. An
-alarm any other judge bears out (the replay, the commands against the motion, the effort
-shares, the start), and any over SLIGHT times its threshold, stands."""
+Nothing in such an alarm tells a failure from the next normal log: the verdict is
+undetermined, saying how far the test went and what would judge it. An alarm any other
+judge bears out (the replay, the commands against the motion, the effort shares, the
+start), and any over SLIGHT times its threshold, stands."""
 
 from dataclasses import replace
 
