@@ -82,3 +82,50 @@ def test_a_change_no_one_part_moves_is_named_by_the_shares_where_they_match_one_
     named = apply_change_alarm(observed(_motor_3_weak(67.0), {}), normal, everything, judging)
     assert named.component == "motor_3" and named.onset_s == 67.0
     assert "where no one part moves what changed" in named.notes[-1]
+
+
+def _weak_in(group: str, members: tuple[str, ...], weak: int, onset_s: float,
+             error_s: float, seen_s: float) -> EffortCheck:
+    """A BlueROV2 effort check whose ``group`` shares match member ``weak`` weak alone,
+    begun at ``onset_s`` (give or take ``error_s``) and seen at ``seen_s``."""
+    rise = 0.2
+    shares = tuple(ActuatorEffort(m, f"thruster_{m[-1]}", group,
+                                  1.0 + (rise if k == weak else -rise / (len(members) - 1)),
+                                  1.0, 0.02, rise if k == weak else -rise / (len(members) - 1),
+                                  3.0 if k == weak else 0.2, None)
+                   for k, m in enumerate(members))
+    return EffortCheck(shares, 0.01, seen_s, onset_s, (shares[weak].component,), (), "",
+                       signature_matches(shares), onset_error_s=error_s)
+
+
+def test_a_pattern_row_of_parts_that_move_the_vehicle_alike_is_narrowed_by_the_shares():
+    """A BlueROV2's thruster stopped late in a dive: the change test saw the roll rate
+    alone change (its row: thruster 5 or thruster 6), or the yaw rate (the four horizontal
+    thrusters or the gyro); the effort their group carries names the stopped one, and where
+    its shares saw it before the change test, their times are the verdict's."""
+    signals = load_profile(Path("bluerov2")).sensor_names
+    judging = cast(Judging, SimpleNamespace(profile=load_profile(Path("bluerov2")),
+                                            sensor_names=signals, not_judged={}))
+    normal = Finding(verdict=Verdict.NORMAL, b={n: 0 for n in signals})
+    vertical = ("motor_5", "motor_6")
+    roll = ChangeCheck({}, {}, 30.0, alarm_s=106.0, onset_s=105.8, onset_error_s=2.0,
+                       flagged={"roll_rate": 3.6}, evidence={"roll_rate": 2.0})
+    unnamed = apply_change_alarm(observed(None, {}, "bluerov2"), normal, roll, judging)
+    assert unnamed.component is None and unnamed.candidates == ("thruster_5", "thruster_6")
+    sixth = _weak_in("vertical", vertical, 1, 106.0, 2.6, 107.9)
+    named = apply_change_alarm(observed(sixth, {}, "bluerov2"), normal, roll, judging)
+    assert named.component == "thruster_6" and named.candidates == ("thruster_6",)
+    assert (named.onset_s, named.detected_at_s) == (105.8, 106.0)    # the change test first
+    assert "its shares match thruster_6 weak alone" in named.notes[-1]
+    # Shares that began after the change test's alarm are another event.
+    later = _weak_in("vertical", vertical, 1, 112.0, 2.6, 113.9)
+    assert apply_change_alarm(observed(later, {}, "bluerov2"), normal, roll,
+                              judging).component is None
+    yaw = ChangeCheck({}, {}, 30.0, alarm_s=126.1, onset_s=114.7, onset_error_s=11.4,
+                      flagged={"yaw_rate": 1.2}, evidence={"yaw_rate": 0.3})
+    first = _weak_in("horizontal", ("motor_1", "motor_2", "motor_3", "motor_4"), 0, 114.8,
+                     0.6, 116.2)
+    named = apply_change_alarm(observed(first, {}, "bluerov2"), normal, yaw, judging)
+    assert named.component == "thruster_1"
+    assert (named.onset_s, named.detected_at_s) == (114.8, 116.2)    # the shares first
+    assert "the shares saw it first, at 116.2 s" in named.notes[-1]

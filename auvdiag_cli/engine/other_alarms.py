@@ -47,8 +47,19 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     finding = replace(finding, verdict=Verdict.FAULT, b=b, detected_at_s=change.alarm_s,
                       onset_s=change.onset_s)
     note = f"found by the change test: {change.describe()}"
+    # The effort's shares matching one actuator weak alone, begun by the change's alarm:
+    # the same event, measured on that actuator.
+    alone = weak_alone(seen, change.onset_s, change.alarm_s)
     row = look_up(judging.profile.pattern, b)
     if row is not None and row.components:
+        if len(row.components) > 1 and alone in row.components:
+            # Parts that move the vehicle alike make one row (a ROV's two vertical
+            # thrusters); the controller drives the weak one harder from then.
+            first, when = _effort_first(seen, replace(finding, case=row.case))
+            return found(seen, first, [alone], f"{note}; the pattern table reads b as "
+                          f"{' or '.join(row.components)}; the effort their group carries "
+                          f"tells them apart: its shares match {alone} weak alone, begun by "
+                          f"the change's alarm{when}", judging)
         return found(seen, replace(finding, case=row.case), list(row.components), note,
                       judging)
     if (frozen := frozen_in(seen, change.onset_s, judging)) is not None:
@@ -56,16 +67,16 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
                       f"{FROZEN_WHY}", judging)
     ranked = change_suspects(change.flagged, judging.profile, change.evidence,
                               change.ways)
-    alone = weak_alone(seen, change.onset_s)
     if alone is not None and (not ranked or ranked[0] in {s.component
                                                           for s in judging.profile.sensors}):
         # A weak actuator moves what a sensor measures too, and a lost one moves every
         # signal at once (no part's signature fits): its group's shares say which.
         instead = (f"not {ranked[0]}, whose signals changed" if ranked
                    else "where no one part moves what changed")
-        return found(seen, replace(finding, case=None), [alone],
-                      f"{note}; named by the effort its group carries (its shares match "
-                      f"{alone} weak alone, begun by the onset), {instead}", judging)
+        first, when = _effort_first(seen, replace(finding, case=None))
+        return found(seen, first, [alone], f"{note}; named by the effort its group carries "
+                      f"(its shares match {alone} weak alone, begun by the change's alarm), "
+                      f"{instead}{when}", judging)
     named = ranked[:1]
     if change.since_judged and len(ranked) > 1:
         # What the failure moved first lies in the reference; what changes after it is
@@ -87,6 +98,19 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         finding = replace(finding, healthy_from_onset=healthy_from_onset(
             seen, change, healthy, horizon, cannot))
     return found(seen, replace(finding, case=None), named, note, judging)
+
+
+def _effort_first(seen: Observations, finding: Finding) -> tuple[Finding, str]:
+    """``finding`` with the effort's detection and onset where its shares saw the event
+    before the change test (a stopped thruster's shares move at once, while the motion it
+    leaves, the controller answering it, builds up over seconds), and what the note adds."""
+    effort = seen.effort_check
+    if effort is None or effort.alarm_s is None or finding.detected_at_s is None \
+            or effort.alarm_s >= finding.detected_at_s:
+        return finding, ""
+    return (replace(finding, detected_at_s=effort.alarm_s, onset_s=effort.onset_s),
+            f"; the shares saw it first, at {effort.alarm_s:.1f} s (begun at "
+            f"~{effort.onset_s:.1f} s): the verdict's times")
 
 
 def _apply_start_alarm(seen: Observations, finding: Finding, start: StartCheck,
