@@ -136,6 +136,13 @@ class CommandRelations(WindowedRelations):
         along = departure @ self.projector
         return drive * along, drive**2, (along * departure).sum(axis=1), ok
 
+    def step_terms(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Per step and actuator, what a span's α sums (steps, n_commands) each: α over a
+        span is the first's sum over the second's."""
+        product, drive2, _, _ = self._terms(commands, sensors, usable)
+        return product, drive2 * np.maximum(np.diag(self.projector), 1e-12)
+
     def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
                      usable: np.ndarray, window_steps: int | None = None) -> np.ndarray:
         """α per actuator over the window (of ``window_steps``; None: the main one) ending

@@ -133,13 +133,17 @@ class ThrustRelations(WindowedRelations):
         parts = features[:, first:first + m, None] * self.weights[None, first:first + m, :]
         return shortfall, parts / self.noise
 
-    def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
-                     usable: np.ndarray, window_steps: int | None = None) -> np.ndarray:
-        """γ per actuator over the window (of ``window_steps``; None: the main one) ending
-        at each step, shape (steps, n_commands): the share of its thrust the motion did not
-        show; NaN where the window holds too few usable steps or the actuator's part of the
-        motion was too small to see."""
-        window = self.window_steps if window_steps is None else window_steps
+    def step_terms(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+        """Per step and actuator, what a span's γ sums (steps, n_commands) each, zero where
+        no row ends: the shortfall along its part, and its part's energy; γ over a span is
+        the first's sum over the second's."""
+        product, energy, _ = self._per_step(commands, sensors, usable)
+        return product, energy
+
+    def _per_step(self, commands: np.ndarray, sensors: np.ndarray, usable: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`step_terms`, and 1 where a row ends (steps,)."""
         n, m = commands.shape
         at, features, change = self.rows(commands, sensors, usable)
         shortfall, parts = self.parts(features, change, m)
@@ -147,6 +151,16 @@ class ThrustRelations(WindowedRelations):
         product[at] = np.einsum("rs,rks->rk", shortfall, parts)
         energy[at] = (parts ** 2).sum(axis=2)
         count[at] = 1.0
+        return product, energy, count
+
+    def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
+                     usable: np.ndarray, window_steps: int | None = None) -> np.ndarray:
+        """γ per actuator over the window (of ``window_steps``; None: the main one) ending
+        at each step, shape (steps, n_commands): the share of its thrust the motion did not
+        show; NaN where the window holds too few usable steps or the actuator's part of the
+        motion was too small to see."""
+        window = self.window_steps if window_steps is None else window_steps
+        product, energy, count = self._per_step(commands, sensors, usable)
         numerator, weight = trailing_sum(product, window), trailing_sum(energy, window)
         rows = trailing_sum(count, window)
         enough = (rows >= window / 2)[:, None] & (

@@ -3,12 +3,14 @@ the starts whose statistic lies within the 95 % interval of one change point (3.
 below the best one's) and on to the starts either side that fall short (the change lies
 between two starts), a stride either side at least; when the last start tried is among
 them, the change may lie after it, up to when it was seen. Steps (the change test's
-residual): where its mean most likely shifted."""
+residual): where its mean most likely shifted. A gain zero in normal operation (a thruster's
+share of thrust lost): where it most likely became positive, in units of the noise its
+correlated steps carry."""
 
 import numpy as np
 import pytest
 
-from auvdiag_cli.engine.change_point import likely_span, shift_start
+from auvdiag_cli.engine.change_point import gain_start, likely_span, shift_start
 
 STARTS = np.arange(10.0, 60.0, 2.0)      # s, a stride of 2 s
 STRIDE = 2.0
@@ -61,3 +63,30 @@ def test_the_steps_date_a_shift_within_the_span_they_are_given():
     # Never before the span's start, nor after the detection.
     assert shift_start(values, 260, 320) >= 260
     assert shift_start(values, 100, 100) == 100
+
+
+def _gain_log(onset: int, gain: float, seed: int = 5) -> tuple[np.ndarray, np.ndarray]:
+    """Per step, a thruster's shortfall along its part and its part's energy: the error
+    correlated over 5 steps (a motion a moment ahead), the loss ``gain`` from ``onset``."""
+    rng = np.random.default_rng(seed)
+    weight = rng.uniform(0.5, 1.5, 1200)
+    error = np.convolve(rng.normal(0.0, 1.0, 1204), np.ones(5) / np.sqrt(5), "valid")
+    numerator = np.sqrt(weight) * error
+    numerator[onset:] += gain * weight[onset:]
+    return numerator, weight
+
+
+def test_a_gain_is_dated_where_it_began_and_within_the_error_its_noise_allows():
+    numerator, weight = _gain_log(800, 0.3)
+    best, first, last = gain_start(numerator, weight, 600, 1000, 1100, 0.1) or (0, 0, 0)
+    assert first <= 800 <= last and abs(best - 800) <= 30, (best, first, last)
+    assert 600 <= first <= best <= last <= 1000
+    # Twice the loss: dated closer.
+    strong = gain_start(*_gain_log(800, 0.6), 600, 1000, 1100, 0.1) or (0, 0, 0)
+    assert strong[2] - strong[1] < last - first and strong[1] <= 800 <= strong[2]
+
+
+def test_a_gain_with_too_little_before_it_or_none_at_all_is_not_dated():
+    numerator, weight = _gain_log(800, 0.3)
+    assert gain_start(numerator, weight, 30, 1000, 1100, 0.1) is None      # 3 s before
+    assert gain_start(-np.abs(numerator), weight, 600, 1000, 1100, 0.1) is None

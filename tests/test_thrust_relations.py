@@ -82,6 +82,13 @@ def test_a_horizontal_thruster_at_70_percent_is_found_and_named(learnt, bluerov2
     assert check.extra_effort is not None and 0.15 < check.extra_effort < 0.6   # 0.3 lost
     assert check.describe().startswith("thruster_4 short of thrust: the motion shows less "
                                        "of it than a healthy one gives (")
+    # Weakened from 60 s: dated within the first window over (which began 45 s before its
+    # end), the true onset within the error it states.
+    assert check.onset_s is not None and check.onset_error_s is not None
+    assert check.earliest_s is not None and check.earliest_s <= check.onset_s
+    assert abs(check.onset_s - 60.0) <= check.onset_error_s < check.window_s / 2, (
+        check.onset_s, check.onset_error_s)
+    assert f"it began at ~{check.onset_s:.1f} s" in check.describe()
 
 
 def test_normal_missions_of_another_seed_raise_no_alarm(learnt, bluerov2, tmp_path):

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from auvdiag_cli.engine.change_point import gain_start
 from auvdiag_cli.vehicle.profile import Profile
 from models.relation_forms import Relations
 from models.skill import MIN_SKILL
@@ -43,6 +44,10 @@ class CommandCheck:
     # The sensors the finding rests on (the loss vanishes without their signal): only they
     # could be misreading instead; None: the relation cannot tell, any could.
     rests_on: tuple[str, ...] | None = None
+    # Where the named actuator's loss most likely began (`change_point.gain_start`) and how
+    # far off that may be; None: not dated within the first window over.
+    began_s: float | None = None
+    began_error_s: float | None = None
 
     @property
     def peak_ratio(self) -> dict[str, float | None]:
@@ -59,9 +64,18 @@ class CommandCheck:
         return any(v is not None for v in self.peak_ratio.values())
 
     @property
-    def onset_s(self) -> float | None:
+    def earliest_s(self) -> float | None:
         """The earliest the fault can have begun: the start of the first window over."""
         return None if self.crossed_s is None else max(0.0, self.crossed_s - self.window_s)
+
+    @property
+    def onset_s(self) -> float | None:
+        """When it most likely began, else the earliest it can have."""
+        return self.earliest_s if self.began_s is None else self.began_s
+
+    @property
+    def onset_error_s(self) -> float | None:
+        return self.began_error_s
 
     def describe(self) -> str:
         if self.alarm_s is None:
@@ -72,7 +86,9 @@ class CommandCheck:
                     f"but no single actuator explains it (at most {best:.0%}): a sensor "
                     "misreading the motion, or more than one fault")
         named = " or ".join(self.named)
-        since = f"from {self.alarm_s:.1f} s ({self.window_s:.0f} s windows)"
+        since = f"from {self.alarm_s:.1f} s ({self.window_s:.0f} s windows)" + (
+            "" if self.began_s is None else f"; it began at ~{self.began_s:.1f} s (give or "
+            f"take {self.began_error_s or 0.0:.1f} s)")
         if self.measure == "thrust lost":
             lost = "" if self.extra_effort is None else f" ({self.extra_effort:.0%} on average)"
             return (f"{named} short of thrust: the motion shows less of it than a healthy "
@@ -137,17 +153,7 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
         efforts.append(effort)
     by_window = tuple(_peaks(r, names) for r in ratios)
     ratio = np.fmax.reduce(ratios) if len(ratios) > 1 else ratios[0]
-    shortest_s = min(w.steps for w in windows) * relations.dt_s
-    not_judged: dict[str, str] = {}
-    for k, name in enumerate(names):
-        skill = relations.skill[k]
-        if not skill >= MIN_SKILL:
-            not_judged[name] = (f"not judged ({relations.unpredicted(k)}"
-                                + ("" if np.isnan(skill) else f": skill {skill:.2f}") + ")")
-        elif all(np.isnan(w.thresholds[k]) for w in windows):
-            not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
-        elif all(p[name] is None for p in by_window):
-            not_judged[name] = f"not judged ({relations.undriven(shortest_s)})"
+    not_judged = _not_judged(relations, names, by_window)
     alarms = [(alarm, w) for w, r in enumerate(ratios)
               if (alarm := _confirmed_alarm(r, windows[w].steps)) is not None]
     alarm, which = min(alarms, key=lambda item: item[0][1]) if alarms else (None, 0)
@@ -155,6 +161,7 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
     named: tuple[str, ...] = ()
     extra = shares = None
     rests_on: tuple[str, ...] | None = None
+    began: tuple[float, float] | None = None
     if alarm is not None:
         first = alarm[0]
         since = usable.copy()
@@ -171,6 +178,8 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
             signals = relations.rests_on(commands, sensors, since, group)
             rests_on = None if signals is None else tuple(
                 profile.sensor_names[s] for s in signals)
+            began = _began(relations, commands, sensors, usable, time_s, best,
+                           (max(0, first - window_steps), first, alarm[1]))
     return CommandCheck(
         names, {n: None if np.isnan(t) else round(float(t), 4) for n, t in zip(
             names, relations.thresholds, strict=True)}, not_judged, ratio, by_window,
@@ -178,4 +187,38 @@ def check_commands(relations: Relations, profile: Profile, commands: np.ndarray,
         None if alarm is None else round(float(time_s[alarm[0]]), 3), named,
         None if shares is None else {n: round(float(v), 3) for n, v in zip(
             names, shares, strict=True)}, extra,
-        window_steps * relations.dt_s, relations.measure, rests_on)
+        window_steps * relations.dt_s, relations.measure, rests_on,
+        *((None, None) if began is None else began))
+
+
+def _not_judged(relations: Relations, names: tuple[str, ...],
+                by_window: tuple[dict[str, float | None], ...]) -> dict[str, str]:
+    """Why each actuator the relations cannot judge on this log is not judged."""
+    shortest_s = min(w.steps for w in relations.windows) * relations.dt_s
+    not_judged: dict[str, str] = {}
+    for k, name in enumerate(names):
+        skill = relations.skill[k]
+        if not skill >= MIN_SKILL:
+            not_judged[name] = (f"not judged ({relations.unpredicted(k)}"
+                                + ("" if np.isnan(skill) else f": skill {skill:.2f}") + ")")
+        elif all(np.isnan(w.thresholds[k]) for w in relations.windows):
+            not_judged[name] = f"not judged ({relations.too_little_heldout(k)})"
+        elif all(p[name] is None for p in by_window):
+            not_judged[name] = f"not judged ({relations.undriven(shortest_s)})"
+    return not_judged
+
+
+def _began(relations: Relations, commands: np.ndarray, sensors: np.ndarray,
+           usable: np.ndarray, time_s: np.ndarray, actuator: int,
+           steps: tuple[int, int, int]) -> tuple[float, float] | None:
+    """(When, give or take how much) the ``actuator``'s loss most likely began, between
+    the start of the first window over and its end, judged up to the alarm (``steps``: those
+    three); a window over dates it only to its length."""
+    earliest, latest, at = steps
+    numerator, weight = relations.step_terms(commands, sensors, usable)
+    found = gain_start(numerator[:, actuator], weight[:, actuator], earliest, latest, at,
+                       relations.dt_s)
+    if found is None:
+        return None
+    best, first, last = (float(time_s[k]) for k in found)
+    return round(best, 3), round(max(best - first, last - best, relations.dt_s), 3)

@@ -116,7 +116,7 @@ def commands_alone(seen: Observations, finding: Finding) -> str | None:
     check = seen.command_check
     if check is None or check.alarm_s is None or len(check.named) != 1:
         return None
-    began = check.onset_s
+    began = check.earliest_s
     return check.named[0] if (began is not None and finding.detected_at_s is not None
                               and began <= finding.detected_at_s) else None
 

@@ -3,6 +3,7 @@ beginning (the change test), a sensor that read wrong from the start, an actuato
 more of its group's effort than on normal logs, or one driven harder than the motion
 needs."""
 
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -52,16 +53,8 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
     alone = weak_alone(seen, change.onset_s, change.alarm_s)
     row = look_up(judging.profile.pattern, b)
     if row is not None and row.components:
-        if len(row.components) > 1 and alone in row.components:
-            # Parts that move the vehicle alike make one row (a ROV's two vertical
-            # thrusters); the controller drives the weak one harder from then.
-            first, when = _effort_first(seen, replace(finding, case=row.case))
-            return found(seen, first, [alone], f"{note}; the pattern table reads b as "
-                          f"{' or '.join(row.components)}; the effort their group carries "
-                          f"tells them apart: its shares match {alone} weak alone, begun by "
-                          f"the change's alarm{when}", judging)
-        return found(seen, replace(finding, case=row.case), list(row.components), note,
-                      judging)
+        return _by_row(seen, replace(finding, case=row.case), row.components, alone, note,
+                       judging)
     if (frozen := frozen_in(seen, change.onset_s, judging)) is not None:
         return found(seen, replace(finding, case=None), [frozen], f"{note}; named as "
                       f"{FROZEN_WHY}", judging)
@@ -98,6 +91,21 @@ def apply_change_alarm(seen: Observations, finding: Finding, change: ChangeCheck
         finding = replace(finding, healthy_from_onset=healthy_from_onset(
             seen, change, healthy, horizon, cannot))
     return found(seen, replace(finding, case=None), named, note, judging)
+
+
+def _by_row(seen: Observations, finding: Finding, components: Sequence[str],
+            alone: str | None, note: str, judging: Judging) -> Finding:
+    """The change test's b read in the pattern table: its row's ``components``, or where
+    they are parts that move the vehicle alike (a ROV's two vertical thrusters), the one
+    whose group's shares match it weak alone, begun by the change's alarm (``alone``): the
+    controller drives the weak one harder from then."""
+    if alone is None or len(components) < 2 or alone not in components:
+        return found(seen, finding, list(components), note, judging)
+    first, when = _effort_first(seen, finding)
+    return found(seen, first, [alone], f"{note}; the pattern table reads b as "
+                  f"{' or '.join(components)}; the effort their group carries tells them "
+                  f"apart: its shares match {alone} weak alone, begun by the change's "
+                  f"alarm{when}", judging)
 
 
 def _effort_first(seen: Observations, finding: Finding) -> tuple[Finding, str]:

@@ -116,8 +116,10 @@ def later_judges_begin(seen: Observations, finding: Finding) -> float | None:
                                       seen.effort_check, seen.start_check)
     if finding.detected_at_s is None or (start is not None and start.off):
         return None
-    begins = [check.onset_s for check in (change, command)
-              if check is not None and check.alarm_s is not None]
+    begins = [*([change.onset_s] if change is not None and change.alarm_s is not None
+                else []),
+              *([command.earliest_s] if command is not None and command.alarm_s is not None
+                else [])]
     if effort is not None and effort.alarm_s is not None:
         begins.append(None if effort.onset_s is None
                       else effort.onset_s - (effort.onset_error_s or 0.0))

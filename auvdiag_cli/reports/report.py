@@ -100,6 +100,7 @@ class CommandsPart:
     not_judged: Mapping[str, str] = field(default_factory=dict)
     alarm_s: float | None = None
     onset_s: float | None = None
+    onset_error_s: float | None = None      # null: the start of the first window over
     named: tuple[str, ...] = ()
     explained: Numbers | None = None
     extra_effort: float | None = None

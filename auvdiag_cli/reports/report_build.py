@@ -213,7 +213,8 @@ def _command_check(check: CommandCheck | None) -> CommandsPart | None:
         summary=check.describe() if check.judged else "no actuator could be judged",
         window_s=check.window_s, extra_effort_allowed=dict(check.thresholds),
         peak_over_threshold=dict(check.peak_ratio), not_judged=dict(check.not_judged),
-        alarm_s=check.alarm_s, onset_s=check.onset_s, named=tuple(check.named),
+        alarm_s=check.alarm_s, onset_s=check.onset_s, onset_error_s=check.onset_error_s,
+        named=tuple(check.named),
         explained=None if check.explained is None else dict(check.explained),
         extra_effort=check.extra_effort, measure=check.measure)
 
