@@ -127,5 +127,13 @@ def test_a_pattern_row_of_parts_that_move_the_vehicle_alike_is_narrowed_by_the_s
                      0.6, 116.2)
     named = apply_change_alarm(observed(first, {}, "bluerov2"), normal, yaw, judging)
     assert named.component == "thruster_1"
-    assert (named.onset_s, named.detected_at_s) == (114.8, 116.2)    # the shares first
-    assert "the shares saw it first, at 116.2 s" in named.notes[-1]
+    assert (named.onset_s, named.detected_at_s) == (114.7, 116.2)    # the shares saw it first
+    assert "the shares saw it first, at 116.2 s: the verdict's times" in named.notes[-1]
+    # A weak vertical thruster: its shares rose from its onset, the roll rate departed
+    # seconds later; the change test saw it a moment before the shares' test did.
+    late_roll = replace(roll, alarm_s=102.55, onset_s=102.35)
+    fifth = _weak_in("vertical", vertical, 0, 88.85, 2.6, 102.75)
+    named = apply_change_alarm(observed(fifth, {}, "bluerov2"), normal, late_roll, judging)
+    assert named.component == "thruster_5"
+    assert (named.onset_s, named.detected_at_s) == (88.85, 102.55)
+    assert "the shares date it from ~88.8 s: the verdict's times" in named.notes[-1]

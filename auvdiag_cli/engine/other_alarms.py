@@ -109,16 +109,24 @@ def _by_row(seen: Observations, finding: Finding, components: Sequence[str],
 
 
 def _effort_first(seen: Observations, finding: Finding) -> tuple[Finding, str]:
-    """``finding`` with the effort's detection and onset where its shares saw the event
-    before the change test (a stopped thruster's shares move at once, while the motion it
-    leaves, the controller answering it, builds up over seconds), and what the note adds."""
+    """``finding`` with the effort's detection where its shares saw the event before the
+    change test (a stopped thruster's shares move at once, while the motion it leaves, the
+    controller answering it, builds up over seconds), and its onset where they date it
+    earlier (a weak vertical thruster's shares rose from its onset, the roll rate departed
+    12 s later); and what the note adds."""
     effort = seen.effort_check
-    if effort is None or effort.alarm_s is None or finding.detected_at_s is None \
-            or effort.alarm_s >= finding.detected_at_s:
+    if effort is None or effort.alarm_s is None or effort.onset_s is None \
+            or finding.detected_at_s is None or finding.onset_s is None:
         return finding, ""
-    return (replace(finding, detected_at_s=effort.alarm_s, onset_s=effort.onset_s),
-            f"; the shares saw it first, at {effort.alarm_s:.1f} s (begun at "
-            f"~{effort.onset_s:.1f} s): the verdict's times")
+    seen_first = effort.alarm_s < finding.detected_at_s
+    dated_first = effort.onset_s < finding.onset_s
+    if not seen_first and not dated_first:
+        return finding, ""
+    said = ([f"saw it first, at {effort.alarm_s:.1f} s"] if seen_first else []) + (
+        [f"date it from ~{effort.onset_s:.1f} s"] if dated_first else [])
+    return (replace(finding, detected_at_s=min(effort.alarm_s, finding.detected_at_s),
+                    onset_s=min(effort.onset_s, finding.onset_s)),
+            f"; the shares {' and '.join(said)}: the verdict's times")
 
 
 def _apply_start_alarm(seen: Observations, finding: Finding, start: StartCheck,
