@@ -16,6 +16,7 @@ from auvdiag_cli.engine.change_suspects import beyond_the_replay
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.effort_naming import ActuatorEffort, signature_matches
 from auvdiag_cli.engine.judging import Judging
+from auvdiag_cli.engine.narrowing import narrowed
 from auvdiag_cli.engine.other_alarms import apply_change_alarm
 from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.vehicle.profile import load_profile
@@ -137,3 +138,18 @@ def test_a_pattern_row_of_parts_that_move_the_vehicle_alike_is_narrowed_by_the_s
     assert named.component == "thruster_5"
     assert (named.onset_s, named.detected_at_s) == (88.85, 102.55)
     assert "the shares date it from ~88.8 s: the verdict's times" in named.notes[-1]
+
+
+def test_the_tables_candidates_are_narrowed_by_shares_that_changed_by_the_detection():
+    """A change dated from a window's residual may begin before the change the shares date
+    closely: shares that began after the onset but by the detection are the same event and
+    tell the table's candidates apart; shares that began after the detection do not."""
+    judging = cast(Judging, SimpleNamespace(profile=PROFILE, model=None))
+    finding = Finding(verdict=Verdict.FAULT, b={"climb": 1}, onset_s=65.0, detected_at_s=70.0,
+                      candidates=("motor_1", "motor_2", "motor_3", "motor_4", "gyro"))
+    begun = narrowed(observed(_motor_3_weak(68.0), {}), finding, (), judging)
+    assert begun.candidates == ("motor_3",)
+    assert begun.notes[-1].endswith("its shares match motor_3 weak alone, begun by the "
+                                    "detection")
+    after = narrowed(observed(_motor_3_weak(75.0), {}), finding, (), judging)
+    assert after.candidates == finding.candidates

@@ -144,11 +144,11 @@ def _narrow_by_frozen(seen: Observations, finding: Finding, active: ActiveDiagno
 def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagnosis
                       ) -> tuple[ActiveDiagnosis, Finding]:
     """Among the candidates left, the actuator whose group's shares match its weakness
-    alone, begun by the onset (`EffortCheck.alone_by`) or over the whole log
-    (`weak_throughout`): the controller drives the weak one harder, which tells apart
-    actuators that move the vehicle alike (a vectored ROV's two vertical thrusters); unless a
-    sensor among them, dead or stuck, explains the log better."""
-    begun = weak_alone(seen, finding.onset_s)
+    alone, begun by the detection (`EffortCheck.alone_by`: the same event) or over the
+    whole log (`weak_throughout`): the controller drives the weak one harder, which tells
+    apart actuators that move the vehicle alike (a vectored ROV's two vertical thrusters);
+    unless a sensor among them, dead or stuck, explains the log better."""
+    begun = weak_alone(seen, finding.onset_s, finding.detected_at_s)
     alone = begun or weak_throughout(seen)
     if alone is None or alone not in active.candidates:
         return active, finding
@@ -165,7 +165,7 @@ def _narrow_by_effort(seen: Observations, finding: Finding, active: ActiveDiagno
     finding = finding.noted(
         f"the pattern table reads b as {' or '.join(active.candidates)}; the effort their "
         f"group carries tells them apart: its shares match {alone} weak alone, "
-        + ("begun by the onset" if begun else "over the whole log"))
+        + ("begun by the detection" if begun else "over the whole log"))
     return replace(active, candidates=(alone,), recommended_dms=()), finding
 
 
