@@ -187,12 +187,16 @@ def test_bluerov2_yaw_alarm_on_a_mission_names_the_gyro_whose_reading_froze(tmp_
 
 def test_bluerov2_dead_vertical_thruster_on_a_mission_shows_in_the_roll(tmp_path):
     # The controller holds the vehicle level: the remaining vertical thruster cannot hold
-    # both depth and level alone, and the roll rate departs; the motor tests tell the two.
+    # both depth and level alone, and the roll rate departs; the table reads both vertical
+    # thrusters, and the effort they carry tells them apart (the controller drives the
+    # dead one to its limit from then), the shares' change begun by the detection.
     code, report = bluerov2_report(tmp_path, "mission-thruster-6-dead")
     assert code == 1
     assert report["b"]["roll_rate"] == 1 and report["case"] in (4, 5)
-    assert report["candidates"] == ["thruster_5", "thruster_6"]
-    assert {"M5", "M6"} <= set(report["active_diagnosis"]["recommended_dms"])
+    assert report["active_diagnosis"]["candidates_before"] == ["thruster_5", "thruster_6"]
+    assert report["candidates"] == ["thruster_6"] and report["component"] == "thruster_6"
+    assert any(n.endswith("its shares match thruster_6 weak alone, begun by the detection")
+               for n in report["notes"])
 
 
 def test_formats_a_profile_cannot_write_are_refused(tmp_path):
