@@ -141,7 +141,11 @@ class CommandRelations(WindowedRelations):
         """Per step and actuator, what a span's α sums (steps, n_commands) each: α over a
         span is the first's sum over the second's."""
         product, drive2, _, _ = self._terms(commands, sensors, usable)
-        return product, drive2 * np.maximum(np.diag(self.projector), 1e-12)
+        return product, drive2 * self._norms()
+
+    def _norms(self) -> np.ndarray:
+        """|P e_k|^2 of each actuator's signature direction, kept off zero."""
+        return np.maximum(np.diag(self.projector), 1e-12)
 
     def extra_effort(self, commands: np.ndarray, sensors: np.ndarray,
                      usable: np.ndarray, window_steps: int | None = None) -> np.ndarray:
@@ -153,7 +157,7 @@ class CommandRelations(WindowedRelations):
         numerator = trailing_sum(product, window)
         weight = trailing_sum(drive2, window)
         count = trailing_sum(ok.astype(float), window)
-        norms = np.maximum(np.diag(self.projector), 1e-12)
+        norms = self._norms()
         enough = (count >= window / 2)[:, None] & (
             weight >= MIN_DRIVE**2 * np.maximum(count, 1.0)[:, None])
         with np.errstate(invalid="ignore", divide="ignore"):
