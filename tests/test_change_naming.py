@@ -2,7 +2,7 @@
 signals that changed are all ones the replay does not judge (a quadrotor's climb), so the
 hypothesis test, scored by the replay's g, has nothing to go on; the change test's own
 evidence names the part, and where it points at a sensor while the effort shares match one
-actuator weak alone, begun by the onset, the actuator is named."""
+actuator weak alone, begun by the change's alarm, the actuator is named."""
 
 from dataclasses import replace
 from pathlib import Path

@@ -80,7 +80,7 @@ def test_one_clear_weakness_is_named_alone_two_are_named_together():
 def test_a_weak_rotor_the_replay_cannot_judge_is_named_by_its_shares():
     """The change showed in body rates the replay does not judge: a gyro bias that the
     hypothesis test finds to explain the judged yaw rate does not outweigh shares that
-    match motor 3 weak alone, begun by the onset; where the replay judges the rates that
+    match motor 3 weak alone, begun by the detection; where the replay judges the rates that
     changed, a dead gyro explaining them is named as before, a bias fitted to them not."""
     profile = load_profile(Path("arducopter_quad"))
     judging = cast(Judging, SimpleNamespace(profile=profile))
@@ -142,7 +142,7 @@ def test_an_anomaly_no_fault_explains_is_named_by_shares_that_changed_by_its_det
 def test_two_candidates_that_move_the_vehicle_alike_are_told_apart_by_their_shares():
     """The table reads b as either of two actuators (a vectored ROV's vertical pair) and
     nothing else decides: the one whose shares match its weakness alone, begun by the
-    onset, is kept; shares that point elsewhere, or began after, decide nothing."""
+    detection, is kept; shares that point elsewhere, or began after, decide nothing."""
     check = replace(_check(_group([-0.02, -0.01, 0.06, -0.03], 2)), onset_error_s=3.0)
     active = ActiveDiagnosis(("motor_3", "motor_4"), ("motor_3", "motor_4"), (),
                              ("M3", "M4"), False)

@@ -59,7 +59,7 @@ def test_the_shares_name_the_member_the_replay_mistook_for_its_partner():
                                  _replay_favours_motor_1(), JUDGING)
     assert finding.component == "motor_2" and finding.candidates == ("motor_2",)
     assert ("named by the effort its group carries (its shares match motor_2 weak alone, "
-            "begun by the onset): the hypothesis test favours motor 1 dead but it is another "
+            "begun by the detection): the hypothesis test favours motor 1 dead but it is another "
             "member of that group (g at 24% of its threshold)") in finding.notes[-1]
 
 

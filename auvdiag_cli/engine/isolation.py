@@ -138,7 +138,7 @@ def name_by_hypotheses(seen: Observations, finding: Finding, test: HypothesisTes
     if alone is not None and why is not None:
         return found(seen, finding, [alone],
                       f"named by the effort its group carries (its shares match {alone} weak "
-                      f"alone, begun by the onset): the hypothesis test favours "
+                      f"alone, begun by the detection): the hypothesis test favours "
                       f"{best.describe()} but {why}", judging)
     if (effort is not None and len(effort.named) == 1 and margin is not None
             and margin < DECISIVE_MARGIN):

@@ -60,7 +60,7 @@ def weak_throughout(seen: Observations) -> str | None:
 
 def group_mate_instead(seen: Observations, finding: Finding, component: str) -> str | None:
     """Another member of ``component``'s effort group, where its group's shares match that
-    member weak alone, begun by the onset (`weak_alone`); else None. The shares measure
+    member weak alone, begun by the detection (`weak_alone`); else None. The shares measure
     which member the controller drives harder; a replay tells a group's members apart only
     as far as its normal logs moved them apart, and a failed member's command pushed past
     anything they held is beyond what it learned (a simulated quadrotor's rotor stopped 3 s
