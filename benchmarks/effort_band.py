@@ -16,7 +16,7 @@ Usage: python benchmarks/effort_band.py [--draws 200] > effort_band.md
 import argparse
 import os
 import platform
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import date
 from pathlib import Path
 
@@ -25,6 +25,7 @@ import numpy as np
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.vehicle.profile import Profile, load_profile
 from models.effort_model import EffortLog, EffortModel, learn_effort
+from models.effort_thresholds import MOST_LOGS_SAID
 
 NORMAL_SHARES = np.array([0.985, 1.002, 1.013, 1.000])
 NORMAL_SPREAD = np.array([0.018, 0.013, 0.028, 0.036])
@@ -64,6 +65,9 @@ class Tally:
     other: int = 0          # alarmed otherwise
     not_ruled_out: int = 0  # undetermined, the cut rotor the candidate
     judged: int = 0
+    # Of those not ruled out: how many normal logs like the model's would judge each
+    # (`EffortCheck.judged_with_logs`; None: more than the tool says).
+    logs_needed: list[int | None] = field(default_factory=list)
 
     def add(self, check: EffortCheck, rotor: str | None) -> None:
         self.judged += 1
@@ -71,8 +75,20 @@ class Tally:
             named = rotor is not None and check.named == (rotor,)
             self.found += named
             self.other += not named
-        elif check.not_ruled_out is not None:
-            self.not_ruled_out += rotor is None or check.not_ruled_out == rotor
+        elif check.not_ruled_out is not None and (rotor is None
+                                                  or check.not_ruled_out == rotor):
+            self.not_ruled_out += 1
+            self.logs_needed.append(check.judged_with_logs)
+
+    def needed(self) -> str:
+        """Median and range of the normal logs said to judge those not ruled out."""
+        if not self.logs_needed:
+            return "–"
+        said = sorted(n for n in self.logs_needed if n is not None)
+        beyond = len(self.logs_needed) - len(said)
+        more = f"; more than {MOST_LOGS_SAID}: {beyond}" if beyond else ""
+        return (f"{int(np.median(said))} ({said[0]}-{said[-1]}){more}" if said
+                else f"more than {MOST_LOGS_SAID}")
 
 
 def main() -> None:
@@ -93,11 +109,11 @@ def main() -> None:
           "(the shares and spreads of a real ArduCopter quad X's flights, simulated), "
           "budget 1 % a log.\n")
     print("| logs | judged | found, motor_1 named | alarmed otherwise | undetermined: not "
-          "ruled out |")
-    print("|---|---|---|---|---|")
+          "ruled out | normal logs like those four that would judge them, median (range) |")
+    print("|---|---|---|---|---|---|")
     for label, tally in ((f"propeller of {CUT_ROTOR} cut 20-25 mm", cut), ("normal", good)):
         print(f"| {label} | {tally.judged} | {tally.found} | {tally.other} | "
-              f"{tally.not_ruled_out} |")
+              f"{tally.not_ruled_out} | {tally.needed()} |")
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ within the log against its own beginning), each a Student-t quantile on the degr
 freedom its spread rests on; and what a threshold means in a user's terms (the smallest
 rise of one member's share it judges)."""
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -18,6 +19,9 @@ WHOLE_LOG_BUDGET = 0.8        # of the false-alarm budget: the whole log; the re
 # A whole log past the threshold this budget would set, where the model's is tighter and its
 # normal logs few, is one they can neither clear nor convict (`Thresholds.near`).
 NEAR_RATE = 0.05
+# A log those logs cannot rule out is told how many normal logs like them would judge it,
+# up to this many (past it, more than this).
+MOST_LOGS_SAID = 100
 
 
 @dataclass(frozen=True)
@@ -81,6 +85,24 @@ def smallest_rise(fit: GroupFit, thresholds: Thresholds, logs: int | None = None
     sigma = replace(fit, logs=n).sigma(fit.typical_s if span_s is None else span_s)
     return rise_judged(thresholds.whole_log(fit, dof), sigma,
                        fit.means.mean(axis=0) if shares is None else shares)
+
+
+def logs_to_judge(fit: GroupFit, thresholds: Thresholds, ratio: float,
+                  most: int = MOST_LOGS_SAID) -> int | None:
+    """How many normal logs like the group's (their spread as measured) would judge a log
+    whose whole-log statistic is ``ratio`` times the threshold its ``fit.logs`` set: with
+    more of them the spread rests on more degrees of freedom and the new log's share of the
+    uncertainty in the normal share shrinks (as `smallest_rise` counts them); None where
+    fit.logs already do, or ``most`` would not."""
+    if ratio > 1:
+        return None
+    z = ratio * thresholds.whole_log(fit)
+    for logs in range(fit.logs + 1, most + 1):
+        dof = fit.dof * (logs - 1) / max(1, fit.logs - 1)
+        grown = z * math.sqrt((1 + 1 / fit.logs) / (1 + 1 / logs))
+        if grown > thresholds.whole_log(fit, dof):
+            return logs
+    return None
 
 
 def rise_judged(z_threshold: float, sigma: np.ndarray, shares: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from auvdiag_cli.engine.results import Finding, Verdict
 from auvdiag_cli.reports.report_build import _actuators
 from auvdiag_cli.reports.training import effort_lines
 from models.effort_model import EffortModel
-from models.effort_thresholds import NEAR_RATE, smallest_rise
+from models.effort_thresholds import NEAR_RATE, logs_to_judge, smallest_rise
 
 ONE_WEAK = np.array([1.0, -1 / 3, -1 / 3, -1 / 3])   # motor_1 up, the others down alike
 
@@ -89,3 +89,32 @@ def test_only_a_normal_verdict_becomes_undetermined(verdict: Verdict):
     assert finding.undetermined_because == not_ruled_out_because("motor_1")
     assert finding.undetermined_because.startswith("motor_1 may be weak")
     assert "cannot rule out a weak motor_1" in finding.notes[-1]
+
+
+def test_a_log_not_ruled_out_is_told_how_many_normal_logs_would_judge_it():
+    """The count said is the least number of normal logs like the model's (their spread as
+    measured: more degrees of freedom, less of the normal share's uncertainty) whose
+    threshold the log's statistic passes; one log fewer would not, and a log nearer the
+    model's threshold needs fewer."""
+    model = _model(4)
+    fit, thresholds = model.fits[0], model.thresholds
+    assert fit is not None and thresholds is not None
+    check = quad_check(model, _between(model, 0.5))
+    motor_1 = next(a for a in check.actuators if a.name == "motor_1")
+    logs = check.judged_with_logs
+    assert logs is not None and logs > fit.logs and logs == motor_1.judged_with_logs
+    z = (motor_1.ratio or 0.0) * thresholds.whole_log(fit)
+
+    def passes(count: int) -> bool:
+        grown = z * np.sqrt((1 + 1 / fit.logs) / (1 + 1 / count))
+        return bool(grown > thresholds.whole_log(fit, fit.dof * (count - 1) / (fit.logs - 1)))
+
+    assert passes(logs) and not passes(logs - 1)
+    assert f"about {logs} normal logs like these would judge it" in check.describe()
+    assert _actuators(check).not_ruled_out_judged_with_logs == logs     # the JSON's
+    nearer = quad_check(model, _between(model, 0.9)).judged_with_logs
+    assert nearer is not None and nearer <= logs
+    assert logs_to_judge(fit, thresholds, 1.2) is None       # already judged
+    finding = unless_not_ruled_out(Finding(verdict=Verdict.NORMAL, b={}),
+                                   observed(check, {}))
+    assert finding.notes[-1].endswith(f"(about {logs} in all, like these, would)")

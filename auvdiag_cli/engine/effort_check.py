@@ -42,7 +42,13 @@ from models.effort import GroupFit, expected_share, window_shares
 from models.effort_directions import judged_directions
 from models.effort_model import EffortLog, EffortModel, GroupSetup
 from models.effort_reach import named_signatures
-from models.effort_thresholds import NEAR_RATE, Thresholds, smallest_rise
+from models.effort_thresholds import (
+    MOST_LOGS_SAID,
+    NEAR_RATE,
+    Thresholds,
+    logs_to_judge,
+    smallest_rise,
+)
 
 
 @dataclass(frozen=True)
@@ -173,8 +179,22 @@ class EffortCheck:
         (best, match), (second, other) = ((said.get(n, n), m) for n, m in self.near_matches[:2])
         return (f"; but {best} is past the threshold a {NEAR_RATE:.0%} budget would set, and "
                 f"the shares match it weak ({match:.2f}; the next, {second}: {other:.2f}): "
-                f"these few normal logs cannot rule out a weak {self.not_ruled_out} (more "
-                "would narrow its threshold)")
+                f"these few normal logs cannot rule out a weak {self.not_ruled_out} "
+                f"({self._judged_with()})")
+
+    def _judged_with(self) -> str:
+        """How many normal logs like the model's would judge the one not ruled out."""
+        logs = self.judged_with_logs
+        if logs is None:
+            return f"more would narrow its threshold; not even {MOST_LOGS_SAID} would judge it"
+        return f"about {logs} normal logs like these would judge it"
+
+    @property
+    def judged_with_logs(self) -> int | None:
+        """How many normal logs like the model's would judge the actuator not ruled out
+        (None: none is, or more than MOST_LOGS_SAID would be needed)."""
+        return next((a.judged_with_logs for a in self.actuators
+                     if a.near and a.component == self.not_ruled_out), None)
 
     def _caution(self) -> str:
         return "" if not self.against_alike_logs else (
@@ -330,7 +350,9 @@ def check_effort(model: EffortModel, profile: Profile, efforts: np.ndarray,
             round(float(normal[k]), 4), round(float(sigma[k]), 4),
             round(float(share[k] / normal[k] - 1), 4), round(float(ratio[k]), 3), None,
             round(float(rise[k]), 4), None if since is None else round(float(since[k]), 4),
-            setup.group.driven_alone, bool(past_near[k])) for k, m in enumerate(members)]
+            setup.group.driven_alone, bool(past_near[k]),
+            logs_to_judge(fit, model.thresholds, float(whole[k])) if past_near[k] else None)
+            for k, m in enumerate(members)]
         if alarm is not None and onset is not None:
             onsets.append((alarm, *onset, setup.group.name))
     matches, named, cannot_tell_apart = named_by_shares(actuators, directions, changed,

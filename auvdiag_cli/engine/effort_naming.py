@@ -35,6 +35,9 @@ class ActuatorEffort:
     # Under its threshold, but past the one a looser budget would set, on few normal logs
     # (`models.effort_thresholds.Thresholds.near`): they cannot rule it out.
     near: bool = False
+    # Where it is `near`: how many normal logs like the model's would judge this log
+    # (`models.effort_thresholds.logs_to_judge`; None: more than it says).
+    judged_with_logs: int | None = None
 
     @property
     def driven_harder(self) -> bool:

@@ -28,4 +28,8 @@ def unless_not_ruled_out(finding: Finding, seen: Observations) -> Finding:
                    undetermined_because=not_ruled_out_because(effort.not_ruled_out)).noted(
         "not judged normal: the effort shares cannot rule out a weak "
         f"{effort.not_ruled_out} (the effort shares' summary says why); calibrate the model "
-        "on more normal logs (auvdiag calibrate) to judge it")
+        f"on more normal logs (auvdiag calibrate) to judge it{_in_all(effort.judged_with_logs)}")
+
+
+def _in_all(logs: int | None) -> str:
+    return "" if logs is None else f" (about {logs} in all, like these, would)"

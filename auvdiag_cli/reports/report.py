@@ -178,8 +178,10 @@ class ActuatorsPart:
     cannot_tell_apart: bool = False
     signatures: tuple[SignaturePart, ...] = ()
     shares: Mapping[str, SharePart] = field(default_factory=dict)
-    # Where none alarmed, the component the few normal logs cannot rule out weak.
+    # Where none alarmed, the component the few normal logs cannot rule out weak, and how
+    # many normal logs like them would judge it (null: more than the tool says).
     not_ruled_out: str | None = None
+    not_ruled_out_judged_with_logs: int | None = None
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -246,6 +246,7 @@ def _actuators(check: EffortCheck | None) -> ActuatorsPart | None:
         signatures=tuple(SignaturePart(actuator=n, match=m)
                          for n, m in check.matches or check.near_matches),
         not_ruled_out=check.not_ruled_out,
+        not_ruled_out_judged_with_logs=check.judged_with_logs,
         shares={a.name: SharePart(
             group=a.group, component=a.component, share=a.share, normal_share=a.normal_share,
             spread=a.spread, departure=a.departure, over_threshold=a.ratio,
