@@ -36,6 +36,7 @@ from auvdiag_cli.engine.isolation import isolate
 from auvdiag_cli.engine.judging import Judging, nothing_judged, skilled
 from auvdiag_cli.engine.log_clock import clock_note, utc_offset_ns, utc_start_ns
 from auvdiag_cli.engine.missions import MissionLeg, mission_path, read_missions
+from auvdiag_cli.engine.onset_dating import sharpest_onset
 from auvdiag_cli.engine.other_alarms import apply_change_alarm, apply_other_evidence
 from auvdiag_cli.engine.resample import AlignedFrame
 from auvdiag_cli.engine.residuals import Matching, match
@@ -258,8 +259,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
                      case=_normal_case(profile), notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
                         dms_starts, companion_runs)
-    return Diagnosis.of(seen, within_what_it_knows(finding, normal, seen, judging, frame,
-                                                        profile))
+    return Diagnosis.of(seen, sharpest_onset(
+        within_what_it_knows(finding, normal, seen, judging, frame, profile), seen))
 
 
 def _conclude(seen: Observations, normal: Finding, detection: Detection | None,

@@ -1,0 +1,61 @@
+"""The verdict's onset is the sharpest dating of its event: where the judge that saw it
+first dates it to within seconds and another judge that names the same part dates it,
+within both their errors, to within tenths, the verdict takes the second; a judge that
+names another part, dates another event, or began after the detection changes nothing."""
+
+from dataclasses import replace
+
+import numpy as np
+from helpers import observed
+
+from auvdiag_cli.engine.command_check import CommandCheck
+from auvdiag_cli.engine.effort_check import EffortCheck
+from auvdiag_cli.engine.effort_naming import ActuatorEffort
+from auvdiag_cli.engine.onset_dating import sharpest_onset
+from auvdiag_cli.engine.results import Finding, Verdict
+
+STOPPED_S = 130.5       # when the simulated thruster stopped
+
+
+def _effort(onset_s: float, error_s: float) -> EffortCheck:
+    actuators = tuple(ActuatorEffort(f"motor_{i}", f"thruster_{i}", "vertical", 1.0, 1.0,
+                                     0.02, 0.0, 2.0 if i == 5 else 0.5, None) for i in (5, 6))
+    return EffortCheck(actuators, 0.01, 133.0, onset_s, ("thruster_5",), (),
+                       onset_error_s=error_s)
+
+
+def _commands(named: tuple[str, ...], began_s: float, error_s: float) -> CommandCheck:
+    return CommandCheck(("thruster_5", "thruster_6"), {}, {}, np.zeros((1, 2)), (), 134.2,
+                        134.0, named, {"thruster_5": 1.0}, 1.06, 15.0, "thrust lost", None,
+                        began_s, error_s)
+
+
+def _finding(onset_s: float) -> Finding:
+    return Finding(verdict=Verdict.FAULT, b={}, component="thruster_5",
+                   candidates=("thruster_5",), detected_at_s=133.0, onset_s=onset_s)
+
+
+def test_the_sharper_dating_of_the_same_part_and_event_is_the_verdicts():
+    seen = replace(observed(_effort(128.0, 2.6), {}),
+                   command_check=_commands(("thruster_5",), 130.65, 0.2))
+    dated = sharpest_onset(_finding(128.0), seen)
+    assert dated.onset_s == 130.65 and abs(dated.onset_s - STOPPED_S) < 0.2
+    assert dated.notes[-1] == (
+        "dated by the commands against the motion, the sharpest of the judges that saw it: "
+        "it began at ~130.7 s (give or take 0.2 s; the effort shares: ~128.0 s, give or "
+        "take 2.6 s)")
+
+
+def test_another_part_another_event_or_a_vaguer_dating_changes_nothing():
+    effort = observed(_effort(128.0, 2.6), {})
+    for command in (_commands(("thruster_6",), 130.65, 0.2),     # another part
+                    _commands(("thruster_5",), 131.5, 0.2),      # outside both errors
+                    _commands(("thruster_5",), 128.5, 3.0)):     # no sharper
+        finding = sharpest_onset(_finding(128.0), replace(effort, command_check=command))
+        assert finding.onset_s == 128.0 and not finding.notes
+    # The verdict's onset from a judge that states no error (the replay's) stays.
+    seen = replace(effort, command_check=_commands(("thruster_5",), 130.65, 0.2))
+    assert sharpest_onset(_finding(127.0), seen).onset_s == 127.0
+    # Not a fault: nothing to date.
+    normal = replace(_finding(128.0), verdict=Verdict.UNDETERMINED)
+    assert sharpest_onset(normal, seen) == normal
