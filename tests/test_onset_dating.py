@@ -13,6 +13,9 @@ from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.effort_naming import ActuatorEffort
 from auvdiag_cli.engine.onset_dating import sharpest_onset
 from auvdiag_cli.engine.results import Finding, Verdict
+from auvdiag_cli.reports.report import Report
+from auvdiag_cli.reports.sentences import when_sentence
+from auvdiag_cli.reports.text import summary_lines
 
 STOPPED_S = 130.5       # when the simulated thruster stopped
 
@@ -40,6 +43,7 @@ def test_the_sharper_dating_of_the_same_part_and_event_is_the_verdicts():
                    command_check=_commands(("thruster_5",), 130.65, 0.2))
     dated = sharpest_onset(_finding(128.0), seen)
     assert dated.onset_s == 130.65 and abs(dated.onset_s - STOPPED_S) < 0.2
+    assert dated.onset_error_s == 0.2
     assert dated.notes[-1] == (
         "dated by the commands against the motion, the sharpest of the judges that saw it: "
         "it began at ~130.7 s (give or take 0.2 s; the effort shares: ~128.0 s, give or "
@@ -53,9 +57,22 @@ def test_another_part_another_event_or_a_vaguer_dating_changes_nothing():
                     _commands(("thruster_5",), 128.5, 3.0)):     # no sharper
         finding = sharpest_onset(_finding(128.0), replace(effort, command_check=command))
         assert finding.onset_s == 128.0 and not finding.notes
+        assert finding.onset_error_s == 2.6      # the effort shares' own
     # The verdict's onset from a judge that states no error (the replay's) stays.
     seen = replace(effort, command_check=_commands(("thruster_5",), 130.65, 0.2))
-    assert sharpest_onset(_finding(127.0), seen).onset_s == 127.0
+    replayed = sharpest_onset(_finding(127.0), seen)
+    assert replayed.onset_s == 127.0 and replayed.onset_error_s is None
     # Not a fault: nothing to date.
     normal = replace(_finding(128.0), verdict=Verdict.UNDETERMINED)
     assert sharpest_onset(normal, seen) == normal
+
+
+def test_the_report_says_the_onsets_error():
+    report = Report(log="dive.tlog", verdict="fault", detected_at_s=133.0, onset_s=130.65,
+                    onset_error_s=0.2)
+    assert when_sentence(report).startswith("onset about 130.7 s (give or take 0.2 s), "
+                                            "detected at 133.0 s")
+    assert "onset    ~130.7 s (give or take 0.2 s)   detected 133.0 s" in "\n".join(
+        summary_lines(report))
+    assert "give or take" not in when_sentence(replace(report, onset_error_s=None))
+    assert report.to_json()["onset_error_s"] == 0.2

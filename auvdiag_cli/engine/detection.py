@@ -72,3 +72,9 @@ def look_up(pattern: tuple[PatternRow, ...], b: dict[str, int]) -> PatternRow | 
     return next((row for row in pattern if row.b == b), None)
 
 
+
+
+def normal_case(pattern: tuple[PatternRow, ...], sensor_names: Sequence[str]) -> int | None:
+    """The pattern table's case for no alarm (None: the table has no such row)."""
+    row = look_up(pattern, {name: 0 for name in sensor_names})
+    return None if row is None else row.case

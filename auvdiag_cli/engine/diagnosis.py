@@ -26,6 +26,7 @@ from auvdiag_cli.engine.detection import (
     detect,
     first_alarm,
     look_up,
+    normal_case,
 )
 from auvdiag_cli.engine.effort_check import EffortCheck, check_effort
 from auvdiag_cli.engine.flat_signals import held_at, not_judged_flat
@@ -256,7 +257,8 @@ def diagnose_ingested(log: IngestedLog, profile: Profile, model: LoadedModel,
         set_points=tuple(c.name for c in profile.commands if c.kind == SET_POINT),
         autopilot=log.autopilot_said)
     normal = Finding(verdict=Verdict.NORMAL, b={name: 0 for name in frame.sensor_names},
-                     case=_normal_case(profile), notes=tuple(notes))
+                     case=normal_case(profile.pattern, profile.sensor_names),
+                     notes=tuple(notes))
     finding = _conclude(seen, normal, detection, judging, log, matching, thresholds,
                         dms_starts, companion_runs)
     return Diagnosis.of(seen, sharpest_onset(
@@ -374,11 +376,6 @@ def _check_effort(log: IngestedLog, segments: list[Segment], judging: Judging,
     frame = log.frame
     return check_effort(effort, profile, frame.efforts,
                         mission_steps(segments, frame.time_s, frame.operating), frame.time_s)
-
-
-def _normal_case(profile: Profile) -> int | None:
-    row = look_up(profile.pattern, {s.name: 0 for s in profile.sensors})
-    return None if row is None else row.case
 
 
 def _segment_results(segments: list[Segment], time_s: np.ndarray, matching: Matching,

@@ -44,9 +44,10 @@ def _datings(seen: Observations) -> list[tuple[Dating, tuple[str, ...]]]:
 
 
 def sharpest_onset(finding: Finding, seen: Observations) -> Finding:
-    """``finding`` with its onset from the judge that dates its event most sharply, where
-    the judge that gave it stated its error and another that names one of the same parts,
-    begun by the detection, agrees with it and states a smaller one."""
+    """``finding`` with the error of its onset as the judge that dated it states it, and
+    its onset from the judge that dates its event most sharply, where another that names
+    one of the same parts, begun by the detection, agrees with it and states a smaller
+    error."""
     if finding.verdict is not Verdict.FAULT or finding.onset_s is None \
             or finding.detected_at_s is None:
         return finding
@@ -59,9 +60,9 @@ def sharpest_onset(finding: Finding, seen: Observations) -> Finding:
                and d.onset_s - d.error_s <= finding.detected_at_s
                and d.error_s < current.error_s]
     if not sharper:
-        return finding
+        return replace(finding, onset_error_s=current.error_s)
     best = min(sharper, key=lambda d: d.error_s)
-    return replace(finding, onset_s=best.onset_s).noted(
+    return replace(finding, onset_s=best.onset_s, onset_error_s=best.error_s).noted(
         f"dated by {best.judge}, the sharpest of the judges that saw it: it began at "
         f"~{best.onset_s:.1f} s (give or take {best.error_s:.1f} s; {current.judge}: "
         f"~{current.onset_s:.1f} s, give or take {current.error_s:.1f} s)")

@@ -111,6 +111,9 @@ class Finding:
     notes: tuple[str, ...] = ()
     # Why the verdict is undetermined where it is (None: nothing could be judged).
     undetermined_because: str | None = None
+    # How far the onset may lie from onset_s, as the judge that dated it states (None: it
+    # states none: the replay's window, a window's start): `onset_dating`.
+    onset_error_s: float | None = None
 
     def noted(self, *notes: str) -> "Finding":
         return replace(self, notes=(*self.notes, *notes))

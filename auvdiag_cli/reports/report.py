@@ -293,6 +293,7 @@ class Report:
     units: Mapping[str, str] = field(default_factory=dict)
     detected_at_s: float | None = None
     onset_s: float | None = None
+    onset_error_s: float | None = None      # null: the judge that dated it states none
     duration_s: float | None = None
     start_time_utc: str | None = None
     onset_utc: str | None = None

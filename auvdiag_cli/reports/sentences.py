@@ -37,6 +37,11 @@ def onset_may_be_earlier(report: Report) -> bool:
     return change is not None and change.onset_in_reference and change.onset_s == report.onset_s
 
 
+def give_or_take(error_s: float | None) -> str:
+    """" (give or take 0.2 s)": the error the judge that dated the onset states."""
+    return "" if error_s is None else f" (give or take {error_s:.1f} s)"
+
+
 def when_sentence(report: Report) -> str:
     onset, detected = report.onset_s, report.detected_at_s
     if detected is None:
@@ -44,7 +49,8 @@ def when_sentence(report: Report) -> str:
     earlier = onset_may_be_earlier(report)
     delay = "" if onset is None else \
         f" (delay {detected - onset:.1f} s{' or more' if earlier else ''})"
-    return (f"onset about {seconds(onset)}{' or earlier' if earlier else ''}, detected at "
+    return (f"onset about {seconds(onset)}{' or earlier' if earlier else ''}"
+            f"{give_or_take(report.onset_error_s)}, detected at "
             f"{seconds(detected)}{delay}")
 
 

@@ -10,6 +10,7 @@ from auvdiag_cli.reports.json_report import utc_text, verdict_title
 from auvdiag_cli.reports.report import ActivePart, ActuatorsPart, Report
 from auvdiag_cli.reports.sentences import (
     by_reason,
+    give_or_take,
     hypotheses_sentence,
     names,
     onset_may_be_earlier,
@@ -72,7 +73,8 @@ def _fault_lines(r: Report) -> list[str]:
                                          else "")]
     if r.onset_s is not None and r.detected_at_s is not None:
         earlier = onset_may_be_earlier(r)
-        lines.append(f"  onset    ~{r.onset_s:.1f} s{' or earlier' if earlier else ''}   "
+        lines.append(f"  onset    ~{r.onset_s:.1f} s{' or earlier' if earlier else ''}"
+                     f"{give_or_take(r.onset_error_s)}   "
                      f"detected {r.detected_at_s:.1f} s   "
                      f"(delay {r.detected_at_s - r.onset_s:.1f} s{' or more' if earlier else ''})")
     lines.append("  b        " + ", ".join(f"{k}={v}" for k, v in r.b.items()))
