@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 from helpers import observed
 
+from auvdiag_cli.engine.change_check import ChangeCheck
 from auvdiag_cli.engine.command_check import CommandCheck
 from auvdiag_cli.engine.effort_check import EffortCheck
 from auvdiag_cli.engine.effort_naming import ActuatorEffort
@@ -76,3 +77,13 @@ def test_the_report_says_the_onsets_error():
         summary_lines(report))
     assert "give or take" not in when_sentence(replace(report, onset_error_s=None))
     assert report.to_json()["onset_error_s"] == 0.2
+
+
+def test_a_change_dated_in_its_reference_states_no_error():
+    """The change test dates its own verdict within its error; one that may have begun in
+    the log's beginning it judges against is "or earlier", unbounded."""
+    change = ChangeCheck({}, {}, 20.0, 133.0, 128.0, 1.5)
+    seen = replace(observed(None, {}), change_check=change)
+    assert sharpest_onset(_finding(128.0), seen).onset_error_s == 1.5
+    earlier = replace(seen, change_check=replace(change, since_judged=True))
+    assert sharpest_onset(_finding(128.0), earlier).onset_error_s is None

@@ -30,7 +30,10 @@ def _datings(seen: Observations) -> list[tuple[Dating, tuple[str, ...]]]:
     test's: none of its own; the verdict says which)."""
     found: list[tuple[Dating, tuple[str, ...]]] = []
     change, effort, command = seen.change_check, seen.effort_check, seen.command_check
-    if change is not None and change.alarm_s is not None and change.onset_s is not None:
+    # A change that may have begun in the reference (`ChangeCheck.since_judged`) is dated
+    # "or earlier": no error bounds it.
+    if change is not None and change.alarm_s is not None and change.onset_s is not None \
+            and not change.since_judged:
         found.append((Dating("the change test", change.onset_s, change.onset_error_s), ()))
     if effort is not None and effort.alarm_s is not None and effort.onset_s is not None \
             and effort.onset_error_s is not None:
